@@ -1,0 +1,91 @@
+//! The command-line front end: argument parsing, printing, exit codes. Each subcommand calls one library
+//! function; nothing below `cli` prints.
+
+mod check;
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+/// Exit code for an invalid manifest or input.
+pub const EXIT_INVALID: u8 = 2;
+
+/// vvgen: datasets of dynamic 6-DoF content from declarative TOML manifests.
+#[derive(Debug, Parser)]
+#[command(name = "vvgen", version, about, long_about = None)]
+#[command(after_help = "Example:\n  vvgen check manifests/cesium-man.toml")]
+pub struct Cli {
+    /// Print less (errors only).
+    #[arg(short, long, global = true)]
+    pub quiet: bool,
+    /// Print more (repeat for more detail).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+    /// When to colour diagnostics.
+    #[arg(long, global = true, value_enum, default_value_t = Color::Auto)]
+    pub color: Color,
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// `--color`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Color {
+    /// Colour when standard error is a terminal and NO_COLOR is unset.
+    Auto,
+    /// Always colour.
+    Always,
+    /// Never colour.
+    Never,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Check manifests: syntax, types, unknown keys, references, input files. Exit 2 if any is invalid.
+    #[command(after_help = "Example:\n  vvgen check manifests/cesium-man.toml manifests/*.toml")]
+    Check {
+        /// Manifest files.
+        #[arg(required = true)]
+        manifests: Vec<PathBuf>,
+    },
+}
+
+/// Output settings shared by the subcommands.
+#[derive(Debug, Clone, Copy)]
+pub struct Ui {
+    /// Colour diagnostics.
+    pub color: bool,
+    /// -q
+    pub quiet: bool,
+    /// -v count
+    pub verbose: u8,
+}
+
+/// Parses the process arguments and runs the command.
+pub fn run() -> ExitCode {
+    let cli = Cli::parse();
+    let color = match cli.color {
+        Color::Always => true,
+        Color::Never => false,
+        Color::Auto => std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
+    };
+    let ui = Ui {
+        color,
+        quiet: cli.quiet,
+        verbose: cli.verbose,
+    };
+    let result = match cli.command {
+        Command::Check { manifests } => check::run(&manifests, ui),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,11 @@
+//! vvgen builds datasets of dynamic 6-DoF content (multi-view images with exact cameras, and point-cloud
+//! sequences) from declarative TOML manifests.
+//!
+//! The pipeline, one module per stage: [`manifest`] (TOML → checked tables) → scene (sources, animation,
+//! transforms) → rig/splits → plan (tasks and keys) → execute (render, sample) → cache → export (writers).
+//! [`cli`] is the command-line front end.
+
+#![deny(missing_docs)]
+
+pub mod cli;
+pub mod manifest;

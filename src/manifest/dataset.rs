@@ -1,0 +1,50 @@
+//! `[dataset]`: name, version, output root, seed, cache location.
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::diag::Diagnostic;
+
+/// The `[dataset]` table.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dataset {
+    /// Dataset name; used in default output directory names.
+    pub name: Spanned<String>,
+    /// Free-form version string, recorded in metadata.
+    #[serde(default)]
+    pub version: Option<String>,
+    /// Output root, relative to the manifest's directory.
+    pub out: Spanned<String>,
+    /// Root of every random stream (camera draws, point samples).
+    #[serde(default)]
+    pub seed: u64,
+    /// Cache directory, relative to the manifest (default `cache/` beside it; `VVGEN_CACHE` overrides).
+    #[serde(default)]
+    pub cache: Option<Spanned<String>>,
+}
+
+impl Dataset {
+    pub(crate) fn validate(&self, diags: &mut Vec<Diagnostic>) {
+        let name = self.name.get_ref();
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+        {
+            diags.push(
+                Diagnostic::error(
+                    format!("dataset name `{name}` is not a plain file name"),
+                    Some(self.name.span()),
+                )
+                .with_help("use letters, digits, `-`, `_` and `.` only; it names output folders"),
+            );
+        }
+        if self.out.get_ref().trim().is_empty() {
+            diags.push(
+                Diagnostic::error("`out` is empty", Some(self.out.span()))
+                    .with_help("e.g. out = \"out/my-dataset\""),
+            );
+        }
+    }
+}

@@ -1,0 +1,513 @@
+//! The manifest language: TOML text → a validated [`Manifest`], or every problem in it.
+//!
+//! Each table has its own module and type; [`parse`] walks the spanned TOML tree, deserializes every entry
+//! on its own (so all errors are found, not just the first), then runs the table checks and the checks that
+//! span tables (references, file existence, writer/render contradictions). The manifest reference is
+//! `docs/manifest.md`.
+
+pub mod dataset;
+pub mod diag;
+pub mod frames;
+pub mod output;
+pub mod render;
+pub mod rig;
+pub mod sequence;
+pub mod source;
+pub mod split;
+pub mod suggest;
+pub mod transform;
+mod walk;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
+
+pub use dataset::Dataset;
+pub use diag::{Diagnostic, Report, Severity};
+pub use output::{Output, Writer};
+pub use render::Render;
+pub use rig::{Rig, RigKind};
+pub use source::{Source, SourceKind};
+pub use split::{Split, TimeMode};
+pub use transform::Transform;
+
+use suggest::did_you_mean;
+
+/// The top-level tables, in the order the reference documents them.
+pub const TABLES: &[&str] = &[
+    "dataset",
+    "source",
+    "transform",
+    "render",
+    "rig",
+    "split",
+    "output",
+];
+
+/// A validated manifest. Named tables are kept sorted by name, so table order in the file never matters.
+#[derive(Debug, Clone)]
+pub struct Manifest {
+    /// The manifest file.
+    pub path: PathBuf,
+    /// Its directory: relative paths resolve against it.
+    pub dir: PathBuf,
+    /// The manifest's bytes, as read.
+    pub text: String,
+    /// `[dataset]`.
+    pub dataset: Dataset,
+    /// `[source.NAME]`.
+    pub sources: BTreeMap<String, Source>,
+    /// The global `[transform]`, applied to the whole scene.
+    pub transform: Transform,
+    /// `[render]`.
+    pub render: Render,
+    /// `[rig.NAME]`.
+    pub rigs: BTreeMap<String, Rig>,
+    /// `[split.NAME]`.
+    pub splits: BTreeMap<String, Split>,
+    /// `[output.NAME]`.
+    pub outputs: BTreeMap<String, Output>,
+}
+
+impl Manifest {
+    /// Resolves a manifest-relative path.
+    pub fn resolve(&self, p: &str) -> PathBuf {
+        self.dir.join(p)
+    }
+
+    /// The dataset output root.
+    pub fn out_dir(&self) -> PathBuf {
+        self.resolve(self.dataset.out.get_ref())
+    }
+}
+
+/// Reads and checks a manifest file. `Ok` carries the manifest and its warnings; `Err` every problem found.
+pub fn load(path: &Path) -> Result<(Manifest, Report), Report> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => parse(&text, path),
+        Err(e) => Err(Report {
+            path: path.to_path_buf(),
+            source: String::new(),
+            diagnostics: vec![Diagnostic::error(
+                format!("cannot read the manifest: {e}"),
+                None,
+            )],
+        }),
+    }
+}
+
+/// Checks manifest `text` as if read from `path` (paths in it resolve against `path`'s directory).
+pub fn parse(text: &str, path: &Path) -> Result<(Manifest, Report), Report> {
+    let mut diags = Vec::new();
+    let manifest = parse_inner(text, path, &mut diags);
+    // Report in reading order; problems without a place come last.
+    diags.sort_by_key(|d| d.span.as_ref().map_or(usize::MAX, |s| s.start));
+    let report = Report {
+        path: path.to_path_buf(),
+        source: text.to_string(),
+        diagnostics: diags,
+    };
+    match manifest {
+        Some(m) if report.error_count() == 0 => Ok((m, report)),
+        _ => Err(report),
+    }
+}
+
+fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<Manifest> {
+    let (root, syntax) = DeTable::parse_recoverable(text);
+    if !syntax.is_empty() {
+        for e in syntax {
+            let span = e.span();
+            diags.push(Diagnostic::error(
+                format!("TOML syntax: {}", e.message().trim()),
+                span,
+            ));
+        }
+        return None;
+    }
+    let root = root.into_inner();
+    let mut tables: BTreeMap<&str, &walk::Raw<'_>> = BTreeMap::new();
+    for (key, value) in root.iter() {
+        let name: &str = key.get_ref().as_ref();
+        if TABLES.contains(&name) {
+            tables.insert(TABLES.iter().find(|t| **t == name).unwrap(), value);
+        } else {
+            let mut d = Diagnostic::error(format!("unknown table `{name}`"), Some(key.span()));
+            d = match did_you_mean(name, TABLES.iter().copied()) {
+                Some(s) => {
+                    d.message = format!("unknown table `{name}`, did you mean `{s}`?");
+                    d.with_help(format!("did you mean `[{s}…]`?"))
+                }
+                None => d.with_help(format!("tables are {}", suggest::one_of(TABLES))),
+            };
+            diags.push(d);
+        }
+    }
+
+    let dataset: Option<Dataset> = match tables.get("dataset") {
+        Some(v) => walk::typed(v, diags),
+        None => {
+            diags.push(
+                Diagnostic::error("missing `[dataset]` table", Some(0..0))
+                    .with_help("start with [dataset] name = \"…\" out = \"out/…\""),
+            );
+            None
+        }
+    };
+    let transform: Option<Transform> = tables
+        .get("transform")
+        .map_or(Some(Transform::default()), |v| walk::typed(v, diags));
+    let render: Option<Render> = tables
+        .get("render")
+        .map_or(Some(Render::default()), |v| walk::typed(v, diags));
+    let sources = named::<Source>(tables.get("source"), "source", diags);
+    let rigs = named::<Rig>(tables.get("rig"), "rig", diags);
+    let splits = named::<Split>(tables.get("split"), "split", diags);
+    let outputs = named::<Output>(tables.get("output"), "output", diags);
+
+    // Table-local checks run on whatever parsed, so their errors join the type errors above.
+    if let Some(d) = &dataset {
+        d.validate(diags);
+    }
+    if let Some(t) = &transform {
+        t.validate(diags);
+    }
+    if let Some(r) = &render {
+        r.validate(diags);
+    }
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    {
+        let (sources, _) = &sources;
+        if sources.is_empty() {
+            let span = tables.get("source").map(|v| v.span());
+            diags.push(
+                Diagnostic::error("no `[source.NAME]` table: there is nothing to render", span)
+                    .with_help("add e.g. [source.main] gltf = \"model.glb\""),
+            );
+        }
+        for (name, (s, span, _)) in sources {
+            s.validate(name, span.clone(), diags);
+            check_source_files(&dir, s, diags);
+        }
+    }
+    {
+        let (rigs, _) = &rigs;
+        for (name, (r, _, keys)) in rigs {
+            let keys: Vec<(&str, Range<usize>)> =
+                keys.iter().map(|(k, s)| (k.as_str(), s.clone())).collect();
+            r.validate(name, &keys, diags);
+            if let Some(f) = &r.file {
+                if !dir.join(f.get_ref()).is_file() {
+                    diags.push(
+                        Diagnostic::error(
+                            format!("file not found: {}", dir.join(f.get_ref()).display()),
+                            Some(f.span()),
+                        )
+                        .with_help("paths are relative to the manifest's folder"),
+                    );
+                }
+            }
+        }
+    }
+    {
+        let (splits, _) = &splits;
+        for (s, _, _) in splits.values() {
+            s.validate(diags);
+        }
+    }
+    {
+        let (outputs, _) = &outputs;
+        for (name, (o, _, keys)) in outputs {
+            let keys: Vec<(&str, Range<usize>)> =
+                keys.iter().map(|(k, s)| (k.as_str(), s.clone())).collect();
+            o.validate(name, &keys, diags);
+        }
+    }
+
+    let broken = Broken {
+        sources: sources.1,
+        rigs: rigs.1,
+        splits: splits.1,
+    };
+    let manifest = Manifest {
+        path: path.to_path_buf(),
+        dir,
+        text: text.to_string(),
+        dataset: dataset?,
+        sources: strip(sources.0),
+        transform: transform.unwrap_or_default(),
+        render: render.unwrap_or_default(),
+        rigs: strip(rigs.0),
+        splits: strip(splits.0),
+        outputs: strip(outputs.0),
+    };
+    cross_check(&manifest, &broken, diags);
+    Some(manifest)
+}
+
+fn strip<T>(m: Named<T>) -> BTreeMap<String, T> {
+    m.into_iter().map(|(k, (v, _, _))| (k, v)).collect()
+}
+
+type Named<T> = BTreeMap<String, (T, Range<usize>, Vec<(String, Range<usize>)>)>;
+
+/// Names of entries that did not parse, so checks across tables do not call them undefined.
+struct Broken {
+    sources: BTreeSet<String>,
+    rigs: BTreeSet<String>,
+    splits: BTreeSet<String>,
+}
+
+/// Deserializes every entry of a `[kind.NAME]` table; keeps each entry's span and key list, and returns the
+/// names of entries that could not be recovered.
+fn named<T: serde::de::DeserializeOwned>(
+    value: Option<&&walk::Raw<'_>>,
+    kind: &str,
+    diags: &mut Vec<Diagnostic>,
+) -> (Named<T>, BTreeSet<String>) {
+    let mut out = BTreeMap::new();
+    let mut broken = BTreeSet::new();
+    let Some(value) = value else {
+        return (out, broken);
+    };
+    for (name, key_span, entry) in walk::entries(value, kind, diags) {
+        if !matches!(entry.get_ref(), DeValue::Table(_)) {
+            diags.push(
+                Diagnostic::error(format!("`{kind}.{name}` must be a table"), Some(key_span))
+                    .with_help(format!("write it as [{kind}.{name}] followed by its keys")),
+            );
+            broken.insert(name.to_string());
+            continue;
+        }
+        let keys = walk::keys(entry)
+            .into_iter()
+            .map(|(k, s)| (k.to_string(), s))
+            .collect();
+        match walk::typed::<T>(entry, diags) {
+            Some(t) => {
+                out.insert(name.to_string(), (t, entry.span(), keys));
+            }
+            None => {
+                broken.insert(name.to_string());
+            }
+        }
+    }
+    (out, broken)
+}
+
+fn check_source_files(dir: &Path, s: &Source, diags: &mut Vec<Diagnostic>) {
+    let Some((kind, p)) = s.kind() else { return };
+    match kind {
+        SourceKind::Gltf | SourceKind::Mesh => {
+            let full = dir.join(p.get_ref());
+            if !full.is_file() {
+                diags.push(
+                    Diagnostic::error(
+                        format!("file not found: {}", full.display()),
+                        Some(p.span()),
+                    )
+                    .with_help("paths are relative to the manifest's folder"),
+                );
+            }
+        }
+        SourceKind::PlySequence => {
+            let frames = s
+                .frames
+                .as_ref()
+                .map(|f| f.get_ref().clone())
+                .unwrap_or_default();
+            if let Err(e) = sequence::resolve(dir, p.get_ref(), &frames) {
+                diags.push(Diagnostic::error(format!("PLY sequence: {e}"), Some(p.span())).with_help("paths are relative to the manifest's folder; patterns use {frame} or {frame:04}"));
+            }
+        }
+    }
+}
+
+/// Checks that span tables: references, counts that depend on the rig, writer/render contradictions.
+fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
+    for (name, split) in &m.splits {
+        let rig_name = split.rig.get_ref();
+        match m.rigs.get(rig_name) {
+            None if broken.rigs.contains(rig_name) => {}
+            None => {
+                let mut d = Diagnostic::error(
+                    format!("split `{name}` uses rig `{rig_name}`, which is not defined"),
+                    Some(split.rig.span()),
+                );
+                d = match did_you_mean(rig_name, m.rigs.keys().map(String::as_str)) {
+                    Some(s) => d.with_help(format!("did you mean `{s}`?")),
+                    None if m.rigs.is_empty() => {
+                        d.with_help(format!("add a [rig.{rig_name}] table"))
+                    }
+                    None => d.with_help(format!(
+                        "defined rigs: {}",
+                        suggest::one_of(&m.rigs.keys().map(String::as_str).collect::<Vec<_>>())
+                    )),
+                };
+                diags.push(d);
+            }
+            Some(rig) => {
+                let kind = *rig.kind.get_ref();
+                if kind.counts_itself() {
+                    if let Some(v) = &split.views {
+                        diags.push(Diagnostic::warning(
+                            format!(
+                                "`views` is ignored: rig `{rig_name}` ({}) fixes its own views",
+                                kind.name()
+                            ),
+                            Some(v.span()),
+                        ));
+                    }
+                } else if split.views.is_none() && split.time != TimeMode::Monocular {
+                    diags.push(
+                        Diagnostic::error(
+                            format!("split `{name}` needs `views`"),
+                            Some(split.rig.span()),
+                        )
+                        .with_help("e.g. views = 100"),
+                    );
+                }
+                if let (RigKind::Dome, Some(r), Some(v)) = (kind, &rig.rings, &split.views) {
+                    if v.get_ref() % r.get_ref() != 0 {
+                        diags.push(
+                            Diagnostic::error(
+                                format!(
+                                    "views = {} does not divide into {} rings",
+                                    v.get_ref(),
+                                    r.get_ref()
+                                ),
+                                Some(v.span()),
+                            )
+                            .with_help("use a multiple of `rings`"),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    let (w, h) = m.render.size();
+    for (name, out) in &m.outputs {
+        let writer = *out.writer.get_ref();
+        for s in out.splits.iter().flatten() {
+            if !m.splits.contains_key(s.get_ref()) && !broken.splits.contains(s.get_ref()) {
+                let mut d = Diagnostic::error(
+                    format!(
+                        "output `{name}` lists split `{}`, which is not defined",
+                        s.get_ref()
+                    ),
+                    Some(s.span()),
+                );
+                if let Some(x) = did_you_mean(s.get_ref(), m.splits.keys().map(String::as_str)) {
+                    d = d.with_help(format!("did you mean `{x}`?"));
+                }
+                diags.push(d);
+            }
+        }
+        if let Some(src) = &out.source {
+            if !m.sources.contains_key(src.get_ref()) && !broken.sources.contains(src.get_ref()) {
+                let mut d = Diagnostic::error(
+                    format!(
+                        "output `{name}` uses source `{}`, which is not defined",
+                        src.get_ref()
+                    ),
+                    Some(src.span()),
+                );
+                if let Some(x) = did_you_mean(src.get_ref(), m.sources.keys().map(String::as_str)) {
+                    d = d.with_help(format!("did you mean `{x}`?"));
+                }
+                diags.push(d);
+            }
+        }
+        if writer.renders_images() && m.splits.is_empty() && broken.splits.is_empty() {
+            diags.push(
+                Diagnostic::error(
+                    format!(
+                        "output `{name}` ({}) renders images but no `[split.NAME]` is defined",
+                        writer.name()
+                    ),
+                    Some(out.writer.span()),
+                )
+                .with_help("add e.g. [split.train] rig = \"…\" views = 100"),
+            );
+        }
+        if matches!(writer, Writer::Dnerf | Writer::StaticFrames) && w != h {
+            diags.push(
+                Diagnostic::warning(format!("output `{name}` ({}) with non-square {w}×{h} images", writer.name()), Some(m.render.resolution.span()))
+                    .with_help("K-Planes swaps W/H when resizing, Deformable-3DGS swaps FovX/FovY, 4DGaussians resizes to 800×800 and D-NeRF's half_res resizes wrongly: use square images"),
+            );
+        }
+        if writer == Writer::Dnerf {
+            let selected: Vec<&str> = match &out.splits {
+                Some(s) => s.iter().map(|s| s.get_ref().as_str()).collect(),
+                None => m.splits.keys().map(String::as_str).collect(),
+            };
+            for needed in ["train", "val", "test"] {
+                if !selected.contains(&needed) {
+                    diags.push(
+                        Diagnostic::warning(format!("output `{name}` (dnerf) has no `{needed}` split"), Some(out.writer.span()))
+                            .with_help("D-NeRF opens transforms_train/val/test.json unconditionally and nerfstudio's dnerf-data needs val while training"),
+                    );
+                }
+            }
+            if let Some(d) = &out.dir {
+                if !d.get_ref().contains("dnerf") && !d.get_ref().contains("lego") {
+                    diags.push(
+                        Diagnostic::warning(
+                            format!(
+                                "dnerf output directory `{}` does not contain \"dnerf\"",
+                                d.get_ref()
+                            ),
+                            Some(d.span()),
+                        )
+                        .with_help(
+                            "K-Planes picks its D-NeRF loader by that substring in the path",
+                        ),
+                    );
+                }
+            }
+        }
+        if let Some(d) = &out.dir {
+            for (other, o2) in &m.outputs {
+                if other > name && o2.dir.as_ref().map(|x| x.get_ref()) == Some(d.get_ref()) {
+                    diags.push(Diagnostic::error(
+                        format!(
+                            "outputs `{name}` and `{other}` write to the same directory `{}`",
+                            d.get_ref()
+                        ),
+                        Some(d.span()),
+                    ));
+                }
+            }
+        }
+    }
+    if m.outputs.is_empty() {
+        diags.push(
+            Diagnostic::warning(
+                "no `[output.NAME]` table: a build would write nothing",
+                None,
+            )
+            .with_help("add e.g. [output.dnerf] writer = \"dnerf\""),
+        );
+    }
+}
+
+/// Where a key sits, for tests and tools: the byte span of `table.entry.key` (e.g. `["split", "train", "views"]`).
+pub fn span_of(text: &str, path: &[&str]) -> Option<Range<usize>> {
+    let root = DeTable::parse(text).ok()?.into_inner();
+    let mut table: &DeTable<'_> = &root;
+    let mut found: Option<&Spanned<DeValue<'_>>> = None;
+    for (i, key) in path.iter().enumerate() {
+        let v = table.get(*key)?;
+        if i + 1 < path.len() {
+            match v.get_ref() {
+                DeValue::Table(t) => table = t,
+                _ => return None,
+            }
+        }
+        found = Some(v);
+    }
+    found.map(|v| v.span())
+}

@@ -1,0 +1,275 @@
+//! `[output.NAME]`: a dataset writer and its options.
+
+use std::ops::Range;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::diag::Diagnostic;
+use super::suggest::{did_you_mean, one_of};
+
+/// Most points per frame a point-cloud writer may ask for.
+pub const MAX_POINTS: u64 = 100_000_000;
+
+/// One `[output.NAME]` table.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// The writer.
+    pub writer: Spanned<Writer>,
+    /// Directory under `[dataset] out` (default depends on the writer, e.g. `<name>_dnerf`).
+    pub dir: Option<Spanned<String>>,
+    /// Splits to write (default: all).
+    pub splits: Option<Vec<Spanned<String>>>,
+    /// Which source (default: all sources together).
+    pub source: Option<Spanned<String>>,
+    /// Image writers: points in the `points3d.ply` / `fused.ply` initialization cloud (default 100 000; 0 = none).
+    pub init_points: Option<Spanned<u64>>,
+    /// `instant-ngp`: aabb_scale (power of two, 1..=128).
+    pub aabb_scale: Option<Spanned<u32>>,
+    /// `ply-sequence`: surface samples per frame.
+    pub points: Option<Spanned<u64>>,
+    /// `ply-sequence`: voxel edge for downsampling, world units.
+    pub voxel: Option<Spanned<f64>>,
+    /// `ply-sequence`: quantize to a 2^vox integer grid (8..=16), like 8i's vox10.
+    pub vox: Option<Spanned<u32>>,
+    /// `ply-sequence`: keep point identity across frames (default true for animated sources).
+    pub correspondence: Option<bool>,
+    /// `ply-sequence`: write per-point motion vectors to the next frame.
+    #[serde(default)]
+    pub motion: bool,
+    /// `ply-sequence`: voxel reduction, `"mean"` (default), `"nearest"` or `"first"`.
+    pub reduce: Option<Reduce>,
+    /// `ply-sequence`: colour averaging space, `"linear"` (default) or `"srgb"`.
+    pub color_average: Option<ColorAverage>,
+    /// `ply-sequence`: file name pattern (default `{name}_{frame:04}.ply`).
+    pub pattern: Option<Spanned<String>>,
+    /// `ply-sequence`: `"binary"` (default) or `"ascii"`.
+    pub format: Option<PlyFormat>,
+}
+
+/// Dataset writers.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[serde(rename_all = "kebab-case")]
+pub enum Writer {
+    /// D-NeRF / NeRF-synthetic transforms_{train,val,test}.json (+ points3d.ply, fused.ply).
+    Dnerf,
+    /// nerfstudio transforms.json.
+    Nerfstudio,
+    /// instant-ngp transforms per split.
+    InstantNgp,
+    /// COLMAP text model (PINHOLE).
+    Colmap,
+    /// DyNeRF / LLFF poses_bounds.npy with per-camera frame folders.
+    Dynerf,
+    /// One NeRF-synthetic dataset per time step.
+    StaticFrames,
+    /// Point-cloud sequence sampled from the posed scene.
+    PlySequence,
+}
+
+impl Writer {
+    /// Manifest spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Writer::Dnerf => "dnerf",
+            Writer::Nerfstudio => "nerfstudio",
+            Writer::InstantNgp => "instant-ngp",
+            Writer::Colmap => "colmap",
+            Writer::Dynerf => "dynerf",
+            Writer::StaticFrames => "static-frames",
+            Writer::PlySequence => "ply-sequence",
+        }
+    }
+
+    /// Whether the writer needs rendered images.
+    pub fn renders_images(self) -> bool {
+        self != Writer::PlySequence
+    }
+
+    /// Keys this writer accepts besides `writer`.
+    pub fn allowed_keys(self) -> &'static [&'static str] {
+        match self {
+            Writer::PlySequence => &[
+                "dir",
+                "source",
+                "points",
+                "voxel",
+                "vox",
+                "correspondence",
+                "motion",
+                "reduce",
+                "color_average",
+                "pattern",
+                "format",
+            ],
+            Writer::InstantNgp => &["dir", "splits", "init_points", "aabb_scale"],
+            _ => &["dir", "splits", "init_points"],
+        }
+    }
+}
+
+/// Voxel reduction.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Reduce {
+    /// Mean position and colour.
+    #[default]
+    Mean,
+    /// The point nearest the voxel centre.
+    Nearest,
+    /// The first point (in sample order).
+    First,
+}
+
+/// Colour averaging space.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ColorAverage {
+    /// Average in linear light.
+    #[default]
+    Linear,
+    /// Average the stored sRGB values (what Open3D does).
+    Srgb,
+}
+
+/// PLY encoding.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PlyFormat {
+    /// binary_little_endian.
+    #[default]
+    Binary,
+    /// ascii.
+    Ascii,
+}
+
+impl Output {
+    pub(crate) fn validate(
+        &self,
+        name: &str,
+        present: &[(&str, Range<usize>)],
+        diags: &mut Vec<Diagnostic>,
+    ) {
+        let w = *self.writer.get_ref();
+        let allowed = w.allowed_keys();
+        for (key, span) in present {
+            if *key == "writer" || allowed.contains(key) {
+                continue;
+            }
+            let help = match did_you_mean(key, allowed.iter().copied()) {
+                Some(s) => format!("did you mean `{s}`?"),
+                None => format!("writer `{}` takes {}", w.name(), one_of(allowed)),
+            };
+            diags.push(
+                Diagnostic::error(
+                    format!(
+                        "key `{key}` does not apply to output `{name}` (writer = \"{}\")",
+                        w.name()
+                    ),
+                    Some(span.clone()),
+                )
+                .with_help(help),
+            );
+        }
+        if let Some(d) = &self.dir {
+            check_relative(d, "dir", diags);
+        }
+        if let Some(p) = &self.pattern {
+            check_relative(p, "pattern", diags);
+            if !p.get_ref().contains("{frame") {
+                diags.push(
+                    Diagnostic::error(
+                        "`pattern` has no `{frame}`: every frame would overwrite the last",
+                        Some(p.span()),
+                    )
+                    .with_help("e.g. pattern = \"{name}_vox10_{frame:04}.ply\""),
+                );
+            }
+        }
+        if let Some(p) = &self.points {
+            let n = *p.get_ref();
+            if n == 0 || n > MAX_POINTS {
+                diags.push(Diagnostic::error(
+                    format!("points = {n} is outside 1..={MAX_POINTS}"),
+                    Some(p.span()),
+                ));
+            }
+        }
+        if let Some(p) = &self.init_points {
+            if *p.get_ref() > MAX_POINTS {
+                diags.push(Diagnostic::error(
+                    format!("init_points = {} is more than {MAX_POINTS}", p.get_ref()),
+                    Some(p.span()),
+                ));
+            }
+        }
+        if let Some(v) = &self.voxel {
+            if !(v.get_ref().is_finite() && *v.get_ref() > 0.0) {
+                diags.push(Diagnostic::error(
+                    format!("voxel = {} must be positive", v.get_ref()),
+                    Some(v.span()),
+                ));
+            }
+        }
+        if let Some(v) = &self.vox {
+            if !(8..=16).contains(v.get_ref()) {
+                diags.push(
+                    Diagnostic::error(
+                        format!("vox = {} is outside 8..=16", v.get_ref()),
+                        Some(v.span()),
+                    )
+                    .with_help("8i's sequences use vox = 10"),
+                );
+            }
+        }
+        if let Some(a) = &self.aabb_scale {
+            let a = *a.get_ref();
+            if !a.is_power_of_two() || a > 128 {
+                diags.push(Diagnostic::error(
+                    format!("aabb_scale = {a} must be a power of two in 1..=128"),
+                    Some(self.aabb_scale.as_ref().unwrap().span()),
+                ));
+            }
+        }
+        if w == Writer::PlySequence && self.points.is_none() {
+            diags.push(
+                Diagnostic::error(
+                    format!("output `{name}` (ply-sequence) needs `points`"),
+                    Some(self.writer.span()),
+                )
+                .with_help("e.g. points = 1000000"),
+            );
+        }
+    }
+}
+
+/// A path inside the output root: relative, and no `..` that climbs out.
+pub(crate) fn check_relative(p: &Spanned<String>, key: &str, diags: &mut Vec<Diagnostic>) {
+    let s = p.get_ref();
+    let path = std::path::Path::new(s);
+    let mut depth: i64 = 0;
+    let mut escapes = path.is_absolute() || s.starts_with('/') || s.starts_with('\\');
+    for c in path.components() {
+        match c {
+            std::path::Component::ParentDir => depth -= 1,
+            std::path::Component::Normal(_) => depth += 1,
+            std::path::Component::Prefix(_) | std::path::Component::RootDir => escapes = true,
+            std::path::Component::CurDir => {}
+        }
+        if depth < 0 {
+            escapes = true;
+        }
+    }
+    if escapes {
+        diags.push(
+            Diagnostic::error(
+                format!("`{key}` = \"{s}\" escapes the dataset's `out` directory"),
+                Some(p.span()),
+            )
+            .with_help(
+                "use a relative path without leading `..`; move `[dataset] out` to write elsewhere",
+            ),
+        );
+    }
+}

@@ -1,0 +1,393 @@
+//! `[render]`: image size, intrinsics, supersampling, shading, passes, point splats.
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::diag::Diagnostic;
+
+/// Largest image side accepted.
+pub const MAX_RESOLUTION: u32 = 16384;
+
+/// NeRF-synthetic's horizontal field of view: Blender's 50 mm lens on a 36 mm sensor.
+pub const NERF_CAMERA_ANGLE_X: f64 = 0.6911112070083618;
+
+/// The `[render]` table. Absent: 800×800, NeRF-synthetic field of view, one sample, unlit, RGBA only.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Render {
+    /// `[width, height]` in pixels.
+    #[serde(default = "default_resolution")]
+    pub resolution: Spanned<[u32; 2]>,
+    /// Horizontal field of view in radians.
+    pub camera_angle_x: Option<Spanned<f64>>,
+    /// Focal length in mm (with `sensor_mm`, Blender's sensor width, default 36).
+    pub focal_mm: Option<Spanned<f64>>,
+    /// Sensor width in mm (default 36, Blender's).
+    pub sensor_mm: Option<f64>,
+    /// Focal length in pixels, x.
+    pub fx: Option<Spanned<f64>>,
+    /// Focal length in pixels, y (default `fx`).
+    pub fy: Option<f64>,
+    /// Principal point x in pixels (default width / 2).
+    pub cx: Option<f64>,
+    /// Principal point y in pixels (default height / 2).
+    pub cy: Option<f64>,
+    /// Near clip distance (default 0.05).
+    pub near: Option<f64>,
+    /// Far clip distance (default 1000).
+    pub far: Option<f64>,
+    /// Supersampling: 1, 4, 9 or 16 samples per pixel.
+    #[serde(default = "one")]
+    pub samples: Spanned<u32>,
+    /// `"unlit"` (albedo) or `"lambert"`.
+    #[serde(default)]
+    pub shading: Shading,
+    /// `"transparent"` (default), `"white"`, `"black"` or `[r, g, b]` in 0..1 sRGB.
+    #[serde(default)]
+    pub background: Option<Spanned<Background>>,
+    /// Which images to write per view: `rgba`, `depth`, `normal`, `mask`.
+    #[serde(default = "default_passes")]
+    pub passes: Spanned<Vec<Pass>>,
+    /// Depth pass options.
+    #[serde(default)]
+    pub depth: DepthOptions,
+    /// Normal pass options.
+    #[serde(default)]
+    pub normal: NormalOptions,
+    /// How points are drawn.
+    #[serde(default)]
+    pub splat: SplatOptions,
+    /// Directional lights for `lambert` (default: a head light).
+    #[serde(default)]
+    pub lights: Vec<Light>,
+    /// Ambient term for `lambert`, 0..1 (default 0.3).
+    pub ambient: Option<f64>,
+    /// PNG compression: `"fast"` (default), `"default"`, `"best"`.
+    #[serde(default)]
+    pub png_compression: PngCompression,
+}
+
+fn default_resolution() -> Spanned<[u32; 2]> {
+    Spanned::new(0..0, [800, 800])
+}
+fn one() -> Spanned<u32> {
+    Spanned::new(0..0, 1)
+}
+fn default_passes() -> Spanned<Vec<Pass>> {
+    Spanned::new(0..0, vec![Pass::Rgba])
+}
+
+impl Default for Render {
+    fn default() -> Self {
+        Render {
+            resolution: default_resolution(),
+            camera_angle_x: None,
+            focal_mm: None,
+            sensor_mm: None,
+            fx: None,
+            fy: None,
+            cx: None,
+            cy: None,
+            near: None,
+            far: None,
+            samples: one(),
+            shading: Shading::default(),
+            background: None,
+            passes: default_passes(),
+            depth: DepthOptions::default(),
+            normal: NormalOptions::default(),
+            splat: SplatOptions::default(),
+            lights: Vec::new(),
+            ambient: None,
+            png_compression: PngCompression::default(),
+        }
+    }
+}
+
+/// Surface shading.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[serde(rename_all = "lowercase")]
+pub enum Shading {
+    /// Albedo only: base colour × texture × vertex colour.
+    #[default]
+    Unlit,
+    /// Albedo × (ambient + Σ lights · max(0, n·l)).
+    Lambert,
+}
+
+/// Background of the RGBA pass.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum Background {
+    /// `"transparent"`, `"white"` or `"black"`.
+    Named(String),
+    /// sRGB colour in 0..1.
+    Rgb([f64; 3]),
+}
+
+/// An image pass.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[serde(rename_all = "lowercase")]
+pub enum Pass {
+    /// 8-bit sRGB straight-alpha RGBA.
+    Rgba,
+    /// Depth in millimetres, 16-bit.
+    Depth,
+    /// Unit normals remapped to 8-bit.
+    Normal,
+    /// 8-bit coverage mask.
+    Mask,
+}
+
+/// `[render.depth]`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct DepthOptions {
+    /// `"planar"` z-depth (default, what nerfstudio and instant-ngp read) or `"ray"` distance.
+    #[serde(default)]
+    pub kind: DepthKind,
+}
+
+/// Depth convention.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthKind {
+    /// Distance along the optical axis.
+    #[default]
+    Planar,
+    /// Distance along the pixel's ray.
+    Ray,
+}
+
+/// `[render.normal]`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct NormalOptions {
+    /// `"world"` (default) or `"camera"` (OpenGL camera axes).
+    #[serde(default)]
+    pub space: NormalSpace,
+}
+
+/// Normal pass coordinate frame.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalSpace {
+    /// World axes (+Z up).
+    #[default]
+    World,
+    /// Camera axes, OpenGL (+X right, +Y up, +Z back).
+    Camera,
+}
+
+/// `[render.splat]`: how points are drawn.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SplatOptions {
+    /// `"cube"` (default), `"square"` or `"disk"`.
+    #[serde(default)]
+    pub shape: SplatShape,
+    /// Size in world units (default: the sequence's voxel size).
+    pub size: Option<f64>,
+    /// Size in pixels instead.
+    pub size_px: Option<f64>,
+}
+
+/// Splat shape.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[serde(rename_all = "lowercase")]
+pub enum SplatShape {
+    /// A 3D cube of edge `size` centred on the point.
+    #[default]
+    Cube,
+    /// A screen-aligned square.
+    Square,
+    /// A screen-aligned disk.
+    Disk,
+}
+
+/// A directional light.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    /// Direction the light travels, world space.
+    pub direction: [f64; 3],
+    /// Intensity (default 1).
+    #[serde(default = "unit")]
+    pub intensity: f64,
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+/// PNG compression level.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[serde(rename_all = "lowercase")]
+pub enum PngCompression {
+    /// fdeflate, ~3 ms per 800² image.
+    #[default]
+    Fast,
+    /// zlib level 6, ~15× slower, ~half the size.
+    Default,
+    /// zlib level 9.
+    Best,
+}
+
+impl Render {
+    /// `(width, height)`.
+    pub fn size(&self) -> (u32, u32) {
+        let [w, h] = *self.resolution.get_ref();
+        (w, h)
+    }
+
+    /// Focal lengths and principal point in pixels: `(fx, fy, cx, cy)`.
+    pub fn intrinsics(&self) -> (f64, f64, f64, f64) {
+        let (w, h) = self.size();
+        let fx = if let Some(fx) = &self.fx {
+            *fx.get_ref()
+        } else if let Some(f) = &self.focal_mm {
+            *f.get_ref() / self.sensor_mm.unwrap_or(36.0) * w as f64
+        } else {
+            let a = self
+                .camera_angle_x
+                .as_ref()
+                .map(|a| *a.get_ref())
+                .unwrap_or(NERF_CAMERA_ANGLE_X);
+            0.5 * w as f64 / (0.5 * a).tan()
+        };
+        let fy = self.fy.unwrap_or(fx);
+        (
+            fx,
+            fy,
+            self.cx.unwrap_or(w as f64 / 2.0),
+            self.cy.unwrap_or(h as f64 / 2.0),
+        )
+    }
+
+    /// Whether a pass is requested.
+    pub fn has_pass(&self, p: Pass) -> bool {
+        self.passes.get_ref().contains(&p)
+    }
+
+    pub(crate) fn validate(&self, diags: &mut Vec<Diagnostic>) {
+        let [w, h] = *self.resolution.get_ref();
+        let rs = Some(self.resolution.span());
+        if w == 0 || h == 0 || w > MAX_RESOLUTION || h > MAX_RESOLUTION {
+            diags.push(
+                Diagnostic::error(
+                    format!("resolution {w}×{h} is outside 1..={MAX_RESOLUTION}"),
+                    rs,
+                )
+                .with_help("e.g. resolution = [800, 800]"),
+            );
+        }
+        let ways = [
+            self.camera_angle_x.as_ref().map(|s| s.span()),
+            self.focal_mm.as_ref().map(|s| s.span()),
+            self.fx.as_ref().map(|s| s.span()),
+        ];
+        let given: Vec<_> = ways.iter().flatten().collect();
+        if given.len() > 1 {
+            diags.push(
+                Diagnostic::error("the field of view is given more than once", Some(given[1].clone()))
+                    .with_help("use one of `camera_angle_x`, `focal_mm` (+ `sensor_mm`), or `fx`/`fy`/`cx`/`cy`"),
+            );
+        }
+        if let Some(a) = &self.camera_angle_x {
+            let v = *a.get_ref();
+            if !(v > 0.0 && v < std::f64::consts::PI) {
+                diags.push(
+                    Diagnostic::error(
+                        format!("camera_angle_x = {v} is not an angle in (0, π) radians"),
+                        Some(a.span()),
+                    )
+                    .with_help("NeRF-synthetic uses 0.6911112"),
+                );
+            }
+        }
+        for (name, v) in [
+            ("focal_mm", self.focal_mm.as_ref()),
+            ("fx", self.fx.as_ref()),
+        ] {
+            if let Some(v) = v {
+                if !(v.get_ref().is_finite() && *v.get_ref() > 0.0) {
+                    diags.push(Diagnostic::error(
+                        format!("{name} must be positive"),
+                        Some(v.span()),
+                    ));
+                }
+            }
+        }
+        let s = *self.samples.get_ref();
+        if ![1, 4, 9, 16].contains(&s) {
+            diags.push(
+                Diagnostic::error(
+                    format!("samples = {s} is not a square supersampling count"),
+                    Some(self.samples.span()),
+                )
+                .with_help("use 1, 4, 9 or 16"),
+            );
+        }
+        let (near, far) = (self.near.unwrap_or(0.05), self.far.unwrap_or(1000.0));
+        if !(near > 0.0 && far > near) {
+            diags.push(Diagnostic::error(
+                format!("near = {near}, far = {far}: need 0 < near < far"),
+                None,
+            ));
+        }
+        let passes = self.passes.get_ref();
+        if passes.is_empty() {
+            diags.push(
+                Diagnostic::error(
+                    "no passes: nothing would be rendered",
+                    Some(self.passes.span()),
+                )
+                .with_help("e.g. passes = [\"rgba\"]"),
+            );
+        }
+        let mut sorted = passes.clone();
+        sorted.sort();
+        sorted.dedup();
+        if sorted.len() != passes.len() {
+            diags.push(Diagnostic::warning(
+                "a pass is listed twice",
+                Some(self.passes.span()),
+            ));
+        }
+        if let Some(bg) = &self.background {
+            match bg.get_ref() {
+                Background::Named(n)
+                    if !["transparent", "white", "black"].contains(&n.as_str()) =>
+                {
+                    diags.push(
+                        Diagnostic::error(format!("unknown background `{n}`"), Some(bg.span()))
+                            .with_help(
+                                "use \"transparent\", \"white\", \"black\" or [r, g, b] in 0..1",
+                            ),
+                    )
+                }
+                Background::Rgb(c) if c.iter().any(|v| !(0.0..=1.0).contains(v)) => {
+                    diags.push(Diagnostic::error(
+                        "background colour components must be in 0..1",
+                        Some(bg.span()),
+                    ))
+                }
+                _ => {}
+            }
+        }
+        if let (Some(_), Some(_)) = (self.splat.size, self.splat.size_px) {
+            diags.push(Diagnostic::error(
+                "[render.splat] takes `size` or `size_px`, not both",
+                None,
+            ));
+        }
+        for v in [self.splat.size, self.splat.size_px].into_iter().flatten() {
+            if !(v.is_finite() && v > 0.0) {
+                diags.push(Diagnostic::error(
+                    format!("splat size {v} must be positive"),
+                    None,
+                ));
+            }
+        }
+    }
+}

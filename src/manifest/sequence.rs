@@ -1,0 +1,196 @@
+//! Resolving a `ply_sequence` string (a `{frame}` pattern or a glob) to the list of frame files.
+//!
+//! This is the one place in `manifest` that looks at the file system: checking a manifest means checking
+//! that its inputs exist.
+
+use std::path::{Path, PathBuf};
+
+use super::frames::{Frames, MAX_FRAMES};
+use super::source::is_pattern;
+
+/// One frame of a sequence: its number (pattern) or position (glob), and its file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SequenceFrame {
+    /// Frame number substituted into the pattern, or position in the sorted glob.
+    pub number: i64,
+    /// The file.
+    pub path: PathBuf,
+}
+
+/// Substitutes `n` into a `{frame}` / `{frame:04}` pattern.
+pub fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
+    let start = pattern
+        .find("{frame")
+        .ok_or_else(|| format!("`{pattern}` has no {{frame}}"))?;
+    let rest = &pattern[start + 6..];
+    let close = rest
+        .find('}')
+        .ok_or_else(|| format!("`{pattern}`: unclosed {{frame"))?;
+    let spec = &rest[..close];
+    let width = if spec.is_empty() {
+        0
+    } else {
+        let digits = spec
+            .strip_prefix(":0")
+            .or_else(|| spec.strip_prefix(':'))
+            .ok_or_else(|| format!("`{{frame{spec}}}`: expected {{frame}} or {{frame:04}}"))?;
+        digits
+            .parse::<usize>()
+            .map_err(|_| format!("`{{frame{spec}}}`: expected {{frame}} or {{frame:04}}"))?
+            .min(32)
+    };
+    let num = if n < 0 {
+        format!("-{:0width$}", -n, width = width.saturating_sub(1))
+    } else {
+        format!("{n:0width$}")
+    };
+    Ok(format!(
+        "{}{}{}",
+        &pattern[..start],
+        num,
+        &rest[close + 1..]
+    ))
+}
+
+/// Lists the frames of a sequence, `dir`-relative, applying `frames`. Errors name the first missing file.
+pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFrame>, String> {
+    let step = frames.step() as i64;
+    if is_pattern(spec) {
+        let start = frames.start.unwrap_or(0);
+        let end = match (frames.end, frames.count) {
+            (Some(e), _) => e,
+            (None, Some(c)) => start + (c as i64 - 1) * step,
+            (None, None) => return scan_pattern(dir, spec, start, step),
+        };
+        if end < start {
+            return Err(format!("empty frame range {start}..={end}"));
+        }
+        if ((end - start) / step) as u64 >= MAX_FRAMES {
+            return Err(format!("more than {MAX_FRAMES} frames"));
+        }
+        let mut out = Vec::new();
+        let mut n = start;
+        while n <= end {
+            let path = dir.join(format_frame(spec, n)?);
+            if !path.is_file() {
+                return Err(format!("frame {n} is missing: {}", path.display()));
+            }
+            out.push(SequenceFrame { number: n, path });
+            n += step;
+        }
+        Ok(out)
+    } else {
+        let full = dir.join(spec);
+        let pattern = full.to_string_lossy().to_string();
+        let mut paths: Vec<PathBuf> = glob::glob(&pattern)
+            .map_err(|e| format!("bad glob `{spec}`: {e}"))?
+            .filter_map(Result::ok)
+            .filter(|p| p.is_file())
+            .collect();
+        paths.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
+        if paths.is_empty() {
+            return Err(format!("no file matches `{}`", full.display()));
+        }
+        let first = frames.start.unwrap_or(0).max(0);
+        let last = match (frames.end, frames.count) {
+            (Some(e), _) => e,
+            (None, Some(c)) => first + (c as i64 - 1) * step,
+            (None, None) => paths.len() as i64 - 1,
+        };
+        if last >= paths.len() as i64 {
+            return Err(format!(
+                "frames up to position {last} requested, but only {} files match `{spec}`",
+                paths.len()
+            ));
+        }
+        Ok((first..=last)
+            .step_by(step as usize)
+            .map(|i| SequenceFrame {
+                number: i,
+                path: paths[i as usize].clone(),
+            })
+            .collect())
+    }
+}
+
+/// With no end or count: consecutive numbers from `start` until the first missing file.
+fn scan_pattern(
+    dir: &Path,
+    spec: &str,
+    start: i64,
+    step: i64,
+) -> Result<Vec<SequenceFrame>, String> {
+    let mut out = Vec::new();
+    let mut n = start;
+    loop {
+        let path = dir.join(format_frame(spec, n)?);
+        if !path.is_file() {
+            break;
+        }
+        out.push(SequenceFrame { number: n, path });
+        if out.len() as u64 >= MAX_FRAMES {
+            break;
+        }
+        n += step;
+    }
+    if out.is_empty() {
+        return Err(format!(
+            "first frame is missing: {}",
+            dir.join(format_frame(spec, start)?).display()
+        ));
+    }
+    Ok(out)
+}
+
+/// Natural order: digit runs compare as numbers (`f2` < `f10`).
+pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    use std::cmp::Ordering;
+    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
+    while !a.is_empty() && !b.is_empty() {
+        if a[0].is_ascii_digit() && b[0].is_ascii_digit() {
+            let la = a.iter().take_while(|c| c.is_ascii_digit()).count();
+            let lb = b.iter().take_while(|c| c.is_ascii_digit()).count();
+            let (da, db) = (trim_zeros(&a[..la]), trim_zeros(&b[..lb]));
+            let ord = da.len().cmp(&db.len()).then(da.cmp(db)).then(la.cmp(&lb));
+            if ord != Ordering::Equal {
+                return ord;
+            }
+            a = &a[la..];
+            b = &b[lb..];
+        } else {
+            if a[0] != b[0] {
+                return a[0].cmp(&b[0]);
+            }
+            a = &a[1..];
+            b = &b[1..];
+        }
+    }
+    a.len().cmp(&b.len())
+}
+
+fn trim_zeros(d: &[u8]) -> &[u8] {
+    let z = d.iter().take_while(|&&c| c == b'0').count();
+    &d[z.min(d.len().saturating_sub(1))..]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn patterns_pad() {
+        assert_eq!(
+            format_frame("loot_vox10_{frame:04}.ply", 7).unwrap(),
+            "loot_vox10_0007.ply"
+        );
+        assert_eq!(format_frame("f{frame}.ply", 1051).unwrap(), "f1051.ply");
+        assert!(format_frame("f{frame:x}.ply", 1).is_err());
+    }
+
+    #[test]
+    fn natural_order() {
+        let mut v = vec!["f10.ply", "f2.ply", "f1.ply", "f02.ply"];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(v, ["f1.ply", "f2.ply", "f02.ply", "f10.ply"]);
+    }
+}

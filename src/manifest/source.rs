@@ -1,0 +1,158 @@
+//! `[source.NAME]`: where geometry comes from (animated glTF, static mesh, PLY point-cloud sequence).
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::diag::Diagnostic;
+use super::frames::Frames;
+use super::transform::Transform;
+
+/// One `[source.NAME]` table. Exactly one of `gltf`, `mesh`, `ply_sequence` is set.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Source {
+    /// An animated (or static) glTF 2.0 file, `.gltf` or `.glb`.
+    pub gltf: Option<Spanned<String>>,
+    /// A static mesh, glTF or PLY.
+    pub mesh: Option<Spanned<String>>,
+    /// A PLY sequence: a pattern with `{frame}` / `{frame:04}`, or a glob (`*`, `?`, `[…]`).
+    pub ply_sequence: Option<Spanned<String>>,
+    /// Which glTF animation clips play: an index, a name, a list of them, or `"all"`. Default: the first clip.
+    pub animation: Option<Spanned<AnimationSel>>,
+    /// Which glTF scene (default: the file's default scene, else all scenes).
+    pub scene: Option<u32>,
+    /// Frame times (glTF) or frame numbers (PLY sequences).
+    pub frames: Option<Spanned<Frames>>,
+    /// A transform applied to this source alone, before the global `[transform]`.
+    pub transform: Option<Transform>,
+}
+
+/// What kind of source a table describes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SourceKind {
+    /// `gltf = …`
+    Gltf,
+    /// `mesh = …`
+    Mesh,
+    /// `ply_sequence = …`
+    PlySequence,
+}
+
+/// Clip selection: `animation = 0`, `"Walk"`, `[0, "Wave"]` or `"all"`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum AnimationSel {
+    /// A clip by index.
+    Index(u32),
+    /// A clip by name, or `"all"`.
+    Name(String),
+    /// Several clips playing together.
+    Many(Vec<ClipRef>),
+}
+
+/// One clip reference inside a list.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum ClipRef {
+    /// By index.
+    Index(u32),
+    /// By name.
+    Name(String),
+}
+
+impl Source {
+    /// The kind and the path string, if exactly one kind is set.
+    pub fn kind(&self) -> Option<(SourceKind, &Spanned<String>)> {
+        match (&self.gltf, &self.mesh, &self.ply_sequence) {
+            (Some(p), None, None) => Some((SourceKind::Gltf, p)),
+            (None, Some(p), None) => Some((SourceKind::Mesh, p)),
+            (None, None, Some(p)) => Some((SourceKind::PlySequence, p)),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn validate(
+        &self,
+        name: &str,
+        table_span: std::ops::Range<usize>,
+        diags: &mut Vec<Diagnostic>,
+    ) {
+        let set: Vec<&Spanned<String>> = [&self.gltf, &self.mesh, &self.ply_sequence]
+            .into_iter()
+            .flatten()
+            .collect();
+        match set.len() {
+            0 => diags.push(
+                Diagnostic::error(format!("source `{name}` names no file"), Some(table_span.clone()))
+                    .with_help("add one of `gltf = \"…\"`, `mesh = \"…\"` or `ply_sequence = \"…\"`"),
+            ),
+            1 => {}
+            _ => diags.push(
+                Diagnostic::error(format!("source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`"), Some(set[1].span()))
+                    .with_help("one source is one file or sequence; declare another `[source.…]` for the second"),
+            ),
+        }
+        if let Some((kind, _)) = self.kind() {
+            if kind != SourceKind::Gltf {
+                if let Some(a) = &self.animation {
+                    diags.push(Diagnostic::error(
+                        "`animation` applies only to `gltf` sources",
+                        Some(a.span()),
+                    ));
+                }
+                if self.scene.is_some() {
+                    diags.push(Diagnostic::error(
+                        "`scene` applies only to `gltf` sources",
+                        Some(table_span.clone()),
+                    ));
+                }
+            }
+            if kind == SourceKind::Mesh {
+                if let Some(f) = &self.frames {
+                    diags.push(
+                        Diagnostic::error("a static `mesh` has no frames", Some(f.span()))
+                            .with_help("remove `frames`, or use `gltf = …` for an animated file"),
+                    );
+                }
+            }
+            if kind == SourceKind::PlySequence {
+                if let Some(f) = &self.frames {
+                    if f.get_ref().count.is_some()
+                        && f.get_ref().start.is_none()
+                        && is_pattern(self.ply_sequence.as_ref().unwrap().get_ref())
+                    {
+                        diags.push(
+                            Diagnostic::error(
+                                "a `{frame}` pattern needs `start` with `count`",
+                                Some(f.span()),
+                            )
+                            .with_help("e.g. frames = { start = 1000, count = 300 }"),
+                        );
+                    }
+                }
+            }
+        }
+        if let Some(f) = &self.frames {
+            Frames::validate(f, diags);
+        }
+        if let Some(a) = &self.animation {
+            if let AnimationSel::Many(v) = a.get_ref() {
+                if v.is_empty() {
+                    diags.push(
+                        Diagnostic::error("empty animation list", Some(a.span())).with_help(
+                            "name at least one clip, or remove `animation` for the first clip",
+                        ),
+                    );
+                }
+            }
+        }
+        if let Some(t) = &self.transform {
+            t.validate(diags);
+        }
+    }
+}
+
+/// Whether a `ply_sequence` string is a `{frame}` pattern (as opposed to a glob).
+pub fn is_pattern(s: &str) -> bool {
+    s.contains("{frame")
+}

@@ -1,0 +1,159 @@
+//! Turning the spanned TOML tree into typed tables while collecting *every* error.
+//!
+//! serde stops at the first error of a value. To report all of them, each table entry is deserialized on its
+//! own, and when an entry fails at a key, that key is removed and the entry is deserialized again (at most
+//! [`MAX_RETRIES`] times), so one misspelt key does not hide the next. The raw tree keeps absolute byte spans,
+//! so every error points into the manifest text.
+
+use std::ops::Range;
+
+use serde::de::DeserializeOwned;
+use toml::de::{DeTable, DeValue, ValueDeserializer};
+use toml::Spanned;
+
+use super::diag::Diagnostic;
+use super::suggest::{did_you_mean, one_of};
+
+/// How many errors one table entry may report before the rest are left for the next run.
+const MAX_RETRIES: usize = 16;
+
+/// A raw spanned value of the manifest.
+pub type Raw<'i> = Spanned<DeValue<'i>>;
+
+/// Deserializes `value` into `T`, pushing one diagnostic per problem.
+///
+/// After an error the offending key is dropped and the rest deserialized again, so the value returned may
+/// lack keys that were in error (their defaults stand in); it exists so later checks can still run. `None` if
+/// the value could not be recovered at all (e.g. a required key is wrong).
+pub fn typed<T: DeserializeOwned>(value: &Raw<'_>, diags: &mut Vec<Diagnostic>) -> Option<T> {
+    let mut value = value.clone();
+    let mut removed: Vec<String> = Vec::new();
+    for _ in 0..MAX_RETRIES {
+        match T::deserialize(ValueDeserializer::from(value.clone())) {
+            Ok(v) => return Some(v),
+            Err(e) => {
+                let span = e.span().unwrap_or_else(|| value.span());
+                let message = e.message().trim().to_string();
+                // A key we removed to keep going must not come back as "missing".
+                let follow_on = removed
+                    .iter()
+                    .any(|k| message == format!("missing field `{k}`"));
+                if !follow_on {
+                    diags.push(translate(&message, span.clone()));
+                }
+                match remove_key_at(&mut value, &span) {
+                    Some(key) => removed.push(key),
+                    None => return None,
+                }
+            }
+        }
+    }
+    None
+}
+
+/// Rewrites serde's wording into the manifest's ("unknown key … did you mean …").
+pub fn translate(message: &str, span: Range<usize>) -> Diagnostic {
+    if let Some(rest) = message.strip_prefix("unknown field `") {
+        let (word, expected) = split_expected(rest);
+        let mut d = Diagnostic::error(format!("unknown key `{word}`"), Some(span));
+        let help = match did_you_mean(word, expected.iter().copied()) {
+            Some(s) => format!("did you mean `{s}`?"),
+            None if expected.is_empty() => "this table takes no keys".to_string(),
+            None => format!("valid keys here: {}", one_of(&expected)),
+        };
+        d = d.with_help(help);
+        d.message = match did_you_mean(word, expected.iter().copied()) {
+            Some(s) => format!("unknown key `{word}`, did you mean `{s}`?"),
+            None => d.message,
+        };
+        return d;
+    }
+    if let Some(rest) = message.strip_prefix("unknown variant `") {
+        let (word, expected) = split_expected(rest);
+        let text = match did_you_mean(word, expected.iter().copied()) {
+            Some(s) => format!("unknown value `{word}`, did you mean `{s}`?"),
+            None => format!("unknown value `{word}`"),
+        };
+        return Diagnostic::error(text, Some(span))
+            .with_help(format!("expected {}", one_of(&expected)));
+    }
+    if let Some(rest) = message.strip_prefix("missing field `") {
+        let key = rest.trim_end_matches('`');
+        return Diagnostic::error(format!("missing required key `{key}`"), Some(span))
+            .with_help(format!("add `{key} = …` to this table"));
+    }
+    if let Some(rest) = message.strip_prefix("invalid type: ") {
+        return Diagnostic::error(format!("wrong type: {rest}"), Some(span));
+    }
+    Diagnostic::error(message.to_string(), Some(span))
+}
+
+/// Splits "word`, expected one of `a`, `b`" into ("word", ["a", "b"]).
+fn split_expected(rest: &str) -> (&str, Vec<&str>) {
+    let (word, tail) = rest.split_once('`').unwrap_or((rest, ""));
+    let expected = tail.split('`').skip(1).step_by(2).collect();
+    (word, expected)
+}
+
+/// Removes the key whose key or value span best matches `span`, returning its name.
+fn remove_key_at(value: &mut Raw<'_>, span: &Range<usize>) -> Option<String> {
+    match value.get_mut() {
+        DeValue::Table(table) => remove_in_table(table, span),
+        DeValue::Array(array) => array.iter_mut().find_map(|v| remove_key_at(v, span)),
+        _ => None,
+    }
+}
+
+fn remove_in_table(table: &mut DeTable<'_>, span: &Range<usize>) -> Option<String> {
+    // Descend first: the innermost key containing the span is the culprit.
+    for (_, v) in table.iter_mut() {
+        let vs = v.span();
+        if vs.start <= span.start && span.end <= vs.end && vs != *span {
+            if let Some(k) = remove_key_at(v, span) {
+                return Some(k);
+            }
+        }
+    }
+    let hit = table
+        .iter()
+        .find(|(k, v)| {
+            let (ks, vs) = (k.span(), v.span());
+            let inside = |s: &Range<usize>| s.start <= span.start && span.end <= s.end;
+            ks == *span || vs == *span || inside(&ks) || inside(&vs)
+        })
+        .map(|(k, _)| k.clone())?;
+    table.remove(&hit);
+    Some(hit.get_ref().to_string())
+}
+
+/// The entries of a table value, or an error if it is not a table.
+pub fn entries<'a, 'i>(
+    value: &'a Raw<'i>,
+    what: &str,
+    diags: &mut Vec<Diagnostic>,
+) -> Vec<(&'a str, Range<usize>, &'a Raw<'i>)> {
+    match value.get_ref() {
+        DeValue::Table(t) => t
+            .iter()
+            .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
+            .collect(),
+        _ => {
+            diags.push(Diagnostic::error(
+                format!("`{what}` must be a table"),
+                Some(value.span()),
+            ));
+            Vec::new()
+        }
+    }
+}
+
+/// Keys present in a raw table value, with their spans.
+pub fn keys<'a>(value: &'a Raw<'_>) -> Vec<(&'a str, Range<usize>)> {
+    match value.get_ref() {
+        DeValue::Table(t) => t
+            .iter()
+            .map(|(k, _)| (k.get_ref().as_ref(), k.span()))
+            .collect(),
+        _ => Vec::new(),
+    }
+}

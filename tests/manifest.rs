@@ -1,0 +1,337 @@
+//! The manifest language: every table parses, every class of error is reported with the right place and fix.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use vvgen::manifest::{self, Report};
+
+fn data(rel: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel).to_string_lossy().replace('\\', "/")
+}
+
+/// Parses `text` as if it were `<tmp>/m.toml`.
+fn check(text: &str) -> Result<manifest::Manifest, Report> {
+    manifest::parse(text, Path::new("/nonexistent-dir/m.toml")).map(|(m, _)| m)
+}
+
+fn errors(text: &str) -> Report {
+    match check(text) {
+        Ok(_) => panic!("manifest was accepted:\n{text}"),
+        Err(r) => r,
+    }
+}
+
+/// The (line, message, help) of every error.
+fn lines(r: &Report) -> Vec<(usize, String, String)> {
+    r.diagnostics
+        .iter()
+        .filter(|d| d.is_error())
+        .map(|d| (d.span.as_ref().map_or(0, |s| r.line_col(s.start).0), d.message.clone(), d.help.clone().unwrap_or_default()))
+        .collect()
+}
+
+fn full_manifest() -> String {
+    format!(
+        r#"
+[dataset]
+name = "full"
+version = "2.1"
+out = "out/full"
+seed = 42
+cache = "my-cache"
+
+[source.man]
+gltf = "{man}"
+animation = 0
+frames = {{ count = 10, fps = 24 }}
+transform = {{ up = "y", translate = [1.0, 0.0, 0.0] }}
+
+[source.box]
+mesh = "{box_}"
+
+[source.torus]
+ply_sequence = "{seq}"
+frames = {{ start = 1000, end = 1002, step = 1 }}
+
+[transform]
+up = "y"
+fit = {{ height = 2.4 }}
+center = "centroid"
+rotate_deg = [0.0, 0.0, 90.0]
+scale = [1.0, 1.0, 1.0]
+matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+over = "first"
+
+[render]
+resolution = [640, 480]
+fx = 500.0
+fy = 510.0
+cx = 320.0
+cy = 240.0
+near = 0.1
+far = 50.0
+samples = 9
+shading = "lambert"
+background = [1.0, 1.0, 1.0]
+passes = ["rgba", "depth", "normal", "mask"]
+depth = {{ kind = "ray" }}
+normal = {{ space = "camera" }}
+splat = {{ shape = "disk", size_px = 2.0 }}
+lights = [{{ direction = [0.0, 0.0, -1.0], intensity = 0.8 }}]
+ambient = 0.2
+png_compression = "default"
+
+[rig.hemi]
+kind = "hemisphere"
+radius = 4.0311
+numpy_seed = 0
+jitter = {{ position = 0.01 }}
+
+[rig.fib]
+kind = "fibonacci"
+elevation_range_deg = [-10.0, 80.0]
+
+[rig.ring]
+kind = "orbit"
+schedule = "nerf-test"
+start_azimuth_deg = 90.0
+
+[rig.dome]
+kind = "dome"
+rings = 3
+band = "upper"
+
+[rig.ff]
+kind = "forward-facing"
+layout = "spiral"
+extent = [1.0, 0.5]
+
+[rig.fixed]
+kind = "explicit"
+poses = [{{ position = [0.0, -4.0, 1.0] }}, {{ c2w = [[1, 0, 0, 0], [0, 0, -1, -4], [0, 1, 0, 0], [0, 0, 0, 1]] }}]
+
+[split.train]
+rig = "hemi"
+views = 100
+time = "all"
+frames = {{ start = 0, every = 2 }}
+
+[split.val]
+rig = "dome"
+views = 9
+time = "monocular"
+seed = 3
+
+[split.test]
+rig = "ring"
+views = 20
+time = "random"
+pairs = 50
+frames = [0, 5, 9]
+
+[output.dnerf]
+writer = "dnerf"
+dir = "full_dnerf"
+init_points = 50000
+
+[output.ngp]
+writer = "instant-ngp"
+splits = ["train"]
+aabb_scale = 4
+
+[output.pc]
+writer = "ply-sequence"
+source = "man"
+points = 100000
+voxel = 0.01
+vox = 10
+correspondence = true
+motion = true
+reduce = "nearest"
+color_average = "srgb"
+pattern = "man_vox10_{{frame:04}}.ply"
+format = "ascii"
+"#,
+        man = data("gltf/CesiumMan/CesiumMan.glb"),
+        box_ = data("gltf/BoxTextured/BoxTextured.glb"),
+        seq = data("seq/torus_vox10_{frame:04}.ply"),
+    )
+}
+
+#[test]
+fn every_table_parses_from_a_full_example() {
+    let m = check(&full_manifest()).unwrap_or_else(|r| panic!("{}", r.render(false)));
+    assert_eq!(m.dataset.name.get_ref(), "full");
+    assert_eq!(m.dataset.seed, 42);
+    assert_eq!(m.sources.len(), 3);
+    assert_eq!(m.rigs.len(), 6);
+    assert_eq!(m.splits.len(), 3);
+    assert_eq!(m.outputs.len(), 3);
+    assert_eq!(m.render.size(), (640, 480));
+    assert_eq!(m.render.intrinsics(), (500.0, 510.0, 320.0, 240.0));
+    assert_eq!(m.transform.over, Some(manifest::transform::Over::First));
+    assert_eq!(m.splits["test"].time, manifest::TimeMode::Random);
+    assert_eq!(m.outputs["pc"].writer.get_ref(), &manifest::Writer::PlySequence);
+    // Named tables are kept by name: table order in the file does not matter.
+    assert_eq!(m.rigs.keys().collect::<Vec<_>>(), ["dome", "ff", "fib", "fixed", "hemi", "ring"]);
+}
+
+#[test]
+fn syntax_error_has_line_and_column() {
+    let r = errors("[dataset]\nname = \"x\"\nout = \"o\nseed = 1\n");
+    let l = lines(&r);
+    assert_eq!(l.len(), 1, "{l:?}");
+    assert_eq!(l[0].0, 3);
+    assert!(l[0].1.starts_with("TOML syntax"), "{l:?}");
+    assert!(r.render(false).contains("m.toml:3:"), "{}", r.render(false));
+}
+
+#[test]
+fn unknown_key_suggests_the_nearest() {
+    let text = full_manifest().replace("views = 100", "veiws = 100");
+    let r = errors(&text);
+    let l = lines(&r);
+    let line = text.lines().position(|l| l.starts_with("veiws")).unwrap() + 1;
+    assert!(l.iter().any(|(n, m, _)| *n == line && m == "unknown key `veiws`, did you mean `views`?"), "{l:?}");
+    // The follow-on "missing views" must not be reported twice as a separate problem.
+    let rendered = r.render(false);
+    assert!(rendered.contains(&format!("m.toml:{line}:1")), "{rendered}");
+    assert!(rendered.contains("help: did you mean `views`?"), "{rendered}");
+}
+
+#[test]
+fn unknown_table_and_enum_value_suggest() {
+    let text = full_manifest().replace("[output.ngp]", "[ouptut.ngp]").replace("\"fibonacci\"", "\"fibonaci\"");
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(_, m, _)| m == "unknown table `ouptut`, did you mean `output`?"), "{l:?}");
+    assert!(l.iter().any(|(_, m, _)| m == "unknown value `fibonaci`, did you mean `fibonacci`?"), "{l:?}");
+}
+
+#[test]
+fn wrong_type_is_named() {
+    let text = full_manifest().replace("samples = 9", "samples = \"nine\"");
+    let line = text.lines().position(|l| l.starts_with("samples")).unwrap() + 1;
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(n, m, _)| *n == line && m.contains("wrong type") && m.contains("\"nine\"")), "{l:?}");
+}
+
+#[test]
+fn dangling_reference_names_the_missing_rig() {
+    let text = full_manifest().replace("rig = \"ring\"", "rig = \"rign\"");
+    let line = text.lines().position(|l| l == "rig = \"rign\"").unwrap() + 1;
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(n, m, h)| *n == line && m == "split `test` uses rig `rign`, which is not defined" && h == "did you mean `ring`?"), "{l:?}");
+}
+
+#[test]
+fn missing_file_is_an_error_at_its_path() {
+    let text = full_manifest().replace("BoxTextured.glb\"", "BoxTexture.glb\"");
+    let line = text.lines().position(|l| l.contains("BoxTexture.glb")).unwrap() + 1;
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(n, m, _)| *n == line && m.starts_with("file not found") && m.contains("BoxTexture.glb")), "{l:?}");
+}
+
+#[test]
+fn missing_sequence_frame_is_named() {
+    let text = full_manifest().replace("end = 1002", "end = 1003");
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(_, m, _)| m.contains("frame 1003 is missing") && m.contains("torus_vox10_1003.ply")), "{l:?}");
+}
+
+#[test]
+fn output_path_may_not_escape() {
+    let text = full_manifest().replace("dir = \"full_dnerf\"", "dir = \"../../elsewhere_dnerf\"");
+    let line = text.lines().position(|l| l.contains("elsewhere_dnerf")).unwrap() + 1;
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(n, m, _)| *n == line && m.contains("escapes the dataset's `out` directory")), "{l:?}");
+    let l = lines(&errors(&full_manifest().replace("dir = \"full_dnerf\"", "dir = \"/abs_dnerf\"")));
+    assert!(l.iter().any(|(_, m, _)| m.contains("escapes")), "{l:?}");
+    assert!(check(&full_manifest().replace("dir = \"full_dnerf\"", "dir = \"a/../b_dnerf\"")).is_ok());
+}
+
+#[test]
+fn zero_and_absurd_counts() {
+    for (from, to, expect) in [
+        ("views = 100", "views = 0", "views = 0: the split would be empty"),
+        ("points = 100000", "points = 0", "points = 0 is outside"),
+        ("resolution = [640, 480]", "resolution = [640, 20000]", "resolution 640×20000 is outside 1..=16384"),
+        ("count = 10, fps = 24", "count = 0, fps = 24", "count = 0: the frame range is empty"),
+        ("end = 1002", "end = 999", "empty frame range"),
+        ("samples = 9", "samples = 5", "samples = 5 is not a square supersampling count"),
+    ] {
+        let text = full_manifest().replace(from, to);
+        let line = text.lines().position(|l| l.contains(to)).unwrap() + 1;
+        let l = lines(&errors(&text));
+        assert!(l.iter().any(|(n, m, _)| *n == line && m.contains(expect)), "{to}: {l:?}");
+    }
+}
+
+#[test]
+fn all_errors_are_reported_together() {
+    let text = full_manifest()
+        .replace("views = 100", "veiws = 100")
+        .replace("samples = 9", "samples = \"nine\"")
+        .replace("rig = \"ring\"", "rig = \"rign\"")
+        .replace("BoxTextured.glb\"", "BoxTexture.glb\"")
+        .replace("dir = \"full_dnerf\"", "dir = \"../x_dnerf\"")
+        .replace("points = 100000", "points = 0")
+        .replace("kind = \"dome\"", "kind = \"dome\"\nradius = -1.0");
+    let r = errors(&text);
+    let l = lines(&r);
+    for expect in ["veiws", "wrong type", "rign", "file not found", "escapes", "points = 0", "radius = -1"] {
+        assert!(l.iter().any(|(_, m, _)| m.contains(expect)), "missing {expect}: {l:?}");
+    }
+    // Reported in reading order.
+    let ns: Vec<usize> = l.iter().map(|x| x.0).collect();
+    let mut sorted = ns.clone();
+    sorted.sort();
+    assert_eq!(ns, sorted);
+}
+
+#[test]
+fn keys_of_another_kind_are_rejected() {
+    let text = full_manifest().replace("schedule = \"nerf-test\"", "schedule = \"nerf-test\"\nrings = 4");
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(_, m, _)| m == "key `rings` does not apply to rig `ring` (kind = \"orbit\")"), "{l:?}");
+}
+
+#[test]
+fn dnerf_with_non_square_images_warns_citing_loaders() {
+    let m = manifest::parse(&full_manifest(), Path::new("/nonexistent-dir/m.toml")).unwrap().1;
+    let w: Vec<_> = m.diagnostics.iter().filter(|d| !d.is_error()).collect();
+    assert!(w.iter().any(|d| d.message.contains("non-square 640×480") && d.help.as_deref().unwrap_or("").contains("K-Planes")), "{w:?}");
+}
+
+#[test]
+fn shipped_manifests_check() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("manifests");
+    let mut kinds = std::collections::BTreeSet::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let p: PathBuf = entry.unwrap().path();
+        if p.extension().is_some_and(|e| e == "toml") {
+            let (m, _) = manifest::load(&p).unwrap_or_else(|r| panic!("{}", r.render(false)));
+            for s in m.sources.values() {
+                kinds.insert(format!("{:?}", s.kind().unwrap().0));
+            }
+        }
+    }
+    assert_eq!(kinds.into_iter().collect::<Vec<_>>(), ["Gltf", "Mesh", "PlySequence"]);
+}
+
+#[test]
+fn cli_check_exits_2_with_line_and_suggestion() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("typo.toml");
+    let text = full_manifest().replace("views = 100", "veiws = 100");
+    std::fs::write(&path, &text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).args(["check", "--color", "never"]).arg(&path).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    let line = text.lines().position(|l| l.starts_with("veiws")).unwrap() + 1;
+    assert!(err.contains(&format!("typo.toml:{line}:1")), "{err}");
+    assert!(err.contains("did you mean `views`?"), "{err}");
+
+    std::fs::write(&path, full_manifest()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).args(["check", "-q"]).arg(&path).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+}
