@@ -1,0 +1,2 @@
+//! Scene sources.
+pub mod ply;

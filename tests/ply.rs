@@ -1,0 +1,105 @@
+//! PLY reading on real odd and malformed files (tests/data/bad/ply): each loads correctly or fails clearly.
+
+use std::path::Path;
+
+use vvgen::scene::ply::{self, PlyError};
+
+fn load(name: &str) -> Result<ply::PlyData, PlyError> {
+    let bytes = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/ply").join(name)).unwrap();
+    ply::read(&bytes)
+}
+
+#[test]
+fn corrupt_header_is_an_error() {
+    let e = load("assimp_crash_corrupt_header.ply").unwrap_err();
+    assert!(matches!(e, PlyError::Header { .. } | PlyError::NoEndHeader), "{e}");
+}
+
+#[test]
+fn empty_file_is_not_ply() {
+    assert_eq!(load("assimp_empty_0bytes.ply").unwrap_err(), PlyError::NotPly);
+}
+
+#[test]
+fn binary_body_starting_with_newline_is_kept() {
+    let d = load("assimp_cube_binary_starts_with_nl.ply").unwrap();
+    assert_eq!(d.positions.len(), 8);
+    assert_eq!(d.triangles.len(), 6 * 2 * 3);
+    // The first x is the body's first 4 bytes, 0x0A included: skipping it as whitespace would shift everything.
+    assert_eq!(d.positions[0], [f32::from_le_bytes([0x0a, 0xf6, 0xbe, 0x40]), 0.0, 0.0]);
+    assert_eq!(d.positions[1], [f32::from_le_bytes([0x0a, 0xf6, 0xbe, 0x40]), 0.0, 1.0]);
+}
+
+#[test]
+fn float_colours_scale_to_bytes() {
+    let d = load("assimp_float_color.ply").unwrap();
+    let c = d.colors.unwrap();
+    assert_eq!(c.len(), 3);
+    assert!(c.iter().flatten().any(|&v| v == 255), "{c:?}");
+}
+
+#[test]
+fn rows_that_do_not_match_the_header_are_an_error() {
+    // The header declares a list after six floats; the rows have no list, so the 7th value is read as a count.
+    let e = load("assimp_issue623_comment_between_properties.ply").unwrap_err();
+    assert!(matches!(e, PlyError::Body { row: 0, .. }), "{e}");
+    assert!(e.to_string().contains("not a count"), "{e}");
+}
+
+#[test]
+fn lone_cr_header_and_extra_element() {
+    let d = load("draco_delim_test.ply").unwrap();
+    assert_eq!(d.positions.len(), 24);
+    // 8 polygons (quads and triangles), fan-triangulated.
+    assert_eq!(d.triangles.len(), 12 * 3);
+    assert!(d.normals.is_some() && d.colors.is_some());
+}
+
+#[test]
+fn tabs_and_extra_whitespace() {
+    let d = load("draco_test_extra_whitespace.ply").unwrap();
+    assert_eq!(d.positions.len(), 3);
+    assert_eq!(d.triangles, [0, 1, 2]);
+}
+
+#[test]
+fn every_scalar_type_and_alias_parses_without_xyz_being_usable() {
+    // A custom element "point" with every type: the header parses; there is no vertex element to use.
+    let bytes = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/ply/plyrs_all_atomic_types_ok_ascii.ply")).unwrap();
+    let h = ply::parse_header(&bytes).unwrap();
+    assert_eq!(h.elements[0].props.len(), 16);
+    assert!(matches!(ply::read(&bytes), Err(PlyError::Unusable(_))));
+}
+
+#[test]
+fn empty_cloud_loads_empty() {
+    let d = load("plyrs_empty_2_ok_little_endian.ply").unwrap();
+    assert!(d.positions.is_empty() && d.triangles.is_empty());
+}
+
+#[test]
+fn greg_turk_example_with_edges() {
+    let d = load("plyrs_greg_turk_example2_ok_ascii.ply").unwrap();
+    assert_eq!(d.positions.len(), 8);
+    assert!(d.colors.is_some());
+    assert!(!d.triangles.is_empty());
+}
+
+#[test]
+fn leading_spaces_load_without_xyz_z() {
+    // "point" element with x, y only: parses, but has no vertex element.
+    assert!(matches!(load("plyrs_leading_spaces_ok_ascii.ply"), Err(PlyError::Unusable(_))));
+}
+
+#[test]
+fn crlf_and_char_face_property() {
+    let d = load("trimesh_metadata_char_face_prop.ply").unwrap();
+    assert_eq!(d.positions.len(), 4);
+    assert_eq!(d.triangles.len(), 6);
+}
+
+#[test]
+fn lists_in_custom_elements_are_skipped() {
+    let d = load("trimesh_points_ascii_with_lists.ply").unwrap();
+    assert_eq!(d.positions.len(), 5);
+}
