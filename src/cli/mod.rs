@@ -2,6 +2,7 @@
 //! function; nothing below `cli` prints.
 
 mod check;
+mod inspect;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -52,6 +53,23 @@ pub enum Command {
         #[arg(required = true)]
         manifests: Vec<PathBuf>,
     },
+    /// Show a manifest's scene: sources, clips, frames, bounds, resolved transforms, posed-geometry hashes.
+    #[command(
+        after_help = "Examples:\n  vvgen inspect manifests/cesium-man.toml\n  vvgen inspect manifests/cesium-man.toml --frame 12 --ply posed.ply"
+    )]
+    Inspect {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Only this source.
+        #[arg(long)]
+        source: Option<String>,
+        /// Frame to describe and export.
+        #[arg(long, default_value_t = 0)]
+        frame: usize,
+        /// Write the posed, transformed geometry of the frame (normals, colours, faces) to this PLY file.
+        #[arg(long)]
+        ply: Option<PathBuf>,
+    },
 }
 
 /// Output settings shared by the subcommands.
@@ -80,12 +98,34 @@ pub fn run() -> ExitCode {
     };
     let result = match cli.command {
         Command::Check { manifests } => check::run(&manifests, ui),
+        Command::Inspect {
+            manifest,
+            source,
+            frame,
+            ply,
+        } => inspect::run(&manifest, source.as_deref(), frame, ply.as_ref(), ui),
     };
     match result {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// Loads a manifest, printing its diagnostics; `None` when it is invalid.
+pub(crate) fn load_manifest(path: &std::path::Path, ui: Ui) -> Option<crate::manifest::Manifest> {
+    match crate::manifest::load(path) {
+        Ok((m, report)) => {
+            if !ui.quiet && !report.diagnostics.is_empty() {
+                eprint!("{}", report.render(ui.color));
+            }
+            Some(m)
+        }
+        Err(report) => {
+            eprint!("{}", report.render(ui.color));
+            None
         }
     }
 }

@@ -1,2 +1,206 @@
-//! Scene sources.
+//! Scene sources: glTF and PLY files → [`PosedScene`] at any frame, in world space after the manifest's
+//! transforms. The transforms are resolved once per sequence when the scene opens ([`Scene::open`]), never per
+//! frame, so the subject does not jump or breathe between frames.
+
+pub mod gltf;
+pub mod material;
 pub mod ply;
+pub mod posed;
+pub mod source;
+pub mod transform;
+
+use std::sync::Arc;
+
+use glam::Mat4;
+
+pub use posed::{PosedPrimitive, PosedScene, PrimKind};
+pub use source::{LoadedSource, SourceData};
+
+use crate::manifest::transform::{Over, Transform, UpAxis};
+use crate::manifest::Manifest;
+use gltf::PoseScratch;
+use transform::Stats;
+
+/// Every source of a manifest, loaded, with its resolved transform.
+#[derive(Debug)]
+pub struct Scene {
+    /// Sources, sorted by name.
+    pub sources: Vec<LoadedSource>,
+    /// Per-source transform (the source's `[transform]` with its up axis), source → scene.
+    pub locals: Vec<Mat4>,
+    /// The global `[transform]`, scene → world.
+    pub global: Mat4,
+    /// Frames of the scene: the longest source's count (shorter sources hold their last frame).
+    pub frames: usize,
+    /// Non-fatal problems found while loading.
+    pub warnings: Vec<String>,
+}
+
+/// Reusable buffers for posing a scene; posing a single-source scene after its first frame allocates nothing.
+#[derive(Debug, Default)]
+pub struct Poser {
+    scratch: Vec<PoseScratch>,
+    parts: Vec<PosedScene>,
+    out: PosedScene,
+}
+
+impl Scene {
+    /// Loads every source and resolves the transforms (reading every frame once when a transform needs the
+    /// bounds of all frames).
+    pub fn open(m: &Manifest) -> Result<Scene, String> {
+        let mut sources = Vec::new();
+        for (name, s) in &m.sources {
+            sources.push(LoadedSource::load(name, s, &m.dir)?);
+        }
+        let mut warnings = Vec::new();
+        for s in &sources {
+            if let SourceData::Gltf { asset, .. } = &s.data {
+                warnings.extend(
+                    asset
+                        .warnings
+                        .iter()
+                        .map(|w| format!("{}: {w}", asset.path.display())),
+                );
+            }
+        }
+        let mut scratch = PoseScratch::default();
+        let mut posed = PosedScene::default();
+        let mut locals = Vec::new();
+        for (src, (_, cfg)) in sources.iter().zip(&m.sources) {
+            let t = cfg.transform.clone().unwrap_or_default();
+            let up = t.up.or(m.transform.up).unwrap_or(src.default_up);
+            let over = t.over.or(m.transform.over).unwrap_or_default();
+            let pre = transform::pre(&t, up).as_mat4();
+            let mut stats = Stats::default();
+            if transform::needs_stats(&t) {
+                gather(src, pre, over, &mut scratch, &mut posed, &mut stats)?;
+            }
+            locals.push(
+                transform::resolve(&t, up, &stats)
+                    .map_err(|e| format!("source `{}`: {e}", src.name))?,
+            );
+        }
+        // The global table's `up` is only the sources' default: the rotation was applied per source.
+        let g = Transform {
+            up: None,
+            ..m.transform.clone()
+        };
+        let g_pre = transform::pre(&g, UpAxis::Z).as_mat4();
+        let mut stats = Stats::default();
+        if transform::needs_stats(&g) {
+            for (src, local) in sources.iter().zip(&locals) {
+                gather(
+                    src,
+                    g_pre * *local,
+                    g.over.unwrap_or_default(),
+                    &mut scratch,
+                    &mut posed,
+                    &mut stats,
+                )?;
+            }
+        }
+        let global =
+            transform::resolve(&g, UpAxis::Z, &stats).map_err(|e| format!("[transform]: {e}"))?;
+        let frames = sources
+            .iter()
+            .map(LoadedSource::frame_count)
+            .max()
+            .unwrap_or(0);
+        Ok(Scene {
+            sources,
+            locals,
+            global,
+            frames,
+            warnings,
+        })
+    }
+
+    /// Source → world matrix of source `i`.
+    pub fn world_from_source(&self, i: usize) -> Mat4 {
+        self.global * self.locals[i]
+    }
+
+    /// Poses frame `frame` of every source, in world space.
+    pub fn pose<'a>(&self, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, String> {
+        let n = self.sources.len();
+        poser.scratch.resize_with(n, PoseScratch::default);
+        if n == 1 {
+            self.sources[0].pose(
+                frame,
+                self.world_from_source(0),
+                &mut poser.scratch[0],
+                &mut poser.out,
+            )?;
+            return Ok(&poser.out);
+        }
+        poser.parts.resize_with(n, PosedScene::default);
+        for i in 0..n {
+            self.sources[i].pose(
+                frame,
+                self.world_from_source(i),
+                &mut poser.scratch[i],
+                &mut poser.parts[i],
+            )?;
+        }
+        merge(&poser.parts, &mut poser.out);
+        Ok(&poser.out)
+    }
+}
+
+/// Accumulates the bounds of `src`'s frames (`over`) after `post`.
+fn gather(
+    src: &LoadedSource,
+    post: Mat4,
+    over: Over,
+    scratch: &mut PoseScratch,
+    posed: &mut PosedScene,
+    stats: &mut Stats,
+) -> Result<(), String> {
+    let frames = if over == Over::First {
+        1
+    } else {
+        src.frame_count()
+    };
+    for f in 0..frames {
+        *posed = PosedScene::default();
+        src.pose(f, post, scratch, posed)?;
+        for p in &posed.primitives {
+            stats.add(&p.positions);
+        }
+    }
+    Ok(())
+}
+
+/// Concatenates several sources' posed scenes, renumbering materials, textures and objects.
+fn merge(parts: &[PosedScene], out: &mut PosedScene) {
+    let mut materials = Vec::new();
+    let mut textures = Vec::new();
+    out.primitives.clear();
+    let mut object_base = 0;
+    for part in parts {
+        let (mb, tb) = (materials.len() as u32, textures.len() as u32);
+        materials.extend(
+            part.materials
+                .iter()
+                .cloned()
+                .map(|mut m: material::Material| {
+                    if let Some(t) = &mut m.base_color_texture {
+                        t.texture += tb;
+                    }
+                    m
+                }),
+        );
+        textures.extend(part.textures.iter().cloned());
+        let mut max_object = 0;
+        for p in &part.primitives {
+            let mut q = p.clone();
+            q.material += mb;
+            q.object += object_base;
+            max_object = max_object.max(p.object + 1);
+            out.primitives.push(q);
+        }
+        object_base += max_object;
+    }
+    out.materials = Arc::new(materials);
+    out.textures = Arc::new(textures);
+}

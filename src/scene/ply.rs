@@ -111,7 +111,11 @@ impl Scalar {
         macro_rules! rd {
             ($t:ty, $n:expr) => {{
                 let a: [u8; $n] = b[..$n].try_into().unwrap();
-                (if be { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f64
+                (if be {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }) as f64
             }};
         }
         match self {
@@ -180,13 +184,19 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
         }
         // Lines end in LF, CRLF or a lone CR (Rhino).
         let rest = &bytes[pos..];
-        let end = rest.iter().position(|&c| c == b'\n' || c == b'\r').ok_or(PlyError::NoEndHeader)?;
+        let end = rest
+            .iter()
+            .position(|&c| c == b'\n' || c == b'\r')
+            .ok_or(PlyError::NoEndHeader)?;
         let mut next = pos + end + 1;
         if rest[end] == b'\r' && rest.get(end + 1) == Some(&b'\n') {
             next += 1;
         }
         line_no += 1;
-        let line = std::str::from_utf8(&rest[..end]).map_err(|_| PlyError::Header { line: line_no, msg: "not text".into() })?;
+        let line = std::str::from_utf8(&rest[..end]).map_err(|_| PlyError::Header {
+            line: line_no,
+            msg: "not text".into(),
+        })?;
         let herr = |msg: String| PlyError::Header { line: line_no, msg };
         let mut words = line.split_ascii_whitespace();
         match words.next() {
@@ -203,27 +213,53 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
             Some("comment") => comments.push(line.trim_start()[7..].trim().to_string()),
             Some("obj_info") => obj_info.push(line.trim_start()[8..].trim().to_string()),
             Some("element") => {
-                let name = words.next().ok_or_else(|| herr("element without a name".into()))?;
-                let count = words.next().and_then(|c| c.parse::<usize>().ok()).ok_or_else(|| herr(format!("element `{name}` has no valid count")))?;
-                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
+                let name = words
+                    .next()
+                    .ok_or_else(|| herr("element without a name".into()))?;
+                let count = words
+                    .next()
+                    .and_then(|c| c.parse::<usize>().ok())
+                    .ok_or_else(|| herr(format!("element `{name}` has no valid count")))?;
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    props: Vec::new(),
+                });
             }
             Some("property") => {
-                let el = elements.last_mut().ok_or_else(|| herr("property before any element".into()))?;
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| herr("property before any element".into()))?;
                 let w: Vec<&str> = words.collect();
                 let prop = match w.as_slice() {
                     ["list", c, t, n] => Property {
                         name: n.to_string(),
-                        list: Some(Scalar::parse(c).filter(|c| !c.is_float()).ok_or_else(|| herr(format!("bad list count type `{c}`")))?),
+                        list: Some(
+                            Scalar::parse(c)
+                                .filter(|c| !c.is_float())
+                                .ok_or_else(|| herr(format!("bad list count type `{c}`")))?,
+                        ),
                         ty: Scalar::parse(t).ok_or_else(|| herr(format!("unknown type `{t}`")))?,
                     },
-                    [t, n] => Property { name: n.to_string(), list: None, ty: Scalar::parse(t).ok_or_else(|| herr(format!("unknown type `{t}`")))? },
+                    [t, n] => Property {
+                        name: n.to_string(),
+                        list: None,
+                        ty: Scalar::parse(t).ok_or_else(|| herr(format!("unknown type `{t}`")))?,
+                    },
                     _ => return Err(herr(format!("cannot read `{line}`"))),
                 };
                 el.props.push(prop);
             }
             Some("end_header") => {
-                let format = format.ok_or_else(|| herr("no `format` line before end_header".into()))?;
-                return Ok(Header { format, elements, comments, obj_info, body_start: next });
+                let format =
+                    format.ok_or_else(|| herr("no `format` line before end_header".into()))?;
+                return Ok(Header {
+                    format,
+                    elements,
+                    comments,
+                    obj_info,
+                    body_start: next,
+                });
             }
             Some(w) => return Err(herr(format!("unknown header keyword `{w}`"))),
         }
@@ -272,8 +308,15 @@ fn slot(name: &str) -> usize {
 pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
     let header = parse_header(bytes)?;
     let body = &bytes[header.body_start..];
-    let mut out = PlyData { comments: header.comments.clone(), ..Default::default() };
-    let mut cursor = Cursor { body, pos: 0, format: header.format };
+    let mut out = PlyData {
+        comments: header.comments.clone(),
+        ..Default::default()
+    };
+    let mut cursor = Cursor {
+        body,
+        pos: 0,
+        format: header.format,
+    };
     let mut vertex_seen = false;
     for el in &header.elements {
         match el.name.as_str() {
@@ -307,9 +350,18 @@ impl<'a> Cursor<'a> {
         let min_row: usize = match self.format {
             // Every ascii value takes at least one character and one separator.
             Format::Ascii => 2 * el.props.len().max(1),
-            _ => el.props.iter().map(|p| p.list.map_or(p.ty.size(), |c| c.size())).sum::<usize>().max(1),
+            _ => el
+                .props
+                .iter()
+                .map(|p| p.list.map_or(p.ty.size(), |c| c.size()))
+                .sum::<usize>()
+                .max(1),
         };
-        if el.count.checked_mul(min_row).is_none_or(|n| n > self.remaining()) {
+        if el
+            .count
+            .checked_mul(min_row)
+            .is_none_or(|n| n > self.remaining())
+        {
             return Err(PlyError::Truncated(format!(
                 "element `{}` declares {} rows, more than the remaining {} bytes can hold",
                 el.name,
@@ -340,13 +392,22 @@ impl<'a> Cursor<'a> {
     fn value(&mut self, ty: Scalar, el: &Element, row: usize) -> Result<f64, PlyError> {
         match self.format {
             Format::Ascii => {
-                let t = self.token().ok_or_else(|| PlyError::Truncated(format!("element `{}` row {row} is incomplete", el.name)))?;
-                parse_number(t).ok_or_else(|| PlyError::Body { element: el.name.clone(), row, msg: format!("`{}` is not a number", String::from_utf8_lossy(t)) })
+                let t = self.token().ok_or_else(|| {
+                    PlyError::Truncated(format!("element `{}` row {row} is incomplete", el.name))
+                })?;
+                parse_number(t).ok_or_else(|| PlyError::Body {
+                    element: el.name.clone(),
+                    row,
+                    msg: format!("`{}` is not a number", String::from_utf8_lossy(t)),
+                })
             }
             f => {
                 let n = ty.size();
                 if self.remaining() < n {
-                    return Err(PlyError::Truncated(format!("element `{}` row {row} is incomplete", el.name)));
+                    return Err(PlyError::Truncated(format!(
+                        "element `{}` row {row} is incomplete",
+                        el.name
+                    )));
                 }
                 let v = ty.read(&self.body[self.pos..], f == Format::BinaryBe);
                 self.pos += n;
@@ -358,7 +419,11 @@ impl<'a> Cursor<'a> {
     fn list_len(&mut self, count_ty: Scalar, el: &Element, row: usize) -> Result<usize, PlyError> {
         let v = self.value(count_ty, el, row)?;
         if !(v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64) {
-            return Err(PlyError::Body { element: el.name.clone(), row, msg: format!("list length {v} is not a count") });
+            return Err(PlyError::Body {
+                element: el.name.clone(),
+                row,
+                msg: format!("list length {v} is not a count"),
+            });
         }
         Ok(v as usize)
     }
@@ -374,8 +439,15 @@ impl<'a> Cursor<'a> {
                     Some(c) => {
                         let n = self.list_len(c, el, row)?;
                         if self.format != Format::Ascii {
-                            let bytes = n.checked_mul(p.ty.size()).filter(|&b| b <= self.remaining());
-                            self.pos += bytes.ok_or_else(|| PlyError::Truncated(format!("element `{}` row {row}: list of {n} items", el.name)))?;
+                            let bytes = n
+                                .checked_mul(p.ty.size())
+                                .filter(|&b| b <= self.remaining());
+                            self.pos += bytes.ok_or_else(|| {
+                                PlyError::Truncated(format!(
+                                    "element `{}` row {row}: list of {n} items",
+                                    el.name
+                                ))
+                            })?;
                         } else {
                             for _ in 0..n {
                                 self.value(p.ty, el, row)?;
@@ -406,10 +478,22 @@ fn parse_number(t: &[u8]) -> Option<f64> {
 
 fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<(), PlyError> {
     c.check_count(el)?;
-    let slots: Vec<usize> = el.props.iter().map(|p| if p.list.is_some() { NO_SLOT } else { slot(&p.name) }).collect();
+    let slots: Vec<usize> = el
+        .props
+        .iter()
+        .map(|p| {
+            if p.list.is_some() {
+                NO_SLOT
+            } else {
+                slot(&p.name)
+            }
+        })
+        .collect();
     let has = |s: usize| slots.contains(&s);
     if !(has(SLOT_X) && has(SLOT_X + 1) && has(SLOT_X + 2)) {
-        return Err(PlyError::Unusable("the vertex element has no x, y, z".into()));
+        return Err(PlyError::Unusable(
+            "the vertex element has no x, y, z".into(),
+        ));
     }
     let has_n = has(SLOT_NX) && has(SLOT_NX + 1) && has(SLOT_NX + 2);
     let has_c = has(SLOT_R) && has(SLOT_R + 1) && has(SLOT_R + 2);
@@ -429,17 +513,18 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
     out.positions = Vec::with_capacity(n);
     let mut normals = Vec::with_capacity(if has_n { n } else { 0 });
     let mut colors = Vec::with_capacity(if has_c { n } else { 0 });
-    let fixed: Option<Vec<usize>> = (c.format != Format::Ascii && el.props.iter().all(|p| p.list.is_none())).then(|| {
-        let mut off = 0;
-        el.props
-            .iter()
-            .map(|p| {
-                let o = off;
-                off += p.ty.size();
-                o
-            })
-            .collect()
-    });
+    let fixed: Option<Vec<usize>> =
+        (c.format != Format::Ascii && el.props.iter().all(|p| p.list.is_none())).then(|| {
+            let mut off = 0;
+            el.props
+                .iter()
+                .map(|p| {
+                    let o = off;
+                    off += p.ty.size();
+                    o
+                })
+                .collect()
+        });
     let mut v = [0f64; 10];
     v[SLOT_A] = 255.0;
     if let Some(offsets) = fixed {
@@ -447,13 +532,28 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         let row_size: usize = el.props.iter().map(|p| p.ty.size()).sum();
         let total = row_size * n;
         if c.remaining() < total {
-            return Err(PlyError::Truncated(format!("vertex data needs {total} bytes, {} remain", c.remaining())));
+            return Err(PlyError::Truncated(format!(
+                "vertex data needs {total} bytes, {} remain",
+                c.remaining()
+            )));
         }
         let be = c.format == Format::BinaryBe;
         let data = &c.body[c.pos..c.pos + total];
-        let mapped: Vec<(usize, Scalar, usize)> = el.props.iter().zip(&offsets).zip(&slots).filter(|(_, &s)| s != NO_SLOT).map(|((p, &o), &s)| (o, p.ty, s)).collect();
+        let mapped: Vec<(usize, Scalar, usize)> = el
+            .props
+            .iter()
+            .zip(&offsets)
+            .zip(&slots)
+            .filter(|(_, &s)| s != NO_SLOT)
+            .map(|((p, &o), &s)| (o, p.ty, s))
+            .collect();
         // The common layouts (x, y, z as f32 at the start of the row) get an unrolled path.
-        let xyz_f32_le = !be && mapped.iter().take(3).enumerate().all(|(i, &(o, t, s))| o == 4 * i && t == Scalar::F32 && s == i);
+        let xyz_f32_le = !be
+            && mapped
+                .iter()
+                .take(3)
+                .enumerate()
+                .all(|(i, &(o, t, s))| o == 4 * i && t == Scalar::F32 && s == i);
         for row in data.chunks_exact(row_size) {
             if xyz_f32_le {
                 let f = |o: usize| f32::from_le_bytes([row[o], row[o + 1], row[o + 2], row[o + 3]]);
@@ -513,9 +613,17 @@ fn to_rgba8(v: &[f64; 10], scale: f64) -> [u8; 4] {
     [q(v[6]), q(v[7]), q(v[8]), q(v[9])]
 }
 
-fn read_faces(c: &mut Cursor<'_>, el: &Element, n_vertices: usize, tris: &mut Vec<u32>) -> Result<(), PlyError> {
+fn read_faces(
+    c: &mut Cursor<'_>,
+    el: &Element,
+    n_vertices: usize,
+    tris: &mut Vec<u32>,
+) -> Result<(), PlyError> {
     c.check_count(el)?;
-    let list_idx = el.props.iter().position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"));
+    let list_idx = el
+        .props
+        .iter()
+        .position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"));
     tris.reserve(el.count.min(c.remaining()) * 3);
     let mut poly: Vec<u32> = Vec::new();
     for row in 0..el.count {
@@ -533,13 +641,19 @@ fn read_faces(c: &mut Cursor<'_>, el: &Element, n_vertices: usize, tris: &mut Ve
                         continue;
                     }
                     if len > c.remaining() {
-                        return Err(PlyError::Truncated(format!("face row {row} lists {len} vertices")));
+                        return Err(PlyError::Truncated(format!(
+                            "face row {row} lists {len} vertices"
+                        )));
                     }
                     poly.clear();
                     for _ in 0..len {
                         let v = c.value(p.ty, el, row)?;
                         if !(v >= 0.0 && (v as usize) < n_vertices) {
-                            return Err(PlyError::Body { element: el.name.clone(), row, msg: format!("vertex index {v} is out of range (0..{n_vertices})") });
+                            return Err(PlyError::Body {
+                                element: el.name.clone(),
+                                row,
+                                msg: format!("vertex index {v} is out of range (0..{n_vertices})"),
+                            });
                         }
                         poly.push(v as u32);
                     }
@@ -578,7 +692,11 @@ pub struct PlyOut<'a> {
 pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
     let n = out.positions.len();
     let mut h = String::from("ply\n");
-    h.push_str(if out.ascii { "format ascii 1.0\n" } else { "format binary_little_endian 1.0\n" });
+    h.push_str(if out.ascii {
+        "format ascii 1.0\n"
+    } else {
+        "format binary_little_endian 1.0\n"
+    });
     for c in out.comments {
         let _ = writeln!(h, "comment {c}");
     }
@@ -598,7 +716,11 @@ pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
     }
     let tris = out.triangles.unwrap_or(&[]);
     if out.triangles.is_some() {
-        let _ = writeln!(h, "element face {}\nproperty list uchar int vertex_indices", tris.len() / 3);
+        let _ = writeln!(
+            h,
+            "element face {}\nproperty list uchar int vertex_indices",
+            tris.len() / 3
+        );
     }
     h.push_str("end_header\n");
     let mut buf = Vec::with_capacity(h.len() + n * 40);
@@ -661,9 +783,15 @@ pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
 mod tests {
     use super::*;
 
-    fn cloud() -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[u8; 3]>) {
-        let p: Vec<[f32; 3]> = (0..100).map(|i| [i as f32 * 0.5, -(i as f32), 1e-3 * i as f32]).collect();
-        let n: Vec<[f32; 3]> = (0..100).map(|i| [0.0, (i % 2) as f32, 1.0 - (i % 2) as f32]).collect();
+    type Cloud = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[u8; 3]>);
+
+    fn cloud() -> Cloud {
+        let p: Vec<[f32; 3]> = (0..100)
+            .map(|i| [i as f32 * 0.5, -(i as f32), 1e-3 * i as f32])
+            .collect();
+        let n: Vec<[f32; 3]> = (0..100)
+            .map(|i| [0.0, (i % 2) as f32, 1.0 - (i % 2) as f32])
+            .collect();
         let c: Vec<[u8; 3]> = (0..100).map(|i| [i as u8, 255 - i as u8, 7]).collect();
         (p, n, c)
     }
@@ -673,11 +801,25 @@ mod tests {
         let (p, n, c) = cloud();
         let tris = [0u32, 1, 2, 2, 3, 0];
         for ascii in [false, true] {
-            let bytes = write(&PlyOut { positions: &p, normals: Some(&n), colors: Some(&c), triangles: Some(&tris), ascii, ..Default::default() });
+            let bytes = write(&PlyOut {
+                positions: &p,
+                normals: Some(&n),
+                colors: Some(&c),
+                triangles: Some(&tris),
+                ascii,
+                ..Default::default()
+            });
             let d = read(&bytes).unwrap();
             assert_eq!(d.positions, p);
             assert_eq!(d.normals.unwrap(), n);
-            assert_eq!(d.colors.unwrap().iter().map(|c| [c[0], c[1], c[2]]).collect::<Vec<_>>(), c);
+            assert_eq!(
+                d.colors
+                    .unwrap()
+                    .iter()
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect::<Vec<_>>(),
+                c
+            );
             assert_eq!(d.triangles, tris);
         }
     }
@@ -696,7 +838,11 @@ mod tests {
         let b = b"ply\nformat binary_little_endian 1.0\nelement vertex 4000000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0";
         assert!(matches!(read(b), Err(PlyError::Truncated(_))));
         let b = b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n4 5\n";
-        assert!(matches!(read(b), Err(PlyError::Truncated(_))), "{:?}", read(b));
+        assert!(
+            matches!(read(b), Err(PlyError::Truncated(_))),
+            "{:?}",
+            read(b)
+        );
         let b = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 zz\n";
         assert!(matches!(read(b), Err(PlyError::Body { .. })));
     }

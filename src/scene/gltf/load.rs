@@ -1,0 +1,698 @@
+//! Loading a glTF file into [`GltfAsset`]: buffers (GLB chunk, side-car files, `data:` URIs; never outside
+//! the file's folder), decoded textures, materials, rest-pose primitives, nodes, skins and animations.
+
+use std::path::{Path, PathBuf};
+
+use base64::Engine as _;
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+use gltf::mesh::Mode;
+
+use super::accessor::{read_f32, read_u32};
+use super::anim::{Animation, Channel, Interp, Sampler, Target};
+use crate::scene::material::{srgb_to_linear, AlphaMode, Material, Texture, TextureRef, Wrap};
+use crate::scene::posed::PrimKind;
+
+/// Extensions vvgen understands; a file that *requires* any other is refused.
+const SUPPORTED_REQUIRED: &[&str] = &["KHR_texture_transform", "KHR_materials_emissive_strength"];
+
+/// A loaded glTF: everything needed to pose it at any time, with no further I/O.
+#[derive(Debug, Clone)]
+pub struct GltfAsset {
+    /// The file.
+    pub path: PathBuf,
+    /// Materials (index = glTF material index; the last one is the default material).
+    pub materials: Vec<Material>,
+    /// Decoded textures (index = glTF texture index).
+    pub textures: Vec<Texture>,
+    /// Meshes: rest-pose primitives.
+    pub meshes: Vec<Vec<Primitive>>,
+    /// Nodes.
+    pub nodes: Vec<Node>,
+    /// Skins.
+    pub skins: Vec<Skin>,
+    /// Animation clips.
+    pub animations: Vec<Animation>,
+    /// Root nodes of the scenes in use.
+    pub roots: Vec<usize>,
+    /// Cameras in the file: (node name, vertical fov in radians, aspect ratio) of perspective cameras.
+    pub cameras: Vec<FileCamera>,
+    /// Non-fatal problems (skipped line primitives, normalized quaternions).
+    pub warnings: Vec<String>,
+    /// Nodes reachable from the roots, parents first, with their parents (see [`GltfAsset::traversal`]).
+    pub order: Vec<(usize, Option<usize>)>,
+}
+
+/// A camera found in the file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FileCamera {
+    /// Node index.
+    pub node: usize,
+    /// Camera name.
+    pub name: String,
+    /// `perspective` or `orthographic`.
+    pub kind: &'static str,
+    /// Vertical field of view (perspective), radians.
+    pub yfov: Option<f32>,
+}
+
+/// A primitive at rest.
+#[derive(Debug, Clone)]
+pub struct Primitive {
+    /// Triangles or points.
+    pub kind: PrimKind,
+    /// POSITION.
+    pub positions: Vec<Vec3>,
+    /// NORMAL (generated when absent).
+    pub normals: Vec<Vec3>,
+    /// The TEXCOORD set the base colour texture reads (empty when untextured).
+    pub uvs: Vec<Vec2>,
+    /// COLOR_0, linear RGBA (empty means white).
+    pub colors: Vec<Vec4>,
+    /// Triangle list indices (empty for points).
+    pub indices: Vec<u32>,
+    /// Material index into [`GltfAsset::materials`].
+    pub material: u32,
+    /// Influences per vertex (4 × number of JOINTS_n sets), 0 when unskinned.
+    pub influences: usize,
+    /// Joint indices, `influences` per vertex.
+    pub joints: Vec<u16>,
+    /// Weights, `influences` per vertex, renormalized to sum 1.
+    pub weights: Vec<f32>,
+    /// Morph target POSITION deltas (one Vec per target; empty Vec when the target has none).
+    pub morph_positions: Vec<Vec<Vec3>>,
+    /// Morph target NORMAL deltas.
+    pub morph_normals: Vec<Vec<Vec3>>,
+}
+
+/// A node.
+#[derive(Debug, Clone)]
+pub struct Node {
+    /// Name, if any.
+    pub name: Option<String>,
+    /// Children.
+    pub children: Vec<usize>,
+    /// Rest translation.
+    pub translation: Vec3,
+    /// Rest rotation.
+    pub rotation: Quat,
+    /// Rest scale.
+    pub scale: Vec3,
+    /// A fixed matrix (nodes with `matrix` cannot be animated).
+    pub matrix: Option<Mat4>,
+    /// Mesh index.
+    pub mesh: Option<usize>,
+    /// Skin index.
+    pub skin: Option<usize>,
+    /// Morph weights: node's, else the mesh's defaults, else zeros.
+    pub weights: Vec<f32>,
+}
+
+/// A skin.
+#[derive(Debug, Clone)]
+pub struct Skin {
+    /// Joint node indices.
+    pub joints: Vec<usize>,
+    /// Inverse bind matrices (identity when absent).
+    pub inverse_bind: Vec<Mat4>,
+}
+
+fn err(path: &Path, msg: impl std::fmt::Display) -> String {
+    format!("{}: {msg}", path.display())
+}
+
+/// Loads a `.gltf` or `.glb`. `scene`: which scene (default: the file's default, else all).
+pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
+    let bytes = std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    let gltf =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| err(path, format!("invalid glTF: {e}")))?;
+    let doc = &gltf.document;
+    for ext in doc.extensions_required() {
+        if !SUPPORTED_REQUIRED.contains(&ext) {
+            return Err(err(
+                path,
+                format!("requires extension `{ext}`, which vvgen does not support"),
+            ));
+        }
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut buffers = Vec::new();
+    for b in doc.buffers() {
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                err(
+                    path,
+                    "buffer refers to a GLB BIN chunk the file does not have",
+                )
+            })?,
+            gltf::buffer::Source::Uri(uri) => {
+                fetch_uri(dir, uri).map_err(|e| err(path, format!("buffer {}: {e}", b.index())))?
+            }
+        };
+        if data.len() < b.length() {
+            return Err(err(
+                path,
+                format!(
+                    "buffer {} holds {} bytes, {} declared",
+                    b.index(),
+                    data.len(),
+                    b.length()
+                ),
+            ));
+        }
+        buffers.push(data);
+    }
+    let mut warnings = Vec::new();
+
+    // Textures: decode each image once; base colour and emissive use is sRGB.
+    let mut images: Vec<Option<image::RgbaImage>> = vec![None; doc.images().len()];
+    let mut textures = Vec::new();
+    for t in doc.textures() {
+        let img_index = t.source().index();
+        if images[img_index].is_none() {
+            let bytes = match t.source().source() {
+                gltf::image::Source::View { view, .. } => {
+                    let buf = &buffers[view.buffer().index()];
+                    let end = view.offset() + view.length();
+                    if end > buf.len() {
+                        return Err(err(path, format!("image {img_index} runs past its buffer")));
+                    }
+                    buf[view.offset()..end].to_vec()
+                }
+                gltf::image::Source::Uri { uri, .. } => {
+                    fetch_uri(dir, uri).map_err(|e| err(path, format!("image {img_index}: {e}")))?
+                }
+            };
+            let decoded = image::load_from_memory(&bytes)
+                .map_err(|e| err(path, format!("image {img_index}: cannot decode: {e}")))?;
+            images[img_index] = Some(decoded.to_rgba8());
+        }
+        let img = images[img_index].as_ref().unwrap();
+        textures.push(Texture {
+            width: img.width(),
+            height: img.height(),
+            rgba: img.as_raw().clone(),
+            srgb: true,
+        });
+    }
+
+    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m)).collect();
+    let default_material = materials.len() as u32;
+    materials.push(Material::default());
+
+    let mut meshes = Vec::new();
+    for mesh in doc.meshes() {
+        let mut prims = Vec::new();
+        for (pi, p) in mesh.primitives().enumerate() {
+            match primitive(&p, &buffers, &materials, default_material) {
+                Ok(Some(prim)) => prims.push(prim),
+                Ok(None) => warnings.push(format!(
+                    "mesh {} primitive {pi}: {:?} lines are skipped",
+                    mesh.index(),
+                    p.mode()
+                )),
+                Err(e) => {
+                    return Err(err(
+                        path,
+                        format!("mesh {} primitive {pi}: {e}", mesh.index()),
+                    ))
+                }
+            }
+        }
+        meshes.push(prims);
+    }
+
+    let nodes: Vec<Node> = doc
+        .nodes()
+        .map(|n| {
+            let (matrix, (t, r, s)) = match n.transform() {
+                gltf::scene::Transform::Matrix { matrix } => (
+                    Some(Mat4::from_cols_array_2d(&matrix)),
+                    (Vec3::ZERO, Quat::IDENTITY, Vec3::ONE),
+                ),
+                gltf::scene::Transform::Decomposed {
+                    translation,
+                    rotation,
+                    scale,
+                } => (
+                    None,
+                    (
+                        Vec3::from(translation),
+                        Quat::from_array(rotation).normalize(),
+                        Vec3::from(scale),
+                    ),
+                ),
+            };
+            let n_targets = n
+                .mesh()
+                .map(|m| {
+                    m.primitives()
+                        .map(|p| p.morph_targets().len())
+                        .max()
+                        .unwrap_or(0)
+                })
+                .unwrap_or(0);
+            let mut weights = n
+                .weights()
+                .map(<[f32]>::to_vec)
+                .or_else(|| n.mesh().and_then(|m| m.weights().map(<[f32]>::to_vec)))
+                .unwrap_or_default();
+            weights.resize(n_targets, 0.0);
+            Node {
+                name: n.name().map(str::to_string),
+                children: n.children().map(|c| c.index()).collect(),
+                translation: t,
+                rotation: r,
+                scale: s,
+                matrix,
+                mesh: n.mesh().map(|m| m.index()),
+                skin: n.skin().map(|s| s.index()),
+                weights,
+            }
+        })
+        .collect();
+
+    let mut skins = Vec::new();
+    for s in doc.skins() {
+        let joints: Vec<usize> = s.joints().map(|j| j.index()).collect();
+        let inverse_bind = match s.inverse_bind_matrices() {
+            Some(acc) => {
+                let v = read_f32(&acc, &buffers).map_err(|e| err(path, e))?;
+                if v.len() < joints.len() * 16 {
+                    return Err(err(
+                        path,
+                        format!(
+                            "skin {} has fewer inverse bind matrices than joints",
+                            s.index()
+                        ),
+                    ));
+                }
+                v.chunks_exact(16)
+                    .take(joints.len())
+                    .map(Mat4::from_cols_slice)
+                    .collect()
+            }
+            None => vec![Mat4::IDENTITY; joints.len()],
+        };
+        skins.push(Skin {
+            joints,
+            inverse_bind,
+        });
+    }
+    for (ni, node) in nodes.iter().enumerate() {
+        if let (Some(m), Some(s)) = (node.mesh, node.skin) {
+            let n_joints = skins[s].joints.len();
+            if meshes[m]
+                .iter()
+                .any(|p| p.joints.iter().any(|&j| j as usize >= n_joints))
+            {
+                return Err(err(
+                    path,
+                    format!("node {ni}: a JOINTS index is beyond skin {s}'s {n_joints} joints"),
+                ));
+            }
+        }
+    }
+
+    let mut animations = Vec::new();
+    for a in doc.animations() {
+        let mut channels = Vec::new();
+        for c in a.channels() {
+            let s = c.sampler();
+            let times = read_f32(&s.input(), &buffers)
+                .map_err(|e| err(path, format!("animation {}: {e}", a.index())))?;
+            let values = read_f32(&s.output(), &buffers)
+                .map_err(|e| err(path, format!("animation {}: {e}", a.index())))?;
+            let node = c.target().node().index();
+            let target = match c.target().property() {
+                gltf::animation::Property::Translation => Target::Translation,
+                gltf::animation::Property::Rotation => Target::Rotation,
+                gltf::animation::Property::Scale => Target::Scale,
+                gltf::animation::Property::MorphTargetWeights => Target::Weights,
+            };
+            let width = match target {
+                Target::Translation | Target::Scale => 3,
+                Target::Rotation => 4,
+                Target::Weights => nodes[node].weights.len().max(1),
+            };
+            let interp = match s.interpolation() {
+                gltf::animation::Interpolation::Step => Interp::Step,
+                gltf::animation::Interpolation::Linear => Interp::Linear,
+                gltf::animation::Interpolation::CubicSpline => Interp::CubicSpline,
+            };
+            let sampler = Sampler::new(times, values, width, interp, target == Target::Rotation)
+                .map_err(|e| {
+                    err(
+                        path,
+                        format!("animation {} channel {}: {e}", a.index(), c.index()),
+                    )
+                })?;
+            if sampler.normalized_quaternions {
+                warnings.push(format!("animation {} channel {}: rotation keys were not unit quaternions and were normalized", a.index(), c.index()));
+            }
+            channels.push(Channel {
+                node,
+                target,
+                sampler,
+            });
+        }
+        animations.push(Animation::new(a.name().map(str::to_string), channels));
+    }
+
+    let roots: Vec<usize> = match scene {
+        Some(i) => doc
+            .scenes()
+            .nth(i)
+            .ok_or_else(|| err(path, format!("there is no scene {i}")))?
+            .nodes()
+            .map(|n| n.index())
+            .collect(),
+        None => match doc.default_scene() {
+            Some(s) => s.nodes().map(|n| n.index()).collect(),
+            None => doc
+                .scenes()
+                .flat_map(|s| s.nodes().map(|n| n.index()).collect::<Vec<_>>())
+                .collect(),
+        },
+    };
+    let cameras = doc
+        .nodes()
+        .filter_map(|n| {
+            n.camera().map(|c| match c.projection() {
+                gltf::camera::Projection::Perspective(p) => FileCamera {
+                    node: n.index(),
+                    name: c.name().unwrap_or("").to_string(),
+                    kind: "perspective",
+                    yfov: Some(p.yfov()),
+                },
+                gltf::camera::Projection::Orthographic(_) => FileCamera {
+                    node: n.index(),
+                    name: c.name().unwrap_or("").to_string(),
+                    kind: "orthographic",
+                    yfov: None,
+                },
+            })
+        })
+        .collect();
+    let mut asset = GltfAsset {
+        path: path.to_path_buf(),
+        materials,
+        textures,
+        meshes,
+        nodes,
+        skins,
+        animations,
+        roots,
+        cameras,
+        warnings,
+        order: Vec::new(),
+    };
+    asset.order = asset.traversal();
+    Ok(asset)
+}
+
+/// Reads a buffer or image URI: `data:` (base64) or a file relative to the glTF that stays inside its folder.
+fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (meta, data) = rest.split_once(',').ok_or("malformed data: URI")?;
+        if !meta.ends_with(";base64") {
+            return Err("data: URI is not base64".into());
+        }
+        return base64::engine::general_purpose::STANDARD
+            .decode(data.trim())
+            .map_err(|e| format!("bad base64 in data: URI: {e}"));
+    }
+    let decoded = percent_decode(uri);
+    let rel = Path::new(&decoded);
+    let escapes = rel.is_absolute()
+        || decoded.contains("://")
+        || rel.components().any(|c| {
+            matches!(
+                c,
+                std::path::Component::ParentDir
+                    | std::path::Component::RootDir
+                    | std::path::Component::Prefix(_)
+            )
+        });
+    if escapes {
+        return Err(format!("URI `{uri}` points outside the glTF's folder"));
+    }
+    let full = dir.join(rel);
+    std::fs::read(&full).map_err(|e| format!("cannot read `{}`: {e}", full.display()))
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let Some(v) = std::str::from_utf8(&b[i + 1..i + 3])
+                .ok()
+                .and_then(|h| u8::from_str_radix(h, 16).ok())
+            {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn material(m: &gltf::Material<'_>) -> Material {
+    let pbr = m.pbr_metallic_roughness();
+    let base_color_texture = pbr.base_color_texture().map(|info| {
+        let s = info.texture().sampler();
+        let wrap = |w: gltf::texture::WrappingMode| match w {
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        };
+        let (mut tex_coord, mut transform) = (info.tex_coord(), None);
+        if let Some(t) = info.texture_transform() {
+            // uv' = T · R · S · uv, with R rotating by -rotation as the extension specifies.
+            let (sn, cs) = t.rotation().sin_cos();
+            let [sx, sy] = t.scale();
+            transform = Some([
+                Vec2::new(cs * sx, -sn * sx),
+                Vec2::new(sn * sy, cs * sy),
+                Vec2::from(t.offset()),
+            ]);
+            if let Some(tc) = t.tex_coord() {
+                tex_coord = tc;
+            }
+        }
+        TextureRef {
+            texture: info.texture().index() as u32,
+            tex_coord,
+            wrap_s: wrap(s.wrap_s()),
+            wrap_t: wrap(s.wrap_t()),
+            nearest: s.mag_filter() == Some(gltf::texture::MagFilter::Nearest),
+            transform,
+        }
+    });
+    let [r, g, b, a] = pbr.base_color_factor();
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    Material {
+        base_color: Vec4::new(r, g, b, a),
+        base_color_texture,
+        alpha_mode: match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
+        double_sided: m.double_sided(),
+        emissive: Vec3::from(m.emissive_factor()) * strength,
+    }
+}
+
+fn vec3s(v: Vec<f32>) -> Vec<Vec3> {
+    v.chunks_exact(3).map(Vec3::from_slice).collect()
+}
+
+fn primitive(
+    p: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    materials: &[Material],
+    default_material: u32,
+) -> Result<Option<Primitive>, String> {
+    let kind = match p.mode() {
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => PrimKind::Triangles,
+        Mode::Points => PrimKind::Points,
+        Mode::Lines | Mode::LineLoop | Mode::LineStrip => return Ok(None),
+    };
+    let pos_acc = p
+        .get(&gltf::Semantic::Positions)
+        .ok_or("no POSITION attribute")?;
+    let positions = vec3s(read_f32(&pos_acc, buffers)?);
+    let n = positions.len();
+    let attr = |sem: gltf::Semantic| -> Result<Option<Vec<f32>>, String> {
+        match p.get(&sem) {
+            Some(acc) if acc.count() != n => Err(format!(
+                "{sem:?} has {} elements, POSITION has {n}",
+                acc.count()
+            )),
+            Some(acc) => read_f32(&acc, buffers).map(Some),
+            None => Ok(None),
+        }
+    };
+    let raw_indices: Vec<u32> = match p.indices() {
+        Some(acc) => read_u32(&acc, buffers)?,
+        None => (0..n as u32).collect(),
+    };
+    if let Some(&bad) = raw_indices.iter().find(|&&i| i as usize >= n) {
+        return Err(format!(
+            "index {bad} is out of range: POSITION has {n} vertices"
+        ));
+    }
+    let indices = match (kind, p.mode()) {
+        (PrimKind::Points, _) => Vec::new(),
+        (_, Mode::TriangleStrip) => (0..raw_indices.len().saturating_sub(2))
+            .flat_map(|i| {
+                let (a, b, c) = (raw_indices[i], raw_indices[i + 1], raw_indices[i + 2]);
+                if i % 2 == 0 {
+                    [a, b, c]
+                } else {
+                    [b, a, c]
+                }
+            })
+            .collect(),
+        (_, Mode::TriangleFan) => (1..raw_indices.len().saturating_sub(1))
+            .flat_map(|i| [raw_indices[0], raw_indices[i], raw_indices[i + 1]])
+            .collect(),
+        _ => {
+            let mut v = raw_indices;
+            v.truncate(v.len() / 3 * 3);
+            v
+        }
+    };
+    let material = p.material().index().map_or(default_material, |i| i as u32);
+    let tex_coord = materials[material as usize]
+        .base_color_texture
+        .map(|t| t.tex_coord);
+    let uvs = match tex_coord {
+        Some(tc) => attr(gltf::Semantic::TexCoords(tc))?
+            .map(|v| v.chunks_exact(2).map(Vec2::from_slice).collect())
+            .unwrap_or_default(),
+        None => Vec::new(),
+    };
+    let colors: Vec<Vec4> = match p.get(&gltf::Semantic::Colors(0)) {
+        Some(acc) => {
+            let comps = acc.dimensions().multiplicity();
+            let v = attr(gltf::Semantic::Colors(0))?.unwrap_or_default();
+            // COLOR_0 is linear already; VEC3 means alpha 1.
+            v.chunks_exact(comps)
+                .map(|c| Vec4::new(c[0], c[1], c[2], if comps == 4 { c[3] } else { 1.0 }))
+                .collect()
+        }
+        None => Vec::new(),
+    };
+    let mut normals = attr(gltf::Semantic::Normals)?
+        .map(vec3s)
+        .unwrap_or_default();
+    if normals.is_empty() {
+        normals = if kind == PrimKind::Triangles {
+            smooth_normals(&positions, &indices)
+        } else {
+            vec![Vec3::ZERO; n]
+        };
+    } else {
+        for v in &mut normals {
+            *v = v.normalize_or_zero();
+        }
+    }
+    // Skinning: every JOINTS_n / WEIGHTS_n set, 4 influences each.
+    let mut sets = 0;
+    while p.get(&gltf::Semantic::Joints(sets)).is_some()
+        && p.get(&gltf::Semantic::Weights(sets)).is_some()
+    {
+        sets += 1;
+    }
+    let influences = sets as usize * 4;
+    let (mut joints, mut weights) = (vec![0u16; n * influences], vec![0f32; n * influences]);
+    for s in 0..sets as usize {
+        let j = read_u32(&p.get(&gltf::Semantic::Joints(s as u32)).unwrap(), buffers)?;
+        let w = attr(gltf::Semantic::Weights(s as u32))?.unwrap_or_default();
+        if j.len() != n * 4 || w.len() != n * 4 {
+            return Err(format!(
+                "JOINTS_{s}/WEIGHTS_{s} must be VEC4 with one element per vertex"
+            ));
+        }
+        for v in 0..n {
+            for k in 0..4 {
+                joints[v * influences + s * 4 + k] =
+                    u16::try_from(j[v * 4 + k]).map_err(|_| "joint index above 65535")?;
+                weights[v * influences + s * 4 + k] = w[v * 4 + k];
+            }
+        }
+    }
+    if influences > 0 {
+        for w in weights.chunks_exact_mut(influences) {
+            let sum: f32 = w.iter().sum();
+            if sum > 0.0 {
+                w.iter_mut().for_each(|x| *x /= sum);
+            }
+        }
+    }
+    let (mut morph_positions, mut morph_normals) = (Vec::new(), Vec::new());
+    for t in p.morph_targets() {
+        let read = |acc: Option<gltf::Accessor<'_>>| -> Result<Vec<Vec3>, String> {
+            match acc {
+                Some(a) if a.count() != n => Err(format!(
+                    "a morph target has {} elements, POSITION has {n}",
+                    a.count()
+                )),
+                Some(a) => read_f32(&a, buffers).map(vec3s),
+                None => Ok(Vec::new()),
+            }
+        };
+        morph_positions.push(read(t.positions())?);
+        morph_normals.push(read(t.normals())?);
+    }
+    Ok(Some(Primitive {
+        kind,
+        positions,
+        normals,
+        uvs,
+        colors,
+        indices,
+        material,
+        influences,
+        joints,
+        weights,
+        morph_positions,
+        morph_normals,
+    }))
+}
+
+/// Area-weighted vertex normals (cross products are proportional to twice the area). Non-indexed triangles
+/// share no vertices, so they come out flat.
+pub fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut n = vec![Vec3::ZERO; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let (a, b, c) = (
+            positions[t[0] as usize],
+            positions[t[1] as usize],
+            positions[t[2] as usize],
+        );
+        let f = (b - a).cross(c - a);
+        for &i in t {
+            n[i as usize] += f;
+        }
+    }
+    n.iter_mut().for_each(|v| *v = v.normalize_or_zero());
+    n
+}
+
+/// sRGB bytes of a texel → linear RGBA (alpha stays linear).
+pub fn texel_to_linear(t: &[u8]) -> Vec4 {
+    Vec4::new(
+        srgb_to_linear(t[0] as f32 / 255.0),
+        srgb_to_linear(t[1] as f32 / 255.0),
+        srgb_to_linear(t[2] as f32 / 255.0),
+        t[3] as f32 / 255.0,
+    )
+}

@@ -1,0 +1,9 @@
+//! glTF 2.0 sources: loading ([`load`]), accessor decoding, animation sampling and posing.
+
+pub mod accessor;
+pub mod anim;
+pub mod load;
+pub mod pose;
+
+pub use load::{load, GltfAsset};
+pub use pose::PoseScratch;

@@ -1,0 +1,204 @@
+//! Materials and textures as the renderer and the point sampler read them (glTF metallic-roughness, base
+//! colour only: vvgen renders albedo or Lambert, not PBR).
+
+use glam::{Vec2, Vec3, Vec4};
+
+/// A decoded texture, RGBA8, shared by every material that uses it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Texture {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// RGBA8 rows, top row first.
+    pub rgba: Vec<u8>,
+    /// Whether the bytes are sRGB-encoded (base colour and emissive textures are; data textures are not).
+    pub srgb: bool,
+}
+
+/// Texture wrap mode (glTF sampler).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// REPEAT (10497), the default.
+    Repeat,
+    /// CLAMP_TO_EDGE (33071).
+    Clamp,
+    /// MIRRORED_REPEAT (33648).
+    Mirror,
+}
+
+/// A material's use of a texture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextureRef {
+    /// Index into the scene's textures.
+    pub texture: u32,
+    /// Which TEXCOORD_n set.
+    pub tex_coord: u32,
+    /// Wrap along u.
+    pub wrap_s: Wrap,
+    /// Wrap along v.
+    pub wrap_t: Wrap,
+    /// Magnification filter is NEAREST.
+    pub nearest: bool,
+    /// KHR_texture_transform as a 2×3 affine map of uv (columns x, y, translation).
+    pub transform: Option<[Vec2; 3]>,
+}
+
+impl TextureRef {
+    /// Applies the texture transform to a uv.
+    #[inline]
+    pub fn map(&self, uv: Vec2) -> Vec2 {
+        match &self.transform {
+            Some([x, y, t]) => *x * uv.x + *y * uv.y + *t,
+            None => uv,
+        }
+    }
+}
+
+/// How alpha is used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum AlphaMode {
+    /// Alpha ignored.
+    Opaque,
+    /// Alpha below the cutoff discards the fragment.
+    Mask,
+    /// Alpha blends.
+    Blend,
+}
+
+/// One material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Linear RGBA base colour factor.
+    pub base_color: Vec4,
+    /// Base colour texture (sRGB).
+    pub base_color_texture: Option<TextureRef>,
+    /// Alpha mode.
+    pub alpha_mode: AlphaMode,
+    /// Cutoff for MASK (default 0.5).
+    pub alpha_cutoff: f32,
+    /// Render back faces too.
+    pub double_sided: bool,
+    /// Linear emissive factor (× strength).
+    pub emissive: Vec3,
+}
+
+impl Default for Material {
+    /// glTF's default material: white, opaque, single-sided.
+    fn default() -> Self {
+        Material {
+            base_color: Vec4::ONE,
+            base_color_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            alpha_cutoff: 0.5,
+            double_sided: false,
+            emissive: Vec3::ZERO,
+        }
+    }
+}
+
+/// sRGB byte → linear float.
+#[inline]
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear float → sRGB float.
+#[inline]
+pub fn linear_to_srgb(c: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.0031308 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+impl Texture {
+    /// Linear RGBA of texel (x, y) (sRGB decoded when the texture is sRGB).
+    #[inline]
+    pub fn texel(&self, x: u32, y: u32) -> Vec4 {
+        let i = ((y * self.width + x) * 4) as usize;
+        let t = &self.rgba[i..i + 4];
+        let c = |v: u8| {
+            if self.srgb {
+                srgb_to_linear(v as f32 / 255.0)
+            } else {
+                v as f32 / 255.0
+            }
+        };
+        Vec4::new(c(t[0]), c(t[1]), c(t[2]), t[3] as f32 / 255.0)
+    }
+
+    /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light.
+    pub fn sample(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
+        let uv = r.map(uv);
+        let (w, h) = (self.width as f32, self.height as f32);
+        if self.width == 0 || self.height == 0 {
+            return Vec4::ONE;
+        }
+        if r.nearest {
+            let x = wrap(r.wrap_s, (uv.x * w).floor() as i64, self.width);
+            let y = wrap(r.wrap_t, (uv.y * h).floor() as i64, self.height);
+            return self.texel(x, y);
+        }
+        let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (tx, ty) = (fx - x0, fy - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let xs = [
+            wrap(r.wrap_s, x0, self.width),
+            wrap(r.wrap_s, x0 + 1, self.width),
+        ];
+        let ys = [
+            wrap(r.wrap_t, y0, self.height),
+            wrap(r.wrap_t, y0 + 1, self.height),
+        ];
+        let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), tx);
+        let bottom = self.texel(xs[0], ys[1]).lerp(self.texel(xs[1], ys[1]), tx);
+        top.lerp(bottom, ty)
+    }
+}
+
+/// Maps an integer texel coordinate into `0..n` by a wrap mode.
+#[inline]
+pub fn wrap(mode: Wrap, i: i64, n: u32) -> u32 {
+    let n = n as i64;
+    (match mode {
+        Wrap::Clamp => i.clamp(0, n - 1),
+        Wrap::Repeat => i.rem_euclid(n),
+        Wrap::Mirror => {
+            let p = i.rem_euclid(2 * n);
+            if p < n {
+                p
+            } else {
+                2 * n - 1 - p
+            }
+        }
+    }) as u32
+}
+
+impl Material {
+    /// Albedo (linear RGBA) at a surface point: base colour × texture × vertex colour.
+    pub fn albedo(
+        &self,
+        textures: &[Texture],
+        uv: Option<Vec2>,
+        vertex_color: Option<Vec4>,
+    ) -> Vec4 {
+        let mut c = self.base_color;
+        if let (Some(r), Some(uv)) = (&self.base_color_texture, uv) {
+            if let Some(t) = textures.get(r.texture as usize) {
+                c *= t.sample(r, uv);
+            }
+        }
+        if let Some(v) = vertex_color {
+            c *= v;
+        }
+        c
+    }
+}

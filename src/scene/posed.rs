@@ -1,0 +1,106 @@
+//! The posed scene: what the renderer and the sampler consume for one frame, in world space, after every
+//! transform. Static per-vertex data (indices, uvs, colours) is shared between frames through `Arc`; positions
+//! and normals are rewritten in place each frame, so posing a frame after the first allocates nothing.
+
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::material::{Material, Texture};
+
+/// What a primitive is drawn as.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PrimKind {
+    /// Triangle list (`indices` in threes).
+    Triangles,
+    /// Points (rendered as splats).
+    Points,
+}
+
+/// One posed primitive.
+#[derive(Debug, Clone)]
+pub struct PosedPrimitive {
+    /// Triangles or points.
+    pub kind: PrimKind,
+    /// World-space positions.
+    pub positions: Vec<Vec3>,
+    /// World-space unit normals (same length as positions; zero where unknown for points).
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates for the base colour texture (empty when none).
+    pub uvs: Arc<Vec<Vec2>>,
+    /// Linear RGBA vertex colours, COLOR_0 (empty means white).
+    pub colors: Arc<Vec<Vec4>>,
+    /// Triangle indices (empty for points).
+    pub indices: Arc<Vec<u32>>,
+    /// Index into the scene's materials.
+    pub material: u32,
+    /// Object id (for instance masks): one per source node instance.
+    pub object: u32,
+}
+
+/// Everything drawn at one frame.
+#[derive(Debug, Clone, Default)]
+pub struct PosedScene {
+    /// The primitives, in a fixed order.
+    pub primitives: Vec<PosedPrimitive>,
+    /// Materials.
+    pub materials: Arc<Vec<Material>>,
+    /// Textures.
+    pub textures: Arc<Vec<Texture>>,
+}
+
+impl PosedScene {
+    /// Axis-aligned bounds of every position, or `None` when empty.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut it = self.primitives.iter().flat_map(|p| p.positions.iter());
+        let first = *it.next()?;
+        Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.primitives
+            .iter()
+            .filter(|p| p.kind == PrimKind::Triangles)
+            .map(|p| p.indices.len() / 3)
+            .sum()
+    }
+
+    /// Number of point primitives' points.
+    pub fn point_count(&self) -> usize {
+        self.primitives
+            .iter()
+            .filter(|p| p.kind == PrimKind::Points)
+            .map(|p| p.positions.len())
+            .sum()
+    }
+
+    /// blake3 of the posed geometry and material/texture content: equal hashes mean equal renders.
+    pub fn digest(&self) -> blake3::Hash {
+        let mut h = blake3::Hasher::new();
+        h.update(b"vvgen.posed.v1");
+        for p in &self.primitives {
+            h.update(&[p.kind as u8]);
+            for part in [
+                bytemuck::cast_slice::<Vec3, u8>(&p.positions),
+                bytemuck::cast_slice(&p.normals),
+                bytemuck::cast_slice(&p.uvs),
+                bytemuck::cast_slice(&p.colors),
+                bytemuck::cast_slice(&p.indices),
+            ] {
+                h.update(&(part.len() as u64).to_le_bytes());
+                h.update(part);
+            }
+            h.update(&p.material.to_le_bytes());
+            h.update(&p.object.to_le_bytes());
+        }
+        h.update(format!("{:?}", self.materials).as_bytes());
+        for t in self.textures.iter() {
+            h.update(&t.width.to_le_bytes());
+            h.update(&t.height.to_le_bytes());
+            h.update(&[t.srgb as u8]);
+            h.update(&t.rgba);
+        }
+        h.finalize()
+    }
+}

@@ -1,0 +1,292 @@
+//! One manifest source, loaded: its geometry and its frame list, posable in source space.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::gltf::{GltfAsset, PoseScratch};
+use super::material::{srgb_to_linear, Material};
+use super::ply;
+use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use crate::manifest::sequence::{self, SequenceFrame};
+use crate::manifest::source::{AnimationSel, ClipRef};
+use crate::manifest::transform::UpAxis;
+use crate::manifest::{Source, SourceKind};
+
+/// A loaded source.
+#[derive(Debug)]
+pub enum SourceData {
+    /// An animated glTF and the times of its frames (seconds).
+    Gltf {
+        /// The file.
+        asset: Box<GltfAsset>,
+        /// Clips that play.
+        clips: Vec<usize>,
+        /// Frame times.
+        times: Vec<f32>,
+    },
+    /// A static mesh, posed once in source space.
+    Static(PosedScene),
+    /// A PLY sequence, read frame by frame.
+    Sequence(Vec<SequenceFrame>),
+}
+
+/// A source with its name.
+#[derive(Debug)]
+pub struct LoadedSource {
+    /// Manifest name.
+    pub name: String,
+    /// Geometry.
+    pub data: SourceData,
+    /// The up axis its transform assumes by default.
+    pub default_up: UpAxis,
+}
+
+impl LoadedSource {
+    /// Loads a manifest source; `dir` is the manifest's folder.
+    pub fn load(name: &str, s: &Source, dir: &std::path::Path) -> Result<LoadedSource, String> {
+        let (kind, path) = s
+            .kind()
+            .ok_or_else(|| format!("source `{name}` names no file"))?;
+        let full: PathBuf = dir.join(path.get_ref());
+        let is_ply = full
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+        let data = match kind {
+            SourceKind::Gltf => {
+                let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
+                let clips = select_clips(&asset, s.animation.as_ref().map(|a| a.get_ref()))?;
+                let duration = clips
+                    .iter()
+                    .map(|&c| asset.animations[c].duration())
+                    .fold(0.0f32, f32::max);
+                let f = s
+                    .frames
+                    .as_ref()
+                    .map(|f| f.get_ref().clone())
+                    .unwrap_or_default();
+                let fps = f.fps();
+                let start = f.start.unwrap_or(0);
+                let step = f.step() as i64;
+                let end = match (f.end, f.count) {
+                    (Some(e), _) => e,
+                    (None, Some(c)) => start + (c as i64 - 1) * step,
+                    (None, None) => start.max((duration as f64 * fps + 1e-4).floor() as i64),
+                };
+                let times = (start..=end)
+                    .step_by(step as usize)
+                    .map(|n| (n as f64 / fps) as f32)
+                    .collect();
+                SourceData::Gltf {
+                    asset: Box::new(asset),
+                    clips,
+                    times,
+                }
+            }
+            SourceKind::Mesh if is_ply => SourceData::Static(ply_scene(&full)?),
+            SourceKind::Mesh => {
+                let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
+                let mut posed = PosedScene {
+                    materials: Arc::new(asset.materials.clone()),
+                    textures: Arc::new(asset.textures.clone()),
+                    ..Default::default()
+                };
+                asset.pose(
+                    &[],
+                    0.0,
+                    Mat4::IDENTITY,
+                    &mut PoseScratch::default(),
+                    &mut posed,
+                );
+                SourceData::Static(posed)
+            }
+            SourceKind::PlySequence => {
+                let frames = s
+                    .frames
+                    .as_ref()
+                    .map(|f| f.get_ref().clone())
+                    .unwrap_or_default();
+                SourceData::Sequence(
+                    sequence::resolve(dir, path.get_ref(), &frames)
+                        .map_err(|e| format!("source `{name}`: {e}"))?,
+                )
+            }
+        };
+        let default_up = if is_ply || kind == SourceKind::PlySequence {
+            UpAxis::Z
+        } else {
+            UpAxis::Y
+        };
+        Ok(LoadedSource {
+            name: name.to_string(),
+            data,
+            default_up,
+        })
+    }
+
+    /// Number of frames (1 for a static mesh).
+    pub fn frame_count(&self) -> usize {
+        match &self.data {
+            SourceData::Gltf { times, .. } => times.len(),
+            SourceData::Static(_) => 1,
+            SourceData::Sequence(f) => f.len(),
+        }
+    }
+
+    /// Poses frame `frame` (clamped to the last) with `post` applied, into `out`.
+    pub fn pose(
+        &self,
+        frame: usize,
+        post: Mat4,
+        scratch: &mut PoseScratch,
+        out: &mut PosedScene,
+    ) -> Result<(), String> {
+        match &self.data {
+            SourceData::Gltf {
+                asset,
+                clips,
+                times,
+            } => {
+                if out.materials.len() != asset.materials.len()
+                    || out.textures.len() != asset.textures.len()
+                {
+                    out.materials = Arc::new(asset.materials.clone());
+                    out.textures = Arc::new(asset.textures.clone());
+                    out.primitives.clear();
+                }
+                let t = times[frame.min(times.len() - 1)];
+                asset.pose(clips, t, post, scratch, out);
+            }
+            SourceData::Static(rest) => transform_into(rest, post, out),
+            SourceData::Sequence(frames) => {
+                let f = &frames[frame.min(frames.len() - 1)];
+                let rest = ply_scene(&f.path)?;
+                transform_into(&rest, post, out);
+            }
+        }
+        Ok(())
+    }
+}
+
+fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usize>, String> {
+    let n = asset.animations.len();
+    let find = |r: &ClipRef| -> Result<usize, String> {
+        match r {
+            ClipRef::Index(i) if (*i as usize) < n => Ok(*i as usize),
+            ClipRef::Index(i) => Err(format!(
+                "{}: there is no animation {i} (the file has {n})",
+                asset.path.display()
+            )),
+            ClipRef::Name(name) => asset
+                .animations
+                .iter()
+                .position(|a| a.name.as_deref() == Some(name))
+                .ok_or_else(|| {
+                    let names: Vec<String> = asset
+                        .animations
+                        .iter()
+                        .enumerate()
+                        .map(|(i, a)| a.name.clone().unwrap_or(format!("#{i}")))
+                        .collect();
+                    format!(
+                        "{}: no animation named `{name}` (clips: {})",
+                        asset.path.display(),
+                        names.join(", ")
+                    )
+                }),
+        }
+    };
+    match sel {
+        None => Ok(if n > 0 { vec![0] } else { vec![] }),
+        Some(AnimationSel::Name(s)) if s == "all" => Ok((0..n).collect()),
+        Some(AnimationSel::Name(s)) => Ok(vec![find(&ClipRef::Name(s.clone()))?]),
+        Some(AnimationSel::Index(i)) => Ok(vec![find(&ClipRef::Index(*i))?]),
+        Some(AnimationSel::Many(v)) => v.iter().map(find).collect(),
+    }
+}
+
+/// A PLY file as a posed scene in source space: triangles if it has faces, else points.
+pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let d = ply::read(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    let kind = if d.triangles.is_empty() {
+        PrimKind::Points
+    } else {
+        PrimKind::Triangles
+    };
+    let positions: Vec<Vec3> = d.positions.iter().map(|p| Vec3::from(*p)).collect();
+    let normals = match (&d.normals, kind) {
+        (Some(n), _) => n
+            .iter()
+            .map(|n| Vec3::from(*n).normalize_or_zero())
+            .collect(),
+        (None, PrimKind::Triangles) => super::gltf::load::smooth_normals(&positions, &d.triangles),
+        (None, PrimKind::Points) => vec![Vec3::ZERO; positions.len()],
+    };
+    let colors = d
+        .colors
+        .as_ref()
+        .map(|c| {
+            c.iter()
+                .map(|c| {
+                    Vec4::new(
+                        srgb_to_linear(c[0] as f32 / 255.0),
+                        srgb_to_linear(c[1] as f32 / 255.0),
+                        srgb_to_linear(c[2] as f32 / 255.0),
+                        c[3] as f32 / 255.0,
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    // Scans rarely have consistent winding: draw both sides.
+    let material = Material {
+        double_sided: true,
+        ..Material::default()
+    };
+    Ok(PosedScene {
+        primitives: vec![PosedPrimitive {
+            kind,
+            positions,
+            normals,
+            uvs: Arc::new(Vec::new()),
+            colors: Arc::new(colors),
+            indices: Arc::new(d.triangles),
+            material: 0,
+            object: 0,
+        }],
+        materials: Arc::new(vec![material]),
+        textures: Arc::new(Vec::new()),
+    })
+}
+
+/// Copies `rest` into `out` with `m` applied, reusing `out`'s buffers.
+fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
+    let nm = super::gltf::pose::normal_matrix(&m);
+    out.materials = rest.materials.clone();
+    out.textures = rest.textures.clone();
+    out.primitives.truncate(rest.primitives.len());
+    for (i, p) in rest.primitives.iter().enumerate() {
+        if i == out.primitives.len() {
+            out.primitives.push(PosedPrimitive {
+                positions: Vec::new(),
+                normals: Vec::new(),
+                ..p.clone()
+            });
+        }
+        let o = &mut out.primitives[i];
+        o.kind = p.kind;
+        o.uvs = p.uvs.clone();
+        o.colors = p.colors.clone();
+        o.indices = p.indices.clone();
+        o.material = p.material;
+        o.object = p.object;
+        o.positions.clear();
+        o.positions
+            .extend(p.positions.iter().map(|v| m.transform_point3(*v)));
+        o.normals.clear();
+        o.normals
+            .extend(p.normals.iter().map(|n| (nm * *n).normalize_or_zero()));
+    }
+}

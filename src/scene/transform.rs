@@ -1,0 +1,168 @@
+//! Resolving a manifest `[transform]` to one 4×4 matrix from the bounds of the frames it covers.
+//!
+//! `world = translate · rotate · scale · fit · center · up · matrix`. The caller gathers [`Stats`] of the
+//! geometry after `up · matrix` ([`Transform::pre`]) over the frames `over` selects, once per sequence.
+
+use glam::{DMat4, DVec3, Mat4, Vec3};
+
+use crate::manifest::transform::{Center, Scale, Transform, UpAxis};
+
+/// Bounds and centroid accumulator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stats {
+    /// Minimum corner.
+    pub lo: DVec3,
+    /// Maximum corner.
+    pub hi: DVec3,
+    /// Sum of points (for the centroid).
+    pub sum: DVec3,
+    /// Number of points.
+    pub count: u64,
+}
+
+impl Default for Stats {
+    fn default() -> Self {
+        Stats {
+            lo: DVec3::splat(f64::INFINITY),
+            hi: DVec3::splat(f64::NEG_INFINITY),
+            sum: DVec3::ZERO,
+            count: 0,
+        }
+    }
+}
+
+impl Stats {
+    /// Adds points.
+    pub fn add(&mut self, points: &[Vec3]) {
+        for p in points {
+            let d = p.as_dvec3();
+            self.lo = self.lo.min(d);
+            self.hi = self.hi.max(d);
+            self.sum += d;
+        }
+        self.count += points.len() as u64;
+    }
+
+    /// Whether no point was added.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+}
+
+/// `up · matrix`: the part of the transform that does not depend on bounds.
+pub fn pre(t: &Transform, up: UpAxis) -> DMat4 {
+    let m = t.matrix.as_ref().map_or(DMat4::IDENTITY, |m| {
+        DMat4::from_cols_array_2d(m.get_ref()).transpose()
+    });
+    let up_m = match up {
+        // +Y up → +Z up: +90° about X maps (x, y, z) to (x, -z, y).
+        UpAxis::Y => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        UpAxis::Z => DMat4::IDENTITY,
+    };
+    up_m * m
+}
+
+/// Whether the transform needs bounds at all.
+pub fn needs_stats(t: &Transform) -> bool {
+    t.fit.is_some() || matches!(t.center, Some(Center::Bbox | Center::Centroid))
+}
+
+/// The full matrix, given stats gathered after [`pre`]. Errors when a fit is asked of empty or flat geometry.
+pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, String> {
+    let pre = pre(t, up);
+    let center = match t.center.unwrap_or(Center::None) {
+        Center::None => DVec3::ZERO,
+        Center::Bbox => (stats.lo + stats.hi) * 0.5,
+        Center::Centroid => stats.sum / stats.count.max(1) as f64,
+    };
+    if needs_stats(t) && stats.is_empty() {
+        return Err("cannot fit or centre: the source has no geometry".into());
+    }
+    let mut s = 1.0;
+    if let Some(fit) = &t.fit {
+        let f = fit.get_ref();
+        let size = stats.hi - stats.lo;
+        let (measure, target, what) = if let Some(h) = f.height {
+            (size.z, h, "height")
+        } else if let Some(r) = f.radius {
+            let far = (0..8)
+                .map(|i| {
+                    DVec3::new(
+                        pick(i & 1, stats.lo.x, stats.hi.x),
+                        pick(i & 2, stats.lo.y, stats.hi.y),
+                        pick(i & 4, stats.lo.z, stats.hi.z),
+                    )
+                    .distance(center)
+                })
+                .fold(0.0, f64::max);
+            (far, r, "radius")
+        } else {
+            (size.max_element(), f.extent.unwrap_or(1.0), "extent")
+        };
+        if measure.is_nan() || measure <= 1e-12 {
+            return Err(format!("cannot fit {what}: the geometry's {what} is zero"));
+        }
+        s = target / measure;
+    }
+    let extra = match t.scale {
+        Some(Scale::Uniform(k)) => DVec3::splat(k),
+        Some(Scale::Axes(a)) => DVec3::from(a),
+        None => DVec3::ONE,
+    };
+    let r = t.rotate_deg.map_or(DMat4::IDENTITY, |[x, y, z]| {
+        DMat4::from_rotation_z(z.to_radians())
+            * DMat4::from_rotation_y(y.to_radians())
+            * DMat4::from_rotation_x(x.to_radians())
+    });
+    let tr = DMat4::from_translation(t.translate.map_or(DVec3::ZERO, DVec3::from));
+    let m = tr
+        * r
+        * DMat4::from_scale(extra)
+        * DMat4::from_scale(DVec3::splat(s))
+        * DMat4::from_translation(-center)
+        * pre;
+    Ok(m.as_mat4())
+}
+
+fn pick(bit: usize, lo: f64, hi: f64) -> f64 {
+    if bit != 0 {
+        hi
+    } else {
+        lo
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::manifest::transform::Fit;
+
+    #[test]
+    fn y_up_becomes_z_up_and_fits() {
+        let t = Transform {
+            fit: Some(toml::Spanned::new(
+                0..0,
+                Fit {
+                    height: Some(2.0),
+                    ..Default::default()
+                },
+            )),
+            center: Some(Center::Bbox),
+            ..Default::default()
+        };
+        let mut st = Stats::default();
+        // A column 4 tall along source Y, from y=1 to y=5: after up it spans z=1..5.
+        let p = pre(&t, UpAxis::Y).as_mat4();
+        st.add(&[
+            p.transform_point3(Vec3::new(0.0, 1.0, 0.0)),
+            p.transform_point3(Vec3::new(1.0, 5.0, 0.0)),
+        ]);
+        let m = resolve(&t, UpAxis::Y, &st).unwrap();
+        let top = m.transform_point3(Vec3::new(1.0, 5.0, 0.0));
+        let bottom = m.transform_point3(Vec3::new(0.0, 1.0, 0.0));
+        assert!(
+            (top.z - 1.0).abs() < 1e-6 && (bottom.z + 1.0).abs() < 1e-6,
+            "{top} {bottom}"
+        );
+    }
+}
