@@ -282,6 +282,18 @@ mod tests {
     }
 
     #[test]
+    fn malformed_samplers_are_refused() {
+        assert!(
+            Sampler::new(vec![0.0], vec![0.0; 3], 1, Interp::CubicSpline, false)
+                .unwrap_err()
+                .contains("CUBICSPLINE")
+        );
+        assert!(Sampler::new(vec![0.0, 1.0], vec![0.0; 5], 3, Interp::Linear, false).is_err());
+        assert!(Sampler::new(vec![1.0, 0.0], vec![0.0; 2], 1, Interp::Linear, false).is_err());
+        assert!(Sampler::new(vec![0.0], vec![0.0; 4], 4, Interp::Linear, true).is_err());
+    }
+
+    #[test]
     fn slerp_takes_the_short_way() {
         let a = Quat::IDENTITY;
         let b = -Quat::from_rotation_z(0.5); // same rotation as +, opposite sign

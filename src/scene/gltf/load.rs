@@ -123,8 +123,7 @@ fn err(path: &Path, msg: impl std::fmt::Display) -> String {
 /// Loads a `.gltf` or `.glb`. `scene`: which scene (default: the file's default, else all).
 pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
     let bytes = std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
-    let gltf =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| err(path, format!("invalid glTF: {e}")))?;
+    let gltf = parse(&bytes).map_err(|e| err(path, e))?;
     let doc = &gltf.document;
     for ext in doc.extensions_required() {
         if !SUPPORTED_REQUIRED.contains(&ext) {
@@ -408,6 +407,23 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
     };
     asset.order = asset.traversal();
     Ok(asset)
+}
+
+/// Parses and validates, except that an accessor without a bufferView is accepted: the spec says it reads as
+/// zeros (then sparse values), but gltf 1.4's validation calls it missing data.
+fn parse(bytes: &[u8]) -> Result<gltf::Gltf, gltf::Error> {
+    match gltf::Gltf::from_slice(bytes) {
+        Err(gltf::Error::Validation(errors))
+            if errors.iter().all(|(p, e)| {
+                p.as_str().starts_with("accessors[")
+                    && p.as_str().ends_with("].bufferView")
+                    && matches!(e, gltf::json::validation::Error::Missing)
+            }) =>
+        {
+            gltf::Gltf::from_slice_without_validation(bytes)
+        }
+        other => other,
+    }
 }
 
 /// Reads a buffer or image URI: `data:` (base64) or a file relative to the glTF that stays inside its folder.

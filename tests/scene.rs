@@ -1,0 +1,503 @@
+//! Scene sources on real assets: accessor decoding, interpolation, skinning, morphs, materials, primitive
+//! modes, and clear errors for malformed files.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Quat, Vec3};
+use vvgen::scene::gltf::{self, GltfAsset, PoseScratch};
+use vvgen::scene::{PosedScene, PrimKind};
+
+fn asset_path(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(rel)
+}
+
+fn load(rel: &str) -> GltfAsset {
+    gltf::load(&asset_path(rel), None).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn pose(a: &GltfAsset, clips: &[usize], t: f32) -> PosedScene {
+    let mut out = PosedScene::default();
+    a.pose(
+        clips,
+        t,
+        Mat4::IDENTITY,
+        &mut PoseScratch::default(),
+        &mut out,
+    );
+    out
+}
+
+/// The posed primitive of a node (first primitive of its mesh).
+fn of_node<'a>(
+    a: &GltfAsset,
+    posed: &'a PosedScene,
+    node: usize,
+) -> &'a vvgen::scene::PosedPrimitive {
+    let object = a.order.iter().position(|(n, _)| *n == node).unwrap() as u32;
+    posed
+        .primitives
+        .iter()
+        .find(|p| p.object == object)
+        .unwrap()
+}
+
+fn assert_close(a: Vec3, b: Vec3, tol: f32, what: &str) {
+    assert!((a - b).abs().max_element() <= tol, "{what}: {a} vs {b}");
+}
+
+/// Every POSITION accessor's declared min/max (written by the exporter) must match what we decode,
+/// sparse substitution included.
+#[test]
+fn decoded_positions_match_declared_bounds() {
+    for rel in [
+        "gltf/SimpleSparseAccessor/SimpleSparseAccessor.gltf",
+        "gltf/BoxTextured/BoxTextured.glb",
+        "gltf/CesiumMan/CesiumMan.glb",
+        "gltf/VertexColorTest/VertexColorTest.gltf",
+        "gltf/InterpolationTest/InterpolationTest.gltf",
+        "gltf/MorphPrimitivesTest/MorphPrimitivesTest.gltf",
+    ] {
+        let a = load(rel);
+        let doc = ::gltf::Gltf::open(asset_path(rel)).unwrap();
+        for (mi, mesh) in doc.meshes().enumerate() {
+            for (pi, p) in mesh.primitives().enumerate() {
+                let acc = p.get(&::gltf::Semantic::Positions).unwrap();
+                let (Some(min), Some(max)) = (acc.min(), acc.max()) else {
+                    continue;
+                };
+                let min = Vec3::new(
+                    min[0].as_f64().unwrap() as f32,
+                    min[1].as_f64().unwrap() as f32,
+                    min[2].as_f64().unwrap() as f32,
+                );
+                let max = Vec3::new(
+                    max[0].as_f64().unwrap() as f32,
+                    max[1].as_f64().unwrap() as f32,
+                    max[2].as_f64().unwrap() as f32,
+                );
+                let ours = &a.meshes[mi][pi].positions;
+                let lo = ours.iter().fold(Vec3::INFINITY, |m, p| m.min(*p));
+                let hi = ours.iter().fold(Vec3::NEG_INFINITY, |m, p| m.max(*p));
+                assert_close(lo, min, 1e-4, &format!("{rel} mesh {mi} min"));
+                assert_close(hi, max, 1e-4, &format!("{rel} mesh {mi} max"));
+            }
+        }
+    }
+}
+
+/// InterpolationTest: node = T·R·S of the rest mesh; expected TRS computed by hand from the keys.
+#[test]
+fn interpolation_step_linear_cubic() {
+    let a = load("gltf/InterpolationTest/InterpolationTest.gltf");
+    let check = |clip: usize, node: usize, t: f32, trs: (Vec3, Quat, Vec3)| {
+        let posed = pose(&a, &[clip], t);
+        let p = of_node(&a, &posed, node);
+        let rest = &a.meshes[a.nodes[node].mesh.unwrap()][0].positions;
+        let m = Mat4::from_scale_rotation_translation(trs.2, trs.1, trs.0);
+        for (i, r) in rest.iter().enumerate() {
+            assert_close(
+                p.positions[i],
+                m.transform_point3(*r),
+                2e-4,
+                &format!("clip {clip} t {t} vertex {i}"),
+            );
+        }
+    };
+    let n = |i: usize| a.nodes[i].translation;
+    // STEP translation (node 8): keys y = 6.665, 10, 6, … at 0, 0.458, 0.833: t = 0.6 holds key 1.
+    check(
+        6,
+        8,
+        0.6,
+        (Vec3::new(0.0, 10.0, 0.0), Quat::IDENTITY, Vec3::ONE),
+    );
+    // LINEAR translation (node 10): halfway between y = 6.621 and 10.
+    check(
+        8,
+        10,
+        0.416_666_66 / 2.0,
+        (
+            Vec3::new(-3.2975807, (6.621_014_6 + 10.0) / 2.0, 0.0),
+            Quat::IDENTITY,
+            Vec3::ONE,
+        ),
+    );
+    // CUBICSPLINE translation (node 9) with zero tangents: the Hermite midpoint is the mean.
+    check(
+        7,
+        9,
+        0.416_666_66 / 2.0,
+        (
+            Vec3::new(3.30518, (6.640_117 + 10.0) / 2.0, 0.0),
+            Quat::IDENTITY,
+            Vec3::ONE,
+        ),
+    );
+    // LINEAR rotation (node 7): halfway from identity to -45° about Z is -22.5°.
+    check(
+        5,
+        7,
+        0.416_666_66 / 2.0,
+        (
+            n(7),
+            Quat::from_rotation_z(-22.5f32.to_radians()),
+            Vec3::ONE,
+        ),
+    );
+    // STEP scale (node 0): before the first key clamps to it (1), at 0.5 holds key 1 (0.5); after the last key: last.
+    check(0, 0, 0.0, (n(0), Quat::IDENTITY, Vec3::ONE));
+    check(0, 0, 0.5, (n(0), Quat::IDENTITY, Vec3::splat(0.5)));
+    // CUBICSPLINE scale (node 4): keys 1 → 0.5 with zero tangents; midpoint 0.75, quarter smoothstep.
+    let (t0, t1) = (0.041_666_668f32, 0.416_666_66f32);
+    check(
+        2,
+        4,
+        (t0 + t1) / 2.0,
+        (n(4), Quat::IDENTITY, Vec3::splat(0.75)),
+    );
+    let s = 0.25f32;
+    let h = 3.0 * s * s - 2.0 * s * s * s;
+    check(
+        2,
+        4,
+        t0 + s * (t1 - t0),
+        (n(4), Quat::IDENTITY, Vec3::splat(1.0 - 0.5 * h)),
+    );
+}
+
+/// World matrix of a node at rest, from the parent chain.
+fn rest_world(a: &GltfAsset, node: usize) -> Mat4 {
+    let n = &a.nodes[node];
+    let local = n.matrix.unwrap_or_else(|| {
+        Mat4::from_scale_rotation_translation(n.scale, n.rotation, n.translation)
+    });
+    match a
+        .order
+        .iter()
+        .find(|(x, _)| *x == node)
+        .and_then(|(_, p)| *p)
+    {
+        Some(p) => rest_world(a, p) * local,
+        None => local,
+    }
+}
+
+/// With no animation, every joint is at its bind pose: skinning must place the mesh where its node's own
+/// transform would (the file's inverse bind matrices invert the joints' rest transforms).
+#[test]
+fn skins_at_bind_pose_reproduce_the_mesh() {
+    for rel in ["gltf/QuadSkinMultiInfluence/quad_skin.glb"] {
+        let a = load(rel);
+        let posed = pose(&a, &[], 0.0);
+        let mut checked = 0;
+        for (object, &(node, _)) in a.order.iter().enumerate() {
+            let Some(mesh) = a.nodes[node].mesh else {
+                continue;
+            };
+            let p = posed
+                .primitives
+                .iter()
+                .find(|p| p.object == object as u32)
+                .unwrap();
+            for (i, r) in a.meshes[mesh][0].positions.iter().enumerate() {
+                let expect = rest_world(&a, node).transform_point3(*r);
+                assert_close(p.positions[i], expect, 1e-3, &format!("{rel} vertex {i}"));
+                checked += 1;
+            }
+        }
+        assert!(checked > 0);
+    }
+    // QuadSkinMultiInfluence uses JOINTS_0..2: 12 influences per vertex, renormalized.
+    let a = load("gltf/QuadSkinMultiInfluence/quad_skin.glb");
+    let prim = a
+        .meshes
+        .iter()
+        .flatten()
+        .find(|p| p.influences > 0)
+        .unwrap();
+    assert!(prim.influences > 4, "{}", prim.influences);
+    for w in prim.weights.chunks_exact(prim.influences) {
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+    }
+}
+
+/// SimpleSkin: joints are nodes 1 (at y = 1) and 2 (its child, rotating about Z); both inverse bind matrices
+/// are a translation by (-0.5, -1, 0) (from the file), so joint 0 shifts vertices by -0.5 in x and joint 1
+/// rotates them about (0.5, 1, 0) before the same shift... written out: J1·r = R·(r - (0.5, 1, 0)) + (0, 1, 0).
+#[test]
+fn skinning_follows_the_joint() {
+    let a = load("gltf/SimpleSkin/SimpleSkin.gltf");
+    let ch = &a.animations[0].channels[0];
+    let mut q = [0f32; 4];
+    let t = 2.0;
+    ch.sampler.sample(t, &mut q);
+    let rot = Quat::from_slice(&q);
+    assert!(
+        rot.angle_between(Quat::IDENTITY) > 0.1,
+        "pick a time with a visible rotation"
+    );
+    let posed = pose(&a, &[0], t);
+    let prim = &a.meshes[0][0];
+    let ibm = Vec3::new(-0.5, -1.0, 0.0);
+    let joint = Vec3::new(0.0, 1.0, 0.0);
+    for v in 0..prim.positions.len() {
+        let w = &prim.weights[v * 4..v * 4 + 4];
+        let j = &prim.joints[v * 4..v * 4 + 4];
+        // Blend of joint 0 (identity) and joint 1 (rotation about the pivot).
+        let (w0, w1) = (
+            if j[0] == 0 { w[0] } else { 0.0 } + if j[1] == 0 { w[1] } else { 0.0 },
+            if j[0] == 1 { w[0] } else { 0.0 } + if j[1] == 1 { w[1] } else { 0.0 },
+        );
+        let r = prim.positions[v];
+        let expect = (r + ibm + joint) * w0 + (rot * (r + ibm) + joint) * w1;
+        assert_close(
+            posed.primitives[0].positions[v],
+            expect,
+            1e-4,
+            &format!("vertex {v}"),
+        );
+    }
+    for n in &posed.primitives[0].normals {
+        assert!((n.length() - 1.0).abs() < 1e-4 || *n == Vec3::ZERO);
+    }
+}
+
+#[test]
+fn cesium_man_poses_every_frame_sanely() {
+    let a = load("gltf/CesiumMan/CesiumMan.glb");
+    assert_eq!(a.skins[0].joints.len(), 19);
+    assert_eq!(a.textures.len(), 1);
+    let mut last = None;
+    for f in 0..20 {
+        let posed = pose(&a, &[0], f as f32 * 0.1);
+        let (lo, hi) = posed.bounds().unwrap();
+        assert!(lo.is_finite() && hi.is_finite());
+        // The man is ~1.5 units tall in his file units whatever the frame.
+        let size = (hi - lo).max_element();
+        assert!(size > 1.0 && size < 2.5, "{size}");
+        for p in &posed.primitives {
+            assert!(p.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-3));
+        }
+        let d = posed.digest();
+        assert_ne!(
+            Some(d),
+            last,
+            "frame {f} equals the previous one: the animation is not applied"
+        );
+        last = Some(d);
+    }
+}
+
+#[test]
+fn morph_weights_blend_deltas() {
+    // MorphPrimitivesTest: static mesh.weights = [0.5] on two primitives.
+    let a = load("gltf/MorphPrimitivesTest/MorphPrimitivesTest.gltf");
+    let posed = pose(&a, &[], 0.0);
+    let node = a
+        .order
+        .iter()
+        .find(|(n, _)| a.nodes[*n].mesh.is_some())
+        .unwrap()
+        .0;
+    let model = a.nodes[node].matrix.unwrap_or_else(|| {
+        Mat4::from_scale_rotation_translation(
+            a.nodes[node].scale,
+            a.nodes[node].rotation,
+            a.nodes[node].translation,
+        )
+    });
+    assert_eq!(a.nodes[node].weights, [0.5]);
+    for (pi, prim) in a.meshes[a.nodes[node].mesh.unwrap()].iter().enumerate() {
+        let d = &prim.morph_positions[0];
+        assert!(d.iter().any(|v| *v != Vec3::ZERO));
+        for v in 0..prim.positions.len() {
+            assert_close(
+                posed.primitives[pi].positions[v],
+                model.transform_point3(prim.positions[v] + d[v] * 0.5),
+                1e-5,
+                "morph",
+            );
+        }
+    }
+    // AnimatedMorphCube: weights animated LINEAR; at the first key both weights are 0 → the rest cube.
+    let a = load("gltf/AnimatedMorphCube/AnimatedMorphCube.gltf");
+    let mut w = [0f32; 2];
+    a.animations[0].channels[0].sampler.sample(1.0, &mut w);
+    let posed = pose(&a, &[0], 1.0);
+    let n = &a.nodes[0];
+    let model = Mat4::from_scale_rotation_translation(n.scale, n.rotation, n.translation);
+    let prim = &a.meshes[0][0];
+    for v in 0..prim.positions.len() {
+        let p = prim.positions[v]
+            + prim.morph_positions[0][v] * w[0]
+            + prim.morph_positions[1][v] * w[1];
+        assert_close(
+            posed.primitives[0].positions[v],
+            model.transform_point3(p),
+            1e-4,
+            "animated morph",
+        );
+    }
+    // SparseMorphTargets: deltas in a sparse accessor without a bufferView.
+    let a = load("gltf/SparseMorphTargets/singleBlendshapeCube_sparse.glb");
+    let prim = &a.meshes[0][0];
+    let nonzero = prim.morph_positions[0]
+        .iter()
+        .filter(|v| **v != Vec3::ZERO)
+        .count();
+    assert!(nonzero > 0 && nonzero < prim.positions.len(), "{nonzero}");
+    // SimpleMorph: two targets, default weights from the mesh.
+    let a = load("gltf/SimpleMorph/SimpleMorph.gltf");
+    assert_eq!(a.meshes[0][0].morph_positions.len(), 2);
+    assert_eq!(pose(&a, &[0], 0.5).primitives.len(), 1);
+}
+
+#[test]
+fn primitive_modes() {
+    let tris = |rel: &str| {
+        let a = load(rel);
+        (
+            a.meshes
+                .iter()
+                .flatten()
+                .map(|p| (p.kind, p.indices.len() / 3, p.positions.len()))
+                .collect::<Vec<_>>(),
+            a.warnings,
+        )
+    };
+    let (p, _) = tris("gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_00.gltf");
+    assert_eq!(p[0].0, PrimKind::Points);
+    for rel in [
+        "gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_01.gltf",
+        "gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_02.gltf",
+        "gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_03.gltf",
+    ] {
+        let (p, w) = tris(rel);
+        assert!(p.is_empty(), "{rel}: lines are skipped");
+        assert_eq!(w.len(), 1, "{rel}: one warning per line primitive: {w:?}");
+    }
+    for rel in [
+        "gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_04.gltf",
+        "gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_05.gltf",
+        "gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_14.gltf",
+    ] {
+        let (p, _) = tris(rel);
+        assert_eq!(
+            (p[0].0, p[0].1),
+            (PrimKind::Triangles, 2),
+            "{rel}: a strip, a fan or uint8 indices make the 2-triangle square"
+        );
+    }
+}
+
+#[test]
+fn materials_textures_and_vertex_colours() {
+    let a = load("gltf/BoxTextured/BoxTextured.glb");
+    let m = &a.materials[0];
+    let r = m
+        .base_color_texture
+        .expect("BoxTextured has a base colour texture");
+    let t = &a.textures[r.texture as usize];
+    assert!(t.width > 0 && t.srgb);
+    assert!(!a.meshes[0][0].uvs.is_empty());
+    let a = load("gltf/VertexColorTest/VertexColorTest.gltf");
+    assert!(a.meshes.iter().flatten().any(|p| !p.colors.is_empty()));
+    let a = load("gltf/Cameras/Cameras.gltf");
+    assert!(
+        a.cameras.iter().any(|c| c.kind == "perspective")
+            && a.cameras.iter().any(|c| c.kind == "orthographic")
+    );
+}
+
+#[test]
+fn generated_normals_are_unit_and_outward() {
+    // The primitive-mode squares have no NORMAL: generated normals face +Z for a counter-clockwise square.
+    let a = load("gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_14.gltf");
+    for n in &a.meshes[0][0].normals {
+        assert!((n.length() - 1.0).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn malformed_gltf_files_fail_clearly() {
+    let bad = |rel: &str| gltf::load(&asset_path(rel), None).unwrap_err();
+    let e = bad("bad/gltf/assimp/MissingBin_BoxTextured.gltf");
+    assert!(
+        e.contains("MissingBin_BoxTextured.gltf") && e.contains("BoxTextured0.bin"),
+        "{e}"
+    );
+    let e = bad("bad/gltf/draco/Box_Draco.glb");
+    assert!(
+        e.contains("Box_Draco.glb") && e.contains("KHR_draco_mesh_compression"),
+        "{e}"
+    );
+    let e = bad("bad/gltf/validator/animation/sampler_too_few_cubic_frames.gltf");
+    assert!(
+        e.contains("sampler_too_few_cubic_frames.gltf")
+            && e.contains("CUBICSPLINE sampler needs at least 2 keyframes"),
+        "{e}"
+    );
+    // Its index accessor has no bufferView, so it reads as zeros (as the spec says): valid, a degenerate mesh.
+    let a = gltf::load(
+        &asset_path("bad/gltf/validator/mesh_data/index_buffer_oob.gltf"),
+        None,
+    );
+    assert!(
+        a.is_ok() || a.as_ref().unwrap_err().contains("out of range"),
+        "{a:?}"
+    );
+    // Non-unit rotation keys are valid enough to load: they are normalized, with a warning.
+    let a = gltf::load(
+        &asset_path("bad/gltf/validator/animation_data/quaternion_non_unit_values.gltf"),
+        None,
+    )
+    .unwrap();
+    assert!(
+        a.warnings.iter().any(|w| w.contains("normalized")),
+        "{:?}",
+        a.warnings
+    );
+}
+
+#[test]
+fn uris_may_not_escape_the_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("secret.bin"), [0u8; 64]).unwrap();
+    let sub = dir.path().join("model");
+    std::fs::create_dir(&sub).unwrap();
+    let json = r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"../secret.bin","byteLength":64}]}"#;
+    std::fs::write(sub.join("m.gltf"), json).unwrap();
+    let e = gltf::load(&sub.join("m.gltf"), None).unwrap_err();
+    assert!(e.contains("../secret.bin") && e.contains("outside"), "{e}");
+}
+
+#[test]
+fn indices_beyond_the_vertices_are_an_error() {
+    use base64::Engine as _;
+    let mut bin = Vec::new();
+    for v in [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    bin.extend_from_slice(&[0u8, 1, 5, 0]);
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                     {{"bufferView":1,"componentType":5121,"count":3,"type":"SCALAR"}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":3}}],
+        "buffers":[{{"uri":"{uri}","byteLength":40}}]}}"#
+    );
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("oob.gltf"), json).unwrap();
+    let e = gltf::load(&dir.path().join("oob.gltf"), None).unwrap_err();
+    assert!(
+        e.contains("oob.gltf") && e.contains("index 5 is out of range"),
+        "{e}"
+    );
+}
