@@ -1,4 +1,5 @@
 //! Scene sources on real assets: accessor decoding, interpolation, skinning, morphs, materials, primitive
+#![allow(clippy::needless_range_loop)] // index loops read clearer when several arrays share the index
 //! modes, and clear errors for malformed files.
 
 use std::path::{Path, PathBuf};
