@@ -547,31 +547,62 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
             .filter(|(_, &s)| s != NO_SLOT)
             .map(|((p, &o), &s)| (o, p.ty, s))
             .collect();
-        // The common layouts (x, y, z as f32 at the start of the row) get an unrolled path.
-        let xyz_f32_le = !be
-            && mapped
-                .iter()
-                .take(3)
-                .enumerate()
-                .all(|(i, &(o, t, s))| o == 4 * i && t == Scalar::F32 && s == i);
-        for row in data.chunks_exact(row_size) {
-            if xyz_f32_le {
-                let f = |o: usize| f32::from_le_bytes([row[o], row[o + 1], row[o + 2], row[o + 3]]);
-                out.positions.push([f(0), f(4), f(8)]);
-                for &(o, t, s) in &mapped[3..] {
-                    v[s] = t.read(&row[o..], be);
-                }
+        let rows = || data.chunks_exact(row_size);
+        // Column fast paths: a group of three consecutive properties of one type (x y z float, nx ny nz float,
+        // red green blue uchar) is decoded by one tight loop each; anything else goes through the generic row loop.
+        let group = |first: usize, ty: Scalar| -> Option<usize> {
+            let at = |s: usize| mapped.iter().find(|m| m.2 == s);
+            let (a, b, c) = (at(first)?, at(first + 1)?, at(first + 2)?);
+            (a.1 == ty
+                && b.1 == ty
+                && c.1 == ty
+                && b.0 == a.0 + ty.size()
+                && c.0 == b.0 + ty.size())
+            .then_some(a.0)
+        };
+        let f = |r: &[u8], o: usize| {
+            let b = [r[o], r[o + 1], r[o + 2], r[o + 3]];
+            if be {
+                f32::from_be_bytes(b)
             } else {
+                f32::from_le_bytes(b)
+            }
+        };
+        let xyz = group(SLOT_X, Scalar::F32);
+        let nxyz = if has_n {
+            group(SLOT_NX, Scalar::F32)
+        } else {
+            None
+        };
+        let rgb = if has_c && !slots.contains(&SLOT_A) {
+            group(SLOT_R, Scalar::U8)
+        } else {
+            None
+        };
+        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some())) {
+            out.positions = rows()
+                .map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)])
+                .collect();
+            if let Some(o) = nxyz {
+                normals = rows()
+                    .map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)])
+                    .collect();
+            }
+            if let Some(o) = rgb {
+                colors = rows().map(|r| [r[o], r[o + 1], r[o + 2], 255]).collect();
+            }
+        } else {
+            for row in rows() {
                 for &(o, t, s) in &mapped {
                     v[s] = t.read(&row[o..], be);
                 }
                 out.positions.push([v[0] as f32, v[1] as f32, v[2] as f32]);
-            }
-            if has_n {
-                normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
-            }
-            if has_c {
-                colors.push(to_rgba8(&v, color_scale));
+                if has_n {
+                    normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
+                }
+                if has_c {
+                    colors.push(to_rgba8(&v, color_scale));
+                }
             }
         }
         c.pos += total;
@@ -726,25 +757,49 @@ pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
     let mut buf = Vec::with_capacity(h.len() + n * 40);
     buf.extend_from_slice(h.as_bytes());
     if out.ascii {
-        let mut line = String::new();
+        let mut fmt = ryu::Buffer::new();
+        let mut put = |buf: &mut Vec<u8>, v: f32| {
+            // Integer values (8i's vox10 coordinates) are written as integers, like 8i's files; others in the
+            // shortest form that reads back to the same f32.
+            if v.fract() == 0.0 && v.abs() < 1e7 {
+                let _ = write!(buf, "{}", v as i64);
+            } else {
+                buf.extend_from_slice(fmt.format(v).as_bytes());
+            }
+        };
         for i in 0..n {
-            line.clear();
-            let p = out.positions[i];
-            let _ = write!(line, "{} {} {}", p[0], p[1], p[2]);
+            let mut first = true;
+            let mut sep = |buf: &mut Vec<u8>| {
+                if !first {
+                    buf.push(b' ');
+                }
+                first = false;
+            };
+            for v in out.positions[i] {
+                sep(&mut buf);
+                put(&mut buf, v);
+            }
             if let Some(nr) = out.normals {
-                let _ = write!(line, " {} {} {}", nr[i][0], nr[i][1], nr[i][2]);
+                for v in nr[i] {
+                    sep(&mut buf);
+                    put(&mut buf, v);
+                }
             }
             if let Some(c) = out.colors {
-                let _ = write!(line, " {} {} {}", c[i][0], c[i][1], c[i][2]);
+                for v in c[i] {
+                    sep(&mut buf);
+                    let _ = write!(buf, "{v}");
+                }
             }
             for (_, v) in out.extra_u32 {
-                let _ = write!(line, " {}", v[i]);
+                sep(&mut buf);
+                let _ = write!(buf, "{}", v[i]);
             }
             for (_, v) in out.extra_f32 {
-                let _ = write!(line, " {}", v[i]);
+                sep(&mut buf);
+                put(&mut buf, v[i]);
             }
-            line.push('\n');
-            buf.extend_from_slice(line.as_bytes());
+            buf.push(b'\n');
         }
         for t in tris.chunks_exact(3) {
             let _ = writeln!(buf, "3 {} {} {}", t[0], t[1], t[2]);

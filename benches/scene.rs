@@ -1,0 +1,132 @@
+//! Scene benchmarks: PLY read/write (1M points, binary and ascii; an 800k-point 8i-style ascii frame) and glTF
+//! frame evaluation (CesiumMan). Run: `cargo bench --bench scene [-- OUT_DIR]`. The PLY files are left in
+//! OUT_DIR (default `target/bench-data`) so peers (plyfile, Open3D) can time the same bytes in the same run.
+
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use glam::Mat4;
+use vvgen::scene::gltf::{self, PoseScratch};
+use vvgen::scene::ply::{self, PlyOut};
+use vvgen::scene::PosedScene;
+
+/// Median wall time of `runs` calls.
+fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> Duration {
+    let mut v: Vec<Duration> = (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            black_box(f());
+            t.elapsed()
+        })
+        .collect();
+    v.sort();
+    v[runs / 2]
+}
+
+fn ms(d: Duration) -> String {
+    format!("{:8.3} ms", d.as_secs_f64() * 1e3)
+}
+
+fn main() {
+    let out: PathBuf = std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with('-'))
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("target/bench-data"));
+    std::fs::create_dir_all(&out).unwrap();
+
+    // 1M points, xyz float + rgb uchar: the common capture layout.
+    let n = 1_000_000;
+    let mut s = 0x9E3779B97F4A7C15u64;
+    let mut rnd = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let pos: Vec<[f32; 3]> = (0..n)
+        .map(|_| [rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0])
+        .collect();
+    let col: Vec<[u8; 3]> = (0..n)
+        .map(|i| [(i % 251) as u8, (i % 241) as u8, (i % 239) as u8])
+        .collect();
+    let cloud = PlyOut {
+        positions: &pos,
+        colors: Some(&col),
+        ..Default::default()
+    };
+
+    println!("PLY, 1M points (x y z float, red green blue uchar):");
+    let bin = ply::write(&cloud);
+    std::fs::write(out.join("pc_1m_bin.ply"), &bin).unwrap();
+    println!(
+        "  write binary        {}",
+        ms(time(5, || ply::write(&cloud)))
+    );
+    println!(
+        "  read  binary        {}",
+        ms(time(5, || ply::read(&bin).unwrap()))
+    );
+    let txt = ply::write(&PlyOut {
+        ascii: true,
+        ..cloud
+    });
+    std::fs::write(out.join("pc_1m_ascii.ply"), &txt).unwrap();
+    println!(
+        "  write ascii         {}",
+        ms(time(3, || ply::write(&PlyOut {
+            ascii: true,
+            ..cloud
+        })))
+    );
+    println!(
+        "  read  ascii         {}",
+        ms(time(3, || ply::read(&txt).unwrap()))
+    );
+
+    // An 8i vox10 frame: 800k points with integer coordinates in 0..1024, written as 8i does (ascii).
+    let vox: Vec<[f32; 3]> = pos
+        .iter()
+        .take(800_000)
+        .map(|p| {
+            [
+                ((p[0] + 1.0) * 511.0).round(),
+                ((p[1] + 1.0) * 511.0).round(),
+                (p[2] * 511.0).round(),
+            ]
+        })
+        .collect();
+    let vox_txt = ply::write(&PlyOut {
+        positions: &vox,
+        colors: Some(&col[..800_000]),
+        ascii: true,
+        ..Default::default()
+    });
+    std::fs::write(out.join("vox10_800k_ascii.ply"), &vox_txt).unwrap();
+    println!(
+        "  read  8i-style ascii frame, 800k points   {}",
+        ms(time(5, || ply::read(&vox_txt).unwrap()))
+    );
+
+    let man = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb");
+    let asset = gltf::load(&man, None).unwrap();
+    let mut scratch = PoseScratch::default();
+    let mut posed = PosedScene::default();
+    asset.pose(&[0], 0.0, Mat4::IDENTITY, &mut scratch, &mut posed);
+    let mut t = 0.0f32;
+    let d = time(201, || {
+        t = (t + 1.0 / 30.0) % 2.0;
+        asset.pose(&[0], t, Mat4::IDENTITY, &mut scratch, &mut posed);
+    });
+    println!(
+        "glTF: CesiumMan frame evaluation ({} vertices, 19 joints)  {}",
+        posed
+            .primitives
+            .iter()
+            .map(|p| p.positions.len())
+            .sum::<usize>(),
+        ms(d)
+    );
+    println!("files for peers: {}", out.display());
+}
