@@ -45,69 +45,30 @@ fn main() {
         s ^= s << 17;
         (s >> 40) as f32 / (1u64 << 24) as f32
     };
-    let pos: Vec<[f32; 3]> = (0..n)
-        .map(|_| [rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0])
-        .collect();
-    let col: Vec<[u8; 3]> = (0..n)
-        .map(|i| [(i % 251) as u8, (i % 241) as u8, (i % 239) as u8])
-        .collect();
-    let cloud = PlyOut {
-        positions: &pos,
-        colors: Some(&col),
-        ..Default::default()
-    };
+    let pos: Vec<[f32; 3]> = (0..n).map(|_| [rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0]).collect();
+    let col: Vec<[u8; 3]> = (0..n).map(|i| [(i % 251) as u8, (i % 241) as u8, (i % 239) as u8]).collect();
+    let cloud = PlyOut { positions: &pos, colors: Some(&col), ..Default::default() };
 
     println!("PLY, 1M points (x y z float, red green blue uchar):");
     let bin = ply::write(&cloud);
     std::fs::write(out.join("pc_1m_bin.ply"), &bin).unwrap();
-    println!(
-        "  write binary        {}",
-        ms(time(5, || ply::write(&cloud)))
-    );
-    println!(
-        "  read  binary        {}",
-        ms(time(5, || ply::read(&bin).unwrap()))
-    );
-    let txt = ply::write(&PlyOut {
-        ascii: true,
-        ..cloud
-    });
+    println!("  write binary        {}", ms(time(5, || ply::write(&cloud))));
+    println!("  read  binary        {}", ms(time(5, || ply::read(&bin).unwrap())));
+    let txt = ply::write(&PlyOut { ascii: true, ..cloud });
     std::fs::write(out.join("pc_1m_ascii.ply"), &txt).unwrap();
-    println!(
-        "  write ascii         {}",
-        ms(time(3, || ply::write(&PlyOut {
-            ascii: true,
-            ..cloud
-        })))
-    );
-    println!(
-        "  read  ascii         {}",
-        ms(time(3, || ply::read(&txt).unwrap()))
-    );
+    println!("  write ascii         {}", ms(time(3, || ply::write(&PlyOut { ascii: true, ..cloud }))));
+    println!("  read  ascii         {}", ms(time(3, || ply::read(&txt).unwrap())));
 
     // An 8i vox10 frame: 800k points with integer coordinates in 0..1024, written as 8i does (ascii).
     let vox: Vec<[f32; 3]> = pos
         .iter()
         .take(800_000)
-        .map(|p| {
-            [
-                ((p[0] + 1.0) * 511.0).round(),
-                ((p[1] + 1.0) * 511.0).round(),
-                (p[2] * 511.0).round(),
-            ]
-        })
+        .map(|p| [((p[0] + 1.0) * 511.0).round(), ((p[1] + 1.0) * 511.0).round(), (p[2] * 511.0).round()])
         .collect();
-    let vox_txt = ply::write(&PlyOut {
-        positions: &vox,
-        colors: Some(&col[..800_000]),
-        ascii: true,
-        ..Default::default()
-    });
+    let vox_txt =
+        ply::write(&PlyOut { positions: &vox, colors: Some(&col[..800_000]), ascii: true, ..Default::default() });
     std::fs::write(out.join("vox10_800k_ascii.ply"), &vox_txt).unwrap();
-    println!(
-        "  read  8i-style ascii frame, 800k points   {}",
-        ms(time(5, || ply::read(&vox_txt).unwrap()))
-    );
+    println!("  read  8i-style ascii frame, 800k points   {}", ms(time(5, || ply::read(&vox_txt).unwrap())));
 
     let man = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb");
     let asset = gltf::load(&man, None).unwrap();
@@ -121,11 +82,7 @@ fn main() {
     });
     println!(
         "glTF: CesiumMan frame evaluation ({} vertices, 19 joints)  {}",
-        posed
-            .primitives
-            .iter()
-            .map(|p| p.positions.len())
-            .sum::<usize>(),
+        posed.primitives.iter().map(|p| p.positions.len()).sum::<usize>(),
         ms(d)
     );
     println!("files for peers: {}", out.display());

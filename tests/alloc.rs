@@ -29,20 +29,13 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn posing_after_the_first_frame_does_not_allocate() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/gltf/CesiumMan/CesiumMan.glb");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb");
     let asset = gltf::load(&path, None).unwrap();
     let (mut scratch, mut posed) = (PoseScratch::default(), PosedScene::default());
     asset.pose(&[0], 0.0, Mat4::IDENTITY, &mut scratch, &mut posed);
     let before = ALLOCS.load(Ordering::SeqCst);
     for f in 1..30 {
-        asset.pose(
-            &[0],
-            f as f32 / 30.0,
-            Mat4::IDENTITY,
-            &mut scratch,
-            &mut posed,
-        );
+        asset.pose(&[0], f as f32 / 30.0, Mat4::IDENTITY, &mut scratch, &mut posed);
     }
     assert_eq!(ALLOCS.load(Ordering::SeqCst) - before, 0);
     assert!(posed.triangle_count() > 4000);

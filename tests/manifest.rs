@@ -6,11 +6,7 @@ use std::process::Command;
 use vvgen::manifest::{self, Report};
 
 fn data(rel: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(rel)
-        .to_string_lossy()
-        .replace('\\', "/")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel).to_string_lossy().replace('\\', "/")
 }
 
 /// Parses `text` as if it were `<tmp>/m.toml`.
@@ -181,15 +177,9 @@ fn every_table_parses_from_a_full_example() {
     assert_eq!(m.render.intrinsics(), (500.0, 510.0, 320.0, 240.0));
     assert_eq!(m.transform.over, Some(manifest::transform::Over::First));
     assert_eq!(m.splits["test"].time, manifest::TimeMode::Random);
-    assert_eq!(
-        m.outputs["pc"].writer.get_ref(),
-        &manifest::Writer::PlySequence
-    );
+    assert_eq!(m.outputs["pc"].writer.get_ref(), &manifest::Writer::PlySequence);
     // Named tables are kept by name: table order in the file does not matter.
-    assert_eq!(
-        m.rigs.keys().collect::<Vec<_>>(),
-        ["dome", "ff", "fib", "fixed", "hemi", "ring"]
-    );
+    assert_eq!(m.rigs.keys().collect::<Vec<_>>(), ["dome", "ff", "fib", "fixed", "hemi", "ring"]);
 }
 
 #[test]
@@ -208,36 +198,19 @@ fn unknown_key_suggests_the_nearest() {
     let r = errors(&text);
     let l = lines(&r);
     let line = text.lines().position(|l| l.starts_with("veiws")).unwrap() + 1;
-    assert!(
-        l.iter()
-            .any(|(n, m, _)| *n == line && m == "unknown key `veiws`, did you mean `views`?"),
-        "{l:?}"
-    );
+    assert!(l.iter().any(|(n, m, _)| *n == line && m == "unknown key `veiws`, did you mean `views`?"), "{l:?}");
     // The follow-on "missing views" must not be reported twice as a separate problem.
     let rendered = r.render(false);
     assert!(rendered.contains(&format!("m.toml:{line}:1")), "{rendered}");
-    assert!(
-        rendered.contains("help: did you mean `views`?"),
-        "{rendered}"
-    );
+    assert!(rendered.contains("help: did you mean `views`?"), "{rendered}");
 }
 
 #[test]
 fn unknown_table_and_enum_value_suggest() {
-    let text = full_manifest()
-        .replace("[output.ngp]", "[ouptut.ngp]")
-        .replace("\"fibonacci\"", "\"fibonaci\"");
+    let text = full_manifest().replace("[output.ngp]", "[ouptut.ngp]").replace("\"fibonacci\"", "\"fibonaci\"");
     let l = lines(&errors(&text));
-    assert!(
-        l.iter()
-            .any(|(_, m, _)| m == "unknown table `ouptut`, did you mean `output`?"),
-        "{l:?}"
-    );
-    assert!(
-        l.iter()
-            .any(|(_, m, _)| m == "unknown value `fibonaci`, did you mean `fibonacci`?"),
-        "{l:?}"
-    );
+    assert!(l.iter().any(|(_, m, _)| m == "unknown table `ouptut`, did you mean `output`?"), "{l:?}");
+    assert!(l.iter().any(|(_, m, _)| m == "unknown value `fibonaci`, did you mean `fibonacci`?"), "{l:?}");
 }
 
 #[test]
@@ -245,11 +218,7 @@ fn wrong_type_is_named() {
     let text = full_manifest().replace("samples = 9", "samples = \"nine\"");
     let line = text.lines().position(|l| l.starts_with("samples")).unwrap() + 1;
     let l = lines(&errors(&text));
-    assert!(
-        l.iter()
-            .any(|(n, m, _)| *n == line && m.contains("wrong type") && m.contains("\"nine\"")),
-        "{l:?}"
-    );
+    assert!(l.iter().any(|(n, m, _)| *n == line && m.contains("wrong type") && m.contains("\"nine\"")), "{l:?}");
 }
 
 #[test]
@@ -268,16 +237,10 @@ fn dangling_reference_names_the_missing_rig() {
 #[test]
 fn missing_file_is_an_error_at_its_path() {
     let text = full_manifest().replace("BoxTextured.glb\"", "BoxTexture.glb\"");
-    let line = text
-        .lines()
-        .position(|l| l.contains("BoxTexture.glb"))
-        .unwrap()
-        + 1;
+    let line = text.lines().position(|l| l.contains("BoxTexture.glb")).unwrap() + 1;
     let l = lines(&errors(&text));
     assert!(
-        l.iter().any(|(n, m, _)| *n == line
-            && m.starts_with("file not found")
-            && m.contains("BoxTexture.glb")),
+        l.iter().any(|(n, m, _)| *n == line && m.starts_with("file not found") && m.contains("BoxTexture.glb")),
         "{l:?}"
     );
 }
@@ -287,9 +250,7 @@ fn missing_sequence_frame_is_named() {
     let text = full_manifest().replace("end = 1002", "end = 1003");
     let l = lines(&errors(&text));
     assert!(
-        l.iter()
-            .any(|(_, m, _)| m.contains("frame 1003 is missing")
-                && m.contains("torus_vox10_1003.ply")),
+        l.iter().any(|(_, m, _)| m.contains("frame 1003 is missing") && m.contains("torus_vox10_1003.ply")),
         "{l:?}"
     );
 }
@@ -297,59 +258,28 @@ fn missing_sequence_frame_is_named() {
 #[test]
 fn output_path_may_not_escape() {
     let text = full_manifest().replace("dir = \"full_dnerf\"", "dir = \"../../elsewhere_dnerf\"");
-    let line = text
-        .lines()
-        .position(|l| l.contains("elsewhere_dnerf"))
-        .unwrap()
-        + 1;
+    let line = text.lines().position(|l| l.contains("elsewhere_dnerf")).unwrap() + 1;
     let l = lines(&errors(&text));
-    assert!(
-        l.iter()
-            .any(|(n, m, _)| *n == line && m.contains("escapes the dataset's `out` directory")),
-        "{l:?}"
-    );
-    let l = lines(&errors(
-        &full_manifest().replace("dir = \"full_dnerf\"", "dir = \"/abs_dnerf\""),
-    ));
+    assert!(l.iter().any(|(n, m, _)| *n == line && m.contains("escapes the dataset's `out` directory")), "{l:?}");
+    let l = lines(&errors(&full_manifest().replace("dir = \"full_dnerf\"", "dir = \"/abs_dnerf\"")));
     assert!(l.iter().any(|(_, m, _)| m.contains("escapes")), "{l:?}");
-    assert!(
-        check(&full_manifest().replace("dir = \"full_dnerf\"", "dir = \"a/../b_dnerf\"")).is_ok()
-    );
+    assert!(check(&full_manifest().replace("dir = \"full_dnerf\"", "dir = \"a/../b_dnerf\"")).is_ok());
 }
 
 #[test]
 fn zero_and_absurd_counts() {
     for (from, to, expect) in [
-        (
-            "views = 100",
-            "views = 0",
-            "views = 0: the split would be empty",
-        ),
+        ("views = 100", "views = 0", "views = 0: the split would be empty"),
         ("points = 100000", "points = 0", "points = 0 is outside"),
-        (
-            "resolution = [640, 480]",
-            "resolution = [640, 20000]",
-            "resolution 640×20000 is outside 1..=16384",
-        ),
-        (
-            "count = 10, fps = 24",
-            "count = 0, fps = 24",
-            "count = 0: the frame range is empty",
-        ),
+        ("resolution = [640, 480]", "resolution = [640, 20000]", "resolution 640×20000 is outside 1..=16384"),
+        ("count = 10, fps = 24", "count = 0, fps = 24", "count = 0: the frame range is empty"),
         ("end = 1002", "end = 999", "empty frame range"),
-        (
-            "samples = 9",
-            "samples = 5",
-            "samples = 5 is not a square supersampling count",
-        ),
+        ("samples = 9", "samples = 5", "samples = 5 is not a square supersampling count"),
     ] {
         let text = full_manifest().replace(from, to);
         let line = text.lines().position(|l| l.contains(to)).unwrap() + 1;
         let l = lines(&errors(&text));
-        assert!(
-            l.iter().any(|(n, m, _)| *n == line && m.contains(expect)),
-            "{to}: {l:?}"
-        );
+        assert!(l.iter().any(|(n, m, _)| *n == line && m.contains(expect)), "{to}: {l:?}");
     }
 }
 
@@ -365,19 +295,8 @@ fn all_errors_are_reported_together() {
         .replace("kind = \"dome\"", "kind = \"dome\"\nradius = -1.0");
     let r = errors(&text);
     let l = lines(&r);
-    for expect in [
-        "veiws",
-        "wrong type",
-        "rign",
-        "file not found",
-        "escapes",
-        "points = 0",
-        "radius = -1",
-    ] {
-        assert!(
-            l.iter().any(|(_, m, _)| m.contains(expect)),
-            "missing {expect}: {l:?}"
-        );
+    for expect in ["veiws", "wrong type", "rign", "file not found", "escapes", "points = 0", "radius = -1"] {
+        assert!(l.iter().any(|(_, m, _)| m.contains(expect)), "missing {expect}: {l:?}");
     }
     // Reported in reading order.
     let ns: Vec<usize> = l.iter().map(|x| x.0).collect();
@@ -388,27 +307,18 @@ fn all_errors_are_reported_together() {
 
 #[test]
 fn keys_of_another_kind_are_rejected() {
-    let text = full_manifest().replace(
-        "schedule = \"nerf-test\"",
-        "schedule = \"nerf-test\"\nrings = 4",
-    );
+    let text = full_manifest().replace("schedule = \"nerf-test\"", "schedule = \"nerf-test\"\nrings = 4");
     let l = lines(&errors(&text));
-    assert!(
-        l.iter()
-            .any(|(_, m, _)| m == "key `rings` does not apply to rig `ring` (kind = \"orbit\")"),
-        "{l:?}"
-    );
+    assert!(l.iter().any(|(_, m, _)| m == "key `rings` does not apply to rig `ring` (kind = \"orbit\")"), "{l:?}");
 }
 
 #[test]
 fn dnerf_with_non_square_images_warns_citing_loaders() {
-    let m = manifest::parse(&full_manifest(), Path::new("/nonexistent-dir/m.toml"))
-        .unwrap()
-        .1;
+    let m = manifest::parse(&full_manifest(), Path::new("/nonexistent-dir/m.toml")).unwrap().1;
     let w: Vec<_> = m.diagnostics.iter().filter(|d| !d.is_error()).collect();
     assert!(
-        w.iter().any(|d| d.message.contains("non-square 640×480")
-            && d.help.as_deref().unwrap_or("").contains("K-Planes")),
+        w.iter()
+            .any(|d| d.message.contains("non-square 640×480") && d.help.as_deref().unwrap_or("").contains("K-Planes")),
         "{w:?}"
     );
 }
@@ -426,10 +336,7 @@ fn shipped_manifests_check() {
             }
         }
     }
-    assert_eq!(
-        kinds.into_iter().collect::<Vec<_>>(),
-        ["Gltf", "Mesh", "PlySequence"]
-    );
+    assert_eq!(kinds.into_iter().collect::<Vec<_>>(), ["Gltf", "Mesh", "PlySequence"]);
 }
 
 #[test]
@@ -438,11 +345,8 @@ fn cli_check_exits_2_with_line_and_suggestion() {
     let path = dir.path().join("typo.toml");
     let text = full_manifest().replace("views = 100", "veiws = 100");
     std::fs::write(&path, &text).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_vvgen"))
-        .args(["check", "--color", "never"])
-        .arg(&path)
-        .output()
-        .unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_vvgen")).args(["check", "--color", "never"]).arg(&path).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     let line = text.lines().position(|l| l.starts_with("veiws")).unwrap() + 1;
@@ -450,15 +354,6 @@ fn cli_check_exits_2_with_line_and_suggestion() {
     assert!(err.contains("did you mean `views`?"), "{err}");
 
     std::fs::write(&path, full_manifest()).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_vvgen"))
-        .args(["check", "-q"])
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).args(["check", "-q"]).arg(&path).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
 }

@@ -5,30 +5,19 @@ use std::path::Path;
 use vvgen::scene::ply::{self, PlyError};
 
 fn load(name: &str) -> Result<ply::PlyData, PlyError> {
-    let bytes = std::fs::read(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/data/bad/ply")
-            .join(name),
-    )
-    .unwrap();
+    let bytes = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/ply").join(name)).unwrap();
     ply::read(&bytes)
 }
 
 #[test]
 fn corrupt_header_is_an_error() {
     let e = load("assimp_crash_corrupt_header.ply").unwrap_err();
-    assert!(
-        matches!(e, PlyError::Header { .. } | PlyError::NoEndHeader),
-        "{e}"
-    );
+    assert!(matches!(e, PlyError::Header { .. } | PlyError::NoEndHeader), "{e}");
 }
 
 #[test]
 fn empty_file_is_not_ply() {
-    assert_eq!(
-        load("assimp_empty_0bytes.ply").unwrap_err(),
-        PlyError::NotPly
-    );
+    assert_eq!(load("assimp_empty_0bytes.ply").unwrap_err(), PlyError::NotPly);
 }
 
 #[test]
@@ -37,14 +26,8 @@ fn binary_body_starting_with_newline_is_kept() {
     assert_eq!(d.positions.len(), 8);
     assert_eq!(d.triangles.len(), 6 * 2 * 3);
     // The first x is the body's first 4 bytes, 0x0A included: skipping it as whitespace would shift everything.
-    assert_eq!(
-        d.positions[0],
-        [f32::from_le_bytes([0x0a, 0xf6, 0xbe, 0x40]), 0.0, 0.0]
-    );
-    assert_eq!(
-        d.positions[1],
-        [f32::from_le_bytes([0x0a, 0xf6, 0xbe, 0x40]), 0.0, 1.0]
-    );
+    assert_eq!(d.positions[0], [f32::from_le_bytes([0x0a, 0xf6, 0xbe, 0x40]), 0.0, 0.0]);
+    assert_eq!(d.positions[1], [f32::from_le_bytes([0x0a, 0xf6, 0xbe, 0x40]), 0.0, 1.0]);
 }
 
 #[test]
@@ -83,8 +66,7 @@ fn tabs_and_extra_whitespace() {
 fn every_scalar_type_and_alias_parses_without_xyz_being_usable() {
     // A custom element "point" with every type: the header parses; there is no vertex element to use.
     let bytes = std::fs::read(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/data/bad/ply/plyrs_all_atomic_types_ok_ascii.ply"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/ply/plyrs_all_atomic_types_ok_ascii.ply"),
     )
     .unwrap();
     let h = ply::parse_header(&bytes).unwrap();
@@ -109,10 +91,7 @@ fn greg_turk_example_with_edges() {
 #[test]
 fn leading_spaces_load_without_xyz_z() {
     // "point" element with x, y only: parses, but has no vertex element.
-    assert!(matches!(
-        load("plyrs_leading_spaces_ok_ascii.ply"),
-        Err(PlyError::Unusable(_))
-    ));
+    assert!(matches!(load("plyrs_leading_spaces_ok_ascii.ply"), Err(PlyError::Unusable(_))));
 }
 
 #[test]

@@ -7,16 +7,12 @@ use vvgen::manifest;
 use vvgen::scene::{Poser, PrimKind, Scene};
 
 fn data(rel: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(rel)
-        .to_string_lossy()
-        .replace('\\', "/")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel).to_string_lossy().replace('\\', "/")
 }
 
 fn scene(text: &str) -> Scene {
-    let (m, _) = manifest::parse(text, Path::new("/nonexistent/m.toml"))
-        .unwrap_or_else(|r| panic!("{}", r.render(false)));
+    let (m, _) =
+        manifest::parse(text, Path::new("/nonexistent/m.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
     Scene::open(&m).unwrap()
 }
 
@@ -34,9 +30,7 @@ fn man(transform: &str) -> String {
 
 #[test]
 fn all_frames_normalization_fits_the_union_exactly() {
-    let s = scene(&man(
-        "up = \"y\"\nfit = { height = 2.4 }\ncenter = \"bbox\"",
-    ));
+    let s = scene(&man("up = \"y\"\nfit = { height = 2.4 }\ncenter = \"bbox\""));
     assert_eq!(s.frames, 20);
     let (lo, hi) = union_bounds(&s);
     assert!(((hi.z - lo.z) - 2.4).abs() < 1e-5, "{lo} {hi}");
@@ -45,9 +39,7 @@ fn all_frames_normalization_fits_the_union_exactly() {
 
 #[test]
 fn first_frame_normalization_fits_frame_zero() {
-    let s = scene(&man(
-        "fit = { height = 2.0 }\ncenter = \"bbox\"\nover = \"first\"",
-    ));
+    let s = scene(&man("fit = { height = 2.0 }\ncenter = \"bbox\"\nover = \"first\""));
     let mut p = Poser::default();
     let (lo, hi) = s.pose(0, &mut p).unwrap().bounds().unwrap();
     assert!(((hi.z - lo.z) - 2.0).abs() < 1e-5);
@@ -65,13 +57,9 @@ fn up_axis_and_explicit_steps() {
     let (lo, hi) = union_bounds(&scene(&man("up = \"z\"")));
     assert!(hi.y - lo.y > 1.3, "{lo} {hi}");
     // translate after scale: fitted to extent 1 then moved by +10 in x.
-    let (lo, hi) = union_bounds(&scene(&man(
-        "fit = { extent = 1.0 }\ncenter = \"bbox\"\ntranslate = [10.0, 0.0, 0.0]",
-    )));
-    assert!(
-        ((hi - lo).max_element() - 1.0).abs() < 1e-5 && ((lo.x + hi.x) / 2.0 - 10.0).abs() < 1e-4,
-        "{lo} {hi}"
-    );
+    let (lo, hi) =
+        union_bounds(&scene(&man("fit = { extent = 1.0 }\ncenter = \"bbox\"\ntranslate = [10.0, 0.0, 0.0]")));
+    assert!(((hi - lo).max_element() - 1.0).abs() < 1e-5 && ((lo.x + hi.x) / 2.0 - 10.0).abs() < 1e-4, "{lo} {hi}");
     // radius: the box's corners lie on the sphere.
     let (lo, hi) = union_bounds(&scene(&man("fit = { radius = 1.5 }\ncenter = \"bbox\"")));
     assert!(((hi - lo).length() / 2.0 - 1.5).abs() < 1e-4, "{lo} {hi}");
@@ -92,10 +80,8 @@ fn ply_sequence_is_normalized_once_over_all_frames() {
     for f in 0..3 {
         let posed = s.pose(f, &mut p).unwrap();
         assert_eq!(posed.primitives[0].kind, PrimKind::Points);
-        let file = vvgen::scene::ply::read(
-            &std::fs::read(data(&format!("seq/torus_vox10_{}.ply", 1000 + f))).unwrap(),
-        )
-        .unwrap();
+        let file = vvgen::scene::ply::read(&std::fs::read(data(&format!("seq/torus_vox10_{}.ply", 1000 + f))).unwrap())
+            .unwrap();
         assert_eq!(posed.point_count(), file.positions.len());
         assert!(!posed.primitives[0].colors.is_empty());
         let (a, b) = posed.bounds().unwrap();
@@ -104,10 +90,7 @@ fn ply_sequence_is_normalized_once_over_all_frames() {
     }
     // The torus turns and rises: per-frame fitting would make every frame exactly 1.0 tall; one matrix for the
     // sequence keeps the frames' own sizes.
-    assert!(
-        heights.iter().filter(|h| (**h - 1.0).abs() < 1e-5).count() <= 1,
-        "{heights:?}"
-    );
+    assert!(heights.iter().filter(|h| (**h - 1.0).abs() < 1e-5).count() <= 1, "{heights:?}");
 }
 
 #[test]
@@ -120,23 +103,11 @@ fn several_sources_merge_with_their_own_transforms() {
     let s = scene(&text);
     let mut p = Poser::default();
     let posed = s.pose(2, &mut p).unwrap();
-    assert_eq!(
-        posed.materials.len(),
-        2 + 2,
-        "each glTF's materials plus its default material"
-    );
+    assert_eq!(posed.materials.len(), 2 + 2, "each glTF's materials plus its default material");
     assert_eq!(posed.textures.len(), 2);
-    let boxes: Vec<_> = posed
-        .primitives
-        .iter()
-        .filter(|p| p.positions.iter().all(|v| v.x > 4.0))
-        .collect();
+    let boxes: Vec<_> = posed.primitives.iter().filter(|p| p.positions.iter().all(|v| v.x > 4.0)).collect();
     assert_eq!(boxes.len(), 1);
     let m = &posed.materials[boxes[0].material as usize];
-    assert_eq!(
-        m.base_color_texture.unwrap().texture,
-        1,
-        "the box's texture index is shifted past the man's"
-    );
+    assert_eq!(m.base_color_texture.unwrap().texture, 1, "the box's texture index is shifted past the man's");
     assert!(boxes[0].object > 0);
 }

@@ -34,11 +34,7 @@ pub fn run(paths: &[PathBuf], ui: Ui) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    Ok(if invalid > 0 {
-        ExitCode::from(EXIT_INVALID)
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(if invalid > 0 { ExitCode::from(EXIT_INVALID) } else { ExitCode::SUCCESS })
 }
 
 fn plural(n: usize) -> &'static str {

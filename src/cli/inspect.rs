@@ -28,10 +28,7 @@ pub fn run(
         eprintln!("warning: {w}");
     }
     if frame >= scene.frames.max(1) {
-        bail!(
-            "frame {frame} is out of range: the scene has {} frames",
-            scene.frames
-        );
+        bail!("frame {frame} is out of range: the scene has {} frames", scene.frames);
     }
     let mut out = String::new();
     use std::fmt::Write as _;
@@ -41,18 +38,10 @@ pub fn run(
         }
         let _ = writeln!(out, "source `{}`: {} frame(s)", s.name, s.frame_count());
         match &s.data {
-            SourceData::Gltf {
-                asset,
-                clips,
-                times,
-            } => {
+            SourceData::Gltf { asset, clips, times } => {
                 let _ = writeln!(out, "  file: {}", asset.path.display());
                 for (ci, a) in asset.animations.iter().enumerate() {
-                    let playing = if clips.contains(&ci) {
-                        " (playing)"
-                    } else {
-                        ""
-                    };
+                    let playing = if clips.contains(&ci) { " (playing)" } else { "" };
                     let _ = writeln!(
                         out,
                         "  clip {ci} `{}`: {:.3} s, {} channel(s){playing}",
@@ -71,9 +60,7 @@ pub fn run(
                         c.name,
                         c.node,
                         c.kind,
-                        c.yfov
-                            .map(|f| format!(", yfov {f:.4} rad"))
-                            .unwrap_or_default()
+                        c.yfov.map(|f| format!(", yfov {f:.4} rad")).unwrap_or_default()
                     );
                 }
             }
@@ -87,29 +74,21 @@ pub fn run(
                     frames[0].path.display(),
                     frames[frames.len() - 1].path.display()
                 );
+                let digest = s.content_digest(frame, &frames[0].path).map_err(anyhow::Error::msg)?;
+                let shown = frames[frame.min(frames.len() - 1)].path.display();
+                let _ = writeln!(out, "  frame {frame}: {shown} (blake3 {digest})");
             }
         }
         let m4 = scene.world_from_source(i).transpose().to_cols_array_2d();
         let _ = writeln!(out, "  source → world (rows):");
         for row in m4 {
-            let _ = writeln!(
-                out,
-                "    [{:>10.6}, {:>10.6}, {:>10.6}, {:>10.6}]",
-                row[0], row[1], row[2], row[3]
-            );
+            let _ = writeln!(out, "    [{:>10.6}, {:>10.6}, {:>10.6}, {:>10.6}]", row[0], row[1], row[2], row[3]);
         }
     }
     let mut poser = Poser::default();
-    let (mut lo, mut hi) = (
-        glam::Vec3::splat(f32::INFINITY),
-        glam::Vec3::splat(f32::NEG_INFINITY),
-    );
+    let (mut lo, mut hi) = (glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY));
     for f in 0..scene.frames {
-        if let Some((a, b)) = scene
-            .pose(f, &mut poser)
-            .map_err(anyhow::Error::msg)?
-            .bounds()
-        {
+        if let Some((a, b)) = scene.pose(f, &mut poser).map_err(anyhow::Error::msg)?.bounds() {
             lo = lo.min(a);
             hi = hi.max(b);
         }
@@ -123,12 +102,7 @@ pub fn run(
         hi.to_array()
     );
     if let Some((a, b)) = posed.bounds() {
-        let _ = writeln!(
-            out,
-            "frame {frame}: bounds {:.4?} … {:.4?}",
-            a.to_array(),
-            b.to_array()
-        );
+        let _ = writeln!(out, "frame {frame}: bounds {:.4?} … {:.4?}", a.to_array(), b.to_array());
     }
     let _ = writeln!(
         out,
@@ -158,11 +132,7 @@ fn write_posed_ply(posed: &crate::scene::PosedScene, path: &Path) -> anyhow::Res
         for v in 0..p.positions.len() {
             pos.push(p.positions[v].to_array());
             nrm.push(p.normals[v].to_array());
-            let c = mat.albedo(
-                &posed.textures,
-                p.uvs.get(v).copied().map(|u: Vec2| u),
-                p.colors.get(v).copied(),
-            );
+            let c = mat.albedo(&posed.textures, p.uvs.get(v).copied().map(|u: Vec2| u), p.colors.get(v).copied());
             col.push([0, 1, 2].map(|k| (linear_to_srgb(c[k]) * 255.0).round() as u8));
         }
         if p.kind == PrimKind::Triangles {
@@ -178,8 +148,7 @@ fn write_posed_ply(posed: &crate::scene::PosedScene, path: &Path) -> anyhow::Res
         ..Default::default()
     });
     let tmp = path.with_extension("ply.partial");
-    let mut f =
-        std::fs::File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+    let mut f = std::fs::File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
     f.write_all(&bytes)?;
     f.sync_all()?;
     std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;

@@ -91,19 +91,12 @@ pub fn run() -> ExitCode {
         Color::Never => false,
         Color::Auto => std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
     };
-    let ui = Ui {
-        color,
-        quiet: cli.quiet,
-        verbose: cli.verbose,
-    };
+    let ui = Ui { color, quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Check { manifests } => check::run(&manifests, ui),
-        Command::Inspect {
-            manifest,
-            source,
-            frame,
-            ply,
-        } => inspect::run(&manifest, source.as_deref(), frame, ply.as_ref(), ui),
+        Command::Inspect { manifest, source, frame, ply } => {
+            inspect::run(&manifest, source.as_deref(), frame, ply.as_ref(), ui)
+        }
     };
     match result {
         Ok(code) => code,

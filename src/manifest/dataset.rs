@@ -27,23 +27,15 @@ pub struct Dataset {
 impl Dataset {
     pub(crate) fn validate(&self, diags: &mut Vec<Diagnostic>) {
         let name = self.name.get_ref();
-        if name.is_empty()
-            || !name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
-        {
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
             diags.push(
-                Diagnostic::error(
-                    format!("dataset name `{name}` is not a plain file name"),
-                    Some(self.name.span()),
-                )
-                .with_help("use letters, digits, `-`, `_` and `.` only; it names output folders"),
+                Diagnostic::error(format!("dataset name `{name}` is not a plain file name"), Some(self.name.span()))
+                    .with_help("use letters, digits, `-`, `_` and `.` only; it names output folders"),
             );
         }
         if self.out.get_ref().trim().is_empty() {
             diags.push(
-                Diagnostic::error("`out` is empty", Some(self.out.span()))
-                    .with_help("e.g. out = \"out/my-dataset\""),
+                Diagnostic::error("`out` is empty", Some(self.out.span())).with_help("e.g. out = \"out/my-dataset\""),
             );
         }
     }

@@ -32,22 +32,12 @@ pub struct Diagnostic {
 impl Diagnostic {
     /// An error at `span`.
     pub fn error(message: impl Into<String>, span: Option<Range<usize>>) -> Self {
-        Diagnostic {
-            severity: Severity::Error,
-            message: message.into(),
-            span,
-            help: None,
-        }
+        Diagnostic { severity: Severity::Error, message: message.into(), span, help: None }
     }
 
     /// A warning at `span`.
     pub fn warning(message: impl Into<String>, span: Option<Range<usize>>) -> Self {
-        Diagnostic {
-            severity: Severity::Warning,
-            message: message.into(),
-            span,
-            help: None,
-        }
+        Diagnostic { severity: Severity::Warning, message: message.into(), span, help: None }
     }
 
     /// Adds a `help:` line.
@@ -100,11 +90,7 @@ impl Report {
                 self.path.display(),
                 errors,
                 if errors == 1 { "" } else { "s" },
-                if warnings > 0 {
-                    format!(", {warnings} warning(s)")
-                } else {
-                    String::new()
-                }
+                if warnings > 0 { format!(", {warnings} warning(s)") } else { String::new() }
             );
         }
         out
@@ -116,12 +102,7 @@ pub fn line_col(src: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(src.len());
     let before = &src[..floor_char_boundary(src, offset)];
     let line = before.matches('\n').count() + 1;
-    let col = before
-        .rsplit('\n')
-        .next()
-        .map(|s| s.chars().count())
-        .unwrap_or(0)
-        + 1;
+    let col = before.rsplit('\n').next().map(|s| s.chars().count()).unwrap_or(0) + 1;
     (line, col)
 }
 
@@ -140,11 +121,7 @@ fn render_one(path: &Path, src: &str, d: &Diagnostic, color: bool) -> String {
     };
     // annotate-snippets appends `:line:column` to the origin itself.
     let origin = path.display().to_string();
-    let renderer = if color {
-        Renderer::styled()
-    } else {
-        Renderer::plain()
-    };
+    let renderer = if color { Renderer::styled() } else { Renderer::plain() };
     let help = d.help.clone().unwrap_or_default();
     let mut msg = level.title(&d.message);
     if let Some(span) = &d.span {
@@ -156,13 +133,7 @@ fn render_one(path: &Path, src: &str, d: &Diagnostic, color: bool) -> String {
                 span.start -= 1;
             }
         }
-        msg = msg.snippet(
-            Snippet::source(src)
-                .line_start(1)
-                .origin(&origin)
-                .fold(true)
-                .annotation(level.span(span)),
-        );
+        msg = msg.snippet(Snippet::source(src).line_start(1).origin(&origin).fold(true).annotation(level.span(span)));
     } else {
         msg = msg.snippet(Snippet::source("").origin(&origin));
     }

@@ -52,42 +52,30 @@ impl Frames {
         }
         if f.step == Some(0) {
             diags.push(
-                Diagnostic::error("step = 0 selects no frames", span.clone())
-                    .with_help("use step = 1 for every frame"),
+                Diagnostic::error("step = 0 selects no frames", span.clone()).with_help("use step = 1 for every frame"),
             );
         }
         match f.count {
             Some(0) => diags.push(
-                Diagnostic::error("count = 0: the frame range is empty", span.clone())
-                    .with_help("use count ≥ 1"),
+                Diagnostic::error("count = 0: the frame range is empty", span.clone()).with_help("use count ≥ 1"),
             ),
-            Some(c) if c > MAX_FRAMES => diags.push(Diagnostic::error(
-                format!("count = {c} frames is more than {MAX_FRAMES}"),
-                span.clone(),
-            )),
+            Some(c) if c > MAX_FRAMES => {
+                diags.push(Diagnostic::error(format!("count = {c} frames is more than {MAX_FRAMES}"), span.clone()))
+            }
             _ => {}
         }
         if f.count.is_some() && f.end.is_some() {
-            diags.push(Diagnostic::error(
-                "give either `count` or `end`, not both",
-                span.clone(),
-            ));
+            diags.push(Diagnostic::error("give either `count` or `end`, not both", span.clone()));
         }
         if let (Some(s), Some(e)) = (f.start, f.end) {
             if e < s {
                 diags.push(
-                    Diagnostic::error(
-                        format!("empty frame range: end = {e} is before start = {s}"),
-                        span.clone(),
-                    )
-                    .with_help("`end` is inclusive and must be ≥ `start`"),
+                    Diagnostic::error(format!("empty frame range: end = {e} is before start = {s}"), span.clone())
+                        .with_help("`end` is inclusive and must be ≥ `start`"),
                 );
             } else if (e - s) as u64 / f.step() > MAX_FRAMES {
                 diags.push(Diagnostic::error(
-                    format!(
-                        "{} frames is more than {MAX_FRAMES}",
-                        (e - s) as u64 / f.step() + 1
-                    ),
+                    format!("{} frames is more than {MAX_FRAMES}", (e - s) as u64 / f.step() + 1),
                     span,
                 ));
             }
@@ -119,20 +107,13 @@ impl FrameSubset {
     pub(crate) fn validate(this: &Spanned<FrameSubset>, diags: &mut Vec<Diagnostic>) {
         let span = Some(this.span());
         match this.get_ref() {
-            FrameSubset::List(l) if l.is_empty() => {
-                diags.push(Diagnostic::error("empty frame list", span))
-            }
+            FrameSubset::List(l) if l.is_empty() => diags.push(Diagnostic::error("empty frame list", span)),
             FrameSubset::Range { every: Some(0), .. } => {
                 diags.push(Diagnostic::error("every = 0 selects no frames", span))
             }
-            FrameSubset::Range {
-                start,
-                end: Some(e),
-                ..
-            } if e < start => diags.push(Diagnostic::error(
-                format!("empty frame range: end = {e} is before start = {start}"),
-                span,
-            )),
+            FrameSubset::Range { start, end: Some(e), .. } if e < start => {
+                diags.push(Diagnostic::error(format!("empty frame range: end = {e} is before start = {start}"), span))
+            }
             _ => {}
         }
     }
@@ -146,9 +127,7 @@ impl FrameSubset {
                 if n == 0 || *start > end {
                     return Vec::new();
                 }
-                (*start..=end)
-                    .step_by(every.unwrap_or(1).max(1) as usize)
-                    .collect()
+                (*start..=end).step_by(every.unwrap_or(1).max(1) as usize).collect()
             }
         }
     }

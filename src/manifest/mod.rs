@@ -37,15 +37,7 @@ pub use transform::Transform;
 use suggest::did_you_mean;
 
 /// The top-level tables, in the order the reference documents them.
-pub const TABLES: &[&str] = &[
-    "dataset",
-    "source",
-    "transform",
-    "render",
-    "rig",
-    "split",
-    "output",
-];
+pub const TABLES: &[&str] = &["dataset", "source", "transform", "render", "rig", "split", "output"];
 
 /// A validated manifest. Named tables are kept sorted by name, so table order in the file never matters.
 #[derive(Debug, Clone)]
@@ -91,10 +83,7 @@ pub fn load(path: &Path) -> Result<(Manifest, Report), Report> {
         Err(e) => Err(Report {
             path: path.to_path_buf(),
             source: String::new(),
-            diagnostics: vec![Diagnostic::error(
-                format!("cannot read the manifest: {e}"),
-                None,
-            )],
+            diagnostics: vec![Diagnostic::error(format!("cannot read the manifest: {e}"), None)],
         }),
     }
 }
@@ -105,11 +94,7 @@ pub fn parse(text: &str, path: &Path) -> Result<(Manifest, Report), Report> {
     let manifest = parse_inner(text, path, &mut diags);
     // Report in reading order; problems without a place come last.
     diags.sort_by_key(|d| d.span.as_ref().map_or(usize::MAX, |s| s.start));
-    let report = Report {
-        path: path.to_path_buf(),
-        source: text.to_string(),
-        diagnostics: diags,
-    };
+    let report = Report { path: path.to_path_buf(), source: text.to_string(), diagnostics: diags };
     match manifest {
         Some(m) if report.error_count() == 0 => Ok((m, report)),
         _ => Err(report),
@@ -121,10 +106,7 @@ fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<M
     if !syntax.is_empty() {
         for e in syntax {
             let span = e.span();
-            diags.push(Diagnostic::error(
-                format!("TOML syntax: {}", e.message().trim()),
-                span,
-            ));
+            diags.push(Diagnostic::error(format!("TOML syntax: {}", e.message().trim()), span));
         }
         return None;
     }
@@ -157,12 +139,9 @@ fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<M
             None
         }
     };
-    let transform: Option<Transform> = tables
-        .get("transform")
-        .map_or(Some(Transform::default()), |v| walk::typed(v, diags));
-    let render: Option<Render> = tables
-        .get("render")
-        .map_or(Some(Render::default()), |v| walk::typed(v, diags));
+    let transform: Option<Transform> =
+        tables.get("transform").map_or(Some(Transform::default()), |v| walk::typed(v, diags));
+    let render: Option<Render> = tables.get("render").map_or(Some(Render::default()), |v| walk::typed(v, diags));
     let sources = named::<Source>(tables.get("source"), "source", diags);
     let rigs = named::<Rig>(tables.get("rig"), "rig", diags);
     let splits = named::<Split>(tables.get("split"), "split", diags);
@@ -196,8 +175,7 @@ fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<M
     {
         let (rigs, _) = &rigs;
         for (name, (r, _, keys)) in rigs {
-            let keys: Vec<(&str, Range<usize>)> =
-                keys.iter().map(|(k, s)| (k.as_str(), s.clone())).collect();
+            let keys: Vec<(&str, Range<usize>)> = keys.iter().map(|(k, s)| (k.as_str(), s.clone())).collect();
             r.validate(name, &keys, diags);
             if let Some(f) = &r.file {
                 if !dir.join(f.get_ref()).is_file() {
@@ -221,17 +199,12 @@ fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<M
     {
         let (outputs, _) = &outputs;
         for (name, (o, _, keys)) in outputs {
-            let keys: Vec<(&str, Range<usize>)> =
-                keys.iter().map(|(k, s)| (k.as_str(), s.clone())).collect();
+            let keys: Vec<(&str, Range<usize>)> = keys.iter().map(|(k, s)| (k.as_str(), s.clone())).collect();
             o.validate(name, &keys, diags);
         }
     }
 
-    let broken = Broken {
-        sources: sources.1,
-        rigs: rigs.1,
-        splits: splits.1,
-    };
+    let broken = Broken { sources: sources.1, rigs: rigs.1, splits: splits.1 };
     let manifest = Manifest {
         path: path.to_path_buf(),
         dir,
@@ -282,10 +255,7 @@ fn named<T: serde::de::DeserializeOwned>(
             broken.insert(name.to_string());
             continue;
         }
-        let keys = walk::keys(entry)
-            .into_iter()
-            .map(|(k, s)| (k.to_string(), s))
-            .collect();
+        let keys = walk::keys(entry).into_iter().map(|(k, s)| (k.to_string(), s)).collect();
         match walk::typed::<T>(entry, diags) {
             Some(t) => {
                 out.insert(name.to_string(), (t, entry.span(), keys));
@@ -305,22 +275,18 @@ fn check_source_files(dir: &Path, s: &Source, diags: &mut Vec<Diagnostic>) {
             let full = dir.join(p.get_ref());
             if !full.is_file() {
                 diags.push(
-                    Diagnostic::error(
-                        format!("file not found: {}", full.display()),
-                        Some(p.span()),
-                    )
-                    .with_help("paths are relative to the manifest's folder"),
+                    Diagnostic::error(format!("file not found: {}", full.display()), Some(p.span()))
+                        .with_help("paths are relative to the manifest's folder"),
                 );
             }
         }
         SourceKind::PlySequence => {
-            let frames = s
-                .frames
-                .as_ref()
-                .map(|f| f.get_ref().clone())
-                .unwrap_or_default();
+            let frames = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
             if let Err(e) = sequence::resolve(dir, p.get_ref(), &frames) {
-                diags.push(Diagnostic::error(format!("PLY sequence: {e}"), Some(p.span())).with_help("paths are relative to the manifest's folder; patterns use {frame} or {frame:04}"));
+                diags.push(
+                    Diagnostic::error(format!("PLY sequence: {e}"), Some(p.span()))
+                        .with_help("paths are relative to the manifest's folder; patterns use {frame} or {frame:04}"),
+                );
             }
         }
     }
@@ -339,9 +305,7 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                 );
                 d = match did_you_mean(rig_name, m.rigs.keys().map(String::as_str)) {
                     Some(s) => d.with_help(format!("did you mean `{s}`?")),
-                    None if m.rigs.is_empty() => {
-                        d.with_help(format!("add a [rig.{rig_name}] table"))
-                    }
+                    None if m.rigs.is_empty() => d.with_help(format!("add a [rig.{rig_name}] table")),
                     None => d.with_help(format!(
                         "defined rigs: {}",
                         suggest::one_of(&m.rigs.keys().map(String::as_str).collect::<Vec<_>>())
@@ -354,31 +318,21 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                 if kind.counts_itself() {
                     if let Some(v) = &split.views {
                         diags.push(Diagnostic::warning(
-                            format!(
-                                "`views` is ignored: rig `{rig_name}` ({}) fixes its own views",
-                                kind.name()
-                            ),
+                            format!("`views` is ignored: rig `{rig_name}` ({}) fixes its own views", kind.name()),
                             Some(v.span()),
                         ));
                     }
                 } else if split.views.is_none() && split.time != TimeMode::Monocular {
                     diags.push(
-                        Diagnostic::error(
-                            format!("split `{name}` needs `views`"),
-                            Some(split.rig.span()),
-                        )
-                        .with_help("e.g. views = 100"),
+                        Diagnostic::error(format!("split `{name}` needs `views`"), Some(split.rig.span()))
+                            .with_help("e.g. views = 100"),
                     );
                 }
                 if let (RigKind::Dome, Some(r), Some(v)) = (kind, &rig.rings, &split.views) {
                     if v.get_ref() % r.get_ref() != 0 {
                         diags.push(
                             Diagnostic::error(
-                                format!(
-                                    "views = {} does not divide into {} rings",
-                                    v.get_ref(),
-                                    r.get_ref()
-                                ),
+                                format!("views = {} does not divide into {} rings", v.get_ref(), r.get_ref()),
                                 Some(v.span()),
                             )
                             .with_help("use a multiple of `rings`"),
@@ -394,10 +348,7 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         for s in out.splits.iter().flatten() {
             if !m.splits.contains_key(s.get_ref()) && !broken.splits.contains(s.get_ref()) {
                 let mut d = Diagnostic::error(
-                    format!(
-                        "output `{name}` lists split `{}`, which is not defined",
-                        s.get_ref()
-                    ),
+                    format!("output `{name}` lists split `{}`, which is not defined", s.get_ref()),
                     Some(s.span()),
                 );
                 if let Some(x) = did_you_mean(s.get_ref(), m.splits.keys().map(String::as_str)) {
@@ -409,10 +360,7 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         if let Some(src) = &out.source {
             if !m.sources.contains_key(src.get_ref()) && !broken.sources.contains(src.get_ref()) {
                 let mut d = Diagnostic::error(
-                    format!(
-                        "output `{name}` uses source `{}`, which is not defined",
-                        src.get_ref()
-                    ),
+                    format!("output `{name}` uses source `{}`, which is not defined", src.get_ref()),
                     Some(src.span()),
                 );
                 if let Some(x) = did_you_mean(src.get_ref(), m.sources.keys().map(String::as_str)) {
@@ -424,10 +372,7 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         if writer.renders_images() && m.splits.is_empty() && broken.splits.is_empty() {
             diags.push(
                 Diagnostic::error(
-                    format!(
-                        "output `{name}` ({}) renders images but no `[split.NAME]` is defined",
-                        writer.name()
-                    ),
+                    format!("output `{name}` ({}) renders images but no `[split.NAME]` is defined", writer.name()),
                     Some(out.writer.span()),
                 )
                 .with_help("add e.g. [split.train] rig = \"…\" views = 100"),
@@ -456,15 +401,10 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                 if !d.get_ref().contains("dnerf") && !d.get_ref().contains("lego") {
                     diags.push(
                         Diagnostic::warning(
-                            format!(
-                                "dnerf output directory `{}` does not contain \"dnerf\"",
-                                d.get_ref()
-                            ),
+                            format!("dnerf output directory `{}` does not contain \"dnerf\"", d.get_ref()),
                             Some(d.span()),
                         )
-                        .with_help(
-                            "K-Planes picks its D-NeRF loader by that substring in the path",
-                        ),
+                        .with_help("K-Planes picks its D-NeRF loader by that substring in the path"),
                     );
                 }
             }
@@ -473,10 +413,7 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
             for (other, o2) in &m.outputs {
                 if other > name && o2.dir.as_ref().map(|x| x.get_ref()) == Some(d.get_ref()) {
                     diags.push(Diagnostic::error(
-                        format!(
-                            "outputs `{name}` and `{other}` write to the same directory `{}`",
-                            d.get_ref()
-                        ),
+                        format!("outputs `{name}` and `{other}` write to the same directory `{}`", d.get_ref()),
                         Some(d.span()),
                     ));
                 }
@@ -485,11 +422,8 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
     }
     if m.outputs.is_empty() {
         diags.push(
-            Diagnostic::warning(
-                "no `[output.NAME]` table: a build would write nothing",
-                None,
-            )
-            .with_help("add e.g. [output.dnerf] writer = \"dnerf\""),
+            Diagnostic::warning("no `[output.NAME]` table: a build would write nothing", None)
+                .with_help("add e.g. [output.dnerf] writer = \"dnerf\""),
         );
     }
 }

@@ -145,12 +145,7 @@ pub enum PlyFormat {
 }
 
 impl Output {
-    pub(crate) fn validate(
-        &self,
-        name: &str,
-        present: &[(&str, Range<usize>)],
-        diags: &mut Vec<Diagnostic>,
-    ) {
+    pub(crate) fn validate(&self, name: &str, present: &[(&str, Range<usize>)], diags: &mut Vec<Diagnostic>) {
         let w = *self.writer.get_ref();
         let allowed = w.allowed_keys();
         for (key, span) in present {
@@ -163,10 +158,7 @@ impl Output {
             };
             diags.push(
                 Diagnostic::error(
-                    format!(
-                        "key `{key}` does not apply to output `{name}` (writer = \"{}\")",
-                        w.name()
-                    ),
+                    format!("key `{key}` does not apply to output `{name}` (writer = \"{}\")", w.name()),
                     Some(span.clone()),
                 )
                 .with_help(help),
@@ -190,10 +182,7 @@ impl Output {
         if let Some(p) = &self.points {
             let n = *p.get_ref();
             if n == 0 || n > MAX_POINTS {
-                diags.push(Diagnostic::error(
-                    format!("points = {n} is outside 1..={MAX_POINTS}"),
-                    Some(p.span()),
-                ));
+                diags.push(Diagnostic::error(format!("points = {n} is outside 1..={MAX_POINTS}"), Some(p.span())));
             }
         }
         if let Some(p) = &self.init_points {
@@ -206,20 +195,14 @@ impl Output {
         }
         if let Some(v) = &self.voxel {
             if !(v.get_ref().is_finite() && *v.get_ref() > 0.0) {
-                diags.push(Diagnostic::error(
-                    format!("voxel = {} must be positive", v.get_ref()),
-                    Some(v.span()),
-                ));
+                diags.push(Diagnostic::error(format!("voxel = {} must be positive", v.get_ref()), Some(v.span())));
             }
         }
         if let Some(v) = &self.vox {
             if !(8..=16).contains(v.get_ref()) {
                 diags.push(
-                    Diagnostic::error(
-                        format!("vox = {} is outside 8..=16", v.get_ref()),
-                        Some(v.span()),
-                    )
-                    .with_help("8i's sequences use vox = 10"),
+                    Diagnostic::error(format!("vox = {} is outside 8..=16", v.get_ref()), Some(v.span()))
+                        .with_help("8i's sequences use vox = 10"),
                 );
             }
         }
@@ -234,11 +217,8 @@ impl Output {
         }
         if w == Writer::PlySequence && self.points.is_none() {
             diags.push(
-                Diagnostic::error(
-                    format!("output `{name}` (ply-sequence) needs `points`"),
-                    Some(self.writer.span()),
-                )
-                .with_help("e.g. points = 1000000"),
+                Diagnostic::error(format!("output `{name}` (ply-sequence) needs `points`"), Some(self.writer.span()))
+                    .with_help("e.g. points = 1000000"),
             );
         }
     }
@@ -263,13 +243,8 @@ pub(crate) fn check_relative(p: &Spanned<String>, key: &str, diags: &mut Vec<Dia
     }
     if escapes {
         diags.push(
-            Diagnostic::error(
-                format!("`{key}` = \"{s}\" escapes the dataset's `out` directory"),
-                Some(p.span()),
-            )
-            .with_help(
-                "use a relative path without leading `..`; move `[dataset] out` to write elsewhere",
-            ),
+            Diagnostic::error(format!("`{key}` = \"{s}\" escapes the dataset's `out` directory"), Some(p.span()))
+                .with_help("use a relative path without leading `..`; move `[dataset] out` to write elsewhere"),
         );
     }
 }

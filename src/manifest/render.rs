@@ -248,20 +248,11 @@ impl Render {
         } else if let Some(f) = &self.focal_mm {
             *f.get_ref() / self.sensor_mm.unwrap_or(36.0) * w as f64
         } else {
-            let a = self
-                .camera_angle_x
-                .as_ref()
-                .map(|a| *a.get_ref())
-                .unwrap_or(NERF_CAMERA_ANGLE_X);
+            let a = self.camera_angle_x.as_ref().map(|a| *a.get_ref()).unwrap_or(NERF_CAMERA_ANGLE_X);
             0.5 * w as f64 / (0.5 * a).tan()
         };
         let fy = self.fy.unwrap_or(fx);
-        (
-            fx,
-            fy,
-            self.cx.unwrap_or(w as f64 / 2.0),
-            self.cy.unwrap_or(h as f64 / 2.0),
-        )
+        (fx, fy, self.cx.unwrap_or(w as f64 / 2.0), self.cy.unwrap_or(h as f64 / 2.0))
     }
 
     /// Whether a pass is requested.
@@ -274,11 +265,8 @@ impl Render {
         let rs = Some(self.resolution.span());
         if w == 0 || h == 0 || w > MAX_RESOLUTION || h > MAX_RESOLUTION {
             diags.push(
-                Diagnostic::error(
-                    format!("resolution {w}×{h} is outside 1..={MAX_RESOLUTION}"),
-                    rs,
-                )
-                .with_help("e.g. resolution = [800, 800]"),
+                Diagnostic::error(format!("resolution {w}×{h} is outside 1..={MAX_RESOLUTION}"), rs)
+                    .with_help("e.g. resolution = [800, 800]"),
             );
         }
         let ways = [
@@ -305,16 +293,10 @@ impl Render {
                 );
             }
         }
-        for (name, v) in [
-            ("focal_mm", self.focal_mm.as_ref()),
-            ("fx", self.fx.as_ref()),
-        ] {
+        for (name, v) in [("focal_mm", self.focal_mm.as_ref()), ("fx", self.fx.as_ref())] {
             if let Some(v) = v {
                 if !(v.get_ref().is_finite() && *v.get_ref() > 0.0) {
-                    diags.push(Diagnostic::error(
-                        format!("{name} must be positive"),
-                        Some(v.span()),
-                    ));
+                    diags.push(Diagnostic::error(format!("{name} must be positive"), Some(v.span())));
                 }
             }
         }
@@ -330,63 +312,39 @@ impl Render {
         }
         let (near, far) = (self.near.unwrap_or(0.05), self.far.unwrap_or(1000.0));
         if !(near > 0.0 && far > near) {
-            diags.push(Diagnostic::error(
-                format!("near = {near}, far = {far}: need 0 < near < far"),
-                None,
-            ));
+            diags.push(Diagnostic::error(format!("near = {near}, far = {far}: need 0 < near < far"), None));
         }
         let passes = self.passes.get_ref();
         if passes.is_empty() {
             diags.push(
-                Diagnostic::error(
-                    "no passes: nothing would be rendered",
-                    Some(self.passes.span()),
-                )
-                .with_help("e.g. passes = [\"rgba\"]"),
+                Diagnostic::error("no passes: nothing would be rendered", Some(self.passes.span()))
+                    .with_help("e.g. passes = [\"rgba\"]"),
             );
         }
         let mut sorted = passes.clone();
         sorted.sort();
         sorted.dedup();
         if sorted.len() != passes.len() {
-            diags.push(Diagnostic::warning(
-                "a pass is listed twice",
-                Some(self.passes.span()),
-            ));
+            diags.push(Diagnostic::warning("a pass is listed twice", Some(self.passes.span())));
         }
         if let Some(bg) = &self.background {
             match bg.get_ref() {
-                Background::Named(n)
-                    if !["transparent", "white", "black"].contains(&n.as_str()) =>
-                {
-                    diags.push(
-                        Diagnostic::error(format!("unknown background `{n}`"), Some(bg.span()))
-                            .with_help(
-                                "use \"transparent\", \"white\", \"black\" or [r, g, b] in 0..1",
-                            ),
-                    )
-                }
+                Background::Named(n) if !["transparent", "white", "black"].contains(&n.as_str()) => diags.push(
+                    Diagnostic::error(format!("unknown background `{n}`"), Some(bg.span()))
+                        .with_help("use \"transparent\", \"white\", \"black\" or [r, g, b] in 0..1"),
+                ),
                 Background::Rgb(c) if c.iter().any(|v| !(0.0..=1.0).contains(v)) => {
-                    diags.push(Diagnostic::error(
-                        "background colour components must be in 0..1",
-                        Some(bg.span()),
-                    ))
+                    diags.push(Diagnostic::error("background colour components must be in 0..1", Some(bg.span())))
                 }
                 _ => {}
             }
         }
         if let (Some(_), Some(_)) = (self.splat.size, self.splat.size_px) {
-            diags.push(Diagnostic::error(
-                "[render.splat] takes `size` or `size_px`, not both",
-                None,
-            ));
+            diags.push(Diagnostic::error("[render.splat] takes `size` or `size_px`, not both", None));
         }
         for v in [self.splat.size, self.splat.size_px].into_iter().flatten() {
             if !(v.is_finite() && v > 0.0) {
-                diags.push(Diagnostic::error(
-                    format!("splat size {v} must be positive"),
-                    None,
-                ));
+                diags.push(Diagnostic::error(format!("splat size {v} must be positive"), None));
             }
         }
     }

@@ -75,26 +75,11 @@ impl RigKind {
     pub fn allowed_keys(self) -> &'static [&'static str] {
         match self {
             RigKind::Hemisphere => &["radius", "target", "numpy_seed", "jitter"],
-            RigKind::Sphere | RigKind::Fibonacci => {
-                &["radius", "target", "band", "elevation_range_deg", "jitter"]
+            RigKind::Sphere | RigKind::Fibonacci => &["radius", "target", "band", "elevation_range_deg", "jitter"],
+            RigKind::Orbit => &["radius", "target", "elevation_deg", "schedule", "start_azimuth_deg", "jitter"],
+            RigKind::Dome => {
+                &["radius", "target", "band", "elevation_range_deg", "rings", "start_azimuth_deg", "jitter"]
             }
-            RigKind::Orbit => &[
-                "radius",
-                "target",
-                "elevation_deg",
-                "schedule",
-                "start_azimuth_deg",
-                "jitter",
-            ],
-            RigKind::Dome => &[
-                "radius",
-                "target",
-                "band",
-                "elevation_range_deg",
-                "rings",
-                "start_azimuth_deg",
-                "jitter",
-            ],
             RigKind::ForwardFacing => &["radius", "target", "layout", "extent", "jitter"],
             RigKind::Explicit => &["poses", "jitter"],
             RigKind::FromFile => &["file", "jitter"],
@@ -176,12 +161,7 @@ pub struct Jitter {
 }
 
 impl Rig {
-    pub(crate) fn validate(
-        &self,
-        name: &str,
-        present: &[(&str, Range<usize>)],
-        diags: &mut Vec<Diagnostic>,
-    ) {
+    pub(crate) fn validate(&self, name: &str, present: &[(&str, Range<usize>)], diags: &mut Vec<Diagnostic>) {
         let kind = *self.kind.get_ref();
         let allowed = kind.allowed_keys();
         for (key, span) in present {
@@ -194,10 +174,7 @@ impl Rig {
             };
             diags.push(
                 Diagnostic::error(
-                    format!(
-                        "key `{key}` does not apply to rig `{name}` (kind = \"{}\")",
-                        kind.name()
-                    ),
+                    format!("key `{key}` does not apply to rig `{name}` (kind = \"{}\")", kind.name()),
                     Some(span.clone()),
                 )
                 .with_help(help),
@@ -205,10 +182,7 @@ impl Rig {
         }
         if let Some(r) = &self.radius {
             if !(r.get_ref().is_finite() && *r.get_ref() > 0.0) {
-                diags.push(Diagnostic::error(
-                    format!("radius = {} must be positive", r.get_ref()),
-                    Some(r.span()),
-                ));
+                diags.push(Diagnostic::error(format!("radius = {} must be positive", r.get_ref()), Some(r.span())));
             }
         }
         if let Some(e) = &self.elevation_range_deg {
@@ -222,24 +196,16 @@ impl Rig {
         }
         if let Some(r) = &self.rings {
             if *r.get_ref() == 0 || *r.get_ref() > 1000 {
-                diags.push(Diagnostic::error(
-                    format!("rings = {} must be in 1..=1000", r.get_ref()),
-                    Some(r.span()),
-                ));
+                diags.push(Diagnostic::error(format!("rings = {} must be in 1..=1000", r.get_ref()), Some(r.span())));
             }
         }
         match kind {
             RigKind::Explicit => match &self.poses {
                 None => diags.push(
-                    Diagnostic::error(
-                        format!("rig `{name}` (explicit) lists no `poses`"),
-                        Some(self.kind.span()),
-                    )
-                    .with_help("e.g. poses = [{ position = [0, -4, 1] }]"),
+                    Diagnostic::error(format!("rig `{name}` (explicit) lists no `poses`"), Some(self.kind.span()))
+                        .with_help("e.g. poses = [{ position = [0, -4, 1] }]"),
                 ),
-                Some(p) if p.get_ref().is_empty() => {
-                    diags.push(Diagnostic::error("empty `poses`", Some(p.span())))
-                }
+                Some(p) if p.get_ref().is_empty() => diags.push(Diagnostic::error("empty `poses`", Some(p.span()))),
                 Some(p) => {
                     for (i, pose) in p.get_ref().iter().enumerate() {
                         if pose.c2w.is_some() == pose.position.is_some() {
@@ -252,11 +218,8 @@ impl Rig {
                 }
             },
             RigKind::FromFile if self.file.is_none() => diags.push(
-                Diagnostic::error(
-                    format!("rig `{name}` (from-file) names no `file`"),
-                    Some(self.kind.span()),
-                )
-                .with_help("e.g. file = \"transforms_test.json\""),
+                Diagnostic::error(format!("rig `{name}` (from-file) names no `file`"), Some(self.kind.span()))
+                    .with_help("e.g. file = \"transforms_test.json\""),
             ),
             _ => {}
         }

@@ -19,13 +19,9 @@ pub struct SequenceFrame {
 
 /// Substitutes `n` into a `{frame}` / `{frame:04}` pattern.
 pub fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
-    let start = pattern
-        .find("{frame")
-        .ok_or_else(|| format!("`{pattern}` has no {{frame}}"))?;
+    let start = pattern.find("{frame").ok_or_else(|| format!("`{pattern}` has no {{frame}}"))?;
     let rest = &pattern[start + 6..];
-    let close = rest
-        .find('}')
-        .ok_or_else(|| format!("`{pattern}`: unclosed {{frame"))?;
+    let close = rest.find('}').ok_or_else(|| format!("`{pattern}`: unclosed {{frame"))?;
     let spec = &rest[..close];
     let width = if spec.is_empty() {
         0
@@ -34,22 +30,10 @@ pub fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
             .strip_prefix(":0")
             .or_else(|| spec.strip_prefix(':'))
             .ok_or_else(|| format!("`{{frame{spec}}}`: expected {{frame}} or {{frame:04}}"))?;
-        digits
-            .parse::<usize>()
-            .map_err(|_| format!("`{{frame{spec}}}`: expected {{frame}} or {{frame:04}}"))?
-            .min(32)
+        digits.parse::<usize>().map_err(|_| format!("`{{frame{spec}}}`: expected {{frame}} or {{frame:04}}"))?.min(32)
     };
-    let num = if n < 0 {
-        format!("-{:0width$}", -n, width = width.saturating_sub(1))
-    } else {
-        format!("{n:0width$}")
-    };
-    Ok(format!(
-        "{}{}{}",
-        &pattern[..start],
-        num,
-        &rest[close + 1..]
-    ))
+    let num = if n < 0 { format!("-{:0width$}", -n, width = width.saturating_sub(1)) } else { format!("{n:0width$}") };
+    Ok(format!("{}{}{}", &pattern[..start], num, &rest[close + 1..]))
 }
 
 /// Lists the frames of a sequence, `dir`-relative, applying `frames`. Errors name the first missing file.
@@ -105,21 +89,13 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
         }
         Ok((first..=last)
             .step_by(step as usize)
-            .map(|i| SequenceFrame {
-                number: i,
-                path: paths[i as usize].clone(),
-            })
+            .map(|i| SequenceFrame { number: i, path: paths[i as usize].clone() })
             .collect())
     }
 }
 
 /// With no end or count: consecutive numbers from `start` until the first missing file.
-fn scan_pattern(
-    dir: &Path,
-    spec: &str,
-    start: i64,
-    step: i64,
-) -> Result<Vec<SequenceFrame>, String> {
+fn scan_pattern(dir: &Path, spec: &str, start: i64, step: i64) -> Result<Vec<SequenceFrame>, String> {
     let mut out = Vec::new();
     let mut n = start;
     loop {
@@ -134,10 +110,7 @@ fn scan_pattern(
         n += step;
     }
     if out.is_empty() {
-        return Err(format!(
-            "first frame is missing: {}",
-            dir.join(format_frame(spec, start)?).display()
-        ));
+        return Err(format!("first frame is missing: {}", dir.join(format_frame(spec, start)?).display()));
     }
     Ok(out)
 }
@@ -179,10 +152,7 @@ mod tests {
 
     #[test]
     fn patterns_pad() {
-        assert_eq!(
-            format_frame("loot_vox10_{frame:04}.ply", 7).unwrap(),
-            "loot_vox10_0007.ply"
-        );
+        assert_eq!(format_frame("loot_vox10_{frame:04}.ply", 7).unwrap(), "loot_vox10_0007.ply");
         assert_eq!(format_frame("f{frame}.ply", 1051).unwrap(), "f1051.ply");
         assert!(format_frame("f{frame:x}.ply", 1).is_err());
     }

@@ -71,16 +71,8 @@ impl Source {
         }
     }
 
-    pub(crate) fn validate(
-        &self,
-        name: &str,
-        table_span: std::ops::Range<usize>,
-        diags: &mut Vec<Diagnostic>,
-    ) {
-        let set: Vec<&Spanned<String>> = [&self.gltf, &self.mesh, &self.ply_sequence]
-            .into_iter()
-            .flatten()
-            .collect();
+    pub(crate) fn validate(&self, name: &str, table_span: std::ops::Range<usize>, diags: &mut Vec<Diagnostic>) {
+        let set: Vec<&Spanned<String>> = [&self.gltf, &self.mesh, &self.ply_sequence].into_iter().flatten().collect();
         match set.len() {
             0 => diags.push(
                 Diagnostic::error(format!("source `{name}` names no file"), Some(table_span.clone()))
@@ -88,23 +80,20 @@ impl Source {
             ),
             1 => {}
             _ => diags.push(
-                Diagnostic::error(format!("source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`"), Some(set[1].span()))
-                    .with_help("one source is one file or sequence; declare another `[source.…]` for the second"),
+                Diagnostic::error(
+                    format!("source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`"),
+                    Some(set[1].span()),
+                )
+                .with_help("one source is one file or sequence; declare another `[source.…]` for the second"),
             ),
         }
         if let Some((kind, _)) = self.kind() {
             if kind != SourceKind::Gltf {
                 if let Some(a) = &self.animation {
-                    diags.push(Diagnostic::error(
-                        "`animation` applies only to `gltf` sources",
-                        Some(a.span()),
-                    ));
+                    diags.push(Diagnostic::error("`animation` applies only to `gltf` sources", Some(a.span())));
                 }
                 if self.scene.is_some() {
-                    diags.push(Diagnostic::error(
-                        "`scene` applies only to `gltf` sources",
-                        Some(table_span.clone()),
-                    ));
+                    diags.push(Diagnostic::error("`scene` applies only to `gltf` sources", Some(table_span.clone())));
                 }
             }
             if kind == SourceKind::Mesh {
@@ -122,11 +111,8 @@ impl Source {
                         && is_pattern(self.ply_sequence.as_ref().unwrap().get_ref())
                     {
                         diags.push(
-                            Diagnostic::error(
-                                "a `{frame}` pattern needs `start` with `count`",
-                                Some(f.span()),
-                            )
-                            .with_help("e.g. frames = { start = 1000, count = 300 }"),
+                            Diagnostic::error("a `{frame}` pattern needs `start` with `count`", Some(f.span()))
+                                .with_help("e.g. frames = { start = 1000, count = 300 }"),
                         );
                     }
                 }
@@ -139,9 +125,8 @@ impl Source {
             if let AnimationSel::Many(v) = a.get_ref() {
                 if v.is_empty() {
                     diags.push(
-                        Diagnostic::error("empty animation list", Some(a.span())).with_help(
-                            "name at least one clip, or remove `animation` for the first clip",
-                        ),
+                        Diagnostic::error("empty animation list", Some(a.span()))
+                            .with_help("name at least one clip, or remove `animation` for the first clip"),
                     );
                 }
             }

@@ -50,14 +50,10 @@ impl Split {
             let n = *v.get_ref();
             if n == 0 {
                 diags.push(
-                    Diagnostic::error("views = 0: the split would be empty", Some(v.span()))
-                        .with_help("use views ≥ 1"),
+                    Diagnostic::error("views = 0: the split would be empty", Some(v.span())).with_help("use views ≥ 1"),
                 );
             } else if n > MAX_VIEWS {
-                diags.push(Diagnostic::error(
-                    format!("views = {n} is more than {MAX_VIEWS}"),
-                    Some(v.span()),
-                ));
+                diags.push(Diagnostic::error(format!("views = {n} is more than {MAX_VIEWS}"), Some(v.span())));
             }
         }
         match (self.time, &self.pairs) {
@@ -65,20 +61,14 @@ impl Split {
                 Diagnostic::error("time = \"random\" needs `pairs`", Some(self.rig.span()))
                     .with_help("e.g. pairs = 200"),
             ),
-            (TimeMode::Random, Some(p)) if *p.get_ref() == 0 => diags.push(Diagnostic::error(
-                "pairs = 0: the split would be empty",
-                Some(p.span()),
-            )),
-            (TimeMode::Random, Some(p)) if *p.get_ref() > MAX_VIEWS => {
-                diags.push(Diagnostic::error(
-                    format!("pairs = {} is more than {MAX_VIEWS}", p.get_ref()),
-                    Some(p.span()),
-                ))
+            (TimeMode::Random, Some(p)) if *p.get_ref() == 0 => {
+                diags.push(Diagnostic::error("pairs = 0: the split would be empty", Some(p.span())))
             }
-            (TimeMode::All | TimeMode::Monocular, Some(p)) => diags.push(Diagnostic::error(
-                "`pairs` applies only to time = \"random\"",
-                Some(p.span()),
-            )),
+            (TimeMode::Random, Some(p)) if *p.get_ref() > MAX_VIEWS => diags
+                .push(Diagnostic::error(format!("pairs = {} is more than {MAX_VIEWS}", p.get_ref()), Some(p.span()))),
+            (TimeMode::All | TimeMode::Monocular, Some(p)) => {
+                diags.push(Diagnostic::error("`pairs` applies only to time = \"random\"", Some(p.span())))
+            }
             _ => {}
         }
         if let Some(f) = &self.frames {

@@ -4,19 +4,11 @@
 ///
 /// Uses optimal string alignment distance (a transposition costs 1, so `veiws` → `views` is one edit) and
 /// accepts at most a third of the word's length in edits (at least 1).
-pub fn did_you_mean<'a>(
-    word: &str,
-    candidates: impl IntoIterator<Item = &'a str>,
-) -> Option<&'a str> {
+pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     let limit = (word.chars().count() / 3).max(1);
     candidates
         .into_iter()
-        .map(|c| {
-            (
-                strsim::osa_distance(&word.to_lowercase(), &c.to_lowercase()),
-                c,
-            )
-        })
+        .map(|c| (strsim::osa_distance(&word.to_lowercase(), &c.to_lowercase()), c))
         .filter(|(d, _)| *d <= limit)
         .min_by_key(|(d, c)| (*d, *c))
         .map(|(_, c)| c)
@@ -38,14 +30,8 @@ mod tests {
 
     #[test]
     fn transposition_is_found() {
-        assert_eq!(
-            did_you_mean("veiws", ["rig", "views", "time"]),
-            Some("views")
-        );
-        assert_eq!(
-            did_you_mean("resolutoin", ["resolution", "samples"]),
-            Some("resolution")
-        );
+        assert_eq!(did_you_mean("veiws", ["rig", "views", "time"]), Some("views"));
+        assert_eq!(did_you_mean("resolutoin", ["resolution", "samples"]), Some("resolution"));
     }
 
     #[test]

@@ -91,17 +91,11 @@ impl Transform {
     pub(crate) fn validate(&self, diags: &mut Vec<Diagnostic>) {
         if let Some(fit) = &self.fit {
             let f = fit.get_ref();
-            let given: Vec<f64> = [f.height, f.radius, f.extent]
-                .into_iter()
-                .flatten()
-                .collect();
+            let given: Vec<f64> = [f.height, f.radius, f.extent].into_iter().flatten().collect();
             if given.len() != 1 {
                 diags.push(
-                    Diagnostic::error(
-                        "`fit` takes exactly one of `height`, `radius`, `extent`",
-                        Some(fit.span()),
-                    )
-                    .with_help("e.g. fit = { height = 2.4 }"),
+                    Diagnostic::error("`fit` takes exactly one of `height`, `radius`, `extent`", Some(fit.span()))
+                        .with_help("e.g. fit = { height = 2.4 }"),
                 );
             } else if !(given[0].is_finite() && given[0] > 0.0) {
                 diags.push(Diagnostic::error(

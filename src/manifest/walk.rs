@@ -35,9 +35,7 @@ pub fn typed<T: DeserializeOwned>(value: &Raw<'_>, diags: &mut Vec<Diagnostic>) 
                 let span = e.span().unwrap_or_else(|| value.span());
                 let message = e.message().trim().to_string();
                 // A key we removed to keep going must not come back as "missing".
-                let follow_on = removed
-                    .iter()
-                    .any(|k| message == format!("missing field `{k}`"));
+                let follow_on = removed.iter().any(|k| message == format!("missing field `{k}`"));
                 if !follow_on {
                     diags.push(translate(&message, span.clone()));
                 }
@@ -74,8 +72,7 @@ pub fn translate(message: &str, span: Range<usize>) -> Diagnostic {
             Some(s) => format!("unknown value `{word}`, did you mean `{s}`?"),
             None => format!("unknown value `{word}`"),
         };
-        return Diagnostic::error(text, Some(span))
-            .with_help(format!("expected {}", one_of(&expected)));
+        return Diagnostic::error(text, Some(span)).with_help(format!("expected {}", one_of(&expected)));
     }
     if let Some(rest) = message.strip_prefix("missing field `") {
         let key = rest.trim_end_matches('`');
@@ -133,15 +130,9 @@ pub fn entries<'a, 'i>(
     diags: &mut Vec<Diagnostic>,
 ) -> Vec<(&'a str, Range<usize>, &'a Raw<'i>)> {
     match value.get_ref() {
-        DeValue::Table(t) => t
-            .iter()
-            .map(|(k, v)| (k.get_ref().as_ref(), k.span(), v))
-            .collect(),
+        DeValue::Table(t) => t.iter().map(|(k, v)| (k.get_ref().as_ref(), k.span(), v)).collect(),
         _ => {
-            diags.push(Diagnostic::error(
-                format!("`{what}` must be a table"),
-                Some(value.span()),
-            ));
+            diags.push(Diagnostic::error(format!("`{what}` must be a table"), Some(value.span())));
             Vec::new()
         }
     }
@@ -150,10 +141,7 @@ pub fn entries<'a, 'i>(
 /// Keys present in a raw table value, with their spans.
 pub fn keys<'a>(value: &'a Raw<'_>) -> Vec<(&'a str, Range<usize>)> {
     match value.get_ref() {
-        DeValue::Table(t) => t
-            .iter()
-            .map(|(k, _)| (k.get_ref().as_ref(), k.span()))
-            .collect(),
+        DeValue::Table(t) => t.iter().map(|(k, _)| (k.get_ref().as_ref(), k.span())).collect(),
         _ => Vec::new(),
     }
 }

@@ -150,14 +150,8 @@ impl Texture {
         let (x0, y0) = (fx.floor(), fy.floor());
         let (tx, ty) = (fx - x0, fy - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
-        let xs = [
-            wrap(r.wrap_s, x0, self.width),
-            wrap(r.wrap_s, x0 + 1, self.width),
-        ];
-        let ys = [
-            wrap(r.wrap_t, y0, self.height),
-            wrap(r.wrap_t, y0 + 1, self.height),
-        ];
+        let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0 + 1, self.width)];
+        let ys = [wrap(r.wrap_t, y0, self.height), wrap(r.wrap_t, y0 + 1, self.height)];
         let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), tx);
         let bottom = self.texel(xs[0], ys[1]).lerp(self.texel(xs[1], ys[1]), tx);
         top.lerp(bottom, ty)
@@ -184,12 +178,7 @@ pub fn wrap(mode: Wrap, i: i64, n: u32) -> u32 {
 
 impl Material {
     /// Albedo (linear RGBA) at a surface point: base colour × texture × vertex colour.
-    pub fn albedo(
-        &self,
-        textures: &[Texture],
-        uv: Option<Vec2>,
-        vertex_color: Option<Vec4>,
-    ) -> Vec4 {
+    pub fn albedo(&self, textures: &[Texture], uv: Option<Vec2>, vertex_color: Option<Vec4>) -> Vec4 {
         let mut c = self.base_color;
         if let (Some(r), Some(uv)) = (&self.base_color_texture, uv) {
             if let Some(t) = textures.get(r.texture as usize) {

@@ -55,12 +55,7 @@ impl Scene {
         let mut warnings = Vec::new();
         for s in &sources {
             if let SourceData::Gltf { asset, .. } = &s.data {
-                warnings.extend(
-                    asset
-                        .warnings
-                        .iter()
-                        .map(|w| format!("{}: {w}", asset.path.display())),
-                );
+                warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", asset.path.display())));
             }
         }
         let mut scratch = PoseScratch::default();
@@ -75,44 +70,20 @@ impl Scene {
             if transform::needs_stats(&t) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut stats)?;
             }
-            locals.push(
-                transform::resolve(&t, up, &stats)
-                    .map_err(|e| format!("source `{}`: {e}", src.name))?,
-            );
+            locals.push(transform::resolve(&t, up, &stats).map_err(|e| format!("source `{}`: {e}", src.name))?);
         }
         // The global table's `up` is only the sources' default: the rotation was applied per source.
-        let g = Transform {
-            up: None,
-            ..m.transform.clone()
-        };
+        let g = Transform { up: None, ..m.transform.clone() };
         let g_pre = transform::pre(&g, UpAxis::Z).as_mat4();
         let mut stats = Stats::default();
         if transform::needs_stats(&g) {
             for (src, local) in sources.iter().zip(&locals) {
-                gather(
-                    src,
-                    g_pre * *local,
-                    g.over.unwrap_or_default(),
-                    &mut scratch,
-                    &mut posed,
-                    &mut stats,
-                )?;
+                gather(src, g_pre * *local, g.over.unwrap_or_default(), &mut scratch, &mut posed, &mut stats)?;
             }
         }
-        let global =
-            transform::resolve(&g, UpAxis::Z, &stats).map_err(|e| format!("[transform]: {e}"))?;
-        let frames = sources
-            .iter()
-            .map(LoadedSource::frame_count)
-            .max()
-            .unwrap_or(0);
-        Ok(Scene {
-            sources,
-            locals,
-            global,
-            frames,
-            warnings,
-        })
+        let global = transform::resolve(&g, UpAxis::Z, &stats).map_err(|e| format!("[transform]: {e}"))?;
+        let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
+        Ok(Scene { sources, locals, global, frames, warnings })
     }
 
     /// Source → world matrix of source `i`.
@@ -125,22 +96,12 @@ impl Scene {
         let n = self.sources.len();
         poser.scratch.resize_with(n, PoseScratch::default);
         if n == 1 {
-            self.sources[0].pose(
-                frame,
-                self.world_from_source(0),
-                &mut poser.scratch[0],
-                &mut poser.out,
-            )?;
+            self.sources[0].pose(frame, self.world_from_source(0), &mut poser.scratch[0], &mut poser.out)?;
             return Ok(&poser.out);
         }
         poser.parts.resize_with(n, PosedScene::default);
         for i in 0..n {
-            self.sources[i].pose(
-                frame,
-                self.world_from_source(i),
-                &mut poser.scratch[i],
-                &mut poser.parts[i],
-            )?;
+            self.sources[i].pose(frame, self.world_from_source(i), &mut poser.scratch[i], &mut poser.parts[i])?;
         }
         merge(&poser.parts, &mut poser.out);
         Ok(&poser.out)
@@ -156,11 +117,7 @@ fn gather(
     posed: &mut PosedScene,
     stats: &mut Stats,
 ) -> Result<(), String> {
-    let frames = if over == Over::First {
-        1
-    } else {
-        src.frame_count()
-    };
+    let frames = if over == Over::First { 1 } else { src.frame_count() };
     for f in 0..frames {
         *posed = PosedScene::default();
         src.pose(f, post, scratch, posed)?;
@@ -179,17 +136,12 @@ fn merge(parts: &[PosedScene], out: &mut PosedScene) {
     let mut object_base = 0;
     for part in parts {
         let (mb, tb) = (materials.len() as u32, textures.len() as u32);
-        materials.extend(
-            part.materials
-                .iter()
-                .cloned()
-                .map(|mut m: material::Material| {
-                    if let Some(t) = &mut m.base_color_texture {
-                        t.texture += tb;
-                    }
-                    m
-                }),
-        );
+        materials.extend(part.materials.iter().cloned().map(|mut m: material::Material| {
+            if let Some(t) = &mut m.base_color_texture {
+                t.texture += tb;
+            }
+            m
+        }));
         textures.extend(part.textures.iter().cloned());
         let mut max_object = 0;
         for p in &part.primitives {

@@ -111,11 +111,7 @@ impl Scalar {
         macro_rules! rd {
             ($t:ty, $n:expr) => {{
                 let a: [u8; $n] = b[..$n].try_into().unwrap();
-                (if be {
-                    <$t>::from_be_bytes(a)
-                } else {
-                    <$t>::from_le_bytes(a)
-                }) as f64
+                (if be { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f64
             }};
         }
         match self {
@@ -184,19 +180,14 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
         }
         // Lines end in LF, CRLF or a lone CR (Rhino).
         let rest = &bytes[pos..];
-        let end = rest
-            .iter()
-            .position(|&c| c == b'\n' || c == b'\r')
-            .ok_or(PlyError::NoEndHeader)?;
+        let end = rest.iter().position(|&c| c == b'\n' || c == b'\r').ok_or(PlyError::NoEndHeader)?;
         let mut next = pos + end + 1;
         if rest[end] == b'\r' && rest.get(end + 1) == Some(&b'\n') {
             next += 1;
         }
         line_no += 1;
-        let line = std::str::from_utf8(&rest[..end]).map_err(|_| PlyError::Header {
-            line: line_no,
-            msg: "not text".into(),
-        })?;
+        let line = std::str::from_utf8(&rest[..end])
+            .map_err(|_| PlyError::Header { line: line_no, msg: "not text".into() })?;
         let herr = |msg: String| PlyError::Header { line: line_no, msg };
         let mut words = line.split_ascii_whitespace();
         match words.next() {
@@ -213,23 +204,15 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
             Some("comment") => comments.push(line.trim_start()[7..].trim().to_string()),
             Some("obj_info") => obj_info.push(line.trim_start()[8..].trim().to_string()),
             Some("element") => {
-                let name = words
-                    .next()
-                    .ok_or_else(|| herr("element without a name".into()))?;
+                let name = words.next().ok_or_else(|| herr("element without a name".into()))?;
                 let count = words
                     .next()
                     .and_then(|c| c.parse::<usize>().ok())
                     .ok_or_else(|| herr(format!("element `{name}` has no valid count")))?;
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    props: Vec::new(),
-                });
+                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
             }
             Some("property") => {
-                let el = elements
-                    .last_mut()
-                    .ok_or_else(|| herr("property before any element".into()))?;
+                let el = elements.last_mut().ok_or_else(|| herr("property before any element".into()))?;
                 let w: Vec<&str> = words.collect();
                 let prop = match w.as_slice() {
                     ["list", c, t, n] => Property {
@@ -251,15 +234,8 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
                 el.props.push(prop);
             }
             Some("end_header") => {
-                let format =
-                    format.ok_or_else(|| herr("no `format` line before end_header".into()))?;
-                return Ok(Header {
-                    format,
-                    elements,
-                    comments,
-                    obj_info,
-                    body_start: next,
-                });
+                let format = format.ok_or_else(|| herr("no `format` line before end_header".into()))?;
+                return Ok(Header { format, elements, comments, obj_info, body_start: next });
             }
             Some(w) => return Err(herr(format!("unknown header keyword `{w}`"))),
         }
@@ -308,15 +284,8 @@ fn slot(name: &str) -> usize {
 pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
     let header = parse_header(bytes)?;
     let body = &bytes[header.body_start..];
-    let mut out = PlyData {
-        comments: header.comments.clone(),
-        ..Default::default()
-    };
-    let mut cursor = Cursor {
-        body,
-        pos: 0,
-        format: header.format,
-    };
+    let mut out = PlyData { comments: header.comments.clone(), ..Default::default() };
+    let mut cursor = Cursor { body, pos: 0, format: header.format };
     let mut vertex_seen = false;
     for el in &header.elements {
         match el.name.as_str() {
@@ -350,18 +319,9 @@ impl<'a> Cursor<'a> {
         let min_row: usize = match self.format {
             // Every ascii value takes at least one character and one separator.
             Format::Ascii => 2 * el.props.len().max(1),
-            _ => el
-                .props
-                .iter()
-                .map(|p| p.list.map_or(p.ty.size(), |c| c.size()))
-                .sum::<usize>()
-                .max(1),
+            _ => el.props.iter().map(|p| p.list.map_or(p.ty.size(), |c| c.size())).sum::<usize>().max(1),
         };
-        if el
-            .count
-            .checked_mul(min_row)
-            .is_none_or(|n| n > self.remaining())
-        {
+        if el.count.checked_mul(min_row).is_none_or(|n| n > self.remaining()) {
             return Err(PlyError::Truncated(format!(
                 "element `{}` declares {} rows, more than the remaining {} bytes can hold",
                 el.name,
@@ -392,9 +352,9 @@ impl<'a> Cursor<'a> {
     fn value(&mut self, ty: Scalar, el: &Element, row: usize) -> Result<f64, PlyError> {
         match self.format {
             Format::Ascii => {
-                let t = self.token().ok_or_else(|| {
-                    PlyError::Truncated(format!("element `{}` row {row} is incomplete", el.name))
-                })?;
+                let t = self
+                    .token()
+                    .ok_or_else(|| PlyError::Truncated(format!("element `{}` row {row} is incomplete", el.name)))?;
                 parse_number(t).ok_or_else(|| PlyError::Body {
                     element: el.name.clone(),
                     row,
@@ -404,10 +364,7 @@ impl<'a> Cursor<'a> {
             f => {
                 let n = ty.size();
                 if self.remaining() < n {
-                    return Err(PlyError::Truncated(format!(
-                        "element `{}` row {row} is incomplete",
-                        el.name
-                    )));
+                    return Err(PlyError::Truncated(format!("element `{}` row {row} is incomplete", el.name)));
                 }
                 let v = ty.read(&self.body[self.pos..], f == Format::BinaryBe);
                 self.pos += n;
@@ -439,14 +396,9 @@ impl<'a> Cursor<'a> {
                     Some(c) => {
                         let n = self.list_len(c, el, row)?;
                         if self.format != Format::Ascii {
-                            let bytes = n
-                                .checked_mul(p.ty.size())
-                                .filter(|&b| b <= self.remaining());
+                            let bytes = n.checked_mul(p.ty.size()).filter(|&b| b <= self.remaining());
                             self.pos += bytes.ok_or_else(|| {
-                                PlyError::Truncated(format!(
-                                    "element `{}` row {row}: list of {n} items",
-                                    el.name
-                                ))
+                                PlyError::Truncated(format!("element `{}` row {row}: list of {n} items", el.name))
                             })?;
                         } else {
                             for _ in 0..n {
@@ -478,22 +430,10 @@ fn parse_number(t: &[u8]) -> Option<f64> {
 
 fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<(), PlyError> {
     c.check_count(el)?;
-    let slots: Vec<usize> = el
-        .props
-        .iter()
-        .map(|p| {
-            if p.list.is_some() {
-                NO_SLOT
-            } else {
-                slot(&p.name)
-            }
-        })
-        .collect();
+    let slots: Vec<usize> = el.props.iter().map(|p| if p.list.is_some() { NO_SLOT } else { slot(&p.name) }).collect();
     let has = |s: usize| slots.contains(&s);
     if !(has(SLOT_X) && has(SLOT_X + 1) && has(SLOT_X + 2)) {
-        return Err(PlyError::Unusable(
-            "the vertex element has no x, y, z".into(),
-        ));
+        return Err(PlyError::Unusable("the vertex element has no x, y, z".into()));
     }
     let has_n = has(SLOT_NX) && has(SLOT_NX + 1) && has(SLOT_NX + 2);
     let has_c = has(SLOT_R) && has(SLOT_R + 1) && has(SLOT_R + 2);
@@ -532,10 +472,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         let row_size: usize = el.props.iter().map(|p| p.ty.size()).sum();
         let total = row_size * n;
         if c.remaining() < total {
-            return Err(PlyError::Truncated(format!(
-                "vertex data needs {total} bytes, {} remain",
-                c.remaining()
-            )));
+            return Err(PlyError::Truncated(format!("vertex data needs {total} bytes, {} remain", c.remaining())));
         }
         let be = c.format == Format::BinaryBe;
         let data = &c.body[c.pos..c.pos + total];
@@ -553,12 +490,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         let group = |first: usize, ty: Scalar| -> Option<usize> {
             let at = |s: usize| mapped.iter().find(|m| m.2 == s);
             let (a, b, c) = (at(first)?, at(first + 1)?, at(first + 2)?);
-            (a.1 == ty
-                && b.1 == ty
-                && c.1 == ty
-                && b.0 == a.0 + ty.size()
-                && c.0 == b.0 + ty.size())
-            .then_some(a.0)
+            (a.1 == ty && b.1 == ty && c.1 == ty && b.0 == a.0 + ty.size() && c.0 == b.0 + ty.size()).then_some(a.0)
         };
         let f = |r: &[u8], o: usize| {
             let b = [r[o], r[o + 1], r[o + 2], r[o + 3]];
@@ -569,24 +501,12 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
             }
         };
         let xyz = group(SLOT_X, Scalar::F32);
-        let nxyz = if has_n {
-            group(SLOT_NX, Scalar::F32)
-        } else {
-            None
-        };
-        let rgb = if has_c && !slots.contains(&SLOT_A) {
-            group(SLOT_R, Scalar::U8)
-        } else {
-            None
-        };
+        let nxyz = if has_n { group(SLOT_NX, Scalar::F32) } else { None };
+        let rgb = if has_c && !slots.contains(&SLOT_A) { group(SLOT_R, Scalar::U8) } else { None };
         if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some())) {
-            out.positions = rows()
-                .map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)])
-                .collect();
+            out.positions = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
             if let Some(o) = nxyz {
-                normals = rows()
-                    .map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)])
-                    .collect();
+                normals = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
             }
             if let Some(o) = rgb {
                 colors = rows().map(|r| [r[o], r[o + 1], r[o + 2], 255]).collect();
@@ -644,17 +564,10 @@ fn to_rgba8(v: &[f64; 10], scale: f64) -> [u8; 4] {
     [q(v[6]), q(v[7]), q(v[8]), q(v[9])]
 }
 
-fn read_faces(
-    c: &mut Cursor<'_>,
-    el: &Element,
-    n_vertices: usize,
-    tris: &mut Vec<u32>,
-) -> Result<(), PlyError> {
+fn read_faces(c: &mut Cursor<'_>, el: &Element, n_vertices: usize, tris: &mut Vec<u32>) -> Result<(), PlyError> {
     c.check_count(el)?;
-    let list_idx = el
-        .props
-        .iter()
-        .position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"));
+    let list_idx =
+        el.props.iter().position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"));
     tris.reserve(el.count.min(c.remaining()) * 3);
     let mut poly: Vec<u32> = Vec::new();
     for row in 0..el.count {
@@ -672,9 +585,7 @@ fn read_faces(
                         continue;
                     }
                     if len > c.remaining() {
-                        return Err(PlyError::Truncated(format!(
-                            "face row {row} lists {len} vertices"
-                        )));
+                        return Err(PlyError::Truncated(format!("face row {row} lists {len} vertices")));
                     }
                     poly.clear();
                     for _ in 0..len {
@@ -723,11 +634,7 @@ pub struct PlyOut<'a> {
 pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
     let n = out.positions.len();
     let mut h = String::from("ply\n");
-    h.push_str(if out.ascii {
-        "format ascii 1.0\n"
-    } else {
-        "format binary_little_endian 1.0\n"
-    });
+    h.push_str(if out.ascii { "format ascii 1.0\n" } else { "format binary_little_endian 1.0\n" });
     for c in out.comments {
         let _ = writeln!(h, "comment {c}");
     }
@@ -747,11 +654,7 @@ pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
     }
     let tris = out.triangles.unwrap_or(&[]);
     if out.triangles.is_some() {
-        let _ = writeln!(
-            h,
-            "element face {}\nproperty list uchar int vertex_indices",
-            tris.len() / 3
-        );
+        let _ = writeln!(h, "element face {}\nproperty list uchar int vertex_indices", tris.len() / 3);
     }
     h.push_str("end_header\n");
     let mut buf = Vec::with_capacity(h.len() + n * 40);
@@ -805,23 +708,35 @@ pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
             let _ = writeln!(buf, "3 {} {} {}", t[0], t[1], t[2]);
         }
     } else {
-        for i in 0..n {
+        // Exact-size rows filled in place: no per-value capacity checks.
+        let row = 12
+            + out.normals.map_or(0, |_| 12)
+            + out.colors.map_or(0, |_| 3)
+            + 4 * (out.extra_u32.len() + out.extra_f32.len());
+        let start = buf.len();
+        buf.resize(start + row * n, 0);
+        for (i, r) in buf[start..].chunks_exact_mut(row).enumerate() {
+            let mut o = 0;
+            let mut put = |bytes: &[u8]| {
+                r[o..o + bytes.len()].copy_from_slice(bytes);
+                o += bytes.len();
+            };
             for v in out.positions[i] {
-                buf.extend_from_slice(&v.to_le_bytes());
+                put(&v.to_le_bytes());
             }
             if let Some(nr) = out.normals {
                 for v in nr[i] {
-                    buf.extend_from_slice(&v.to_le_bytes());
+                    put(&v.to_le_bytes());
                 }
             }
             if let Some(c) = out.colors {
-                buf.extend_from_slice(&c[i]);
+                put(&c[i]);
             }
             for (_, v) in out.extra_u32 {
-                buf.extend_from_slice(&v[i].to_le_bytes());
+                put(&v[i].to_le_bytes());
             }
             for (_, v) in out.extra_f32 {
-                buf.extend_from_slice(&v[i].to_le_bytes());
+                put(&v[i].to_le_bytes());
             }
         }
         for t in tris.chunks_exact(3) {
@@ -841,12 +756,8 @@ mod tests {
     type Cloud = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[u8; 3]>);
 
     fn cloud() -> Cloud {
-        let p: Vec<[f32; 3]> = (0..100)
-            .map(|i| [i as f32 * 0.5, -(i as f32), 1e-3 * i as f32])
-            .collect();
-        let n: Vec<[f32; 3]> = (0..100)
-            .map(|i| [0.0, (i % 2) as f32, 1.0 - (i % 2) as f32])
-            .collect();
+        let p: Vec<[f32; 3]> = (0..100).map(|i| [i as f32 * 0.5, -(i as f32), 1e-3 * i as f32]).collect();
+        let n: Vec<[f32; 3]> = (0..100).map(|i| [0.0, (i % 2) as f32, 1.0 - (i % 2) as f32]).collect();
         let c: Vec<[u8; 3]> = (0..100).map(|i| [i as u8, 255 - i as u8, 7]).collect();
         (p, n, c)
     }
@@ -867,14 +778,7 @@ mod tests {
             let d = read(&bytes).unwrap();
             assert_eq!(d.positions, p);
             assert_eq!(d.normals.unwrap(), n);
-            assert_eq!(
-                d.colors
-                    .unwrap()
-                    .iter()
-                    .map(|c| [c[0], c[1], c[2]])
-                    .collect::<Vec<_>>(),
-                c
-            );
+            assert_eq!(d.colors.unwrap().iter().map(|c| [c[0], c[1], c[2]]).collect::<Vec<_>>(), c);
             assert_eq!(d.triangles, tris);
         }
     }
@@ -893,11 +797,7 @@ mod tests {
         let b = b"ply\nformat binary_little_endian 1.0\nelement vertex 4000000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0";
         assert!(matches!(read(b), Err(PlyError::Truncated(_))));
         let b = b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n4 5\n";
-        assert!(
-            matches!(read(b), Err(PlyError::Truncated(_))),
-            "{:?}",
-            read(b)
-        );
+        assert!(matches!(read(b), Err(PlyError::Truncated(_))), "{:?}", read(b));
         let b = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 zz\n";
         assert!(matches!(read(b), Err(PlyError::Body { .. })));
     }

@@ -59,20 +59,12 @@ impl PosedScene {
 
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
-        self.primitives
-            .iter()
-            .filter(|p| p.kind == PrimKind::Triangles)
-            .map(|p| p.indices.len() / 3)
-            .sum()
+        self.primitives.iter().filter(|p| p.kind == PrimKind::Triangles).map(|p| p.indices.len() / 3).sum()
     }
 
     /// Number of point primitives' points.
     pub fn point_count(&self) -> usize {
-        self.primitives
-            .iter()
-            .filter(|p| p.kind == PrimKind::Points)
-            .map(|p| p.positions.len())
-            .sum()
+        self.primitives.iter().filter(|p| p.kind == PrimKind::Points).map(|p| p.positions.len()).sum()
     }
 
     /// blake3 of the posed geometry and material/texture content: equal hashes mean equal renders.

@@ -46,26 +46,15 @@ pub struct LoadedSource {
 impl LoadedSource {
     /// Loads a manifest source; `dir` is the manifest's folder.
     pub fn load(name: &str, s: &Source, dir: &std::path::Path) -> Result<LoadedSource, String> {
-        let (kind, path) = s
-            .kind()
-            .ok_or_else(|| format!("source `{name}` names no file"))?;
+        let (kind, path) = s.kind().ok_or_else(|| format!("source `{name}` names no file"))?;
         let full: PathBuf = dir.join(path.get_ref());
-        let is_ply = full
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+        let is_ply = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
         let data = match kind {
             SourceKind::Gltf => {
                 let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
                 let clips = select_clips(&asset, s.animation.as_ref().map(|a| a.get_ref()))?;
-                let duration = clips
-                    .iter()
-                    .map(|&c| asset.animations[c].duration())
-                    .fold(0.0f32, f32::max);
-                let f = s
-                    .frames
-                    .as_ref()
-                    .map(|f| f.get_ref().clone())
-                    .unwrap_or_default();
+                let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
+                let f = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
                 let fps = f.fps();
                 let start = f.start.unwrap_or(0);
                 let step = f.step() as i64;
@@ -74,15 +63,8 @@ impl LoadedSource {
                     (None, Some(c)) => start + (c as i64 - 1) * step,
                     (None, None) => start.max((duration as f64 * fps + 1e-4).floor() as i64),
                 };
-                let times = (start..=end)
-                    .step_by(step as usize)
-                    .map(|n| (n as f64 / fps) as f32)
-                    .collect();
-                SourceData::Gltf {
-                    asset: Box::new(asset),
-                    clips,
-                    times,
-                }
+                let times = (start..=end).step_by(step as usize).map(|n| (n as f64 / fps) as f32).collect();
+                SourceData::Gltf { asset: Box::new(asset), clips, times }
             }
             SourceKind::Mesh if is_ply => SourceData::Static(ply_scene(&full)?),
             SourceKind::Mesh => {
@@ -92,37 +74,29 @@ impl LoadedSource {
                     textures: Arc::new(asset.textures.clone()),
                     ..Default::default()
                 };
-                asset.pose(
-                    &[],
-                    0.0,
-                    Mat4::IDENTITY,
-                    &mut PoseScratch::default(),
-                    &mut posed,
-                );
+                asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
                 SourceData::Static(posed)
             }
             SourceKind::PlySequence => {
-                let frames = s
-                    .frames
-                    .as_ref()
-                    .map(|f| f.get_ref().clone())
-                    .unwrap_or_default();
+                let frames = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
                 SourceData::Sequence(
-                    sequence::resolve(dir, path.get_ref(), &frames)
-                        .map_err(|e| format!("source `{name}`: {e}"))?,
+                    sequence::resolve(dir, path.get_ref(), &frames).map_err(|e| format!("source `{name}`: {e}"))?,
                 )
             }
         };
-        let default_up = if is_ply || kind == SourceKind::PlySequence {
-            UpAxis::Z
-        } else {
-            UpAxis::Y
+        let default_up = if is_ply || kind == SourceKind::PlySequence { UpAxis::Z } else { UpAxis::Y };
+        Ok(LoadedSource { name: name.to_string(), data, default_up })
+    }
+
+    /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
+    /// (whose per-frame content is the posed geometry, hashed by [`PosedScene::digest`]).
+    pub fn content_digest(&self, frame: usize, file: &std::path::Path) -> Result<blake3::Hash, String> {
+        let path = match &self.data {
+            SourceData::Sequence(frames) => frames[frame.min(frames.len() - 1)].path.as_path(),
+            _ => file,
         };
-        Ok(LoadedSource {
-            name: name.to_string(),
-            data,
-            default_up,
-        })
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        Ok(blake3::hash(&bytes))
     }
 
     /// Number of frames (1 for a static mesh).
@@ -143,14 +117,8 @@ impl LoadedSource {
         out: &mut PosedScene,
     ) -> Result<(), String> {
         match &self.data {
-            SourceData::Gltf {
-                asset,
-                clips,
-                times,
-            } => {
-                if out.materials.len() != asset.materials.len()
-                    || out.textures.len() != asset.textures.len()
-                {
+            SourceData::Gltf { asset, clips, times } => {
+                if out.materials.len() != asset.materials.len() || out.textures.len() != asset.textures.len() {
                     out.materials = Arc::new(asset.materials.clone());
                     out.textures = Arc::new(asset.textures.clone());
                     out.primitives.clear();
@@ -174,27 +142,18 @@ fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usi
     let find = |r: &ClipRef| -> Result<usize, String> {
         match r {
             ClipRef::Index(i) if (*i as usize) < n => Ok(*i as usize),
-            ClipRef::Index(i) => Err(format!(
-                "{}: there is no animation {i} (the file has {n})",
-                asset.path.display()
-            )),
-            ClipRef::Name(name) => asset
-                .animations
-                .iter()
-                .position(|a| a.name.as_deref() == Some(name))
-                .ok_or_else(|| {
+            ClipRef::Index(i) => Err(format!("{}: there is no animation {i} (the file has {n})", asset.path.display())),
+            ClipRef::Name(name) => {
+                asset.animations.iter().position(|a| a.name.as_deref() == Some(name)).ok_or_else(|| {
                     let names: Vec<String> = asset
                         .animations
                         .iter()
                         .enumerate()
                         .map(|(i, a)| a.name.clone().unwrap_or(format!("#{i}")))
                         .collect();
-                    format!(
-                        "{}: no animation named `{name}` (clips: {})",
-                        asset.path.display(),
-                        names.join(", ")
-                    )
-                }),
+                    format!("{}: no animation named `{name}` (clips: {})", asset.path.display(), names.join(", "))
+                })
+            }
         }
     };
     match sel {
@@ -210,17 +169,10 @@ fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usi
 pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let d = ply::read(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-    let kind = if d.triangles.is_empty() {
-        PrimKind::Points
-    } else {
-        PrimKind::Triangles
-    };
+    let kind = if d.triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
     let positions: Vec<Vec3> = d.positions.iter().map(|p| Vec3::from(*p)).collect();
     let normals = match (&d.normals, kind) {
-        (Some(n), _) => n
-            .iter()
-            .map(|n| Vec3::from(*n).normalize_or_zero())
-            .collect(),
+        (Some(n), _) => n.iter().map(|n| Vec3::from(*n).normalize_or_zero()).collect(),
         (None, PrimKind::Triangles) => super::gltf::load::smooth_normals(&positions, &d.triangles),
         (None, PrimKind::Points) => vec![Vec3::ZERO; positions.len()],
     };
@@ -241,10 +193,7 @@ pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, String> {
         })
         .unwrap_or_default();
     // Scans rarely have consistent winding: draw both sides.
-    let material = Material {
-        double_sided: true,
-        ..Material::default()
-    };
+    let material = Material { double_sided: true, ..Material::default() };
     Ok(PosedScene {
         primitives: vec![PosedPrimitive {
             kind,
@@ -269,11 +218,7 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
     out.primitives.truncate(rest.primitives.len());
     for (i, p) in rest.primitives.iter().enumerate() {
         if i == out.primitives.len() {
-            out.primitives.push(PosedPrimitive {
-                positions: Vec::new(),
-                normals: Vec::new(),
-                ..p.clone()
-            });
+            out.primitives.push(PosedPrimitive { positions: Vec::new(), normals: Vec::new(), ..p.clone() });
         }
         let o = &mut out.primitives[i];
         o.kind = p.kind;
@@ -283,10 +228,8 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
         o.material = p.material;
         o.object = p.object;
         o.positions.clear();
-        o.positions
-            .extend(p.positions.iter().map(|v| m.transform_point3(*v)));
+        o.positions.extend(p.positions.iter().map(|v| m.transform_point3(*v)));
         o.normals.clear();
-        o.normals
-            .extend(p.normals.iter().map(|n| (nm * *n).normalize_or_zero()));
+        o.normals.extend(p.normals.iter().map(|n| (nm * *n).normalize_or_zero()));
     }
 }

@@ -22,12 +22,7 @@ pub struct Stats {
 
 impl Default for Stats {
     fn default() -> Self {
-        Stats {
-            lo: DVec3::splat(f64::INFINITY),
-            hi: DVec3::splat(f64::NEG_INFINITY),
-            sum: DVec3::ZERO,
-            count: 0,
-        }
+        Stats { lo: DVec3::splat(f64::INFINITY), hi: DVec3::splat(f64::NEG_INFINITY), sum: DVec3::ZERO, count: 0 }
     }
 }
 
@@ -51,9 +46,7 @@ impl Stats {
 
 /// `up · matrix`: the part of the transform that does not depend on bounds.
 pub fn pre(t: &Transform, up: UpAxis) -> DMat4 {
-    let m = t.matrix.as_ref().map_or(DMat4::IDENTITY, |m| {
-        DMat4::from_cols_array_2d(m.get_ref()).transpose()
-    });
+    let m = t.matrix.as_ref().map_or(DMat4::IDENTITY, |m| DMat4::from_cols_array_2d(m.get_ref()).transpose());
     let up_m = match up {
         // +Y up → +Z up: +90° about X maps (x, y, z) to (x, -z, y).
         UpAxis::Y => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
@@ -115,12 +108,8 @@ pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, String>
             * DMat4::from_rotation_x(x.to_radians())
     });
     let tr = DMat4::from_translation(t.translate.map_or(DVec3::ZERO, DVec3::from));
-    let m = tr
-        * r
-        * DMat4::from_scale(extra)
-        * DMat4::from_scale(DVec3::splat(s))
-        * DMat4::from_translation(-center)
-        * pre;
+    let m =
+        tr * r * DMat4::from_scale(extra) * DMat4::from_scale(DVec3::splat(s)) * DMat4::from_translation(-center) * pre;
     Ok(m.as_mat4())
 }
 
@@ -140,29 +129,17 @@ mod tests {
     #[test]
     fn y_up_becomes_z_up_and_fits() {
         let t = Transform {
-            fit: Some(toml::Spanned::new(
-                0..0,
-                Fit {
-                    height: Some(2.0),
-                    ..Default::default()
-                },
-            )),
+            fit: Some(toml::Spanned::new(0..0, Fit { height: Some(2.0), ..Default::default() })),
             center: Some(Center::Bbox),
             ..Default::default()
         };
         let mut st = Stats::default();
         // A column 4 tall along source Y, from y=1 to y=5: after up it spans z=1..5.
         let p = pre(&t, UpAxis::Y).as_mat4();
-        st.add(&[
-            p.transform_point3(Vec3::new(0.0, 1.0, 0.0)),
-            p.transform_point3(Vec3::new(1.0, 5.0, 0.0)),
-        ]);
+        st.add(&[p.transform_point3(Vec3::new(0.0, 1.0, 0.0)), p.transform_point3(Vec3::new(1.0, 5.0, 0.0))]);
         let m = resolve(&t, UpAxis::Y, &st).unwrap();
         let top = m.transform_point3(Vec3::new(1.0, 5.0, 0.0));
         let bottom = m.transform_point3(Vec3::new(0.0, 1.0, 0.0));
-        assert!(
-            (top.z - 1.0).abs() < 1e-6 && (bottom.z + 1.0).abs() < 1e-6,
-            "{top} {bottom}"
-        );
+        assert!((top.z - 1.0).abs() < 1e-6 && (bottom.z + 1.0).abs() < 1e-6, "{top} {bottom}");
     }
 }

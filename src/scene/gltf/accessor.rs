@@ -13,10 +13,7 @@ pub fn read_f32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<f32
 /// Reads an integer accessor (indices, joints) as `u32`, exactly.
 pub fn read_u32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
     if matches!(acc.data_type(), DataType::F32) || acc.normalized() {
-        return Err(format!(
-            "accessor {} must hold unnormalized integers",
-            acc.index()
-        ));
+        return Err(format!("accessor {} must hold unnormalized integers", acc.index()));
     }
     read_with(acc, buffers, |d, at, ty| match ty {
         DataType::U8 | DataType::I8 => d[at] as u32,
@@ -55,21 +52,14 @@ fn read_with<T: Copy + Default>(
             for i in 0..count {
                 let base = start + i * stride;
                 for c in 0..n {
-                    out.push(conv(
-                        data,
-                        base + component_offset(acc.dimensions(), ty, c),
-                        ty,
-                    ));
+                    out.push(conv(data, base + component_offset(acc.dimensions(), ty, c), ty));
                 }
             }
         }
         None => {
             // No bufferView: zeros, then sparse values. Bound the allocation by what the sparse data could cover.
             if acc.sparse().is_none() && total > (1 << 28) {
-                return Err(format!(
-                    "accessor {} declares {count} elements with no data",
-                    acc.index()
-                ));
+                return Err(format!("accessor {} declares {count} elements with no data", acc.index()));
             }
             out = vec![T::default(); total];
         }
@@ -88,18 +78,12 @@ fn read_with<T: Copy + Default>(
         let (vdata, _) = view_bytes(&vv, buffers)?;
         let voff = sparse.values().offset();
         if ioff + k * ity.size() > idata.len() || voff + k * n * ty.size() > vdata.len() {
-            return Err(format!(
-                "accessor {}: sparse data runs past its bufferView",
-                acc.index()
-            ));
+            return Err(format!("accessor {}: sparse data runs past its bufferView", acc.index()));
         }
         for j in 0..k {
             let idx = int_at(idata, ioff + j * ity.size(), ity);
             if idx >= count {
-                return Err(format!(
-                    "accessor {}: sparse index {idx} ≥ count {count}",
-                    acc.index()
-                ));
+                return Err(format!("accessor {}: sparse index {idx} ≥ count {count}", acc.index()));
             }
             for c in 0..n {
                 out[idx * n + c] = conv(vdata, voff + (j * n + c) * ty.size(), ty);
@@ -109,21 +93,12 @@ fn read_with<T: Copy + Default>(
     Ok(out)
 }
 
-fn view_bytes<'a>(
-    view: &gltf::buffer::View<'_>,
-    buffers: &'a [Vec<u8>],
-) -> Result<(&'a [u8], Option<usize>), String> {
-    let buf = buffers
-        .get(view.buffer().index())
-        .ok_or("bufferView refers to a missing buffer")?;
+fn view_bytes<'a>(view: &gltf::buffer::View<'_>, buffers: &'a [Vec<u8>]) -> Result<(&'a [u8], Option<usize>), String> {
+    let buf = buffers.get(view.buffer().index()).ok_or("bufferView refers to a missing buffer")?;
     let (off, len) = (view.offset(), view.length());
     let end = off.checked_add(len).ok_or("bufferView range overflows")?;
     if end > buf.len() {
-        return Err(format!(
-            "bufferView {} ({off}..{end}) runs past its {}-byte buffer",
-            view.index(),
-            buf.len()
-        ));
+        return Err(format!("bufferView {} ({off}..{end}) runs past its {}-byte buffer", view.index(), buf.len()));
     }
     Ok((&buf[off..end], view.stride()))
 }

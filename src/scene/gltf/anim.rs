@@ -56,11 +56,7 @@ impl Sampler {
         if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
             return Err("sampler key times must be finite and increasing".into());
         }
-        let per_key = if interp == Interp::CubicSpline {
-            3 * width
-        } else {
-            width
-        };
+        let per_key = if interp == Interp::CubicSpline { 3 * width } else { width };
         if interp == Interp::CubicSpline && times.len() < 2 {
             return Err("a CUBICSPLINE sampler needs at least 2 keyframes".into());
         }
@@ -88,14 +84,7 @@ impl Sampler {
                 }
             }
         }
-        Ok(Sampler {
-            times,
-            values,
-            width,
-            interp,
-            rotation,
-            normalized_quaternions: normalized,
-        })
+        Ok(Sampler { times, values, width, interp, rotation, normalized_quaternions: normalized })
     }
 
     /// Time of the last key.
@@ -152,12 +141,8 @@ impl Sampler {
             }
             Interp::CubicSpline => {
                 let (s2, s3) = (s * s, s * s * s);
-                let (h00, h10, h01, h11) = (
-                    2.0 * s3 - 3.0 * s2 + 1.0,
-                    s3 - 2.0 * s2 + s,
-                    -2.0 * s3 + 3.0 * s2,
-                    s3 - s2,
-                );
+                let (h00, h10, h01, h11) =
+                    (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
                 let base0 = 3 * k * w;
                 let base1 = 3 * (k + 1) * w;
                 for (i, o) in out[..w].iter_mut().enumerate() {
@@ -203,25 +188,10 @@ pub struct Animation {
 impl Animation {
     /// A clip from its channels.
     pub fn new(name: Option<String>, channels: Vec<Channel>) -> Animation {
-        let start = channels
-            .iter()
-            .map(|c| c.sampler.start())
-            .fold(f32::INFINITY, f32::min);
-        let end = channels
-            .iter()
-            .map(|c| c.sampler.end())
-            .fold(f32::NEG_INFINITY, f32::max);
-        let (start, end) = if channels.is_empty() {
-            (0.0, 0.0)
-        } else {
-            (start, end)
-        };
-        Animation {
-            name,
-            channels,
-            start,
-            end,
-        }
+        let start = channels.iter().map(|c| c.sampler.start()).fold(f32::INFINITY, f32::min);
+        let end = channels.iter().map(|c| c.sampler.end()).fold(f32::NEG_INFINITY, f32::max);
+        let (start, end) = if channels.is_empty() { (0.0, 0.0) } else { (start, end) };
+        Animation { name, channels, start, end }
     }
 
     /// Duration in seconds (from time 0, as players do; a clip whose first key is late holds its first pose).
@@ -236,14 +206,7 @@ mod tests {
 
     #[test]
     fn linear_and_step_and_clamping() {
-        let s = Sampler::new(
-            vec![1.0, 2.0],
-            vec![0.0, 0.0, 0.0, 10.0, 20.0, 30.0],
-            3,
-            Interp::Linear,
-            false,
-        )
-        .unwrap();
+        let s = Sampler::new(vec![1.0, 2.0], vec![0.0, 0.0, 0.0, 10.0, 20.0, 30.0], 3, Interp::Linear, false).unwrap();
         let mut o = [0f32; 3];
         s.sample(1.5, &mut o);
         assert_eq!(o, [5.0, 10.0, 15.0]);
@@ -251,14 +214,7 @@ mod tests {
         assert_eq!(o, [0.0; 3]);
         s.sample(9.0, &mut o);
         assert_eq!(o, [10.0, 20.0, 30.0]);
-        let s = Sampler::new(
-            vec![1.0, 2.0],
-            vec![0.0, 0.0, 0.0, 10.0, 20.0, 30.0],
-            3,
-            Interp::Step,
-            false,
-        )
-        .unwrap();
+        let s = Sampler::new(vec![1.0, 2.0], vec![0.0, 0.0, 0.0, 10.0, 20.0, 30.0], 3, Interp::Step, false).unwrap();
         s.sample(1.99, &mut o);
         assert_eq!(o, [0.0; 3]);
     }
@@ -266,14 +222,8 @@ mod tests {
     #[test]
     fn cubic_spline_hermite() {
         // One component, keys (0, 0) and (1, 1), out-tangent 0 and in-tangent 0: smoothstep.
-        let s = Sampler::new(
-            vec![0.0, 1.0],
-            vec![0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-            1,
-            Interp::CubicSpline,
-            false,
-        )
-        .unwrap();
+        let s =
+            Sampler::new(vec![0.0, 1.0], vec![0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 1, Interp::CubicSpline, false).unwrap();
         let mut o = [0f32];
         s.sample(0.5, &mut o);
         assert!((o[0] - 0.5).abs() < 1e-6);
@@ -283,11 +233,9 @@ mod tests {
 
     #[test]
     fn malformed_samplers_are_refused() {
-        assert!(
-            Sampler::new(vec![0.0], vec![0.0; 3], 1, Interp::CubicSpline, false)
-                .unwrap_err()
-                .contains("CUBICSPLINE")
-        );
+        assert!(Sampler::new(vec![0.0], vec![0.0; 3], 1, Interp::CubicSpline, false)
+            .unwrap_err()
+            .contains("CUBICSPLINE"));
         assert!(Sampler::new(vec![0.0, 1.0], vec![0.0; 5], 3, Interp::Linear, false).is_err());
         assert!(Sampler::new(vec![1.0, 0.0], vec![0.0; 2], 1, Interp::Linear, false).is_err());
         assert!(Sampler::new(vec![0.0], vec![0.0; 4], 4, Interp::Linear, true).is_err());

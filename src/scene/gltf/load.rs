@@ -127,36 +127,22 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
     let doc = &gltf.document;
     for ext in doc.extensions_required() {
         if !SUPPORTED_REQUIRED.contains(&ext) {
-            return Err(err(
-                path,
-                format!("requires extension `{ext}`, which vvgen does not support"),
-            ));
+            return Err(err(path, format!("requires extension `{ext}`, which vvgen does not support")));
         }
     }
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut buffers = Vec::new();
     for b in doc.buffers() {
         let data = match b.source() {
-            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
-                err(
-                    path,
-                    "buffer refers to a GLB BIN chunk the file does not have",
-                )
-            })?,
+            gltf::buffer::Source::Bin => {
+                gltf.blob.clone().ok_or_else(|| err(path, "buffer refers to a GLB BIN chunk the file does not have"))?
+            }
             gltf::buffer::Source::Uri(uri) => {
                 fetch_uri(dir, uri).map_err(|e| err(path, format!("buffer {}: {e}", b.index())))?
             }
         };
         if data.len() < b.length() {
-            return Err(err(
-                path,
-                format!(
-                    "buffer {} holds {} bytes, {} declared",
-                    b.index(),
-                    data.len(),
-                    b.length()
-                ),
-            ));
+            return Err(err(path, format!("buffer {} holds {} bytes, {} declared", b.index(), data.len(), b.length())));
         }
         buffers.push(data);
     }
@@ -186,12 +172,7 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
             images[img_index] = Some(decoded.to_rgba8());
         }
         let img = images[img_index].as_ref().unwrap();
-        textures.push(Texture {
-            width: img.width(),
-            height: img.height(),
-            rgba: img.as_raw().clone(),
-            srgb: true,
-        });
+        textures.push(Texture { width: img.width(), height: img.height(), rgba: img.as_raw().clone(), srgb: true });
     }
 
     let mut materials: Vec<Material> = doc.materials().map(|m| material(&m)).collect();
@@ -204,17 +185,10 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
         for (pi, p) in mesh.primitives().enumerate() {
             match primitive(&p, &buffers, &materials, default_material) {
                 Ok(Some(prim)) => prims.push(prim),
-                Ok(None) => warnings.push(format!(
-                    "mesh {} primitive {pi}: {:?} lines are skipped",
-                    mesh.index(),
-                    p.mode()
-                )),
-                Err(e) => {
-                    return Err(err(
-                        path,
-                        format!("mesh {} primitive {pi}: {e}", mesh.index()),
-                    ))
+                Ok(None) => {
+                    warnings.push(format!("mesh {} primitive {pi}: {:?} lines are skipped", mesh.index(), p.mode()))
                 }
+                Err(e) => return Err(err(path, format!("mesh {} primitive {pi}: {e}", mesh.index()))),
             }
         }
         meshes.push(prims);
@@ -224,32 +198,15 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
         .nodes()
         .map(|n| {
             let (matrix, (t, r, s)) = match n.transform() {
-                gltf::scene::Transform::Matrix { matrix } => (
-                    Some(Mat4::from_cols_array_2d(&matrix)),
-                    (Vec3::ZERO, Quat::IDENTITY, Vec3::ONE),
-                ),
-                gltf::scene::Transform::Decomposed {
-                    translation,
-                    rotation,
-                    scale,
-                } => (
-                    None,
-                    (
-                        Vec3::from(translation),
-                        Quat::from_array(rotation).normalize(),
-                        Vec3::from(scale),
-                    ),
-                ),
+                gltf::scene::Transform::Matrix { matrix } => {
+                    (Some(Mat4::from_cols_array_2d(&matrix)), (Vec3::ZERO, Quat::IDENTITY, Vec3::ONE))
+                }
+                gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+                    (None, (Vec3::from(translation), Quat::from_array(rotation).normalize(), Vec3::from(scale)))
+                }
             };
-            let n_targets = n
-                .mesh()
-                .map(|m| {
-                    m.primitives()
-                        .map(|p| p.morph_targets().len())
-                        .max()
-                        .unwrap_or(0)
-                })
-                .unwrap_or(0);
+            let n_targets =
+                n.mesh().map(|m| m.primitives().map(|p| p.morph_targets().len()).max().unwrap_or(0)).unwrap_or(0);
             let mut weights = n
                 .weights()
                 .map(<[f32]>::to_vec)
@@ -277,37 +234,19 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
             Some(acc) => {
                 let v = read_f32(&acc, &buffers).map_err(|e| err(path, e))?;
                 if v.len() < joints.len() * 16 {
-                    return Err(err(
-                        path,
-                        format!(
-                            "skin {} has fewer inverse bind matrices than joints",
-                            s.index()
-                        ),
-                    ));
+                    return Err(err(path, format!("skin {} has fewer inverse bind matrices than joints", s.index())));
                 }
-                v.chunks_exact(16)
-                    .take(joints.len())
-                    .map(Mat4::from_cols_slice)
-                    .collect()
+                v.chunks_exact(16).take(joints.len()).map(Mat4::from_cols_slice).collect()
             }
             None => vec![Mat4::IDENTITY; joints.len()],
         };
-        skins.push(Skin {
-            joints,
-            inverse_bind,
-        });
+        skins.push(Skin { joints, inverse_bind });
     }
     for (ni, node) in nodes.iter().enumerate() {
         if let (Some(m), Some(s)) = (node.mesh, node.skin) {
             let n_joints = skins[s].joints.len();
-            if meshes[m]
-                .iter()
-                .any(|p| p.joints.iter().any(|&j| j as usize >= n_joints))
-            {
-                return Err(err(
-                    path,
-                    format!("node {ni}: a JOINTS index is beyond skin {s}'s {n_joints} joints"),
-                ));
+            if meshes[m].iter().any(|p| p.joints.iter().any(|&j| j as usize >= n_joints)) {
+                return Err(err(path, format!("node {ni}: a JOINTS index is beyond skin {s}'s {n_joints} joints")));
             }
         }
     }
@@ -317,10 +256,10 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
         let mut channels = Vec::new();
         for c in a.channels() {
             let s = c.sampler();
-            let times = read_f32(&s.input(), &buffers)
-                .map_err(|e| err(path, format!("animation {}: {e}", a.index())))?;
-            let values = read_f32(&s.output(), &buffers)
-                .map_err(|e| err(path, format!("animation {}: {e}", a.index())))?;
+            let times =
+                read_f32(&s.input(), &buffers).map_err(|e| err(path, format!("animation {}: {e}", a.index())))?;
+            let values =
+                read_f32(&s.output(), &buffers).map_err(|e| err(path, format!("animation {}: {e}", a.index())))?;
             let node = c.target().node().index();
             let target = match c.target().property() {
                 gltf::animation::Property::Translation => Target::Translation,
@@ -339,20 +278,15 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
                 gltf::animation::Interpolation::CubicSpline => Interp::CubicSpline,
             };
             let sampler = Sampler::new(times, values, width, interp, target == Target::Rotation)
-                .map_err(|e| {
-                    err(
-                        path,
-                        format!("animation {} channel {}: {e}", a.index(), c.index()),
-                    )
-                })?;
+                .map_err(|e| err(path, format!("animation {} channel {}: {e}", a.index(), c.index())))?;
             if sampler.normalized_quaternions {
-                warnings.push(format!("animation {} channel {}: rotation keys were not unit quaternions and were normalized", a.index(), c.index()));
+                warnings.push(format!(
+                    "animation {} channel {}: rotation keys were not unit quaternions and were normalized",
+                    a.index(),
+                    c.index()
+                ));
             }
-            channels.push(Channel {
-                node,
-                target,
-                sampler,
-            });
+            channels.push(Channel { node, target, sampler });
         }
         animations.push(Animation::new(a.name().map(str::to_string), channels));
     }
@@ -367,10 +301,7 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
             .collect(),
         None => match doc.default_scene() {
             Some(s) => s.nodes().map(|n| n.index()).collect(),
-            None => doc
-                .scenes()
-                .flat_map(|s| s.nodes().map(|n| n.index()).collect::<Vec<_>>())
-                .collect(),
+            None => doc.scenes().flat_map(|s| s.nodes().map(|n| n.index()).collect::<Vec<_>>()).collect(),
         },
     };
     let cameras = doc
@@ -444,9 +375,7 @@ fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
         || rel.components().any(|c| {
             matches!(
                 c,
-                std::path::Component::ParentDir
-                    | std::path::Component::RootDir
-                    | std::path::Component::Prefix(_)
+                std::path::Component::ParentDir | std::path::Component::RootDir | std::path::Component::Prefix(_)
             )
         });
     if escapes {
@@ -462,10 +391,7 @@ fn percent_decode(s: &str) -> String {
     let mut i = 0;
     while i < b.len() {
         if b[i] == b'%' && i + 2 < b.len() {
-            if let Some(v) = std::str::from_utf8(&b[i + 1..i + 3])
-                .ok()
-                .and_then(|h| u8::from_str_radix(h, 16).ok())
-            {
+            if let Some(v) = std::str::from_utf8(&b[i + 1..i + 3]).ok().and_then(|h| u8::from_str_radix(h, 16).ok()) {
                 out.push(v);
                 i += 3;
                 continue;
@@ -491,11 +417,7 @@ fn material(m: &gltf::Material<'_>) -> Material {
             // uv' = T · R · S · uv, with R rotating by -rotation as the extension specifies.
             let (sn, cs) = t.rotation().sin_cos();
             let [sx, sy] = t.scale();
-            transform = Some([
-                Vec2::new(cs * sx, -sn * sx),
-                Vec2::new(sn * sy, cs * sy),
-                Vec2::from(t.offset()),
-            ]);
+            transform = Some([Vec2::new(cs * sx, -sn * sx), Vec2::new(sn * sy, cs * sy), Vec2::from(t.offset())]);
             if let Some(tc) = t.tex_coord() {
                 tex_coord = tc;
             }
@@ -540,17 +462,12 @@ fn primitive(
         Mode::Points => PrimKind::Points,
         Mode::Lines | Mode::LineLoop | Mode::LineStrip => return Ok(None),
     };
-    let pos_acc = p
-        .get(&gltf::Semantic::Positions)
-        .ok_or("no POSITION attribute")?;
+    let pos_acc = p.get(&gltf::Semantic::Positions).ok_or("no POSITION attribute")?;
     let positions = vec3s(read_f32(&pos_acc, buffers)?);
     let n = positions.len();
     let attr = |sem: gltf::Semantic| -> Result<Option<Vec<f32>>, String> {
         match p.get(&sem) {
-            Some(acc) if acc.count() != n => Err(format!(
-                "{sem:?} has {} elements, POSITION has {n}",
-                acc.count()
-            )),
+            Some(acc) if acc.count() != n => Err(format!("{sem:?} has {} elements, POSITION has {n}", acc.count())),
             Some(acc) => read_f32(&acc, buffers).map(Some),
             None => Ok(None),
         }
@@ -560,9 +477,7 @@ fn primitive(
         None => (0..n as u32).collect(),
     };
     if let Some(&bad) = raw_indices.iter().find(|&&i| i as usize >= n) {
-        return Err(format!(
-            "index {bad} is out of range: POSITION has {n} vertices"
-        ));
+        return Err(format!("index {bad} is out of range: POSITION has {n} vertices"));
     }
     let indices = match (kind, p.mode()) {
         (PrimKind::Points, _) => Vec::new(),
@@ -586,9 +501,7 @@ fn primitive(
         }
     };
     let material = p.material().index().map_or(default_material, |i| i as u32);
-    let tex_coord = materials[material as usize]
-        .base_color_texture
-        .map(|t| t.tex_coord);
+    let tex_coord = materials[material as usize].base_color_texture.map(|t| t.tex_coord);
     let uvs = match tex_coord {
         Some(tc) => attr(gltf::Semantic::TexCoords(tc))?
             .map(|v| v.chunks_exact(2).map(Vec2::from_slice).collect())
@@ -600,21 +513,13 @@ fn primitive(
             let comps = acc.dimensions().multiplicity();
             let v = attr(gltf::Semantic::Colors(0))?.unwrap_or_default();
             // COLOR_0 is linear already; VEC3 means alpha 1.
-            v.chunks_exact(comps)
-                .map(|c| Vec4::new(c[0], c[1], c[2], if comps == 4 { c[3] } else { 1.0 }))
-                .collect()
+            v.chunks_exact(comps).map(|c| Vec4::new(c[0], c[1], c[2], if comps == 4 { c[3] } else { 1.0 })).collect()
         }
         None => Vec::new(),
     };
-    let mut normals = attr(gltf::Semantic::Normals)?
-        .map(vec3s)
-        .unwrap_or_default();
+    let mut normals = attr(gltf::Semantic::Normals)?.map(vec3s).unwrap_or_default();
     if normals.is_empty() {
-        normals = if kind == PrimKind::Triangles {
-            smooth_normals(&positions, &indices)
-        } else {
-            vec![Vec3::ZERO; n]
-        };
+        normals = if kind == PrimKind::Triangles { smooth_normals(&positions, &indices) } else { vec![Vec3::ZERO; n] };
     } else {
         for v in &mut normals {
             *v = v.normalize_or_zero();
@@ -622,9 +527,7 @@ fn primitive(
     }
     // Skinning: every JOINTS_n / WEIGHTS_n set, 4 influences each.
     let mut sets = 0;
-    while p.get(&gltf::Semantic::Joints(sets)).is_some()
-        && p.get(&gltf::Semantic::Weights(sets)).is_some()
-    {
+    while p.get(&gltf::Semantic::Joints(sets)).is_some() && p.get(&gltf::Semantic::Weights(sets)).is_some() {
         sets += 1;
     }
     let influences = sets as usize * 4;
@@ -633,9 +536,7 @@ fn primitive(
         let j = read_u32(&p.get(&gltf::Semantic::Joints(s as u32)).unwrap(), buffers)?;
         let w = attr(gltf::Semantic::Weights(s as u32))?.unwrap_or_default();
         if j.len() != n * 4 || w.len() != n * 4 {
-            return Err(format!(
-                "JOINTS_{s}/WEIGHTS_{s} must be VEC4 with one element per vertex"
-            ));
+            return Err(format!("JOINTS_{s}/WEIGHTS_{s} must be VEC4 with one element per vertex"));
         }
         for v in 0..n {
             for k in 0..4 {
@@ -657,10 +558,9 @@ fn primitive(
     for t in p.morph_targets() {
         let read = |acc: Option<gltf::Accessor<'_>>| -> Result<Vec<Vec3>, String> {
             match acc {
-                Some(a) if a.count() != n => Err(format!(
-                    "a morph target has {} elements, POSITION has {n}",
-                    a.count()
-                )),
+                Some(a) if a.count() != n => {
+                    Err(format!("a morph target has {} elements, POSITION has {n}", a.count()))
+                }
                 Some(a) => read_f32(&a, buffers).map(vec3s),
                 None => Ok(Vec::new()),
             }
@@ -689,11 +589,7 @@ fn primitive(
 pub fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
     let mut n = vec![Vec3::ZERO; positions.len()];
     for t in indices.chunks_exact(3) {
-        let (a, b, c) = (
-            positions[t[0] as usize],
-            positions[t[1] as usize],
-            positions[t[2] as usize],
-        );
+        let (a, b, c) = (positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]);
         let f = (b - a).cross(c - a);
         for &i in t {
             n[i as usize] += f;

@@ -25,11 +25,7 @@ pub struct PoseScratch {
 /// for proper transforms (and works for singular ones).
 #[inline]
 pub fn normal_matrix(m: &Mat4) -> Mat3 {
-    let (c0, c1, c2) = (
-        m.x_axis.truncate(),
-        m.y_axis.truncate(),
-        m.z_axis.truncate(),
-    );
+    let (c0, c1, c2) = (m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate());
     let cof = Mat3::from_cols(c1.cross(c2), c2.cross(c0), c0.cross(c1));
     // A mirroring matrix has a negative determinant; keep normals on the same side of the surface.
     if c0.dot(c1.cross(c2)) < 0.0 {
@@ -44,8 +40,7 @@ impl GltfAsset {
     pub fn traversal(&self) -> Vec<(usize, Option<usize>)> {
         let mut out = Vec::new();
         let mut seen = vec![false; self.nodes.len()];
-        let mut stack: Vec<(usize, Option<usize>)> =
-            self.roots.iter().rev().map(|&r| (r, None)).collect();
+        let mut stack: Vec<(usize, Option<usize>)> = self.roots.iter().rev().map(|&r| (r, None)).collect();
         while let Some((n, parent)) = stack.pop() {
             if n >= self.nodes.len() || seen[n] {
                 continue; // cycles and duplicates are ignored (gltf validation rejects most)
@@ -61,21 +56,10 @@ impl GltfAsset {
 
     /// Poses clips `clips` at time `t` (seconds), applies `post` (source → world) and writes into `out`,
     /// whose primitives are reused when it was posed from this asset before.
-    pub fn pose(
-        &self,
-        clips: &[usize],
-        t: f32,
-        post: Mat4,
-        scratch: &mut PoseScratch,
-        out: &mut PosedScene,
-    ) {
+    pub fn pose(&self, clips: &[usize], t: f32, post: Mat4, scratch: &mut PoseScratch, out: &mut PosedScene) {
         let s = scratch;
         s.trs.clear();
-        s.trs.extend(
-            self.nodes
-                .iter()
-                .map(|n| (n.translation, n.rotation, n.scale)),
-        );
+        s.trs.extend(self.nodes.iter().map(|n| (n.translation, n.rotation, n.scale)));
         s.weights.resize(self.nodes.len(), Vec::new());
         for (w, n) in s.weights.iter_mut().zip(&self.nodes) {
             w.clear();
@@ -123,12 +107,7 @@ impl GltfAsset {
             let skin = node.skin.map(|si| &self.skins[si]);
             if let Some(skin) = skin {
                 s.joints.clear();
-                s.joints.extend(
-                    skin.joints
-                        .iter()
-                        .zip(&skin.inverse_bind)
-                        .map(|(&j, ibm)| post * s.world[j] * *ibm),
-                );
+                s.joints.extend(skin.joints.iter().zip(&skin.inverse_bind).map(|(&j, ibm)| post * s.world[j] * *ibm));
             }
             let model = post * s.world[n];
             let nmat = normal_matrix(&model);
