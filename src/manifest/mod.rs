@@ -347,26 +347,14 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         let writer = *out.writer.get_ref();
         for s in out.splits.iter().flatten() {
             if !m.splits.contains_key(s.get_ref()) && !broken.splits.contains(s.get_ref()) {
-                let mut d = Diagnostic::error(
-                    format!("output `{name}` lists split `{}`, which is not defined", s.get_ref()),
-                    Some(s.span()),
-                );
-                if let Some(x) = did_you_mean(s.get_ref(), m.splits.keys().map(String::as_str)) {
-                    d = d.with_help(format!("did you mean `{x}`?"));
-                }
-                diags.push(d);
+                let msg = format!("output `{name}` lists split `{}`, which is not defined", s.get_ref());
+                diags.push(suggest::undefined(msg, s.get_ref(), m.splits.keys().map(String::as_str), s.span()));
             }
         }
         if let Some(src) = &out.source {
             if !m.sources.contains_key(src.get_ref()) && !broken.sources.contains(src.get_ref()) {
-                let mut d = Diagnostic::error(
-                    format!("output `{name}` uses source `{}`, which is not defined", src.get_ref()),
-                    Some(src.span()),
-                );
-                if let Some(x) = did_you_mean(src.get_ref(), m.sources.keys().map(String::as_str)) {
-                    d = d.with_help(format!("did you mean `{x}`?"));
-                }
-                diags.push(d);
+                let msg = format!("output `{name}` uses source `{}`, which is not defined", src.get_ref());
+                diags.push(suggest::undefined(msg, src.get_ref(), m.sources.keys().map(String::as_str), src.span()));
             }
         }
         if writer.renders_images() && m.splits.is_empty() && broken.splits.is_empty() {

@@ -6,7 +6,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::diag::Diagnostic;
-use super::suggest::{did_you_mean, one_of};
+use super::suggest::inapplicable_keys;
 
 /// Most points per frame a point-cloud writer may ask for.
 pub const MAX_POINTS: u64 = 100_000_000;
@@ -147,23 +147,8 @@ pub enum PlyFormat {
 impl Output {
     pub(crate) fn validate(&self, name: &str, present: &[(&str, Range<usize>)], diags: &mut Vec<Diagnostic>) {
         let w = *self.writer.get_ref();
-        let allowed = w.allowed_keys();
-        for (key, span) in present {
-            if *key == "writer" || allowed.contains(key) {
-                continue;
-            }
-            let help = match did_you_mean(key, allowed.iter().copied()) {
-                Some(s) => format!("did you mean `{s}`?"),
-                None => format!("writer `{}` takes {}", w.name(), one_of(allowed)),
-            };
-            diags.push(
-                Diagnostic::error(
-                    format!("key `{key}` does not apply to output `{name}` (writer = \"{}\")", w.name()),
-                    Some(span.clone()),
-                )
-                .with_help(help),
-            );
-        }
+        let owner = format!("output `{name}` (writer = \"{}\")", w.name());
+        inapplicable_keys(present, "writer", w.allowed_keys(), &owner, diags);
         if let Some(d) = &self.dir {
             check_relative(d, "dir", diags);
         }

@@ -6,7 +6,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::diag::Diagnostic;
-use super::suggest::{did_you_mean, one_of};
+use super::suggest::inapplicable_keys;
 
 /// NeRF-synthetic camera distance: |(0, 4, 0.5)|.
 pub const NERF_RADIUS: f64 = 4.031128874149275;
@@ -163,23 +163,8 @@ pub struct Jitter {
 impl Rig {
     pub(crate) fn validate(&self, name: &str, present: &[(&str, Range<usize>)], diags: &mut Vec<Diagnostic>) {
         let kind = *self.kind.get_ref();
-        let allowed = kind.allowed_keys();
-        for (key, span) in present {
-            if *key == "kind" || allowed.contains(key) {
-                continue;
-            }
-            let help = match did_you_mean(key, allowed.iter().copied()) {
-                Some(s) => format!("did you mean `{s}`?"),
-                None => format!("a `{}` rig takes {}", kind.name(), one_of(allowed)),
-            };
-            diags.push(
-                Diagnostic::error(
-                    format!("key `{key}` does not apply to rig `{name}` (kind = \"{}\")", kind.name()),
-                    Some(span.clone()),
-                )
-                .with_help(help),
-            );
-        }
+        let owner = format!("rig `{name}` (kind = \"{}\")", kind.name());
+        inapplicable_keys(present, "kind", kind.allowed_keys(), &owner, diags);
         if let Some(r) = &self.radius {
             if !(r.get_ref().is_finite() && *r.get_ref() > 0.0) {
                 diags.push(Diagnostic::error(format!("radius = {} must be positive", r.get_ref()), Some(r.span())));

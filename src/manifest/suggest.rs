@@ -24,6 +24,44 @@ pub fn one_of(names: &[&str]) -> String {
     }
 }
 
+/// Reports keys of a table that its kind does not take (`kind = "orbit"` with `rings`, a writer's foreign
+/// options). `tag` is the key that selects the kind; `owner` describes the table for the message.
+pub fn inapplicable_keys(
+    present: &[(&str, std::ops::Range<usize>)],
+    tag: &str,
+    allowed: &[&str],
+    owner: &str,
+    diags: &mut Vec<super::diag::Diagnostic>,
+) {
+    for (key, span) in present {
+        if *key == tag || allowed.contains(key) {
+            continue;
+        }
+        let help = match did_you_mean(key, allowed.iter().copied()) {
+            Some(s) => format!("did you mean `{s}`?"),
+            None => format!("it takes {}", one_of(allowed)),
+        };
+        diags.push(
+            super::diag::Diagnostic::error(format!("key `{key}` does not apply to {owner}"), Some(span.clone()))
+                .with_help(help),
+        );
+    }
+}
+
+/// "`what` `name`, which is not defined", with the nearest defined name as help.
+pub fn undefined<'a>(
+    message: String,
+    name: &str,
+    known: impl IntoIterator<Item = &'a str>,
+    span: std::ops::Range<usize>,
+) -> super::diag::Diagnostic {
+    let d = super::diag::Diagnostic::error(message, Some(span));
+    match did_you_mean(name, known) {
+        Some(x) => d.with_help(format!("did you mean `{x}`?")),
+        None => d,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
