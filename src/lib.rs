@@ -9,4 +9,5 @@
 
 pub mod cli;
 pub mod manifest;
+pub mod render;
 pub mod scene;

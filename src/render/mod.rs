@@ -1,0 +1,192 @@
+//! The CPU renderer: `render(&PosedScene, &Camera, &RenderSettings) -> Frame`. Triangles are clipped,
+//! snapped and rasterized per tile ([`raster`]); each pixel's `samples` are resolved into straight-alpha
+//! colour (alpha = coverage), depth and normal. Tiles run in parallel with rayon and never share
+//! accumulators, so the bytes do not depend on the thread count.
+
+pub mod camera;
+pub mod encode;
+pub mod raster;
+
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+
+pub use camera::Camera;
+
+use crate::manifest::render::{DepthKind, Shading};
+use crate::scene::material::linear_to_srgb;
+use crate::scene::PosedScene;
+use raster::{Projection, Shade};
+
+/// Tile side in pixels.
+const TILE: i64 = 32;
+
+/// What the renderer needs from `[render]`.
+#[derive(Debug, Clone)]
+pub struct RenderSettings {
+    /// Samples per pixel: 1, 4, 9 or 16 (a k×k grid).
+    pub samples: u32,
+    /// Unlit or Lambert.
+    pub shading: Shading,
+    /// Lambert lights: direction the light travels, intensity. Empty: a head light.
+    pub lights: Vec<(Vec3, f32)>,
+    /// Lambert ambient term.
+    pub ambient: f32,
+    /// Opaque background (linear RGB), or transparent.
+    pub background: Option<Vec3>,
+    /// Planar z-depth or ray distance in the depth buffer.
+    pub depth: DepthKind,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            samples: 1,
+            shading: Shading::Unlit,
+            lights: Vec::new(),
+            ambient: 0.3,
+            background: None,
+            depth: DepthKind::Planar,
+        }
+    }
+}
+
+/// One rendered view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// sRGB RGBA8, straight alpha, rows top first.
+    pub rgba: Vec<u8>,
+    /// Depth in scene units (planar or ray, per the settings); 0 where less than half the pixel is covered.
+    pub depth: Vec<f32>,
+    /// World-space unit normals (zero where less than half the pixel is covered).
+    pub normal: Vec<Vec3>,
+    /// Object id + 1 of the majority of the pixel's covered samples (0 = background).
+    pub object: Vec<u32>,
+}
+
+/// Renders one view of a posed scene.
+pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
+    let k = (s.samples as f64).sqrt().round().max(1.0) as i64;
+    let (w, h) = (cam.width as i64, cam.height as i64);
+    let proj = Projection {
+        w2c: cam.w2c_f32(),
+        f: [
+            (cam.fx * k as f64) as f32,
+            (cam.fy * k as f64) as f32,
+            (cam.cx * k as f64) as f32,
+            (cam.cy * k as f64) as f32,
+        ],
+        near: cam.near as f32,
+        far: cam.far as f32,
+        size: (w * k, h * k),
+    };
+    let tris = raster::setup(scene, &proj);
+    // Bin triangles into tiles in scene order: the depth test keeps the first of equal depths, so order matters
+    // and must not depend on threads.
+    let (tw, th) = ((w + TILE - 1) / TILE, (h + TILE - 1) / TILE);
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); (tw * th) as usize];
+    let ts = TILE * k;
+    for (i, t) in tris.iter().enumerate() {
+        for ty in t.bbox[1] / ts..=t.bbox[3] / ts {
+            for tx in t.bbox[0] / ts..=t.bbox[2] / ts {
+                bins[(ty * tw + tx) as usize].push(i as u32);
+            }
+        }
+    }
+    let shade = Shade {
+        lambert: (s.shading == Shading::Lambert).then(|| {
+            let lights = if s.lights.is_empty() {
+                vec![(raster::camera_back(&cam.c2w.as_mat4()), 1.0 - s.ambient)]
+            } else {
+                s.lights.iter().map(|(d, i)| (-d.normalize(), *i)).collect()
+            };
+            (s.ambient, lights)
+        }),
+    };
+    let tiles: Vec<_> = (0..tw * th)
+        .into_par_iter()
+        .map(|ti| {
+            let (tx, ty) = (ti % tw, ti / tw);
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
+            let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
+            let st = raster::raster_tile(scene, &tris, &bins[ti as usize], &shade, rect, &proj);
+            resolve(&st, k, s)
+        })
+        .collect();
+    let n = (w * h) as usize;
+    let mut f = Frame {
+        width: cam.width,
+        height: cam.height,
+        rgba: vec![0; n * 4],
+        depth: vec![0.0; n],
+        normal: vec![Vec3::ZERO; n],
+        object: vec![0; n],
+    };
+    for (ti, px) in tiles.into_iter().enumerate() {
+        let (x0, y0) = ((ti as i64 % tw) * TILE, (ti as i64 / tw) * TILE);
+        let pw = TILE.min(w - x0);
+        for (j, p) in px.into_iter().enumerate() {
+            let (x, y) = (x0 + j as i64 % pw, y0 + j as i64 / pw);
+            let i = (y * w + x) as usize;
+            f.rgba[i * 4..i * 4 + 4].copy_from_slice(&p.0);
+            f.depth[i] = match s.depth {
+                DepthKind::Planar => p.1,
+                DepthKind::Ray => {
+                    let (dx, dy) = ((x as f64 + 0.5 - cam.cx) / cam.fx, (y as f64 + 0.5 - cam.cy) / cam.fy);
+                    (p.1 as f64 * (dx * dx + dy * dy + 1.0).sqrt()) as f32
+                }
+            };
+            f.normal[i] = p.2;
+            f.object[i] = p.3;
+        }
+    }
+    f
+}
+
+/// Resolves a tile's k×k samples per pixel: alpha is coverage, colour the mean of covered samples (straight).
+fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4], f32, Vec3, u32)> {
+    let (pw, ph) = (st.w / k, st.h / k);
+    let mut out = Vec::with_capacity((pw * ph) as usize);
+    for py in 0..ph {
+        for px in 0..pw {
+            let (mut sum, mut covered, mut depth, mut normal) = (Vec4::ZERO, 0u32, 0f32, Vec3::ZERO);
+            let mut objects: [(u32, u32); 16] = [(0, 0); 16];
+            for sy in 0..k {
+                for sx in 0..k {
+                    let i = ((py * k + sy) * st.w + px * k + sx) as usize;
+                    if st.object[i] == 0 {
+                        continue;
+                    }
+                    covered += 1;
+                    sum += st.color[i];
+                    depth += st.depth[i];
+                    normal += st.normal[i];
+                    let slot = objects.iter().position(|o| o.0 == st.object[i] || o.1 == 0).unwrap_or(0);
+                    objects[slot] = (st.object[i], objects[slot].1 + 1);
+                }
+            }
+            let total = (k * k) as u32;
+            let alpha = covered as f32 / total as f32;
+            let mut rgb = if covered > 0 { sum.truncate() / covered as f32 } else { Vec3::ZERO };
+            let mut a8 = (alpha * 255.0).round() as u8;
+            if let Some(bg) = s.background {
+                rgb = rgb * alpha + bg * (1.0 - alpha);
+                a8 = 255;
+            }
+            let enc = |c: f32| (linear_to_srgb(c) * 255.0).round() as u8;
+            let majority = 2 * covered >= total && covered > 0;
+            let object = objects.iter().max_by_key(|o| (o.1, std::cmp::Reverse(o.0))).map_or(0, |o| o.0);
+            out.push((
+                [enc(rgb.x), enc(rgb.y), enc(rgb.z), a8],
+                if majority { depth / covered as f32 } else { 0.0 },
+                if majority { normal.normalize_or_zero() } else { Vec3::ZERO },
+                if covered > 0 { object } else { 0 },
+            ));
+        }
+    }
+    out
+}
