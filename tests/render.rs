@@ -192,3 +192,108 @@ fn same_bytes_whatever_the_thread_count() {
     colours.dedup();
     assert!(colours.len() > 50, "{}", colours.len());
 }
+
+fn points(positions: Vec<Vec3>, color: Vec4) -> PosedScene {
+    let n = positions.len();
+    PosedScene {
+        primitives: vec![PosedPrimitive {
+            kind: PrimKind::Points,
+            positions,
+            normals: vec![Vec3::ZERO; n],
+            uvs: Arc::new(Vec::new()),
+            colors: Arc::new(vec![color; n]),
+            indices: Arc::new(Vec::new()),
+            material: 0,
+            object: 0,
+        }],
+        materials: Arc::new(vec![Material::default()]),
+        textures: Arc::new(Vec::new()),
+    }
+}
+
+mod splats {
+    use super::*;
+    use vvgen::render::{SplatSettings, SplatShape, SplatSize};
+
+    fn coverage(f: &vvgen::render::Frame) -> f64 {
+        f.rgba.chunks(4).map(|p| p[3] as f64 / 255.0).sum()
+    }
+
+    fn settings(shape: SplatShape, size: SplatSize, samples: u32) -> RenderSettings {
+        RenderSettings { samples, splat: SplatSettings { shape, size }, ..Default::default() }
+    }
+
+    #[test]
+    fn square_of_three_pixels_covers_nine() {
+        // Camera at the origin looking down -Z, f = 1, c = 0: the point (10.5, -10.5, -1) lands on pixel (10, 10)'s centre.
+        let c = Camera {
+            width: 32,
+            height: 32,
+            fx: 1.0,
+            fy: 1.0,
+            cx: 0.0,
+            cy: 0.0,
+            near: 0.1,
+            far: 10.0,
+            c2w: DMat4::IDENTITY,
+        };
+        let green = Vec4::new(0.0, 1.0, 0.0, 1.0);
+        let f = render(
+            &points(vec![Vec3::new(10.5, -10.5, -1.0)], green),
+            &c,
+            &settings(SplatShape::Square, SplatSize::Pixels(3.0), 1),
+        );
+        let hit: Vec<usize> = (0..32 * 32).filter(|&i| f.rgba[i * 4 + 3] == 255).collect();
+        assert_eq!(hit, [9, 10, 11].iter().flat_map(|y| [9, 10, 11].map(|x| y * 32 + x)).collect::<Vec<_>>());
+        assert_eq!(&f.rgba[(10 * 32 + 10) * 4..(10 * 32 + 10) * 4 + 4], &[0, 255, 0, 255]);
+    }
+
+    #[test]
+    fn disk_and_world_sizes_have_the_expected_area() {
+        let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
+        let p = points(vec![Vec3::ZERO], Vec4::ONE);
+        let disk = coverage(&render(&p, &c, &settings(SplatShape::Disk, SplatSize::Pixels(20.0), 16)));
+        assert!((disk / (std::f64::consts::PI * 100.0) - 1.0).abs() < 0.02, "{disk}");
+        // 0.1 world units at distance 2 with f = 100: a 5-pixel square.
+        let sq = coverage(&render(&p, &c, &settings(SplatShape::Square, SplatSize::World(0.1), 16)));
+        assert!((sq - 25.0).abs() < 0.5, "{sq}");
+    }
+
+    #[test]
+    fn cubes_are_true_3d_cubes() {
+        // Edge 0.5 seen face-on from 4 units: the front face is 3.75 away and 0.5·100/3.75 pixels wide.
+        let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y));
+        let f =
+            render(&points(vec![Vec3::ZERO], Vec4::ONE), &c, &settings(SplatShape::Cube, SplatSize::World(0.5), 16));
+        // The edges sit at 32 ± 6.67 px; with 4×4 samples each edge is quantized to a quarter pixel: 13.5 px.
+        let expect = (0.5 * 100.0 / 3.75f64).powi(2);
+        assert!((coverage(&f) - 13.5 * 13.5).abs() < 0.5, "{} vs {expect}", coverage(&f));
+        assert!((f.depth[32 * 64 + 32] - 3.75).abs() < 1e-4, "{}", f.depth[32 * 64 + 32]);
+        // Seen from a corner direction, three faces show: the silhouette is a hexagon, larger than one face.
+        let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(2.3, 2.3, 2.3), Vec3::ZERO, Vec3::Z));
+        assert!(
+            coverage(&render(
+                &points(vec![Vec3::ZERO], Vec4::ONE),
+                &c,
+                &settings(SplatShape::Cube, SplatSize::World(0.5), 16)
+            )) > expect * 1.2
+        );
+    }
+
+    #[test]
+    fn splats_are_depth_tested_against_triangles() {
+        let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
+        let mut s = mesh(
+            vec![Vec3::new(-0.5, -0.5, 0.5), Vec3::new(0.5, -0.5, 0.5), Vec3::new(0.0, 0.5, 0.5)],
+            vec![0, 1, 2],
+            Material::default(),
+        );
+        let p = points(vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0)], Vec4::new(1.0, 0.0, 0.0, 1.0));
+        s.primitives.push(p.primitives[0].clone());
+        let f = render(&s, &c, &settings(SplatShape::Square, SplatSize::Pixels(4.0), 1));
+        // The point in front (z = 1) is drawn red over the white triangle; the one behind it is hidden.
+        let centre = (32 * 64 + 32) * 4;
+        assert_eq!(&f.rgba[centre..centre + 4], &[255, 0, 0, 255]);
+        assert!((f.depth[32 * 64 + 32] - 1.0).abs() < 1e-5);
+    }
+}

@@ -6,11 +6,13 @@
 pub mod camera;
 pub mod encode;
 pub mod raster;
+pub mod splat;
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use camera::Camera;
+pub use splat::{Shape as SplatShape, Size as SplatSize, SplatSettings};
 
 use crate::manifest::render::{DepthKind, Shading};
 use crate::scene::material::linear_to_srgb;
@@ -35,6 +37,8 @@ pub struct RenderSettings {
     pub background: Option<Vec3>,
     /// Planar z-depth or ray distance in the depth buffer.
     pub depth: DepthKind,
+    /// How point primitives are drawn.
+    pub splat: SplatSettings,
 }
 
 impl Default for RenderSettings {
@@ -46,6 +50,7 @@ impl Default for RenderSettings {
             ambient: 0.3,
             background: None,
             depth: DepthKind::Planar,
+            splat: SplatSettings::default(),
         }
     }
 }
@@ -83,18 +88,35 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
         far: cam.far as f32,
         size: (w * k, h * k),
     };
-    let tris = raster::setup(scene, &proj);
+    let mut tris = raster::setup(scene, &proj);
+    let splats = splat::setup(scene, &proj, &s.splat, k as f32);
+    if s.splat.shape == SplatShape::Cube && scene.point_count() > 0 {
+        // A cube needs a world size; a pixel size is taken at unit distance.
+        let size = match s.splat.size {
+            SplatSize::World(w) => w,
+            SplatSize::Pixels(px) => px / cam.fx as f32,
+        };
+        let eye = cam.c2w.w_axis.truncate().as_vec3();
+        tris.extend(raster::setup(&splat::cube_faces(scene, eye, size), &proj));
+    }
     // Bin triangles into tiles in scene order: the depth test keeps the first of equal depths, so order matters
     // and must not depend on threads.
     let (tw, th) = ((w + TILE - 1) / TILE, (h + TILE - 1) / TILE);
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); (tw * th) as usize];
     let ts = TILE * k;
-    for (i, t) in tris.iter().enumerate() {
-        for ty in t.bbox[1] / ts..=t.bbox[3] / ts {
-            for tx in t.bbox[0] / ts..=t.bbox[2] / ts {
+    let bin = |bins: &mut Vec<Vec<u32>>, i: usize, bbox: &[i64; 4]| {
+        for ty in bbox[1] / ts..=bbox[3] / ts {
+            for tx in bbox[0] / ts..=bbox[2] / ts {
                 bins[(ty * tw + tx) as usize].push(i as u32);
             }
         }
+    };
+    for (i, t) in tris.iter().enumerate() {
+        bin(&mut bins, i, &t.bbox);
+    }
+    let mut splat_bins: Vec<Vec<u32>> = vec![Vec::new(); (tw * th) as usize];
+    for (i, sp) in splats.iter().enumerate() {
+        bin(&mut splat_bins, i, &sp.bbox);
     }
     let shade = Shade {
         lambert: (s.shading == Shading::Lambert).then(|| {
@@ -113,7 +135,13 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             let (x0, y0) = (tx * TILE, ty * TILE);
             let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
             let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
-            let st = raster::raster_tile(scene, &tris, &bins[ti as usize], &shade, rect, &proj);
+            let work = raster::TileWork {
+                tris: &tris,
+                bin: &bins[ti as usize],
+                splats: &splats,
+                splat_bin: &splat_bins[ti as usize],
+            };
+            let st = raster::raster_tile(scene, work, &shade, rect, &proj);
             resolve(&st, k, s)
         })
         .collect();

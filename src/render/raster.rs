@@ -226,15 +226,22 @@ pub struct Rect {
     pub h: i64,
 }
 
-/// Rasterizes the triangles in `bin` (indices into `tris`, in scene order) over one tile of samples.
-pub fn raster_tile(
-    scene: &PosedScene,
-    tris: &[Tri],
-    bin: &[u32],
-    shade: &Shade,
-    rect: Rect,
-    proj: &Projection,
-) -> SampleTile {
+/// What one tile draws: indices (in scene order) into the frame's triangles and splats.
+#[derive(Debug, Clone, Copy)]
+pub struct TileWork<'a> {
+    /// All triangles.
+    pub tris: &'a [Tri],
+    /// This tile's triangles.
+    pub bin: &'a [u32],
+    /// All splats.
+    pub splats: &'a [super::splat::Splat],
+    /// This tile's splats.
+    pub splat_bin: &'a [u32],
+}
+
+/// Rasterizes a tile's triangles, then its splats, with one depth buffer.
+pub fn raster_tile(scene: &PosedScene, work: TileWork<'_>, shade: &Shade, rect: Rect, proj: &Projection) -> SampleTile {
+    let TileWork { tris, bin, splats, splat_bin } = work;
     let Rect { x0, y0, w, h } = rect;
     let (near, far) = (proj.near, proj.far);
     let n = (w * h) as usize;
@@ -313,6 +320,23 @@ pub fn raster_tile(
                 t.depth[i] = z;
                 t.normal[i] = nrm;
                 t.object[i] = tri.object + 1;
+            }
+        }
+    }
+    for &si in splat_bin {
+        let sp = &splats[si as usize];
+        let (bx0, by0) = (sp.bbox[0].max(x0), sp.bbox[1].max(y0));
+        let (bx1, by1) = (sp.bbox[2].min(x0 + w - 1), sp.bbox[3].min(y0 + h - 1));
+        for sy in by0..=by1 {
+            for sx in bx0..=bx1 {
+                let i = ((sy - y0) * w + (sx - x0)) as usize;
+                if sp.z < t.depth[i] && sp.covers(sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2) {
+                    // Points carry their own colour: unlit.
+                    t.color[i] = sp.color.truncate().extend(1.0);
+                    t.depth[i] = sp.z;
+                    t.normal[i] = sp.normal;
+                    t.object[i] = sp.object + 1;
+                }
             }
         }
     }
