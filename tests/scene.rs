@@ -383,3 +383,30 @@ fn flight_helmet_multi_mesh_textures() {
         .iter()
         .all(|p| !p.uvs.is_empty() && p.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-3)));
 }
+
+#[test]
+fn unassigned_skeleton_and_box_animated_move() {
+    // A skin without `skeleton`, rotation + scale animation, COLOR_0.
+    let a = load("gltf/UnassignedSkeleton/unassigned-skeleton.gltf");
+    assert!(!a.skins.is_empty() && !a.animations.is_empty());
+    assert!(a.meshes.iter().flatten().any(|p| p.influences > 0 && !p.colors.is_empty()));
+    let end = a.animations[0].duration();
+    let d0 = pose(&a, &[0], 0.0).digest();
+    assert!((1..16).any(|i| pose(&a, &[0], end * i as f32 / 16.0).digest() != d0), "the skinned mesh moves");
+    for p in &pose(&a, &[0], end * 0.5).primitives {
+        assert!(p.positions.iter().all(|v| v.is_finite()));
+    }
+    // BoxAnimated: two clips (rotation of the inner box, translation of the outer), channels of different lengths.
+    let a = load("gltf/BoxAnimated/BoxAnimated.gltf");
+    assert_eq!(a.animations.len(), 1.max(a.animations.len()));
+    let all: Vec<usize> = (0..a.animations.len()).collect();
+    let end = a.animations.iter().map(|x| x.duration()).fold(0.0, f32::max);
+    let (lo0, hi0) = pose(&a, &all, 0.0).bounds().unwrap();
+    let moved = (1..8).any(|i| {
+        let (lo, hi) = pose(&a, &all, end * i as f32 / 8.0).bounds().unwrap();
+        (lo - lo0).length() + (hi - hi0).length() > 1e-3
+    });
+    assert!(moved, "BoxAnimated's boxes move");
+    // Past the end, every channel holds its last key.
+    assert_eq!(pose(&a, &all, end).digest(), pose(&a, &all, end + 10.0).digest());
+}

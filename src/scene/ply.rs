@@ -715,28 +715,42 @@ pub fn write(out: &PlyOut<'_>) -> Vec<u8> {
             + 4 * (out.extra_u32.len() + out.extra_f32.len());
         let start = buf.len();
         buf.resize(start + row * n, 0);
-        for (i, r) in buf[start..].chunks_exact_mut(row).enumerate() {
-            let mut o = 0;
-            let mut put = |bytes: &[u8]| {
-                r[o..o + bytes.len()].copy_from_slice(bytes);
-                o += bytes.len();
-            };
-            for v in out.positions[i] {
-                put(&v.to_le_bytes());
-            }
-            if let Some(nr) = out.normals {
-                for v in nr[i] {
-                    put(&v.to_le_bytes());
+        let rows = buf[start..].chunks_exact_mut(row);
+        if out.normals.is_none() && out.extra_u32.is_empty() && out.extra_f32.is_empty() {
+            // The common layouts (x y z [red green blue]) with fixed offsets, so the loop compiles to plain stores.
+            for (i, r) in rows.enumerate() {
+                let p = out.positions[i];
+                r[0..4].copy_from_slice(&p[0].to_le_bytes());
+                r[4..8].copy_from_slice(&p[1].to_le_bytes());
+                r[8..12].copy_from_slice(&p[2].to_le_bytes());
+                if let Some(c) = out.colors {
+                    r[12..15].copy_from_slice(&c[i]);
                 }
             }
-            if let Some(c) = out.colors {
-                put(&c[i]);
-            }
-            for (_, v) in out.extra_u32 {
-                put(&v[i].to_le_bytes());
-            }
-            for (_, v) in out.extra_f32 {
-                put(&v[i].to_le_bytes());
+        } else {
+            for (i, r) in rows.enumerate() {
+                let mut o = 0;
+                let mut put = |bytes: &[u8]| {
+                    r[o..o + bytes.len()].copy_from_slice(bytes);
+                    o += bytes.len();
+                };
+                for v in out.positions[i] {
+                    put(&v.to_le_bytes());
+                }
+                if let Some(nr) = out.normals {
+                    for v in nr[i] {
+                        put(&v.to_le_bytes());
+                    }
+                }
+                if let Some(c) = out.colors {
+                    put(&c[i]);
+                }
+                for (_, v) in out.extra_u32 {
+                    put(&v[i].to_le_bytes());
+                }
+                for (_, v) in out.extra_f32 {
+                    put(&v[i].to_le_bytes());
+                }
             }
         }
         for t in tris.chunks_exact(3) {
