@@ -30,6 +30,11 @@ fn cam(w: u32, h: u32, f: f64, c2w: DMat4) -> Camera {
     Camera { width: w, height: h, fx: f, fy: f, cx: w as f64 / 2.0, cy: h as f64 / 2.0, near: 0.1, far: 100.0, c2w }
 }
 
+/// A camera at the origin looking down -Z with f = 1 and c = 0: a point (x, -y, -1) lands on pixel coordinate (x, y).
+fn pixel_camera(w: u32, h: u32) -> Camera {
+    Camera { width: w, height: h, fx: 1.0, fy: 1.0, cx: 0.0, cy: 0.0, near: 0.1, far: 10.0, c2w: DMat4::IDENTITY }
+}
+
 fn alpha(f: &vvgen::render::Frame, x: u32, y: u32) -> u8 {
     f.rgba[((y * f.width + x) * 4 + 3) as usize]
 }
@@ -72,17 +77,7 @@ fn unit_square_covers_the_predicted_pixels_at_the_right_depth() {
 #[test]
 fn shared_edges_leave_no_gap_and_no_double_hit() {
     // Camera at the origin looking down -Z with f = 1 and c = 0: screen = (x, -y) for points at z = -1.
-    let c = Camera {
-        width: 64,
-        height: 48,
-        fx: 1.0,
-        fy: 1.0,
-        cx: 0.0,
-        cy: 0.0,
-        near: 0.1,
-        far: 10.0,
-        c2w: DMat4::IDENTITY,
-    };
+    let c = pixel_camera(64, 48);
     let s = |x: f32, y: f32| Vec3::new(x, -y, -1.0);
     let quad = [s(10.5, 10.5), s(50.5, 30.5), s(12.25, 40.0), s(55.0, 5.0)];
     for (a_idx, b_idx) in [([0u32, 2, 1], [0u32, 1, 3]), ([0, 1, 2], [0, 3, 1])] {
@@ -226,17 +221,7 @@ mod splats {
     #[test]
     fn square_of_three_pixels_covers_nine() {
         // Camera at the origin looking down -Z, f = 1, c = 0: the point (10.5, -10.5, -1) lands on pixel (10, 10)'s centre.
-        let c = Camera {
-            width: 32,
-            height: 32,
-            fx: 1.0,
-            fy: 1.0,
-            cx: 0.0,
-            cy: 0.0,
-            near: 0.1,
-            far: 10.0,
-            c2w: DMat4::IDENTITY,
-        };
+        let c = pixel_camera(32, 32);
         let green = Vec4::new(0.0, 1.0, 0.0, 1.0);
         let f = render(
             &points(vec![Vec3::new(10.5, -10.5, -1.0)], green),
