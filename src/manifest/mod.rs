@@ -23,7 +23,6 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use toml::de::{DeTable, DeValue};
-use toml::Spanned;
 
 pub use dataset::Dataset;
 pub use diag::{Diagnostic, Report, Severity};
@@ -414,22 +413,4 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                 .with_help("add e.g. [output.dnerf] writer = \"dnerf\""),
         );
     }
-}
-
-/// Where a key sits, for tests and tools: the byte span of `table.entry.key` (e.g. `["split", "train", "views"]`).
-pub fn span_of(text: &str, path: &[&str]) -> Option<Range<usize>> {
-    let root = DeTable::parse(text).ok()?.into_inner();
-    let mut table: &DeTable<'_> = &root;
-    let mut found: Option<&Spanned<DeValue<'_>>> = None;
-    for (i, key) in path.iter().enumerate() {
-        let v = table.get(*key)?;
-        if i + 1 < path.len() {
-            match v.get_ref() {
-                DeValue::Table(t) => table = t,
-                _ => return None,
-            }
-        }
-        found = Some(v);
-    }
-    found.map(|v| v.span())
 }

@@ -53,18 +53,13 @@ pub fn typed<T: DeserializeOwned>(value: &Raw<'_>, diags: &mut Vec<Diagnostic>) 
 pub fn translate(message: &str, span: Range<usize>) -> Diagnostic {
     if let Some(rest) = message.strip_prefix("unknown field `") {
         let (word, expected) = split_expected(rest);
-        let mut d = Diagnostic::error(format!("unknown key `{word}`"), Some(span));
-        let help = match did_you_mean(word, expected.iter().copied()) {
-            Some(s) => format!("did you mean `{s}`?"),
-            None if expected.is_empty() => "this table takes no keys".to_string(),
-            None => format!("valid keys here: {}", one_of(&expected)),
+        let suggestion = did_you_mean(word, expected.iter().copied());
+        let (message, help) = match suggestion {
+            Some(s) => (format!("unknown key `{word}`, did you mean `{s}`?"), format!("did you mean `{s}`?")),
+            None if expected.is_empty() => (format!("unknown key `{word}`"), "this table takes no keys".to_string()),
+            None => (format!("unknown key `{word}`"), format!("valid keys here: {}", one_of(&expected))),
         };
-        d = d.with_help(help);
-        d.message = match did_you_mean(word, expected.iter().copied()) {
-            Some(s) => format!("unknown key `{word}`, did you mean `{s}`?"),
-            None => d.message,
-        };
-        return d;
+        return Diagnostic::error(message, Some(span)).with_help(help);
     }
     if let Some(rest) = message.strip_prefix("unknown variant `") {
         let (word, expected) = split_expected(rest);

@@ -118,8 +118,9 @@ fn gather(
     stats: &mut Stats,
 ) -> Result<(), String> {
     let frames = if over == Over::First { 1 } else { src.frame_count() };
+    // Fresh buffers per source (another source's materials must not carry over), reused across its frames.
+    *posed = PosedScene::default();
     for f in 0..frames {
-        *posed = PosedScene::default();
         src.pose(f, post, scratch, posed)?;
         for p in &posed.primitives {
             stats.add(&p.positions);

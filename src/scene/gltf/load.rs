@@ -9,7 +9,7 @@ use gltf::mesh::Mode;
 
 use super::accessor::{read_f32, read_u32};
 use super::anim::{Animation, Channel, Interp, Sampler, Target};
-use crate::scene::material::{srgb_to_linear, AlphaMode, Material, Texture, TextureRef, Wrap};
+use crate::scene::material::{AlphaMode, Material, Texture, TextureRef, Wrap};
 use crate::scene::posed::PrimKind;
 
 /// Extensions vvgen understands; a file that *requires* any other is refused.
@@ -597,14 +597,4 @@ pub fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
     }
     n.iter_mut().for_each(|v| *v = v.normalize_or_zero());
     n
-}
-
-/// sRGB bytes of a texel → linear RGBA (alpha stays linear).
-pub fn texel_to_linear(t: &[u8]) -> Vec4 {
-    Vec4::new(
-        srgb_to_linear(t[0] as f32 / 255.0),
-        srgb_to_linear(t[1] as f32 / 255.0),
-        srgb_to_linear(t[2] as f32 / 255.0),
-        t[3] as f32 / 255.0,
-    )
 }

@@ -9,7 +9,7 @@ use glam::{Mat3, Mat4, Quat, Vec3};
 
 use super::anim::Target;
 use super::load::GltfAsset;
-use crate::scene::posed::{PosedPrimitive, PosedScene, PrimKind};
+use crate::scene::posed::{PosedPrimitive, PosedScene};
 
 /// Reusable per-pose state.
 #[derive(Debug, Default, Clone)]
@@ -163,9 +163,6 @@ impl GltfAsset {
                             o.normals.push((nmat * nr).normalize_or_zero());
                         }
                     }
-                }
-                if o.kind == PrimKind::Points && prim.normals.iter().all(|n| *n == Vec3::ZERO) {
-                    o.normals.iter_mut().for_each(|n| *n = Vec3::ZERO);
                 }
             }
         }
