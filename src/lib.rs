@@ -7,7 +7,15 @@
 
 #![deny(missing_docs)]
 
+pub mod atomic;
+pub mod build;
+pub mod cache;
 pub mod cli;
+pub mod execute;
+pub mod export;
 pub mod manifest;
+pub mod plan;
 pub mod render;
+pub mod rig;
+pub mod sample;
 pub mod scene;

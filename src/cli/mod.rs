@@ -1,6 +1,7 @@
 //! The command-line front end: argument parsing, printing, exit codes. Each subcommand calls one library
 //! function; nothing below `cli` prints.
 
+mod build;
 mod check;
 mod inspect;
 
@@ -16,7 +17,7 @@ pub const EXIT_INVALID: u8 = 2;
 /// vvgen: datasets of dynamic 6-DoF content from declarative TOML manifests.
 #[derive(Debug, Parser)]
 #[command(name = "vvgen", version, about, long_about = None)]
-#[command(after_help = "Example:\n  vvgen check manifests/cesium-man.toml")]
+#[command(after_help = "Example:\n  vvgen build manifests/cesium-man.toml")]
 pub struct Cli {
     /// Print less (errors only).
     #[arg(short, long, global = true)]
@@ -52,6 +53,15 @@ pub enum Command {
         /// Manifest files.
         #[arg(required = true)]
         manifests: Vec<PathBuf>,
+    },
+    /// Build every output of a manifest: plan the images, render them (in parallel), write the datasets.
+    #[command(after_help = "Example:\n  vvgen build manifests/cesium-man.toml --jobs 2")]
+    Build {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Worker threads (default: one per core).
+        #[arg(long, short)]
+        jobs: Option<usize>,
     },
     /// Show a manifest's scene: sources, clips, frames, bounds, resolved transforms, posed-geometry hashes.
     #[command(
@@ -94,6 +104,7 @@ pub fn run() -> ExitCode {
     let ui = Ui { color, quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Check { manifests } => check::run(&manifests, ui),
+        Command::Build { manifest, jobs } => build::run(&manifest, jobs, ui),
         Command::Inspect { manifest, source, frame, ply } => {
             inspect::run(&manifest, source.as_deref(), frame, ply.as_ref(), ui)
         }

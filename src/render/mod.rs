@@ -15,7 +15,7 @@ pub use camera::Camera;
 pub use splat::{Shape as SplatShape, Size as SplatSize, SplatSettings};
 
 use crate::manifest::render::{DepthKind, Shading};
-use crate::scene::material::linear_to_srgb;
+use crate::scene::material::linear_to_srgb8;
 use crate::scene::PosedScene;
 use raster::{Projection, Shade};
 
@@ -55,6 +55,44 @@ impl Default for RenderSettings {
     }
 }
 
+impl RenderSettings {
+    /// The settings `[render]` asks for. `voxel` is the world size of one voxel of a point-cloud source, the
+    /// default splat size; without it, splats default to 1.5 px.
+    pub fn from_manifest(r: &crate::manifest::render::Render, voxel: Option<f32>) -> RenderSettings {
+        use crate::manifest::render::{Background, SplatShape as S};
+        use crate::scene::material::srgb_to_linear;
+        let lin = |c: [f64; 3]| {
+            Vec3::new(srgb_to_linear(c[0] as f32), srgb_to_linear(c[1] as f32), srgb_to_linear(c[2] as f32))
+        };
+        let background = match r.background.as_ref().map(|b| b.get_ref()) {
+            Some(Background::Named(n)) if n == "white" => Some(Vec3::ONE),
+            Some(Background::Named(n)) if n == "black" => Some(Vec3::ZERO),
+            Some(Background::Rgb(c)) => Some(lin(*c)),
+            _ => None,
+        };
+        let size = match (r.splat.size, r.splat.size_px, voxel) {
+            (Some(w), _, _) => SplatSize::World(w as f32),
+            (None, Some(px), _) => SplatSize::Pixels(px as f32),
+            (None, None, Some(v)) => SplatSize::World(v),
+            (None, None, None) => SplatSize::Pixels(1.5),
+        };
+        let shape = match r.splat.shape {
+            S::Cube => SplatShape::Cube,
+            S::Square => SplatShape::Square,
+            S::Disk => SplatShape::Disk,
+        };
+        RenderSettings {
+            samples: *r.samples.get_ref(),
+            shading: r.shading,
+            lights: r.lights.iter().map(|l| (glam::DVec3::from(l.direction).as_vec3(), l.intensity as f32)).collect(),
+            ambient: r.ambient.unwrap_or(0.3) as f32,
+            background,
+            depth: r.depth.kind,
+            splat: SplatSettings { shape, size },
+        }
+    }
+}
+
 /// One rendered view.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Frame {
@@ -70,6 +108,8 @@ pub struct Frame {
     pub normal: Vec<Vec3>,
     /// Object id + 1 of the majority of the pixel's covered samples (0 = background).
     pub object: Vec<u32>,
+    /// Coverage in 0..=255 (the alpha of a transparent background, whatever the background).
+    pub coverage: Vec<u8>,
 }
 
 /// Renders one view of a posed scene.
@@ -153,6 +193,7 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
         depth: vec![0.0; n],
         normal: vec![Vec3::ZERO; n],
         object: vec![0; n],
+        coverage: vec![0; n],
     };
     for (ti, px) in tiles.into_iter().enumerate() {
         let (x0, y0) = ((ti as i64 % tw) * TILE, (ti as i64 / tw) * TILE);
@@ -170,13 +211,14 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             };
             f.normal[i] = p.2;
             f.object[i] = p.3;
+            f.coverage[i] = p.4;
         }
     }
     f
 }
 
 /// Resolves a tile's k×k samples per pixel: alpha is coverage, colour the mean of covered samples (straight).
-fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4], f32, Vec3, u32)> {
+fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4], f32, Vec3, u32, u8)> {
     let (pw, ph) = (st.w / k, st.h / k);
     let mut out = Vec::with_capacity((pw * ph) as usize);
     for py in 0..ph {
@@ -200,12 +242,13 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4],
             let total = (k * k) as u32;
             let alpha = covered as f32 / total as f32;
             let mut rgb = if covered > 0 { sum.truncate() / covered as f32 } else { Vec3::ZERO };
-            let mut a8 = (alpha * 255.0).round() as u8;
+            let coverage = (alpha * 255.0).round() as u8;
+            let mut a8 = coverage;
             if let Some(bg) = s.background {
                 rgb = rgb * alpha + bg * (1.0 - alpha);
                 a8 = 255;
             }
-            let enc = |c: f32| (linear_to_srgb(c) * 255.0).round() as u8;
+            let enc = linear_to_srgb8;
             let majority = 2 * covered >= total && covered > 0;
             let object = objects.iter().max_by_key(|o| (o.1, std::cmp::Reverse(o.0))).map_or(0, |o| o.0);
             out.push((
@@ -213,6 +256,7 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4],
                 if majority { depth / covered as f32 } else { 0.0 },
                 if majority { normal.normalize_or_zero() } else { Vec3::ZERO },
                 if covered > 0 { object } else { 0 },
+                coverage,
             ));
         }
     }

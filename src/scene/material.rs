@@ -1,6 +1,8 @@
 //! Materials and textures as the renderer and the point sampler read them (glTF metallic-roughness, base
 //! colour only: vvgen renders albedo or Lambert, not PBR).
 
+use std::sync::LazyLock;
+
 use glam::{Vec2, Vec3, Vec4};
 
 /// A decoded texture, RGBA8, shared by every material that uses it.
@@ -118,20 +120,37 @@ pub fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
+/// sRGB byte → linear, tabulated (texture sampling decodes four texels per sample; `powf` would dominate).
+static SRGB8_TO_LINEAR: LazyLock<[f32; 256]> =
+    LazyLock::new(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)));
+
+/// Linear values where the sRGB byte code steps up: code k+1 starts at `linear(k + 0.5)`.
+static SRGB8_STEPS: LazyLock<[f32; 255]> =
+    LazyLock::new(|| std::array::from_fn(|k| srgb_to_linear((k as f32 + 0.5) / 255.0)));
+
+/// Linear float → nearest sRGB byte (a binary search over the code boundaries, no `powf`).
+#[inline]
+pub fn linear_to_srgb8(c: f32) -> u8 {
+    SRGB8_STEPS.partition_point(|&t| t <= c) as u8
+}
+
+/// sRGB byte → linear float, tabulated.
+#[inline]
+pub fn srgb8_to_linear(v: u8) -> f32 {
+    SRGB8_TO_LINEAR[v as usize]
+}
+
 impl Texture {
     /// Linear RGBA of texel (x, y) (sRGB decoded when the texture is sRGB).
     #[inline]
     pub fn texel(&self, x: u32, y: u32) -> Vec4 {
         let i = ((y * self.width + x) * 4) as usize;
         let t = &self.rgba[i..i + 4];
-        let c = |v: u8| {
-            if self.srgb {
-                srgb_to_linear(v as f32 / 255.0)
-            } else {
-                v as f32 / 255.0
-            }
-        };
-        Vec4::new(c(t[0]), c(t[1]), c(t[2]), t[3] as f32 / 255.0)
+        if self.srgb {
+            Vec4::new(srgb8_to_linear(t[0]), srgb8_to_linear(t[1]), srgb8_to_linear(t[2]), t[3] as f32 / 255.0)
+        } else {
+            Vec4::new(t[0] as f32, t[1] as f32, t[2] as f32, t[3] as f32) / 255.0
+        }
     }
 
     /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light.

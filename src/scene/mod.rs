@@ -91,6 +91,13 @@ impl Scene {
         self.global * self.locals[i]
     }
 
+    /// World size of one source unit of the first point-cloud sequence: one voxel for 8i / vsense style
+    /// integer-coordinate frames, the default splat size.
+    pub fn voxel_size(&self) -> Option<f32> {
+        let i = self.sources.iter().position(|s| matches!(s.data, SourceData::Sequence(_)))?;
+        Some(self.world_from_source(i).x_axis.truncate().length())
+    }
+
     /// Poses frame `frame` of every source, in world space.
     pub fn pose<'a>(&self, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, String> {
         let n = self.sources.len();

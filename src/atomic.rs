@@ -1,0 +1,108 @@
+//! Atomic file writes: a file appears under its final name complete or not at all. Bytes go to a temporary
+//! file in the destination's directory (same file system, so the rename is atomic), are synced, then renamed
+//! over the destination. An interrupted build therefore leaves only `.vvgen-tmp-*` files, never a half file
+//! that looks complete.
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Prefix of temporary files; anything with it is debris of an interrupted write.
+pub const TMP_PREFIX: &str = ".vvgen-tmp-";
+
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// A temporary name beside `dest`, unique within and across processes.
+pub fn temp_path(dest: &Path) -> PathBuf {
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let name = dest.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    dest.with_file_name(format!("{TMP_PREFIX}{}-{n}-{name}", std::process::id()))
+}
+
+/// Writes `bytes` to `dest` atomically, creating parent directories.
+pub fn write(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if let Some(parent) = dest.parent() {
+        fs::create_dir_all(parent)?;
+    }
+    let tmp = temp_path(dest);
+    let result = (|| {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        fs::rename(&tmp, dest)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Places a copy of the file `src` at `dest` atomically: a hard link when the file system allows, else a copy.
+pub fn link_or_copy(src: &Path, dest: &Path) -> std::io::Result<()> {
+    if let Some(parent) = dest.parent() {
+        fs::create_dir_all(parent)?;
+    }
+    if same_file(src, dest) {
+        return Ok(());
+    }
+    let tmp = temp_path(dest);
+    let result = fs::hard_link(src, &tmp)
+        .or_else(|_| {
+            fs::copy(src, &tmp)?;
+            fs::File::open(&tmp)?.sync_all()
+        })
+        .and_then(|_| fs::rename(&tmp, dest));
+    // POSIX rename does nothing when both names are links to one file; the temporary name must not stay behind.
+    let _ = fs::remove_file(&tmp);
+    result
+}
+
+/// Whether two paths name the same file (same device and inode).
+#[cfg(unix)]
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (fs::metadata(a), fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(_: &Path, _: &Path) -> bool {
+    false
+}
+
+/// Removes the debris of interrupted writes directly inside `dir` (not recursive).
+pub fn clean_debris(dir: &Path) {
+    if let Ok(entries) = fs::read_dir(dir) {
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(TMP_PREFIX) {
+                let _ = fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_replace_and_leave_no_temporaries() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a/b.txt");
+        write(&p, b"one").unwrap();
+        write(&p, b"two").unwrap();
+        assert_eq!(fs::read(&p).unwrap(), b"two");
+        let q = dir.path().join("c.txt");
+        link_or_copy(&p, &q).unwrap();
+        assert_eq!(fs::read(&q).unwrap(), b"two");
+        // Linking again onto the same file (rename is a no-op then) leaves no temporary behind.
+        link_or_copy(&p, &q).unwrap();
+        let top: Vec<_> = fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(top.len(), 2, "{top:?}");
+        let names: Vec<_> = fs::read_dir(dir.path().join("a")).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+    }
+}

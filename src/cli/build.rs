@@ -1,0 +1,88 @@
+//! `vvgen build`: runs [`crate::build::build`] with a progress bar (plain log lines when standard error is not
+//! a terminal).
+
+use std::io::IsTerminal;
+use std::path::Path;
+use std::process::ExitCode;
+use std::sync::Mutex;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::{load_manifest, Ui, EXIT_INVALID};
+use crate::build::{self, Progress};
+
+struct Display {
+    bar: Option<ProgressBar>,
+    quiet: bool,
+    /// Total, and the last tenth reported (plain mode).
+    plain: Mutex<(usize, usize)>,
+}
+
+impl Progress for Display {
+    fn planned(&self, images: usize) {
+        if let Some(b) = &self.bar {
+            b.set_length(images as u64);
+        } else if !self.quiet {
+            eprintln!("rendering {images} images");
+        }
+        self.plain.lock().unwrap().0 = images;
+    }
+
+    fn rendered(&self, done: usize) {
+        if let Some(b) = &self.bar {
+            b.set_position(done as u64);
+            return;
+        }
+        let mut p = self.plain.lock().unwrap();
+        let tenth = (done * 10).checked_div(p.0).unwrap_or(10);
+        if tenth > p.1 && !self.quiet {
+            p.1 = tenth;
+            eprintln!("rendered {done}/{}", p.0);
+        }
+    }
+
+    fn writing(&self, name: &str) {
+        match &self.bar {
+            Some(b) => b.set_message(format!("writing {name}")),
+            None if !self.quiet => eprintln!("writing output `{name}`"),
+            None => {}
+        }
+    }
+}
+
+pub fn run(manifest: &Path, jobs: Option<usize>, ui: Ui) -> anyhow::Result<ExitCode> {
+    let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
+    let bar = (!ui.quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+        b.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} images  {per_sec}  eta {eta}  {msg}")
+                .expect("BUG: valid template"),
+        );
+        b
+    });
+    let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
+    let cache = build::cache_dir(&m);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.unwrap_or(0)).build()?;
+    let result = pool.install(|| build::build(&m, &cache, &display));
+    if let Some(b) = &display.bar {
+        b.finish_and_clear();
+    }
+    let report = result.map_err(anyhow::Error::msg)?;
+    if !ui.quiet {
+        for w in &report.warnings {
+            eprintln!("warning: {w}");
+        }
+        for (name, w) in &report.outputs {
+            for warning in &w.warnings {
+                eprintln!("warning: output `{name}`: {warning}");
+            }
+            eprintln!("{name}: {} files in {}", w.files.len(), w.root.display());
+        }
+        let rate = if report.render_seconds > 0.0 { report.images as f64 / report.render_seconds } else { 0.0 };
+        eprintln!(
+            "built {} images in {:.2} s ({rate:.1} images/s rendering), {:.2} s in all",
+            report.images, report.render_seconds, report.total_seconds
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

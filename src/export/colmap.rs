@@ -1,0 +1,85 @@
+//! `colmap`: a COLMAP text model per frame, as 3DGS's and nerfstudio's COLMAP readers parse it:
+//! `images/<name>.png` (RGB, background baked in: the COLMAP path does no alpha compositing),
+//! `sparse/0/cameras.txt` (one PINHOLE camera), `images.txt` (two lines per image; world→camera quaternion and
+//! translation in OpenCV axes) and `points3D.txt` (surface samples of that frame). A single-frame dataset is
+//! written at the root; a dynamic one gets a model per frame under `frame_<NNNN>/`.
+
+use std::fmt::Write;
+
+use glam::{DMat3, DQuat};
+
+use super::{frames_of, init_cloud, init_points, opaque_background, opaque_rgb, pad_for, Export, Files};
+use crate::manifest::output::Output;
+use crate::render::Camera;
+
+/// COLMAP's world→camera rotation (Hamilton quaternion `w x y z`, scalar first, `w ≥ 0`) and translation.
+pub fn colmap_pose(c: &Camera) -> ([f64; 4], [f64; 3]) {
+    let w2c = c.w2c_opencv();
+    let q = DQuat::from_mat3(&DMat3::from_mat4(w2c)).normalize();
+    let q = if q.w < 0.0 { -q } else { q };
+    ([q.w, q.x, q.y, q.z], w2c.w_axis.truncate().to_array())
+}
+
+pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+    let frames = frames_of(x, images);
+    let bg = opaque_background(x.manifest);
+    let fpad = pad_for(x.plan.frames);
+    let n_points = init_points(out);
+    for &f in &frames {
+        let prefix = if frames.len() > 1 { format!("frame_{f:0fpad$}/") } else { String::new() };
+        let in_frame: Vec<usize> = images.iter().copied().filter(|&i| x.plan.images[i].frame == f).collect();
+        let c = &x.plan.images[in_frame[0]].camera;
+        let cameras = format!(
+            "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n\
+             # Number of cameras: 1\n1 PINHOLE {} {} {} {} {} {}\n",
+            c.width,
+            c.height,
+            ryu_f64(c.fx),
+            ryu_f64(c.fy),
+            ryu_f64(c.cx),
+            ryu_f64(c.cy)
+        );
+        let mut imgs = String::from(
+            "# Image list with two lines of data per image:\n#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n\
+             #   POINTS2D[] as (X, Y, POINT3D_ID)\n",
+        );
+        let vpad = pad_for(in_frame.len());
+        for (id, &i) in in_frame.iter().enumerate() {
+            let img = &x.plan.images[i];
+            let split = &x.plan.splits[img.split].name;
+            let name = format!("{split}_{:0vpad$}.png", img.view);
+            files.image_blob(i, "rgb", &format!("{prefix}images/{name}"), opaque_rgb(x, i, bg)?)?;
+            let (q, t) = colmap_pose(&img.camera);
+            let _ = writeln!(
+                imgs,
+                "{} {} {} {} {} {} {} {} 1 {name}\n",
+                id + 1,
+                ryu_f64(q[0]),
+                ryu_f64(q[1]),
+                ryu_f64(q[2]),
+                ryu_f64(q[3]),
+                ryu_f64(t[0]),
+                ryu_f64(t[1]),
+                ryu_f64(t[2])
+            );
+        }
+        let mut pts = String::from(
+            "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[]\n",
+        );
+        if n_points > 0 {
+            let cloud = init_cloud(x, &[f], n_points)?;
+            for (k, (p, c)) in cloud.positions.iter().zip(cloud.srgb8()).enumerate() {
+                let _ = writeln!(pts, "{} {} {} {} {} {} {} 0", k + 1, p[0], p[1], p[2], c[0], c[1], c[2]);
+            }
+        }
+        files.bytes(&format!("{prefix}sparse/0/cameras.txt"), cameras.as_bytes())?;
+        files.bytes(&format!("{prefix}sparse/0/images.txt"), imgs.as_bytes())?;
+        files.bytes(&format!("{prefix}sparse/0/points3D.txt"), pts.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// Shortest round-tripping decimal.
+fn ryu_f64(v: f64) -> String {
+    ryu::Buffer::new().format(v).to_string()
+}

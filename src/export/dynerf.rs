@@ -1,0 +1,126 @@
+//! `dynerf`: the DyNeRF / LLFF layout K-Planes, 4DGaussians and Deformable-3DGS read: `poses_bounds.npy`
+//! (one row of 17 per camera: the 3×5 matrix [down, right, back, centre, (H, W, focal)] then near, far),
+//! `frames/camNN/NNNN.png` (RGB, background baked in) and `points3D_downsample2.ply`. Camera 00 is the one the
+//! loaders hold out for testing: a split named `test` goes first.
+
+use glam::{DMat4, DVec3, Vec3};
+
+use super::{frames_of, init_cloud, init_ply, init_points, opaque_background, opaque_rgb, Export, Files};
+use crate::manifest::output::Output;
+use crate::manifest::split::TimeMode;
+
+pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+    let root = files.root.to_string_lossy().to_string();
+    if root.contains("dnerf") || root.contains("lego") {
+        files.warn(format!("{root}: K-Planes reads a path containing `dnerf` or `lego` as D-NeRF data"));
+    }
+    if root.contains('.') {
+        files.warn(format!("{root}: 4DGaussians treats the first `.` of the path as the extension"));
+    }
+    let frames = frames_of(x, images);
+    // Cameras: split by split, `test` first; each split must see every frame (synchronized video).
+    let mut splits: Vec<usize> = Vec::new();
+    for &i in images {
+        let s = x.plan.images[i].split;
+        if !splits.contains(&s) {
+            splits.push(s);
+        }
+    }
+    splits.sort_by_key(|&s| x.plan.splits[s].name != "test");
+    let mut cams: Vec<(usize, u32)> = Vec::new();
+    for &s in &splits {
+        let sp = &x.plan.splits[s];
+        if sp.time != TimeMode::All || sp.frames != frames {
+            return Err(format!(
+                "split `{}`: the dynerf layout needs every camera at every frame (time = \"all\" over the same frames)",
+                sp.name
+            ));
+        }
+        cams.extend((0..sp.poses.len() as u32).map(|v| (s, v)));
+    }
+    let c0 = &x.plan.images[images[0]].camera;
+    if (c0.fx - c0.fy).abs() > 1e-9 {
+        files.warn("fx ≠ fy: poses_bounds.npy holds one focal length".to_string());
+    }
+    if (c0.width, c0.height) != (2704, 2028) {
+        files.warn(format!(
+            "{}×{}: 4DGaussians hard-codes DyNeRF's 2704×2028 (resized to 1352×1014); K-Planes reads any size",
+            c0.width, c0.height
+        ));
+    }
+    files.warn("no cam*.mp4 videos are written: K-Planes and 4DGaussians need them encoded from frames/".to_string());
+    let bounds = super::bounds(x, &frames)?;
+    let bg = opaque_background(x.manifest);
+    let mut rows: Vec<f64> = Vec::new();
+    for (ci, &(s, v)) in cams.iter().enumerate() {
+        let c2w = x.plan.splits[s].poses[v as usize];
+        let (near, far) = depth_range(&c2w, bounds, c0.near);
+        rows.extend(llff_row(&c2w, c0.height, c0.width, c0.fx));
+        rows.extend([near, far]);
+        for (fi, &f) in frames.iter().enumerate() {
+            let img = x.plan.splits[s]
+                .images
+                .iter()
+                .copied()
+                .find(|&i| x.plan.images[i].frame == f && x.plan.images[i].view == v)
+                .ok_or("BUG: a time = all split lacks an image")?;
+            files.image_blob(img, "rgb", &format!("frames/cam{ci:02}/{fi:04}.png"), opaque_rgb(x, img, bg)?)?;
+        }
+    }
+    files.bytes("poses_bounds.npy", &npy_f64(&rows, cams.len(), 17))?;
+    let n = init_points(out);
+    if n > 0 {
+        files.bytes("points3D_downsample2.ply", &init_ply(&init_cloud(x, &frames, n)?))?;
+    }
+    Ok(())
+}
+
+/// The 15 numbers of an LLFF pose from an OpenGL camera-to-world (columns right, up, back, centre): the 3×5
+/// matrix [−up, right, back, centre, (H, W, f)], row-major.
+pub fn llff_row(c2w: &DMat4, h: u32, w: u32, f: f64) -> [f64; 15] {
+    let (r, u, b, c) = (c2w.x_axis.truncate(), c2w.y_axis.truncate(), c2w.z_axis.truncate(), c2w.w_axis.truncate());
+    let cols = [-u, r, b, c, DVec3::new(h as f64, w as f64, f)];
+    let mut out = [0.0; 15];
+    for row in 0..3 {
+        for (k, col) in cols.iter().enumerate() {
+            out[row * 5 + k] = col[row];
+        }
+    }
+    out
+}
+
+/// Planar depth range of the content's bounding box seen from `c2w`, padded, never below `near`.
+fn depth_range(c2w: &DMat4, bounds: Option<(Vec3, Vec3)>, near: f64) -> (f64, f64) {
+    let Some((lo, hi)) = bounds else { return (near, 100.0) };
+    let w2c = c2w.inverse();
+    let (mut dmin, mut dmax) = (f64::INFINITY, 0f64);
+    for k in 0..8 {
+        let p = DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x } as f64,
+            if k & 2 == 0 { lo.y } else { hi.y } as f64,
+            if k & 4 == 0 { lo.z } else { hi.z } as f64,
+        );
+        let z = -w2c.transform_point3(p).z;
+        dmin = dmin.min(z);
+        dmax = dmax.max(z);
+    }
+    ((dmin * 0.9).max(near), (dmax * 1.1).max(near * 2.0))
+}
+
+/// A little-endian float64 `.npy` (format 1.0) of shape (rows, cols).
+pub fn npy_f64(data: &[f64], rows: usize, cols: usize) -> Vec<u8> {
+    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {cols}), }}");
+    // Magic (6) + version (2) + header length (2) + dict, padded with spaces to a multiple of 64, ending in \n.
+    let total = (10 + dict.len() + 1).div_ceil(64) * 64;
+    let mut header = dict.into_bytes();
+    header.resize(total - 10 - 1, b' ');
+    header.push(b'\n');
+    let mut out = Vec::with_capacity(total + data.len() * 8);
+    out.extend_from_slice(b"\x93NUMPY\x01\x00");
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(&header);
+    for v in data {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out
+}

@@ -1,0 +1,71 @@
+//! `vvgen.json` at every dataset root: what made the dataset (tool, manifest digest, normalization), the camera
+//! model and depth convention, and the split / view / frame / time of every image, so a dataset describes
+//! itself without the manifest.
+
+use serde_json::{json, Value};
+
+use super::{Export, Files};
+use crate::manifest::output::Output;
+use crate::manifest::render::{DepthKind, NormalSpace};
+
+pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+    let m = x.manifest;
+    let sources: Vec<Value> = x
+        .scene
+        .sources
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            json!({
+                "name": s.name,
+                "world_from_source": super::rows(&x.scene.world_from_source(i).as_dmat4()),
+            })
+        })
+        .collect();
+    // Image entries: every file of each image, keyed by pass, as placed by the writer.
+    let mut entries = Vec::new();
+    for &i in images {
+        let img = &x.plan.images[i];
+        let c = &img.camera;
+        entries.push(json!({
+            "split": x.plan.splits[img.split].name,
+            "view": img.view,
+            "frame": img.frame,
+            "time": img.time,
+            "index": img.index,
+            "files": files.placed.get(&i),
+            "c2w": super::rows(&c.c2w),
+        }));
+    }
+    let cam = images.first().map(|&i| x.plan.images[i].camera);
+    let doc = json!({
+        "tool": "vvgen",
+        "version": env!("CARGO_PKG_VERSION"),
+        "dataset": m.dataset.name.get_ref(),
+        "dataset_version": m.dataset.version,
+        "output": name,
+        "writer": out.writer.get_ref().name(),
+        "manifest_blake3": blake3::hash(m.text.as_bytes()).to_hex().to_string(),
+        "seed": m.dataset.seed,
+        "frames": x.plan.frames,
+        "sources": sources,
+        "camera": cam.map(|c| json!({
+            "model": "pinhole",
+            "pose": "camera-to-world, OpenGL axes (camera looks down -Z, +Y up), world +Z up",
+            "pixel_centers": 0.5,
+            "w": c.width, "h": c.height, "fl_x": c.fx, "fl_y": c.fy, "cx": c.cx, "cy": c.cy,
+            "near": c.near, "far": c.far,
+        })),
+        "depth": {
+            "kind": match m.render.depth.kind { DepthKind::Planar => "planar z-depth", DepthKind::Ray => "ray distance" },
+            "encoding": "16-bit PNG, millimetres (1 world unit = 1 m), 0 = background",
+        },
+        "normal": {
+            "space": match m.render.normal.space { NormalSpace::World => "world", NormalSpace::Camera => "camera (OpenGL axes)" },
+            "encoding": "8-bit RGB PNG, (n + 1) / 2, 0 = background",
+        },
+        "rgba": "8-bit sRGB PNG, straight (un-premultiplied) alpha = coverage",
+        "images": entries,
+    });
+    files.json("vvgen.json", &doc)
+}

@@ -1,0 +1,221 @@
+//! Camera rigs: `[rig.NAME]` recipes → camera-to-world poses (OpenGL axes, world +Z up). Intrinsics come from
+//! `[render]`; a rig only places cameras. Random recipes draw from streams keyed by (split seed, rig, view), so
+//! adding views to a split appends poses and leaves the earlier ones bit-identical.
+
+mod from_file;
+pub mod random;
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::path::Path;
+
+use glam::{DMat3, DMat4, DVec3};
+
+use crate::manifest::rig::{Band, ForwardLayout, OrbitSchedule, Rig, RigKind, NERF_RADIUS};
+use random::{Keyed, Mt19937};
+
+/// NeRF-synthetic's starting camera position before the tilt and azimuth: (0, 4, 0.5).
+pub const NERF_START: DVec3 = DVec3::new(0.0, 4.0, 0.5);
+
+/// What identifies a rig's draws.
+#[derive(Debug, Clone, Copy)]
+pub struct Identity<'a> {
+    /// The rig's name.
+    pub rig: &'a str,
+    /// The split's seed (explicit, or derived from the dataset seed and the split name).
+    pub seed: u64,
+}
+
+/// The poses of `views` cameras of `rig` (`views` is ignored by rigs that count themselves).
+/// `dir` resolves `from-file` paths.
+pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat4>, String> {
+    let target = DVec3::from(rig.target.unwrap_or([0.0; 3]));
+    let radius = rig.radius.as_ref().map(|r| *r.get_ref()).unwrap_or(NERF_RADIUS);
+    let n = views as usize;
+    let look = |eye: DVec3| look_at(eye, target);
+    let mut out: Vec<DMat4> = match *rig.kind.get_ref() {
+        RigKind::Hemisphere => {
+            let scale = radius / NERF_START.length();
+            let draw = |u0: f64, u2: f64| {
+                // The NeRF-synthetic Blender recipe: Euler (|acos(1-2u) - π/2|, 0, 2πu) applied to (0, 4, 0.5).
+                let tilt = ((1.0 - 2.0 * u0).acos() - FRAC_PI_2).abs();
+                look(target + DMat3::from_rotation_z(TAU * u2) * DMat3::from_rotation_x(tilt) * NERF_START * scale)
+            };
+            match rig.numpy_seed {
+                Some(s) => {
+                    let mut mt = Mt19937::new(s);
+                    (0..n)
+                        .map(|_| {
+                            // np.random.uniform(0, 1, 3) per view; the middle draw is multiplied by 0.
+                            let (u0, _, u2) = (mt.uniform(), mt.uniform(), mt.uniform());
+                            draw(u0, u2)
+                        })
+                        .collect()
+                }
+                None => (0..n)
+                    .map(|i| {
+                        let mut k = stream(id, "hemisphere", i);
+                        let (u0, u2) = (k.uniform(), k.uniform());
+                        draw(u0, u2)
+                    })
+                    .collect(),
+            }
+        }
+        RigKind::Sphere => {
+            let (lo, hi) = band(rig);
+            (0..n)
+                .map(|i| {
+                    let mut k = stream(id, "sphere", i);
+                    // Uniform on the sphere: z uniform in [sin lo, sin hi], azimuth uniform.
+                    let z = lerp(lo.sin(), hi.sin(), k.uniform());
+                    look(target + radius * dir_from(z, TAU * k.uniform()))
+                })
+                .collect()
+        }
+        RigKind::Fibonacci => {
+            let (lo, hi) = band(rig);
+            let golden = PI * (3.0 - 5f64.sqrt());
+            (0..n)
+                .map(|i| {
+                    let z = lerp(hi.sin(), lo.sin(), (i as f64 + 0.5) / n as f64);
+                    look(target + radius * dir_from(z, golden * i as f64))
+                })
+                .collect()
+        }
+        RigKind::Orbit => {
+            let start = rig.start_azimuth_deg.unwrap_or(0.0).to_radians();
+            let schedule = rig.schedule.unwrap_or(OrbitSchedule::Fixed);
+            (0..n)
+                .map(|i| {
+                    let az = start + TAU * i as f64 / n as f64;
+                    let eye = match schedule {
+                        OrbitSchedule::Fixed => {
+                            let el = rig.elevation_deg.unwrap_or(30.0).to_radians();
+                            // Azimuth 0 puts the camera on +Y (NeRF-synthetic's start), looking toward −Y.
+                            radius * DVec3::new(-az.sin() * el.cos(), az.cos() * el.cos(), el.sin())
+                        }
+                        OrbitSchedule::NerfTest => {
+                            // Frame 0: Rx(0.7)·(0, 4, 0.5) = (0, 2.73726, 2.95929), the published lego fact.
+                            let tilt = 0.7 * ((TAU * i as f64 / n as f64).cos() + 1.0) / 2.0;
+                            DMat3::from_rotation_z(az)
+                                * DMat3::from_rotation_x(tilt)
+                                * NERF_START
+                                * (radius / NERF_START.length())
+                        }
+                    };
+                    look(target + eye)
+                })
+                .collect()
+        }
+        RigKind::Dome => {
+            let (lo, hi) = band(rig);
+            let rings = rig.rings.as_ref().map(|r| *r.get_ref() as usize).unwrap_or(3).min(n.max(1));
+            let start = rig.start_azimuth_deg.unwrap_or(0.0).to_radians();
+            let mut v = Vec::with_capacity(n);
+            for r in 0..rings {
+                // Views shared evenly; the lowest rings take the remainder.
+                let m = n / rings + usize::from(r < n % rings);
+                let el = lerp(lo, hi, (r as f64 + 0.5) / rings as f64);
+                // Alternate rings are offset by half a step so cameras do not line up in columns.
+                let off = if r % 2 == 1 { PI / m.max(1) as f64 } else { 0.0 };
+                for j in 0..m {
+                    let az = start + off + TAU * j as f64 / m as f64;
+                    v.push(look(target + radius * DVec3::new(-az.sin() * el.cos(), az.cos() * el.cos(), el.sin())));
+                }
+            }
+            v
+        }
+        RigKind::ForwardFacing => {
+            let [w, h] = rig.extent.unwrap_or([1.0, 0.75]);
+            // Cameras on a plane at distance `radius` in front of the target (−Y side), all facing it.
+            let at = |x: f64, z: f64| look(target + DVec3::new(x, -radius, z));
+            match rig.layout.unwrap_or(ForwardLayout::Plane) {
+                ForwardLayout::Plane => {
+                    let cols = ((n as f64 * w / h.max(1e-9)).sqrt().ceil() as usize).clamp(1, n.max(1));
+                    let rows = n.div_ceil(cols);
+                    (0..n)
+                        .map(|i| {
+                            let (c, r) = (i % cols, i / cols);
+                            let fx = if cols > 1 { c as f64 / (cols - 1) as f64 - 0.5 } else { 0.0 };
+                            let fz = if rows > 1 { 0.5 - r as f64 / (rows - 1) as f64 } else { 0.0 };
+                            at(fx * w, fz * h)
+                        })
+                        .collect()
+                }
+                ForwardLayout::Spiral => {
+                    let golden = PI * (3.0 - 5f64.sqrt());
+                    (0..n)
+                        .map(|i| {
+                            let r = ((i as f64 + 0.5) / n as f64).sqrt();
+                            let a = golden * i as f64;
+                            at(0.5 * w * r * a.cos(), 0.5 * h * r * a.sin())
+                        })
+                        .collect()
+                }
+            }
+        }
+        RigKind::Explicit => {
+            let list = rig.poses.as_ref().map(|p| p.get_ref().as_slice()).unwrap_or(&[]);
+            list.iter()
+                .map(|p| match (p.c2w, p.position) {
+                    (Some(m), _) => Ok(DMat4::from_cols_array_2d(&m).transpose()),
+                    (None, Some(pos)) => {
+                        Ok(look_at(DVec3::from(pos), DVec3::from(p.target.or(rig.target).unwrap_or([0.0; 3]))))
+                    }
+                    (None, None) => Err("an explicit pose needs `c2w` or `position`".to_string()),
+                })
+                .collect::<Result<_, _>>()?
+        }
+        RigKind::FromFile => {
+            let file = rig.file.as_ref().ok_or("a from-file rig needs `file`")?;
+            from_file::read(&dir.join(file.get_ref()))?
+        }
+    };
+    if let Some(j) = rig.jitter {
+        for (i, m) in out.iter_mut().enumerate() {
+            let mut k = stream(id, "jitter", i);
+            let dp = DVec3::from(k.in_ball()) * j.position;
+            let dt = DVec3::from(k.in_ball()) * j.target;
+            let eye = m.w_axis.truncate();
+            // Keep the distance to the target the jitter is measured from: aim at the (perturbed) target.
+            let back = m.z_axis.truncate();
+            let aim = eye - back * (eye - target).length().max(1e-9);
+            *m = look_at(eye + dp, aim + dt);
+        }
+    }
+    Ok(out)
+}
+
+/// Camera-to-world of a camera at `eye` looking at `target` with world +Z up in the image (OpenGL axes);
+/// Blender's Track To with up axis Y. Straight up or down, image up falls back to world +Y.
+pub fn look_at(eye: DVec3, target: DVec3) -> DMat4 {
+    let back = (eye - target).normalize();
+    let up = if back.cross(DVec3::Z).length_squared() < 1e-12 { DVec3::Y } else { DVec3::Z };
+    let right = up.cross(back).normalize();
+    DMat4::from_cols(right.extend(0.0), back.cross(right).extend(0.0), back.extend(0.0), eye.extend(1.0))
+}
+
+fn stream(id: Identity, what: &str, view: usize) -> Keyed {
+    Keyed::new(what, &[&id.seed.to_le_bytes(), id.rig.as_bytes(), &(view as u64).to_le_bytes()])
+}
+
+fn lerp(a: f64, b: f64, t: f64) -> f64 {
+    a + (b - a) * t
+}
+
+/// Unit direction with height `z` and azimuth `az` (azimuth 0 on +Y, counter-clockwise seen from above).
+fn dir_from(z: f64, az: f64) -> DVec3 {
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    DVec3::new(-r * az.sin(), r * az.cos(), z)
+}
+
+/// The elevation band in radians.
+fn band(rig: &Rig) -> (f64, f64) {
+    if let Some(e) = &rig.elevation_range_deg {
+        let [lo, hi] = *e.get_ref();
+        return (lo.to_radians(), hi.to_radians());
+    }
+    match rig.band.unwrap_or(Band::Upper) {
+        Band::Full => (-FRAC_PI_2, FRAC_PI_2),
+        Band::Upper => (0.0, FRAC_PI_2),
+    }
+}

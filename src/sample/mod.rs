@@ -1,0 +1,138 @@
+//! Surface sampling: a posed scene → points with normals and colours. Triangles are sampled area-uniformly
+//! (stratified over the cumulative area, √r barycentrics); colours come from the material exactly as the
+//! unlit renderer shades it (base colour × texture × COLOR_0). Point primitives pass through. Draws come from
+//! streams keyed by (seed, frame, chunk), so the result does not depend on the thread count.
+
+pub mod voxel;
+
+use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
+
+use crate::rig::random::Keyed;
+use crate::scene::material::linear_to_srgb8;
+use crate::scene::{PosedScene, PrimKind};
+
+/// Samples drawn per keyed chunk (the unit of parallel work).
+const CHUNK: usize = 1 << 16;
+
+/// Sampled points.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Points {
+    /// World positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit normals (zero where unknown).
+    pub normals: Vec<[f32; 3]>,
+    /// Linear RGB colours.
+    pub colors: Vec<[f32; 3]>,
+}
+
+impl Points {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Appends `other`.
+    pub fn extend(&mut self, other: &Points) {
+        self.positions.extend_from_slice(&other.positions);
+        self.normals.extend_from_slice(&other.normals);
+        self.colors.extend_from_slice(&other.colors);
+    }
+
+    /// Colours as 8-bit sRGB.
+    pub fn srgb8(&self) -> Vec<[u8; 3]> {
+        self.colors.iter().map(|c| c.map(linear_to_srgb8)).collect()
+    }
+}
+
+/// A triangle reference: primitive and first index.
+#[derive(Clone, Copy)]
+struct Tri {
+    prim: u32,
+    first: u32,
+}
+
+/// `n` area-uniform samples of `scene`'s triangles plus every point of its point primitives; `key` names the
+/// random stream (e.g. seed and frame).
+pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
+    let mut tris = Vec::new();
+    let mut cdf = Vec::new();
+    let mut total = 0f64;
+    for (pi, p) in scene.primitives.iter().enumerate() {
+        if p.kind != PrimKind::Triangles {
+            continue;
+        }
+        for (t, idx) in p.indices.chunks_exact(3).enumerate() {
+            let [a, b, c] = [0, 1, 2].map(|k| p.positions[idx[k] as usize]);
+            let area = 0.5 * (b - a).cross(c - a).length() as f64;
+            if area > 0.0 {
+                total += area;
+                cdf.push(total);
+                tris.push(Tri { prim: pi as u32, first: 3 * t as u32 });
+            }
+        }
+    }
+    let mut out = Points::default();
+    if !tris.is_empty() && n > 0 {
+        let chunks: Vec<Points> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut parts: Vec<&[u8]> = key.to_vec();
+                let cb = (c as u64).to_le_bytes();
+                parts.push(&cb);
+                let mut k = Keyed::new("surface", &parts);
+                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                let mut pts = Points::default();
+                for i in range {
+                    // Stratified: sample i draws from the i-th of n equal slices of the total area.
+                    let u = (i as f64 + k.uniform()) / n as f64 * total;
+                    let t = cdf.partition_point(|&v| v <= u).min(tris.len() - 1);
+                    let (r1, r2) = (k.uniform() as f32, k.uniform() as f32);
+                    let s = r1.sqrt();
+                    let bary = [1.0 - s, s * (1.0 - r2), s * r2];
+                    push_surface_point(scene, tris[t], bary, &mut pts);
+                }
+                pts
+            })
+            .collect();
+        for c in &chunks {
+            out.extend(c);
+        }
+    }
+    for p in scene.primitives.iter().filter(|p| p.kind == PrimKind::Points) {
+        let m = &scene.materials[p.material as usize];
+        for (i, pos) in p.positions.iter().enumerate() {
+            out.positions.push(pos.to_array());
+            out.normals.push(p.normals.get(i).copied().unwrap_or(Vec3::ZERO).to_array());
+            let c = m.albedo(&scene.textures, p.uvs.get(i).copied(), p.colors.get(i).copied());
+            out.colors.push(c.truncate().to_array());
+        }
+    }
+    out
+}
+
+fn push_surface_point(scene: &PosedScene, t: Tri, b: [f32; 3], out: &mut Points) {
+    let p = &scene.primitives[t.prim as usize];
+    let idx = [0, 1, 2].map(|k| p.indices[(t.first + k) as usize] as usize);
+    let lerp3 = |v: &[Vec3]| v[idx[0]] * b[0] + v[idx[1]] * b[1] + v[idx[2]] * b[2];
+    let pos = lerp3(&p.positions);
+    let n = if p.normals.len() == p.positions.len() {
+        lerp3(&p.normals).normalize_or_zero()
+    } else {
+        let [a, bb, c] = idx.map(|i| p.positions[i]);
+        (bb - a).cross(c - a).normalize_or_zero()
+    };
+    let uv: Option<Vec2> =
+        (p.uvs.len() == p.positions.len()).then(|| p.uvs[idx[0]] * b[0] + p.uvs[idx[1]] * b[1] + p.uvs[idx[2]] * b[2]);
+    let vc: Option<Vec4> = (p.colors.len() == p.positions.len())
+        .then(|| p.colors[idx[0]] * b[0] + p.colors[idx[1]] * b[1] + p.colors[idx[2]] * b[2]);
+    let c = scene.materials[p.material as usize].albedo(&scene.textures, uv, vc);
+    out.positions.push(pos.to_array());
+    out.normals.push(n.to_array());
+    out.colors.push(c.truncate().to_array());
+}
