@@ -60,6 +60,7 @@ pub struct Report {
 /// Builds every output of `m`, using the store at `cache`.
 pub fn build(m: &Manifest, cache: &std::path::Path, progress: &dyn Progress) -> Result<Report, String> {
     let t0 = Instant::now();
+    check_directories(m)?;
     let scene = Scene::open(m)?;
     let plan = Plan::new(m, scene.frames)?;
     let store = Store::open(cache).map_err(|e| format!("cache {}: {e}", cache.display()))?;
@@ -84,4 +85,20 @@ pub fn build(m: &Manifest, cache: &std::path::Path, progress: &dyn Progress) -> 
     let mut warnings = scene.warnings.clone();
     warnings.extend(plan.warnings.iter().cloned());
     Ok(Report { images, render_seconds, total_seconds: t0.elapsed().as_secs_f64(), outputs, warnings })
+}
+
+/// Two outputs writing one directory would overwrite each other's `vvgen.json` (and possibly images).
+fn check_directories(m: &Manifest) -> Result<(), String> {
+    let mut seen: Vec<(String, &str)> = Vec::new();
+    for (name, out) in &m.outputs {
+        let dir = export::dir_name(m, out);
+        let norm = dir.trim_end_matches('/').to_string();
+        if let Some((_, other)) = seen.iter().find(|(d, _)| *d == norm) {
+            return Err(format!(
+                "outputs `{other}` and `{name}` both write to `{dir}`: give one of them its own `dir`"
+            ));
+        }
+        seen.push((norm, name));
+    }
+    Ok(())
 }
