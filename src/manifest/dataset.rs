@@ -19,7 +19,8 @@ pub struct Dataset {
     /// Root of every random stream (camera draws, point samples).
     #[serde(default)]
     pub seed: u64,
-    /// Cache directory, relative to the manifest (default `cache/` beside it; `VVGEN_CACHE` overrides).
+    /// Cache directory, relative to the manifest (default `cache/` in the working directory; `VVGEN_CACHE`
+    /// overrides both).
     #[serde(default)]
     pub cache: Option<Spanned<String>>,
 }
