@@ -24,9 +24,16 @@ pub fn sequence(x: &Export, out: &Output, files: &mut Files) -> Result<(), Strin
     let pattern = pattern.replace("{name}", x.manifest.dataset.name.get_ref());
     let seed = x.manifest.dataset.seed.to_le_bytes();
     let srgb_mean = out.color_average == Some(ColorAverage::Srgb);
+    let only = match &out.source {
+        Some(s) => Some(x.scene.source_index(s.get_ref()).ok_or_else(|| format!("no source `{}`", s.get_ref()))?),
+        None => None,
+    };
     let mut poser = Poser::default();
     for f in 0..x.plan.frames {
-        let posed = x.scene.pose(f, &mut poser)?;
+        let posed = match only {
+            Some(i) => x.scene.pose_source(i, f, &mut poser)?,
+            None => x.scene.pose(f, &mut poser)?,
+        };
         let mut pts = sample::sample(posed, n, &[b"sequence", &seed, &(f as u64).to_le_bytes()]);
         if let Some(v) = &out.voxel {
             if srgb_mean {

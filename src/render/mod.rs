@@ -221,44 +221,66 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
 fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4], f32, Vec3, u32, u8)> {
     let (pw, ph) = (st.w / k, st.h / k);
     let mut out = Vec::with_capacity((pw * ph) as usize);
+    let total = (k * k) as u32;
+    // Most pixels of a dataset image are background: one precomputed value for them.
+    let empty = match s.background {
+        Some(bg) => ([linear_to_srgb8(bg.x), linear_to_srgb8(bg.y), linear_to_srgb8(bg.z), 255], 0.0, Vec3::ZERO, 0, 0),
+        None => ([0; 4], 0.0, Vec3::ZERO, 0, 0),
+    };
+    let mut ids = [0u32; 16];
     for py in 0..ph {
         for px in 0..pw {
             let (mut sum, mut covered, mut depth, mut normal) = (Vec4::ZERO, 0u32, 0f32, Vec3::ZERO);
-            let mut objects: [(u32, u32); 16] = [(0, 0); 16];
             for sy in 0..k {
-                for sx in 0..k {
-                    let i = ((py * k + sy) * st.w + px * k + sx) as usize;
+                let row = ((py * k + sy) * st.w + px * k) as usize;
+                for i in row..row + k as usize {
                     if st.object[i] == 0 {
                         continue;
                     }
+                    ids[covered as usize] = st.object[i];
                     covered += 1;
                     sum += st.color[i];
                     depth += st.depth[i];
                     normal += st.normal[i];
-                    let slot = objects.iter().position(|o| o.0 == st.object[i] || o.1 == 0).unwrap_or(0);
-                    objects[slot] = (st.object[i], objects[slot].1 + 1);
                 }
             }
-            let total = (k * k) as u32;
+            if covered == 0 {
+                out.push(empty);
+                continue;
+            }
             let alpha = covered as f32 / total as f32;
-            let mut rgb = if covered > 0 { sum.truncate() / covered as f32 } else { Vec3::ZERO };
+            let mut rgb = sum.truncate() / covered as f32;
             let coverage = (alpha * 255.0).round() as u8;
             let mut a8 = coverage;
             if let Some(bg) = s.background {
                 rgb = rgb * alpha + bg * (1.0 - alpha);
                 a8 = 255;
             }
-            let enc = linear_to_srgb8;
-            let majority = 2 * covered >= total && covered > 0;
-            let object = objects.iter().max_by_key(|o| (o.1, std::cmp::Reverse(o.0))).map_or(0, |o| o.0);
+            let majority = 2 * covered >= total;
             out.push((
-                [enc(rgb.x), enc(rgb.y), enc(rgb.z), a8],
+                [linear_to_srgb8(rgb.x), linear_to_srgb8(rgb.y), linear_to_srgb8(rgb.z), a8],
                 if majority { depth / covered as f32 } else { 0.0 },
                 if majority { normal.normalize_or_zero() } else { Vec3::ZERO },
-                if covered > 0 { object } else { 0 },
+                majority_id(&ids[..covered as usize]),
                 coverage,
             ));
         }
     }
     out
+}
+
+/// The most frequent id (ties: the smallest), for at most 16 samples.
+fn majority_id(ids: &[u32]) -> u32 {
+    let first = ids[0];
+    if ids.iter().all(|&i| i == first) {
+        return first;
+    }
+    let mut best = (0usize, u32::MAX);
+    for &a in ids {
+        let n = ids.iter().filter(|&&b| b == a).count();
+        if n > best.0 || (n == best.0 && a < best.1) {
+            best = (n, a);
+        }
+    }
+    best.1
 }

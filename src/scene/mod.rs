@@ -98,6 +98,18 @@ impl Scene {
         Some(self.world_from_source(i).x_axis.truncate().length())
     }
 
+    /// Poses frame `frame` of source `i` alone, in world space.
+    pub fn pose_source<'a>(&self, i: usize, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, String> {
+        poser.scratch.resize_with(self.sources.len(), PoseScratch::default);
+        self.sources[i].pose(frame, self.world_from_source(i), &mut poser.scratch[i], &mut poser.out)?;
+        Ok(&poser.out)
+    }
+
+    /// Index of the source called `name`.
+    pub fn source_index(&self, name: &str) -> Option<usize> {
+        self.sources.iter().position(|s| s.name == name)
+    }
+
     /// Poses frame `frame` of every source, in world space.
     pub fn pose<'a>(&self, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, String> {
         let n = self.sources.len();
