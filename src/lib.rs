@@ -15,6 +15,7 @@ pub mod execute;
 pub mod export;
 pub mod manifest;
 pub mod plan;
+pub mod release;
 pub mod render;
 pub mod rig;
 pub mod sample;

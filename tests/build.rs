@@ -46,7 +46,8 @@ init_points = 300
 fn build(manifest: &Path, threads: usize) -> vvgen::build::Report {
     let (m, _) = vvgen::manifest::load(manifest).unwrap_or_else(|r| panic!("{}", r.render(false)));
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    pool.install(|| vvgen::build::build(&m, &vvgen::build::cache_dir(&m), &vvgen::build::Silent)).unwrap()
+    pool.install(|| vvgen::build::build(&m, &vvgen::build::cache_dir(&m), Default::default(), &vvgen::build::Silent))
+        .unwrap()
 }
 
 fn tree(root: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
@@ -138,7 +139,8 @@ fn two_outputs_in_one_directory_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let extra = "[output.e]\nwriter = \"nerfstudio\"\ndir = \"m_dnerf\"\n";
     let (m, _) = vvgen::manifest::load(&write_manifest(dir.path(), extra)).unwrap();
-    let err = vvgen::build::build(&m, &dir.path().join("cache"), &vvgen::build::Silent).unwrap_err();
+    let err =
+        vvgen::build::build(&m, &dir.path().join("cache"), Default::default(), &vvgen::build::Silent).unwrap_err();
     assert!(err.contains("`d` and `e`") && err.contains("m_dnerf"), "{err}");
     assert!(!dir.path().join("out").exists(), "refused before anything was written");
 }

@@ -2,10 +2,14 @@
 //! (`objects/ab/cdef…`). Execution puts blobs here; export materializes them into dataset directories by hard link
 //! (or copy). Identical bytes are stored once, whichever split, output or manifest produced them.
 
+pub mod gc;
+pub mod stat;
+
 use std::fs;
 use std::path::{Path, PathBuf};
 
 use crate::atomic;
+pub use stat::StatCache;
 
 /// A blob's name: blake3 of its content.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -21,6 +25,26 @@ impl Digest {
     pub fn hex(&self) -> String {
         blake3::Hash::from_bytes(self.0).to_hex().to_string()
     }
+
+    /// Parses 64 hex digits.
+    pub fn from_hex(s: &str) -> Option<Digest> {
+        blake3::Hash::from_hex(s).ok().map(|h| Digest(*h.as_bytes()))
+    }
+
+    /// The first 8 bytes as an integer (for sharding).
+    pub fn prefix_u64(&self) -> u64 {
+        u64::from_le_bytes(self.0[..8].try_into().expect("32 bytes"))
+    }
+}
+
+/// Builds a key: blake3 in derive-key mode over a task kind and length-prefixed parts.
+pub fn key(kind: &str, parts: &[&[u8]]) -> Digest {
+    let mut h = blake3::Hasher::new_derive_key(&format!("vvgen key {kind}"));
+    for p in parts {
+        h.update(&(p.len() as u64).to_le_bytes());
+        h.update(p);
+    }
+    Digest(*h.finalize().as_bytes())
 }
 
 /// A cache directory.
@@ -47,12 +71,13 @@ impl Store {
         self.root.join("objects").join(&hex[..2]).join(&hex[2..])
     }
 
-    /// Stores `bytes` (atomically; a blob already present is not rewritten) and returns its digest.
-    pub fn put(&self, bytes: &[u8]) -> std::io::Result<Digest> {
+    /// Stores `bytes` (atomically; an intact blob already present is not rewritten) and returns its digest.
+    pub fn put(&self, bytes: &[u8], stat: &StatCache) -> std::io::Result<Digest> {
         let d = Digest::of(bytes);
         let p = self.object_path(&d);
-        if fs::metadata(&p).map(|m| m.len() != bytes.len() as u64).unwrap_or(true) {
+        if !stat.holds(&p, &d) {
             atomic::write(&p, bytes)?;
+            stat.record(&p, d);
         }
         Ok(d)
     }
@@ -69,8 +94,57 @@ impl Store {
         Ok(bytes)
     }
 
-    /// Places blob `d` at `dest` (hard link, else copy), atomically.
-    pub fn materialize(&self, d: &Digest, dest: &Path) -> std::io::Result<()> {
-        atomic::link_or_copy(&self.object_path(d), dest)
+    /// Places blob `d` at `dest` (hard link, else copy), atomically; a `dest` already holding `d` (by the stat
+    /// cache) is left alone.
+    pub fn materialize(&self, d: &Digest, dest: &Path, stat: &StatCache) -> std::io::Result<()> {
+        if stat.holds(dest, d) {
+            return Ok(());
+        }
+        atomic::link_or_copy(&self.object_path(d), dest)?;
+        stat.record(dest, *d);
+        Ok(())
+    }
+
+    /// Whether blob `d` is present and intact (hashing it only when its metadata changed since last checked).
+    /// A corrupt blob is removed, so the task that made it runs again.
+    pub fn verify(&self, d: &Digest, stat: &StatCache) -> bool {
+        let p = self.object_path(d);
+        if stat.holds(&p, d) {
+            return true;
+        }
+        if p.exists() {
+            let _ = fs::remove_file(&p);
+        }
+        false
+    }
+
+    fn action_path(&self, key: &Digest) -> PathBuf {
+        let hex = key.hex();
+        self.root.join("actions").join(&hex[..2]).join(&hex[2..])
+    }
+
+    /// The blobs a task with `key` produced, if it ran before.
+    pub fn action(&self, key: &Digest) -> Option<Vec<Digest>> {
+        let text = fs::read_to_string(self.action_path(key)).ok()?;
+        text.lines().map(Digest::from_hex).collect()
+    }
+
+    /// Records that the task `key` produced `blobs` (after the blobs are stored).
+    pub fn record_action(&self, key: &Digest, blobs: &[Digest]) -> std::io::Result<()> {
+        let text: String = blobs.iter().map(|d| d.hex() + "\n").collect();
+        atomic::write(&self.action_path(key), text.as_bytes())
+    }
+
+    /// The blobs of task `key` when it ran before and they are all intact.
+    pub fn hit(&self, key: &Digest, stat: &StatCache) -> Option<Vec<Digest>> {
+        let blobs = self.action(key)?;
+        blobs.iter().all(|d| self.verify(d, stat)).then_some(blobs)
+    }
+
+    /// The stat cache for builds of the dataset at `out` (one file per dataset directory).
+    pub fn stat_cache(&self, out: &Path) -> StatCache {
+        let abs = std::path::absolute(out).unwrap_or_else(|_| out.to_path_buf());
+        let name = blake3::hash(abs.to_string_lossy().as_bytes()).to_hex();
+        StatCache::load(&self.root.join("stat").join(&name[..32]))
     }
 }

@@ -9,7 +9,8 @@ use std::sync::Mutex;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::{load_manifest, Ui, EXIT_INVALID};
-use crate::build::{self, Progress};
+use crate::build::{self, Options, Progress};
+use crate::execute::Shard;
 
 struct Display {
     bar: Option<ProgressBar>,
@@ -19,13 +20,14 @@ struct Display {
 }
 
 impl Progress for Display {
-    fn planned(&self, images: usize) {
+    fn started(&self, hits: usize, work: usize) {
         if let Some(b) = &self.bar {
-            b.set_length(images as u64);
+            b.set_length(work as u64);
+            b.set_message(format!("({hits} cached)"));
         } else if !self.quiet {
-            eprintln!("rendering {images} images");
+            eprintln!("{hits} images cached, rendering {work}");
         }
-        self.plain.lock().unwrap().0 = images;
+        self.plain.lock().unwrap().0 = work;
     }
 
     fn rendered(&self, done: usize) {
@@ -50,7 +52,20 @@ impl Progress for Display {
     }
 }
 
-pub fn run(manifest: &Path, jobs: Option<usize>, ui: Ui) -> anyhow::Result<ExitCode> {
+/// Parses `K/N` (0 ≤ K < N), as Slurm array jobs number their tasks.
+pub fn parse_shard(s: &str) -> Result<Shard, String> {
+    let (k, n) = s.split_once('/').ok_or_else(|| format!("`{s}`: expected K/N, e.g. 0/4"))?;
+    let (index, count): (u64, u64) = (
+        k.trim().parse().map_err(|_| format!("`{k}` is not a shard index"))?,
+        n.trim().parse().map_err(|_| format!("`{n}` is not a shard count"))?,
+    );
+    if count == 0 || index >= count {
+        return Err(format!("shard {index}/{count}: need 0 ≤ K < N"));
+    }
+    Ok(Shard { index, count })
+}
+
+pub fn run(manifest: &Path, jobs: Option<usize>, shard: Option<Shard>, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let bar = (!ui.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
@@ -63,7 +78,7 @@ pub fn run(manifest: &Path, jobs: Option<usize>, ui: Ui) -> anyhow::Result<ExitC
     let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
     let cache = build::cache_dir(&m);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.unwrap_or(0)).build()?;
-    let result = pool.install(|| build::build(&m, &cache, &display));
+    let result = pool.install(|| build::build(&m, &cache, Options { shard }, &display));
     if let Some(b) = &display.bar {
         b.finish_and_clear();
     }
@@ -78,10 +93,15 @@ pub fn run(manifest: &Path, jobs: Option<usize>, ui: Ui) -> anyhow::Result<ExitC
             }
             eprintln!("{name}: {} files in {}", w.files.len(), w.root.display());
         }
-        let rate = if report.render_seconds > 0.0 { report.images as f64 / report.render_seconds } else { 0.0 };
+        let rate = if report.render_seconds > 0.0 { report.renders as f64 / report.render_seconds } else { 0.0 };
         eprintln!(
-            "built {} images in {:.2} s ({rate:.1} images/s rendering), {:.2} s in all",
-            report.images, report.render_seconds, report.total_seconds
+            "{} images: {} cached, {} rendered in {:.2} s ({rate:.1} images/s){}; {:.2} s in all",
+            report.images,
+            report.hits,
+            report.renders,
+            report.render_seconds,
+            if report.elsewhere > 0 { format!(", {} left to other shards", report.elsewhere) } else { String::new() },
+            report.total_seconds
         );
     }
     Ok(ExitCode::SUCCESS)

@@ -3,7 +3,10 @@
 
 mod build;
 mod check;
+mod gc;
 mod inspect;
+mod plan;
+mod release;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -62,6 +65,51 @@ pub enum Command {
         /// Worker threads (default: one per core).
         #[arg(long, short)]
         jobs: Option<usize>,
+        /// Render only shard K of N (0 ≤ K < N) of the missing images into the cache, and write no datasets;
+        /// a final unsharded build writes them.
+        #[arg(long, value_parser = build::parse_shard)]
+        shard: Option<crate::execute::Shard>,
+    },
+    /// Show what a build would do: images cached, stale (changed since the last build) and new.
+    #[command(after_help = "Example:\n  vvgen plan manifests/cesium-man.toml --explain")]
+    Plan {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Say why each stale image is stale.
+        #[arg(long)]
+        explain: bool,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// What is built, what is stale, and the cache's size.
+    Status {
+        /// The manifest.
+        manifest: PathBuf,
+    },
+    /// Write vvgen.lock (every file's size and blake3) at each dataset root; refuses while anything is stale.
+    Release {
+        /// The manifest.
+        manifest: PathBuf,
+    },
+    /// Check a dataset directory against its vvgen.lock: missing, modified and extra files. Exit 1 on any.
+    #[command(after_help = "Example:\n  vvgen verify out/cesium-man/cesium-man_dnerf")]
+    Verify {
+        /// The dataset directory (holding vvgen.lock).
+        dir: PathBuf,
+    },
+    /// Remove cache entries no listed manifest needs, and/or the oldest beyond a size.
+    #[command(after_help = "Example:\n  vvgen gc --keep manifests/cesium-man.toml --max-size 20G")]
+    Gc {
+        /// Keep what these manifests need (default: keep everything, apply only --max-size).
+        #[arg(long, num_args = 1..)]
+        keep: Vec<PathBuf>,
+        /// Size budget, e.g. 500M or 20G.
+        #[arg(long, value_parser = gc::parse_size)]
+        max_size: Option<u64>,
+        /// The cache (default: `VVGEN_CACHE`, else the first kept manifest's, else `cache/`).
+        #[arg(long)]
+        cache: Option<PathBuf>,
     },
     /// Show a manifest's scene: sources, clips, frames, bounds, resolved transforms, posed-geometry hashes.
     #[command(
@@ -104,7 +152,12 @@ pub fn run() -> ExitCode {
     let ui = Ui { color, quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Check { manifests } => check::run(&manifests, ui),
-        Command::Build { manifest, jobs } => build::run(&manifest, jobs, ui),
+        Command::Build { manifest, jobs, shard } => build::run(&manifest, jobs, shard, ui),
+        Command::Plan { manifest, explain, json } => plan::run(&manifest, explain, json, ui),
+        Command::Status { manifest } => plan::status(&manifest, ui),
+        Command::Release { manifest } => release::release(&manifest, ui),
+        Command::Verify { dir } => release::verify(&dir, ui),
+        Command::Gc { keep, max_size, cache } => gc::run(&keep, max_size, cache, ui),
         Command::Inspect { manifest, source, frame, ply } => {
             inspect::run(&manifest, source.as_deref(), frame, ply.as_ref(), ui)
         }

@@ -1,13 +1,14 @@
 //! Execution: render the plan's images into the content-addressed store. Each frame is posed once and shared by
 //! every view of that frame; views render and encode in parallel on the worker threads (PNG encoding costs as
-//! much as rendering, so it must not serialize on one thread).
+//! much as rendering, so it must not serialize on one thread). Every pass of every image has a content key
+//! ([`keys`]); a pass whose key has an action record with intact blobs is not rendered again.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::cache::{Digest, Store};
+use crate::cache::{Digest, StatCache, Store};
 use crate::manifest::render::{NormalSpace, Pass, PngCompression, Render};
-use crate::plan::{Image, Plan};
+use crate::plan::{keys, Image, Plan};
 use crate::render::{self, encode, Frame, RenderSettings};
 use crate::scene::{PosedScene, Poser, Scene};
 
@@ -26,34 +27,133 @@ pub struct Rendered {
     pub instance: Option<Digest>,
 }
 
-/// Renders every image of `plan`; `done(n)` is called after each image with the count so far.
+/// Which tasks of a plan this process runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// This process's index, `0..count`.
+    pub index: u64,
+    /// Number of processes sharing the work.
+    pub count: u64,
+}
+
+impl Shard {
+    /// Whether the task with `key` belongs to this shard (a deterministic partition by key).
+    pub fn owns(&self, key: &Digest) -> bool {
+        key.prefix_u64() % self.count == self.index
+    }
+}
+
+/// The keys of an image's requested passes, in `[render] passes` order.
+pub fn image_keys(plan: &Plan, frame_keys: &[Digest], r: &Render, settings: &[u8], i: usize) -> Vec<(Pass, Digest)> {
+    let img = &plan.images[i];
+    r.passes.get_ref().iter().map(|&p| (p, keys::pass_key(&frame_keys[img.frame], img, settings, p))).collect()
+}
+
+/// The cached result of image `i`, when every pass ran before and its blobs are intact.
+pub fn lookup(store: &Store, stat: &StatCache, keys: &[(Pass, Digest)]) -> Option<Rendered> {
+    let mut out = Rendered::default();
+    for (pass, k) in keys {
+        let blobs = store.hit(k, stat)?;
+        match (pass, blobs.as_slice()) {
+            (Pass::Rgba, [d]) => out.rgba = Some(*d),
+            (Pass::Depth, [d]) => out.depth = Some(*d),
+            (Pass::Normal, [d]) => out.normal = Some(*d),
+            (Pass::Mask, [d]) => out.mask = Some(*d),
+            (Pass::Mask, [d, e]) => (out.mask, out.instance) = (Some(*d), Some(*e)),
+            _ => return None,
+        }
+    }
+    Some(out)
+}
+
+/// What [`render_plan`] did.
+#[derive(Debug)]
+pub struct Outcome {
+    /// Per plan image, its blobs (default for images another shard renders).
+    pub rendered: Vec<Rendered>,
+    /// Images found in the cache.
+    pub hits: usize,
+    /// Images rendered now.
+    pub renders: usize,
+    /// Images left to other shards.
+    pub elsewhere: usize,
+}
+
+/// Everything [`render_plan`] reads besides the plan.
+pub struct Inputs<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// `[render]`.
+    pub render: &'a Render,
+    /// The blob store.
+    pub store: &'a Store,
+    /// The stat cache of this dataset.
+    pub stat: &'a StatCache,
+    /// Key of every scene frame.
+    pub frame_keys: &'a [Digest],
+}
+
+/// Renders the images of `plan` whose passes are not cached (those of `shard` only, when given); `started(hits,
+/// work)` is called once the cache has been consulted and `done(n)` after each rendered image.
 pub fn render_plan(
-    scene: &Scene,
+    x: &Inputs,
     plan: &Plan,
-    r: &Render,
-    store: &Store,
+    shard: Option<Shard>,
+    started: &dyn Fn(usize, usize),
     done: &(dyn Fn(usize) + Sync),
-) -> Result<Vec<Rendered>, String> {
-    let settings = RenderSettings::from_manifest(r, scene.voxel_size());
-    let mut out = vec![Rendered::default(); plan.images.len()];
+) -> Result<Outcome, String> {
+    let settings_bytes = keys::render_settings(x.render, x.scene.voxel_size());
+    let all_keys: Vec<Vec<(Pass, Digest)>> = (0..plan.images.len())
+        .into_par_iter()
+        .map(|i| image_keys(plan, x.frame_keys, x.render, &settings_bytes, i))
+        .collect();
+    let found: Vec<Option<Rendered>> = all_keys.par_iter().map(|k| lookup(x.store, x.stat, k)).collect();
+    let hits = found.iter().filter(|f| f.is_some()).count();
+    let mut out: Vec<Rendered> = found.iter().map(|f| f.clone().unwrap_or_default()).collect();
+    let todo: Vec<usize> = (0..plan.images.len())
+        .filter(|&i| found[i].is_none())
+        .filter(|&i| shard.is_none_or(|s| s.owns(&all_keys[i][0].1)))
+        .collect();
+    let elsewhere = plan.images.len() - hits - todo.len();
+    started(hits, todo.len());
+    let settings = RenderSettings::from_manifest(x.render, x.scene.voxel_size());
     let mut poser = Poser::default();
     let count = std::sync::atomic::AtomicUsize::new(0);
     for (frame, images) in plan.by_frame() {
-        let posed = scene.pose(frame, &mut poser)?;
+        let images: Vec<usize> = images.into_iter().filter(|i| todo.binary_search(i).is_ok()).collect();
+        if images.is_empty() {
+            continue;
+        }
+        let posed = x.scene.pose(frame, &mut poser)?;
         let objects = posed.primitives.iter().map(|p| p.object).max().map_or(0, |m| m + 1);
         let results: Vec<Result<Rendered, String>> = images
             .par_iter()
             .map(|&i| {
-                let rendered = render_image(posed, &plan.images[i], r, &settings, objects > 1, store);
+                let r = render_image(posed, &plan.images[i], x.render, &settings, objects > 1, x.store, x.stat);
+                let r = r.and_then(|r| record(x.store, &all_keys[i], &r).map(|_| r));
                 done(count.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-                rendered
+                r
             })
             .collect();
         for (&i, res) in images.iter().zip(results) {
             out[i] = res?;
         }
     }
-    Ok(out)
+    Ok(Outcome { rendered: out, hits, renders: todo.len(), elsewhere })
+}
+
+/// Writes the action records of one rendered image (after its blobs are stored).
+fn record(store: &Store, keys: &[(Pass, Digest)], r: &Rendered) -> Result<(), String> {
+    for (pass, k) in keys {
+        let blobs: Vec<Digest> = match pass {
+            Pass::Rgba => r.rgba.into_iter().collect(),
+            Pass::Depth => r.depth.into_iter().collect(),
+            Pass::Normal => r.normal.into_iter().collect(),
+            Pass::Mask => r.mask.into_iter().chain(r.instance).collect(),
+        };
+        store.record_action(k, &blobs).map_err(|e| format!("cache: {e}"))?;
+    }
+    Ok(())
 }
 
 /// Renders one image and stores its passes.
@@ -64,9 +164,10 @@ pub fn render_image(
     settings: &RenderSettings,
     instances: bool,
     store: &Store,
+    stat: &StatCache,
 ) -> Result<Rendered, String> {
     let f = render::render(posed, &image.camera, settings);
-    let put = |bytes: Vec<u8>| store.put(&bytes).map_err(|e| format!("cache {}: {e}", store.root().display()));
+    let put = |bytes: Vec<u8>| store.put(&bytes, stat).map_err(|e| format!("cache {}: {e}", store.root().display()));
     let mut out = Rendered::default();
     for pass in r.passes.get_ref() {
         for (slot, bytes) in encode_pass(&f, *pass, r, image, instances) {

@@ -9,7 +9,9 @@ use std::fmt::Write;
 use glam::{DMat3, DQuat};
 
 use super::{frames_of, init_cloud, init_points, opaque_background, opaque_rgb, pad_for, Export, Files};
+use crate::cache::key;
 use crate::manifest::output::Output;
+use crate::plan::keys::SAMPLE_SALT;
 use crate::render::Camera;
 
 /// COLMAP's world→camera rotation (Hamilton quaternion `w x y z`, scalar first, `w ≥ 0`) and translation.
@@ -63,18 +65,23 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
                 ryu_f64(t[2])
             );
         }
-        let mut pts = String::from(
-            "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[]\n",
-        );
-        if n_points > 0 {
-            let cloud = init_cloud(x, &[f], n_points)?;
-            for (k, (p, c)) in cloud.positions.iter().zip(cloud.srgb8()).enumerate() {
-                let _ = writeln!(pts, "{} {} {} {} {} {} {} 0", k + 1, p[0], p[1], p[2], c[0], c[1], c[2]);
+        let (nb, seed) = ((n_points as u64).to_le_bytes(), x.manifest.dataset.seed.to_le_bytes());
+        let parts: [&[u8]; 4] = [&x.frame_keys[f].0, SAMPLE_SALT, &nb, &seed];
+        let pts = x.cached(key("colmap points", &parts), || {
+            let mut pts = String::from(
+                "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[]\n",
+            );
+            if n_points > 0 {
+                let cloud = init_cloud(x, &[f], n_points)?;
+                for (k, (p, c)) in cloud.positions.iter().zip(cloud.srgb8()).enumerate() {
+                    let _ = writeln!(pts, "{} {} {} {} {} {} {} 0", k + 1, p[0], p[1], p[2], c[0], c[1], c[2]);
+                }
             }
-        }
+            Ok(pts.into_bytes())
+        })?;
         files.bytes(&format!("{prefix}sparse/0/cameras.txt"), cameras.as_bytes())?;
         files.bytes(&format!("{prefix}sparse/0/images.txt"), imgs.as_bytes())?;
-        files.bytes(&format!("{prefix}sparse/0/points3D.txt"), pts.as_bytes())?;
+        files.blob(&format!("{prefix}sparse/0/points3D.txt"), pts)?;
     }
     Ok(())
 }

@@ -5,7 +5,7 @@
 
 use glam::{DMat4, DVec3, Vec3};
 
-use super::{frames_of, init_cloud, init_ply, init_points, opaque_background, opaque_rgb, Export, Files};
+use super::{frames_of, init_ply_blob, init_points, opaque_background, opaque_rgb, Export, Files};
 use crate::manifest::output::Output;
 use crate::manifest::split::TimeMode;
 
@@ -70,7 +70,7 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
     files.bytes("poses_bounds.npy", &npy_f64(&rows, cams.len(), 17))?;
     let n = init_points(out);
     if n > 0 {
-        files.bytes("points3D_downsample2.ply", &init_ply(&init_cloud(x, &frames, n)?))?;
+        files.blob("points3D_downsample2.ply", init_ply_blob(x, &frames, n)?)?;
     }
     Ok(())
 }

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use glam::{DMat4, Vec3};
 
 use crate::atomic;
-use crate::cache::{Digest, Store};
+use crate::cache::{key, Digest, StatCache, Store};
 use crate::execute::Rendered;
 use crate::manifest::output::{Output, Writer};
 use crate::manifest::Manifest;
@@ -37,6 +37,24 @@ pub struct Export<'a> {
     pub rendered: &'a [Rendered],
     /// Where the blobs are.
     pub store: &'a Store,
+    /// The dataset's stat cache.
+    pub stat: &'a StatCache,
+    /// Key of every scene frame.
+    pub frame_keys: &'a [Digest],
+}
+
+impl Export<'_> {
+    /// The blob of the task `key`, from the cache, or made by `make` and recorded.
+    fn cached(&self, key: Digest, make: impl FnOnce() -> Result<Vec<u8>, String>) -> Result<Digest, String> {
+        if let Some(b) = self.store.hit(&key, self.stat) {
+            if let [d] = b.as_slice() {
+                return Ok(*d);
+            }
+        }
+        let d = self.store.put(&make()?, self.stat).map_err(|e| format!("cache: {e}"))?;
+        self.store.record_action(&key, &[d]).map_err(|e| format!("cache: {e}"))?;
+        Ok(d)
+    }
 }
 
 /// What one writer produced.
@@ -54,6 +72,7 @@ pub struct Written {
 pub(crate) struct Files<'a> {
     root: PathBuf,
     store: &'a Store,
+    stat: &'a StatCache,
     files: Vec<(String, Digest)>,
     warnings: Vec<String>,
     /// Per image: pass name → root-relative path, for vvgen.json.
@@ -61,8 +80,8 @@ pub(crate) struct Files<'a> {
 }
 
 impl<'a> Files<'a> {
-    fn new(root: PathBuf, store: &'a Store) -> Files<'a> {
-        Files { root, store, files: Vec::new(), warnings: Vec::new(), placed: BTreeMap::new() }
+    fn new(root: PathBuf, store: &'a Store, stat: &'a StatCache) -> Files<'a> {
+        Files { root, store, stat, files: Vec::new(), warnings: Vec::new(), placed: BTreeMap::new() }
     }
 
     /// Places stored blob `d` at `rel` as pass `pass` of plan image `image`.
@@ -74,14 +93,14 @@ impl<'a> Files<'a> {
     /// Places stored blob `d` at `rel`.
     fn blob(&mut self, rel: &str, d: Digest) -> Result<(), String> {
         let dest = self.root.join(rel);
-        self.store.materialize(&d, &dest).map_err(|e| format!("{}: {e}", dest.display()))?;
+        self.store.materialize(&d, &dest, self.stat).map_err(|e| format!("{}: {e}", dest.display()))?;
         self.files.push((rel.to_string(), d));
         Ok(())
     }
 
     /// Writes `bytes` at `rel` (through the store, so identical files are stored once).
     fn bytes(&mut self, rel: &str, bytes: &[u8]) -> Result<(), String> {
-        let d = self.store.put(bytes).map_err(|e| format!("cache: {e}"))?;
+        let d = self.store.put(bytes, self.stat).map_err(|e| format!("cache: {e}"))?;
         self.blob(rel, d)
     }
 
@@ -104,7 +123,7 @@ pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, String> {
     let root = x.manifest.out_dir().join(dir_name(x.manifest, out));
     std::fs::create_dir_all(&root).map_err(|e| format!("{}: {e}", root.display()))?;
     atomic::clean_debris(&root);
-    let mut files = Files::new(root, x.store);
+    let mut files = Files::new(root, x.store, x.stat);
     let writer = *out.writer.get_ref();
     let images = selected_images(x, out)?;
     if writer.renders_images() && images.is_empty() {
@@ -187,6 +206,14 @@ fn init_cloud(x: &Export, frames: &[usize], n: usize) -> Result<Points, String> 
     Ok(out)
 }
 
+/// [`init_cloud`] encoded by [`init_ply`], through the cache (keyed by the frames' content, `n` and the seed).
+fn init_ply_blob(x: &Export, frames: &[usize], n: usize) -> Result<Digest, String> {
+    let mut parts: Vec<&[u8]> = frames.iter().map(|&f| &x.frame_keys[f].0[..]).collect();
+    let (nb, seed) = ((n as u64).to_le_bytes(), x.manifest.dataset.seed.to_le_bytes());
+    parts.extend([crate::plan::keys::SAMPLE_SALT, &nb[..], &seed[..]]);
+    x.cached(key("init cloud", &parts), || Ok(init_ply(&init_cloud(x, frames, n)?)))
+}
+
 /// Bounds of the geometry over `frames`.
 fn bounds(x: &Export, frames: &[usize]) -> Result<Option<(Vec3, Vec3)>, String> {
     let mut poser = Poser::default();
@@ -231,20 +258,22 @@ fn init_points(out: &Output) -> usize {
 /// PNG in the store: for consumers that do not read alpha (COLMAP, DyNeRF).
 fn opaque_rgb(x: &Export, image: usize, bg: [u8; 3]) -> Result<Digest, String> {
     let d = x.rendered[image].rgba.ok_or("the `rgba` pass is needed for this writer")?;
-    let png = x.store.get(&d).map_err(|e| format!("cache: {e}"))?;
-    let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
-        .map_err(|e| format!("cache blob {}: {e}", d.hex()))?
-        .into_rgba8();
-    let (w, h) = img.dimensions();
-    let rgb: Vec<u8> = img
-        .pixels()
-        .flat_map(|p| {
-            let a = p[3] as u32;
-            [0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8)
-        })
-        .collect();
-    let bytes = crate::render::encode::rgb_png(&rgb, w, h, x.manifest.render.png_compression);
-    x.store.put(&bytes).map_err(|e| format!("cache: {e}"))
+    let png_setting = format!("{:?}", x.manifest.render.png_compression);
+    x.cached(key("composite 1", &[&d.0, &bg, png_setting.as_bytes()]), || {
+        let png = x.store.get(&d).map_err(|e| format!("cache: {e}"))?;
+        let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
+            .map_err(|e| format!("cache blob {}: {e}", d.hex()))?
+            .into_rgba8();
+        let (w, h) = img.dimensions();
+        let rgb: Vec<u8> = img
+            .pixels()
+            .flat_map(|p| {
+                let a = p[3] as u32;
+                [0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8)
+            })
+            .collect();
+        Ok(crate::render::encode::rgb_png(&rgb, w, h, x.manifest.render.png_compression))
+    })
 }
 
 /// The background that opaque exports bake in: the manifest's, else white (NeRF-synthetic's convention).

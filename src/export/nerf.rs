@@ -4,7 +4,7 @@
 
 use serde_json::{json, Map, Value};
 
-use super::{frames_of, init_cloud, init_ply, init_points, pad_for, r_name, rows, Export, Files};
+use super::{frames_of, init_ply_blob, init_points, pad_for, r_name, rows, Export, Files};
 use crate::manifest::output::Output;
 use crate::manifest::render::Pass;
 use crate::plan::Image;
@@ -136,9 +136,9 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
     }
     let n = init_points(out);
     if n > 0 {
-        let ply = init_ply(&init_cloud(x, &frames_of(x, images), n)?);
-        files.bytes("points3d.ply", &ply)?;
-        files.bytes("fused.ply", &ply)?;
+        let ply = init_ply_blob(x, &frames_of(x, images), n)?;
+        files.blob("points3d.ply", ply)?;
+        files.blob("fused.ply", ply)?;
     }
     Ok(())
 }
@@ -197,8 +197,7 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
     doc.insert("test_filenames".into(), json!(test));
     let n = init_points(out);
     if n > 0 {
-        let ply = init_ply(&init_cloud(x, &frames_of(x, images), n)?);
-        files.bytes("points3d.ply", &ply)?;
+        files.blob("points3d.ply", init_ply_blob(x, &frames_of(x, images), n)?)?;
         doc.insert("ply_file_path".into(), json!("points3d.ply"));
     }
     doc.insert("frames".into(), Value::Array(frames));
@@ -277,7 +276,7 @@ pub fn static_frames(x: &Export, out: &Output, images: &[usize], files: &mut Fil
             files.json(&format!("{prefix}transforms_{split}.json"), &Value::Object(doc))?;
         }
         if n > 0 {
-            files.bytes(&format!("{prefix}points3d.ply"), &init_ply(&init_cloud(x, &[f], n)?))?;
+            files.blob(&format!("{prefix}points3d.ply"), init_ply_blob(x, &[f], n)?)?;
         }
     }
     Ok(())

@@ -2,6 +2,8 @@
 //! (split, view, frame) with its camera and normalized time. Everything after this (rendering, caching, writing)
 //! works from this list, so what a build will do is known before it does anything.
 
+pub mod keys;
+
 use std::collections::BTreeSet;
 
 use glam::DMat4;

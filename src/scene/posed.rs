@@ -70,6 +70,27 @@ impl PosedScene {
     /// blake3 of the posed geometry and material/texture content: equal hashes mean equal renders.
     pub fn digest(&self) -> blake3::Hash {
         let mut h = blake3::Hasher::new();
+        h.update(self.geometry_digest().as_bytes());
+        h.update(self.material_digest().as_bytes());
+        h.finalize()
+    }
+
+    /// blake3 of the materials and texture content only (constant over a source's frames).
+    pub fn material_digest(&self) -> blake3::Hash {
+        let mut h = blake3::Hasher::new();
+        h.update(format!("{:?}", self.materials).as_bytes());
+        for t in self.textures.iter() {
+            h.update(&t.width.to_le_bytes());
+            h.update(&t.height.to_le_bytes());
+            h.update(&[t.srgb as u8]);
+            h.update(&t.rgba);
+        }
+        h.finalize()
+    }
+
+    /// blake3 of the posed geometry (positions, normals, uvs, colours, indices, material and object ids).
+    pub fn geometry_digest(&self) -> blake3::Hash {
+        let mut h = blake3::Hasher::new();
         h.update(b"vvgen.posed.v1");
         for p in &self.primitives {
             h.update(&[p.kind as u8]);
@@ -85,13 +106,6 @@ impl PosedScene {
             }
             h.update(&p.material.to_le_bytes());
             h.update(&p.object.to_le_bytes());
-        }
-        h.update(format!("{:?}", self.materials).as_bytes());
-        for t in self.textures.iter() {
-            h.update(&t.width.to_le_bytes());
-            h.update(&t.height.to_le_bytes());
-            h.update(&[t.srgb as u8]);
-            h.update(&t.rgba);
         }
         h.finalize()
     }

@@ -1,0 +1,103 @@
+//! The stat cache: (path → size, mtime, inode, blake3) for files vvgen has hashed, so a no-op build re-reads
+//! nothing whose metadata is unchanged: source files, and blobs (which are also the dataset files, by hard
+//! link). A file whose metadata changed is hashed again; a file edited in place gets a new mtime, so a flipped
+//! byte in a blob or a dataset file is noticed.
+
+use std::collections::HashMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use super::Digest;
+use crate::atomic;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Meta {
+    size: u64,
+    mtime_ns: i128,
+    ino: u64,
+}
+
+fn meta(p: &Path) -> std::io::Result<Meta> {
+    let m = fs::metadata(p)?;
+    let mtime_ns = m
+        .modified()
+        .ok()
+        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+        .map_or(0, |d| d.as_nanos() as i128);
+    #[cfg(unix)]
+    let ino = std::os::unix::fs::MetadataExt::ino(&m);
+    #[cfg(not(unix))]
+    let ino = 0;
+    Ok(Meta { size: m.len(), mtime_ns, ino })
+}
+
+/// Remembered digests of files, by path.
+#[derive(Debug)]
+pub struct StatCache {
+    path: PathBuf,
+    entries: Mutex<HashMap<PathBuf, (Meta, Digest)>>,
+}
+
+impl StatCache {
+    /// Loads the cache file at `path` (a missing or damaged file is an empty cache).
+    pub fn load(path: &Path) -> StatCache {
+        let mut entries = HashMap::new();
+        if let Ok(text) = fs::read_to_string(path) {
+            for line in text.lines() {
+                let f: Vec<&str> = line.splitn(5, '\t').collect();
+                if f.len() != 5 {
+                    continue;
+                }
+                let (Some(d), Ok(size), Ok(mtime_ns), Ok(ino)) =
+                    (Digest::from_hex(f[0]), f[1].parse(), f[2].parse(), f[3].parse())
+                else {
+                    continue;
+                };
+                entries.insert(PathBuf::from(f[4]), (Meta { size, mtime_ns, ino }, d));
+            }
+        }
+        StatCache { path: path.to_path_buf(), entries: Mutex::new(entries) }
+    }
+
+    /// blake3 of the file at `p`, from the cache when its size, mtime and inode are unchanged.
+    pub fn digest(&self, p: &Path) -> std::io::Result<Digest> {
+        let m = meta(p)?;
+        if let Some((cm, d)) = self.entries.lock().unwrap().get(p) {
+            if *cm == m {
+                return Ok(*d);
+            }
+        }
+        let d = Digest::of(&fs::read(p)?);
+        // Metadata read before the content: a write racing the read leaves a stale entry that the next stat
+        // rejects, never a wrong one that looks current.
+        self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d));
+        Ok(d)
+    }
+
+    /// Whether the file at `p` holds exactly the content named `d`.
+    pub fn holds(&self, p: &Path, d: &Digest) -> bool {
+        self.digest(p).is_ok_and(|got| got == *d)
+    }
+
+    /// Records that `p` (just written by us) holds `d`.
+    pub fn record(&self, p: &Path, d: Digest) {
+        if let Ok(m) = meta(p) {
+            self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d));
+        }
+    }
+
+    /// Writes the cache back (atomically; entries for vanished files are dropped).
+    pub fn save(&self) -> std::io::Result<()> {
+        let entries = self.entries.lock().unwrap();
+        let mut lines: Vec<String> = entries
+            .iter()
+            .filter(|(p, _)| p.exists())
+            .map(|(p, (m, d))| format!("{}\t{}\t{}\t{}\t{}", d.hex(), m.size, m.mtime_ns, m.ino, p.display()))
+            .collect();
+        lines.sort();
+        let mut text = lines.join("\n");
+        text.push('\n');
+        atomic::write(&self.path, text.as_bytes())
+    }
+}

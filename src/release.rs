@@ -1,0 +1,144 @@
+//! Releases: `vvgen.lock` at each dataset root lists the tool version, the manifest digest, every input file's
+//! digest and every dataset file with its size and blake3, so anyone can check a downloaded dataset byte for
+//! byte with `vvgen verify`.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::build::{self, Options, Silent};
+use crate::cache::Digest;
+use crate::manifest::Manifest;
+use crate::scene::SourceData;
+
+/// Name of the lock file at a dataset root.
+pub const LOCK: &str = "vvgen.lock";
+
+/// The content of `vvgen.lock`.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct Lock {
+    /// Always "vvgen".
+    pub tool: String,
+    /// Tool version.
+    pub version: String,
+    /// blake3 of the manifest text.
+    pub manifest_blake3: String,
+    /// Input files (manifest-relative where possible) → blake3.
+    pub inputs: BTreeMap<String, String>,
+    /// Dataset files (root-relative, `/`-separated) → size and blake3.
+    pub files: BTreeMap<String, FileEntry>,
+}
+
+/// One dataset file in a lock.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FileEntry {
+    /// Bytes.
+    pub size: u64,
+    /// blake3, hex.
+    pub blake3: String,
+}
+
+/// Writes `vvgen.lock` into every output root of `m`; refuses when any image is not built.
+pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, String> {
+    let st = build::status(m, cache)?;
+    let pending = st.stale.len() + st.new.len();
+    if pending > 0 {
+        return Err(format!(
+            "{pending} image(s) are not built: run `vvgen build` first (`vvgen plan --explain` says why)"
+        ));
+    }
+    // Everything is cached: this build renders nothing and only (re)materializes and rewrites metadata.
+    let report = build::build(m, cache, Options::default(), &Silent)?;
+    let p = build::prepare(m, cache)?;
+    let mut inputs = BTreeMap::new();
+    for (src, (_, cfg)) in p.scene.sources.iter().zip(&m.sources) {
+        let files: Vec<PathBuf> = match &src.data {
+            SourceData::Gltf { asset, .. } => vec![asset.path.clone()],
+            SourceData::Sequence(frames) => frames.iter().map(|f| f.path.clone()).collect(),
+            SourceData::Static(_) => cfg.mesh.iter().chain(&cfg.gltf).map(|f| m.resolve(f.get_ref())).collect(),
+        };
+        for f in files {
+            let d = p.stat.digest(&f).map_err(|e| format!("{}: {e}", f.display()))?;
+            let name = f.strip_prefix(&m.dir).unwrap_or(&f).to_string_lossy().replace('\\', "/");
+            inputs.insert(name, d.hex());
+        }
+    }
+    let mut roots = Vec::new();
+    for (_, w) in &report.outputs {
+        let mut files = BTreeMap::new();
+        for (rel, d) in &w.files {
+            let size = std::fs::metadata(w.root.join(rel)).map_err(|e| format!("{rel}: {e}"))?.len();
+            files.insert(rel.clone(), FileEntry { size, blake3: d.hex() });
+        }
+        let lock = Lock {
+            tool: "vvgen".into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            manifest_blake3: blake3::hash(m.text.as_bytes()).to_hex().to_string(),
+            inputs: inputs.clone(),
+            files,
+        };
+        let mut text = serde_json::to_string_pretty(&lock).expect("BUG: the lock serializes");
+        text.push('\n');
+        crate::atomic::write(&w.root.join(LOCK), text.as_bytes()).map_err(|e| format!("{}: {e}", w.root.display()))?;
+        roots.push(w.root.clone());
+    }
+    Ok(roots)
+}
+
+/// Differences between a dataset directory and its lock.
+#[derive(Debug, Default)]
+pub struct Verification {
+    /// Files the lock lists that are absent.
+    pub missing: Vec<String>,
+    /// Files whose size or content differs.
+    pub modified: Vec<String>,
+    /// Files present but not in the lock.
+    pub extra: Vec<String>,
+    /// Files checked.
+    pub checked: usize,
+}
+
+impl Verification {
+    /// Whether the directory matches its lock exactly.
+    pub fn ok(&self) -> bool {
+        self.missing.is_empty() && self.modified.is_empty() && self.extra.is_empty()
+    }
+}
+
+/// Checks `dir` against its `vvgen.lock`, hashing every file.
+pub fn verify(dir: &Path) -> Result<Verification, String> {
+    let lock_path = dir.join(LOCK);
+    let text = std::fs::read_to_string(&lock_path).map_err(|e| format!("{}: {e}", lock_path.display()))?;
+    let lock: Lock =
+        serde_json::from_str(&text).map_err(|e| format!("{}: not a vvgen lock: {e}", lock_path.display()))?;
+    let mut v = Verification::default();
+    for (rel, entry) in &lock.files {
+        let p = dir.join(rel);
+        match std::fs::read(&p) {
+            Err(_) => v.missing.push(rel.clone()),
+            Ok(bytes) => {
+                v.checked += 1;
+                if bytes.len() as u64 != entry.size || Digest::of(&bytes).hex() != entry.blake3 {
+                    v.modified.push(rel.clone());
+                }
+            }
+        }
+    }
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).map_err(|e| format!("{}: {e}", d.display()))?.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            let rel = p.strip_prefix(dir).expect("walked under dir").to_string_lossy().replace('\\', "/");
+            if rel != LOCK && !lock.files.contains_key(&rel) {
+                v.extra.push(rel);
+            }
+        }
+    }
+    v.extra.sort();
+    Ok(v)
+}
