@@ -6,6 +6,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::cache::{Digest, StatCache, Store};
@@ -262,20 +263,32 @@ pub fn status(m: &Manifest, cache: &Path) -> Result<Status, String> {
     let p = prepare(m, cache)?;
     let settings = keys::render_settings(&m.render, p.scene.voxel_size());
     let last = last_build(&p.store, m);
-    let parts = image_parts(m, &p);
     let mut st = Status { images: p.plan.images.len(), ..Default::default() };
     let needs_images = m.outputs.values().any(|o| o.writer.get_ref().renders_images());
     if needs_images {
+        let cached: Vec<bool> = (0..p.plan.images.len())
+            .into_par_iter()
+            .map(|i| {
+                let keys = execute::image_keys(&p.plan, &p.frame_keys, &m.render, &settings, i);
+                execute::lookup(&p.store, &p.stat, &keys).is_some()
+            })
+            .collect();
         for (i, img) in p.plan.images.iter().enumerate() {
-            let keys = execute::image_keys(&p.plan, &p.frame_keys, &m.render, &settings, i);
-            if execute::lookup(&p.store, &p.stat, &keys).is_some() {
+            if cached[i] {
                 st.fresh += 1;
                 continue;
             }
             let id = format!("{}/{}/{}", p.plan.splits[img.split].name, img.view, img.frame);
             match last.images.get(&id) {
                 None => st.new.push(id),
-                Some(before) => st.stale.push((id.clone(), why(before, &parts[&id]))),
+                Some(before) => st.stale.push((id.clone(), vec![])),
+            }
+        }
+        if !st.stale.is_empty() {
+            // Key parts only for the explanation, and only when something is stale.
+            let parts = image_parts(m, &p);
+            for (id, reasons) in &mut st.stale {
+                *reasons = why(&last.images[id.as_str()], &parts[id.as_str()]);
             }
         }
     } else {

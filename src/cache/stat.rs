@@ -37,6 +37,8 @@ fn meta(p: &Path) -> std::io::Result<Meta> {
 pub struct StatCache {
     path: PathBuf,
     entries: Mutex<HashMap<PathBuf, (Meta, Digest)>>,
+    /// Whether anything changed since loading (a no-op build need not rewrite the file).
+    dirty: std::sync::atomic::AtomicBool,
 }
 
 impl StatCache {
@@ -57,7 +59,7 @@ impl StatCache {
                 entries.insert(PathBuf::from(f[4]), (Meta { size, mtime_ns, ino }, d));
             }
         }
-        StatCache { path: path.to_path_buf(), entries: Mutex::new(entries) }
+        StatCache { path: path.to_path_buf(), entries: Mutex::new(entries), dirty: false.into() }
     }
 
     /// blake3 of the file at `p`, from the cache when its size, mtime and inode are unchanged.
@@ -72,6 +74,7 @@ impl StatCache {
         // Metadata read before the content: a write racing the read leaves a stale entry that the next stat
         // rejects, never a wrong one that looks current.
         self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d));
+        self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
         Ok(d)
     }
 
@@ -84,11 +87,15 @@ impl StatCache {
     pub fn record(&self, p: &Path, d: Digest) {
         if let Ok(m) = meta(p) {
             self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d));
+            self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
         }
     }
 
     /// Writes the cache back (atomically; entries for vanished files are dropped).
     pub fn save(&self) -> std::io::Result<()> {
+        if !self.dirty.load(std::sync::atomic::Ordering::Relaxed) && self.path.exists() {
+            return Ok(());
+        }
         let entries = self.entries.lock().unwrap();
         let mut lines: Vec<String> = entries
             .iter()
