@@ -281,7 +281,7 @@ pub fn status(m: &Manifest, cache: &Path) -> Result<Status, String> {
             let id = format!("{}/{}/{}", p.plan.splits[img.split].name, img.view, img.frame);
             match last.images.get(&id) {
                 None => st.new.push(id),
-                Some(before) => st.stale.push((id.clone(), vec![])),
+                Some(_) => st.stale.push((id.clone(), vec![])),
             }
         }
         if !st.stale.is_empty() {
