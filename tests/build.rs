@@ -1,6 +1,8 @@
 //! `vvgen build` end to end: identical bytes whatever the thread count, a published camera set re-rendered
 //! from its transforms.json, and point-cloud sequences.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -143,4 +145,74 @@ fn two_outputs_in_one_directory_are_refused() {
         vvgen::build::build(&m, &dir.path().join("cache"), Default::default(), &vvgen::build::Silent).unwrap_err();
     assert!(err.contains("`d` and `e`") && err.contains("m_dnerf"), "{err}");
     assert!(!dir.path().join("out").exists(), "refused before anything was written");
+}
+
+#[test]
+fn correspondence_tracks_surface_points_and_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("tri.gltf"), common::animated_triangle(0.3)).unwrap();
+    let text = r#"[dataset]
+name = "tri"
+out = "out"
+cache = "cache"
+[source.tri]
+gltf = "tri.gltf"
+frames = { count = 4, fps = 1 }
+[render]
+resolution = [16, 16]
+[rig.o]
+kind = "orbit"
+[split.train]
+rig = "o"
+views = 1
+[output.p]
+writer = "ply-sequence"
+points = 500
+motion = true
+"#;
+    std::fs::write(d.join("m.toml"), text).unwrap();
+    build(&d.join("m.toml"), 2);
+    let read = |f: usize| {
+        let bytes = std::fs::read(d.join(format!("out/tri_points/tri_{f:04}.ply"))).unwrap();
+        (vvgen::scene::ply::read(&bytes).unwrap(), String::from_utf8_lossy(&bytes[..600]).to_string())
+    };
+    let (f0, head) = read(0);
+    assert!(head.contains("property uint point_id") && head.contains("property float motion_x"), "{head}");
+    assert_eq!(f0.positions.len(), 500);
+    // The keys translate the triangle by x = 0, 0.1, 0.2, 0.3: point i moves by exactly that (same surface point).
+    for (f, dx) in [(1, 0.1f32), (2, 0.2), (3, 0.3)] {
+        let (pf, _) = read(f);
+        for (a, b) in f0.positions.iter().zip(&pf.positions) {
+            assert!((b[0] - a[0] - dx).abs() < 1e-5 && (b[1] - a[1]).abs() < 1e-6, "frame {f}: {a:?} → {b:?}");
+        }
+    }
+}
+
+#[test]
+fn vox_quantizes_onto_one_integer_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let extra = "[output.v]\nwriter = \"ply-sequence\"\npoints = 30000\nvox = 8\n";
+    build(&write_manifest(dir.path(), extra), 2);
+    let mut grids = Vec::new();
+    for f in 0..2 {
+        let bytes = std::fs::read(dir.path().join(format!("out/m_points/m_{f:04}.ply"))).unwrap();
+        let head = String::from_utf8_lossy(&bytes[..400]).to_string();
+        assert!(!head.contains("property float nx"), "8i layout: x y z and colours only");
+        grids.push(head.lines().find(|l| l.contains("grid origin")).unwrap().to_string());
+        let p = vvgen::scene::ply::read(&bytes).unwrap();
+        let mut cells: Vec<[i32; 3]> = p
+            .positions
+            .iter()
+            .map(|q| {
+                assert!(q.iter().all(|c| c.fract() == 0.0 && (0.0..=255.0).contains(c)), "{q:?}");
+                q.map(|c| c as i32)
+            })
+            .collect();
+        let n = cells.len();
+        cells.sort_unstable();
+        cells.dedup();
+        assert_eq!(cells.len(), n, "duplicate voxels merged");
+    }
+    assert_eq!(grids[0], grids[1], "one grid for the whole sequence");
 }

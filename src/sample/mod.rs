@@ -50,16 +50,18 @@ impl Points {
     }
 }
 
-/// A triangle reference: primitive and first index.
-#[derive(Clone, Copy)]
-struct Tri {
+/// A surface point by identity: a triangle (primitive, first index) and barycentric weights. Re-evaluated on
+/// another frame of the same mesh, it is the same material point (temporal correspondence).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Draw {
     prim: u32,
     first: u32,
+    bary: [f32; 3],
 }
 
-/// `n` area-uniform samples of `scene`'s triangles plus every point of its point primitives; `key` names the
-/// random stream (e.g. seed and frame).
-pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
+/// `n` area-uniform draws over `scene`'s triangles (none when it has no triangle area); `key` names the
+/// random stream.
+pub fn draw(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Vec<Draw> {
     let mut tris = Vec::new();
     let mut cdf = Vec::new();
     let mut total = 0f64;
@@ -73,37 +75,51 @@ pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
             if area > 0.0 {
                 total += area;
                 cdf.push(total);
-                tris.push(Tri { prim: pi as u32, first: 3 * t as u32 });
+                tris.push((pi as u32, 3 * t as u32));
             }
         }
     }
-    let mut out = Points::default();
-    if !tris.is_empty() && n > 0 {
-        let chunks: Vec<Points> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                let mut parts: Vec<&[u8]> = key.to_vec();
-                let cb = (c as u64).to_le_bytes();
-                parts.push(&cb);
-                let mut k = Keyed::new("surface", &parts);
-                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
-                let mut pts = Points::default();
-                for i in range {
+    if tris.is_empty() || n == 0 {
+        return Vec::new();
+    }
+    let chunks: Vec<Vec<Draw>> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut parts: Vec<&[u8]> = key.to_vec();
+            let cb = (c as u64).to_le_bytes();
+            parts.push(&cb);
+            let mut k = Keyed::new("surface", &parts);
+            (c * CHUNK..((c + 1) * CHUNK).min(n))
+                .map(|i| {
                     // Stratified: sample i draws from the i-th of n equal slices of the total area.
                     let u = (i as f64 + k.uniform()) / n as f64 * total;
                     let t = cdf.partition_point(|&v| v <= u).min(tris.len() - 1);
                     let (r1, r2) = (k.uniform() as f32, k.uniform() as f32);
                     let s = r1.sqrt();
-                    let bary = [1.0 - s, s * (1.0 - r2), s * r2];
-                    push_surface_point(scene, tris[t], bary, &mut pts);
-                }
-                pts
-            })
-            .collect();
-        for c in &chunks {
-            out.extend(c);
+                    Draw { prim: tris[t].0, first: tris[t].1, bary: [1.0 - s, s * (1.0 - r2), s * r2] }
+                })
+                .collect()
+        })
+        .collect();
+    chunks.concat()
+}
+
+/// Evaluates `draws` on `scene` (the frame they were drawn on, or another frame of the same meshes).
+pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, String> {
+    let mut out = Points::default();
+    for d in draws {
+        let ok = scene.primitives.get(d.prim as usize).is_some_and(|p| (d.first as usize + 2) < p.indices.len());
+        if !ok {
+            return Err("the mesh's topology changed between frames: correspondence needs fixed triangles".into());
         }
+        push_surface_point(scene, d.prim, d.first, d.bary, &mut out);
     }
+    Ok(out)
+}
+
+/// Every point of `scene`'s point primitives.
+pub fn points(scene: &PosedScene) -> Points {
+    let mut out = Points::default();
     for p in scene.primitives.iter().filter(|p| p.kind == PrimKind::Points) {
         let m = &scene.materials[p.material as usize];
         for (i, pos) in p.positions.iter().enumerate() {
@@ -116,9 +132,17 @@ pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
     out
 }
 
-fn push_surface_point(scene: &PosedScene, t: Tri, b: [f32; 3], out: &mut Points) {
-    let p = &scene.primitives[t.prim as usize];
-    let idx = [0, 1, 2].map(|k| p.indices[(t.first + k) as usize] as usize);
+/// `n` area-uniform samples of `scene`'s triangles plus every point of its point primitives; `key` names the
+/// random stream (e.g. seed and frame).
+pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
+    let mut out = evaluate(scene, &draw(scene, n, key)).expect("BUG: draws index the scene they were drawn on");
+    out.extend(&points(scene));
+    out
+}
+
+fn push_surface_point(scene: &PosedScene, prim: u32, first: u32, b: [f32; 3], out: &mut Points) {
+    let p = &scene.primitives[prim as usize];
+    let idx = [0, 1, 2].map(|k| p.indices[(first + k) as usize] as usize);
     let lerp3 = |v: &[Vec3]| v[idx[0]] * b[0] + v[idx[1]] * b[1] + v[idx[2]] * b[2];
     let pos = lerp3(&p.positions);
     let n = if p.normals.len() == p.positions.len() {

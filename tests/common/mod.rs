@@ -1,0 +1,33 @@
+//! Fixtures the tests make themselves.
+
+/// A triangle whose translation is animated by four LINEAR keys at t = 0, 1, 2, 3 s.
+pub fn animated_triangle(last_key_x: f32) -> String {
+    use base64::Engine;
+    let mut buf: Vec<u8> = Vec::new();
+    for v in [[-0.5f32, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.8, 0.0]] {
+        v.iter().for_each(|c| buf.extend(c.to_le_bytes()));
+    }
+    for t in [0f32, 1.0, 2.0, 3.0] {
+        buf.extend(t.to_le_bytes());
+    }
+    for x in [0f32, 0.1, 0.2, last_key_x] {
+        [x, 0.0, 0.0].iter().for_each(|c| buf.extend(c.to_le_bytes()));
+    }
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&buf));
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+  "buffers": [{{"byteLength": {}, "uri": "{uri}"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 16}},
+                  {{"buffer": 0, "byteOffset": 52, "byteLength": 48}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [-0.5, 0, 0], "max": [0.5, 0.8, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "SCALAR", "min": [0], "max": [3]}},
+    {{"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"}}],
+  "animations": [{{"channels": [{{"sampler": 0, "target": {{"node": 0, "path": "translation"}}}}],
+                   "samplers": [{{"input": 1, "output": 2, "interpolation": "LINEAR"}}]}}]}}"#,
+        buf.len()
+    )
+}
