@@ -153,8 +153,8 @@ fn encode(
     if let Some(g) = grid {
         // Into grid units, merged per integer cell, then each point at its cell's integer corner (8i style).
         for p in &mut pts.positions {
-            for k in 0..3 {
-                p[k] = ((p[k] - g.lo[k]) / g.cell).floor().clamp(0.0, g.max) + 0.5;
+            for (c, lo) in p.iter_mut().zip(g.lo) {
+                *c = ((*c - lo) / g.cell).floor().clamp(0.0, g.max) + 0.5;
             }
         }
         pts = reduce(&pts, 1.0);
