@@ -46,6 +46,23 @@ fn place(x: &Export, i: usize, n: &Names, prefix: &str, files: &mut Files) -> Re
     Ok(())
 }
 
+/// Places image `i` and starts its frame entry with `file_path` (with extension) and `transform_matrix`.
+fn placed_entry(
+    x: &Export,
+    i: usize,
+    split: &str,
+    pad: usize,
+    files: &mut Files,
+) -> Result<(Names, Map<String, Value>), String> {
+    let img = &x.plan.images[i];
+    let n = names(split, &r_name(img, pad));
+    place(x, i, &n, "", files)?;
+    let mut f = Map::new();
+    f.insert("file_path".into(), json!(format!("{}.png", n.rgba)));
+    f.insert("transform_matrix".into(), rows(&img.camera.c2w));
+    Ok((n, f))
+}
+
 /// The intrinsics header shared by every transforms file: `camera_angle_x` and `fl_x/fl_y/cx/cy/w/h`.
 fn intrinsics(img: &Image) -> Map<String, Value> {
     let c = &img.camera;
@@ -156,11 +173,7 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
         let mut names_of_split = Vec::new();
         for &i in &list {
             let img = &x.plan.images[i];
-            let n = names(&split, &r_name(img, pad));
-            place(x, i, &n, "", files)?;
-            let mut f = Map::new();
-            f.insert("file_path".into(), json!(format!("{}.png", n.rgba)));
-            f.insert("transform_matrix".into(), rows(&img.camera.c2w));
+            let (n, mut f) = placed_entry(x, i, &split, pad, files)?;
             f.insert("time".into(), json!(img.time));
             if depth {
                 f.insert("depth_file_path".into(), json!(format!("{}.png", n.depth)));
@@ -221,11 +234,7 @@ pub fn instant_ngp(x: &Export, out: &Output, images: &[usize], files: &mut Files
         let mut frames = Vec::new();
         for &i in &list {
             let img = &x.plan.images[i];
-            let n = names(&split, &r_name(img, pad));
-            place(x, i, &n, "", files)?;
-            let mut f = Map::new();
-            f.insert("file_path".into(), json!(format!("{}.png", n.rgba)));
-            f.insert("transform_matrix".into(), rows(&img.camera.c2w));
+            let (n, mut f) = placed_entry(x, i, &split, pad, files)?;
             if depth {
                 f.insert("depth_path".into(), json!(format!("{}.png", n.depth)));
             }
