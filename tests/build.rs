@@ -3,7 +3,8 @@
 
 mod common;
 
-use std::collections::BTreeMap;
+use common::tree;
+
 use std::path::{Path, PathBuf};
 
 fn asset() -> PathBuf {
@@ -52,22 +53,6 @@ fn build(manifest: &Path, threads: usize) -> vvgen::build::Report {
         .unwrap()
 }
 
-fn tree(root: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.insert(p.strip_prefix(root).unwrap().to_path_buf(), std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
-}
-
 #[test]
 fn same_bytes_with_one_and_two_threads() {
     let points = "[output.p]\nwriter = \"ply-sequence\"\npoints = 5000\nvoxel = 0.02\n";
@@ -79,7 +64,7 @@ fn same_bytes_with_one_and_two_threads() {
     assert!(ta.len() > 20, "{:?}", ta.keys().collect::<Vec<_>>());
     assert_eq!(ta.keys().collect::<Vec<_>>(), tb.keys().collect::<Vec<_>>());
     for (k, v) in &ta {
-        assert!(v == &tb[k], "{} differs between 1 and 2 threads", k.display());
+        assert!(v == &tb[k], "{k} differs between 1 and 2 threads");
     }
     // Every requested pass landed, with its consumer's channel layout.
     let d = a.path().join("out/m_dnerf");

@@ -1,13 +1,12 @@
 //! The incremental engine on real assets: edits re-render exactly what they change, builds are crash-safe,
 //! shards and thread counts give the same release, and corruption is detected.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod common;
 
-use common::animated_triangle;
+use common::{animated_triangle, tree};
 use vvgen::build::{build, Options, Report, Silent};
 use vvgen::execute::Shard;
 
@@ -66,22 +65,6 @@ fn run_with(dir: &Path, text: &str, opts: Options) -> Report {
     std::fs::write(&p, text).unwrap();
     let (m, _) = vvgen::manifest::load(&p).unwrap_or_else(|r| panic!("{}", r.render(false)));
     build(&m, &dir.join("cache"), opts, &Silent).unwrap()
-}
-
-fn tree(root: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.insert(p.strip_prefix(root).unwrap().to_string_lossy().into_owned(), std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
 }
 
 #[test]

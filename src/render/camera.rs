@@ -34,7 +34,11 @@ pub const GL_TO_CV: DMat4 =
 impl Camera {
     /// A camera at `eye` looking at `target`, with image up as close to `up` as possible.
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> DMat4 {
-        let (eye, target, up) = (eye.as_dvec3(), target.as_dvec3(), up.as_dvec3());
+        Self::look_at_f64(eye.as_dvec3(), target.as_dvec3(), up.as_dvec3())
+    }
+
+    /// [`Camera::look_at`] in double precision (what the rigs place cameras with).
+    pub fn look_at_f64(eye: glam::DVec3, target: glam::DVec3, up: glam::DVec3) -> DMat4 {
         let back = (eye - target).normalize();
         // A view straight along `up` has no defined roll: fall back to world +Y as up.
         let up = if back.cross(up).length_squared() < 1e-12 { glam::DVec3::Y } else { up };

@@ -11,6 +11,7 @@ use std::path::Path;
 use glam::{DMat3, DMat4, DVec3};
 
 use crate::manifest::rig::{Band, ForwardLayout, OrbitSchedule, Rig, RigKind, NERF_RADIUS};
+use crate::render::Camera;
 use random::{Keyed, Mt19937};
 
 /// NeRF-synthetic's starting camera position before the tilt and azimuth: (0, 4, 0.5).
@@ -188,10 +189,7 @@ pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat
 /// Camera-to-world of a camera at `eye` looking at `target` with world +Z up in the image (OpenGL axes);
 /// Blender's Track To with up axis Y. Straight up or down, image up falls back to world +Y.
 pub fn look_at(eye: DVec3, target: DVec3) -> DMat4 {
-    let back = (eye - target).normalize();
-    let up = if back.cross(DVec3::Z).length_squared() < 1e-12 { DVec3::Y } else { DVec3::Z };
-    let right = up.cross(back).normalize();
-    DMat4::from_cols(right.extend(0.0), back.cross(right).extend(0.0), back.extend(0.0), eye.extend(1.0))
+    Camera::look_at_f64(eye, target, DVec3::Z)
 }
 
 fn stream(id: Identity, what: &str, view: usize) -> Keyed {

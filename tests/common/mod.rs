@@ -1,4 +1,7 @@
-//! Fixtures the tests make themselves.
+//! Fixtures the tests make themselves, and helpers to compare what builds write.
+
+use std::collections::BTreeMap;
+use std::path::Path;
 
 /// A triangle whose translation is animated by four LINEAR keys at t = 0, 1, 2, 3 s.
 pub fn animated_triangle(last_key_x: f32) -> String {
@@ -30,4 +33,21 @@ pub fn animated_triangle(last_key_x: f32) -> String {
                    "samplers": [{{"input": 1, "output": 2, "interpolation": "LINEAR"}}]}}]}}"#,
         buf.len()
     )
+}
+
+/// Every file under `root` (root-relative path → bytes).
+pub fn tree(root: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.insert(p.strip_prefix(root).unwrap().to_string_lossy().into_owned(), std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    out
 }
