@@ -100,9 +100,12 @@ pub struct ImageParts {
     pub salt: String,
 }
 
+/// One record per (dataset directory, manifest): two manifests may share an `out` directory (a point-cloud
+/// sequence and the renders made from it), and neither may prune the other's files.
 fn last_build_path(store: &Store, m: &Manifest) -> PathBuf {
-    let abs = std::path::absolute(m.out_dir()).unwrap_or_else(|_| m.out_dir());
-    let name = blake3::hash(abs.to_string_lossy().as_bytes()).to_hex();
+    let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p).to_string_lossy().into_owned();
+    let id = format!("{}\0{}", abs(m.out_dir()), abs(m.path.clone()));
+    let name = blake3::hash(id.as_bytes()).to_hex();
     store.root().join("builds").join(format!("{}.json", &name[..32]))
 }
 

@@ -38,7 +38,7 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
         }));
     }
     let cam = images.first().map(|&i| x.plan.images[i].camera);
-    let doc = json!({
+    let mut doc = json!({
         "tool": "vvgen",
         "version": env!("CARGO_PKG_VERSION"),
         "dataset": m.dataset.name.get_ref(),
@@ -67,5 +67,8 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
         "rgba": "8-bit sRGB PNG, straight (un-premultiplied) alpha = coverage",
         "images": entries,
     });
+    for (k, v) in &files.meta {
+        doc[k] = v.clone();
+    }
     files.json("vvgen.json", &doc)
 }

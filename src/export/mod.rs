@@ -77,11 +77,21 @@ pub(crate) struct Files<'a> {
     warnings: Vec<String>,
     /// Per image: pass name → root-relative path, for vvgen.json.
     placed: BTreeMap<usize, BTreeMap<&'static str, String>>,
+    /// Writer-specific sections of vvgen.json (e.g. a point-cloud sequence's grid and counts).
+    meta: serde_json::Map<String, serde_json::Value>,
 }
 
 impl<'a> Files<'a> {
     fn new(root: PathBuf, store: &'a Store, stat: &'a StatCache) -> Files<'a> {
-        Files { root, store, stat, files: Vec::new(), warnings: Vec::new(), placed: BTreeMap::new() }
+        Files {
+            root,
+            store,
+            stat,
+            files: Vec::new(),
+            warnings: Vec::new(),
+            placed: BTreeMap::new(),
+            meta: Default::default(),
+        }
     }
 
     /// Places stored blob `d` at `rel` as pass `pass` of plan image `image`.
@@ -107,6 +117,11 @@ impl<'a> Files<'a> {
     /// Writes pretty JSON at `rel`.
     fn json(&mut self, rel: &str, v: &serde_json::Value) -> Result<(), String> {
         self.bytes(rel, json_text(v).as_bytes())
+    }
+
+    /// Adds section `key` to the dataset's vvgen.json.
+    fn meta(&mut self, key: &str, v: serde_json::Value) {
+        self.meta.insert(key.to_string(), v);
     }
 
     fn warn(&mut self, w: String) {

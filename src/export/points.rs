@@ -5,12 +5,19 @@
 //! re-evaluated on every frame, so point i is the same surface point throughout (`point_id`, and `motion_x/y/z`
 //! to the next frame with `motion = true`).
 
+use std::sync::OnceLock;
+
+use rayon::prelude::*;
+use serde_json::json;
+
 use super::{Export, Files};
 use crate::cache::{key, Digest};
-use crate::manifest::output::{ColorAverage, Output, PlyFormat, Reduce};
+use crate::manifest::output::{ColorAverage, Output, PlyFormat};
 use crate::manifest::sequence::format_frame;
 use crate::plan::keys::SAMPLE_SALT;
-use crate::sample::{self, voxel, Draw, Points};
+use crate::plan::time_of;
+use crate::sample::voxel::{self, Reduction};
+use crate::sample::{self, Draw, Points};
 use crate::scene::material::{linear_to_srgb, srgb_to_linear};
 use crate::scene::ply::{self, PlyOut};
 use crate::scene::{PosedScene, Poser, SourceData};
@@ -26,10 +33,10 @@ struct Grid {
     max: f32,
 }
 
+/// One frame's samples before reduction, and their motion to the next frame.
+type Samples = (Points, Option<Vec<[f32; 3]>>);
+
 pub fn sequence(x: &Export, out: &Output, files: &mut Files) -> Result<(), String> {
-    if !matches!(out.reduce.unwrap_or_default(), Reduce::Mean) {
-        return Err("ply-sequence: only reduce = \"mean\" is implemented yet".to_string());
-    }
     let n = out.points.as_ref().map_or(0, |p| *p.get_ref()) as usize;
     let pattern = out.pattern.as_ref().map_or(DEFAULT_PATTERN, |p| p.get_ref().as_str());
     let pattern = pattern.replace("{name}", x.manifest.dataset.name.get_ref());
@@ -49,61 +56,58 @@ pub fn sequence(x: &Export, out: &Output, files: &mut Files) -> Result<(), Strin
             "ply-sequence: `motion` needs correspondence and no `voxel`/`vox` (merged points have no track)".into()
         );
     }
-    let frames: Vec<usize> = (0..x.plan.frames).collect();
+    let frames = x.plan.frames;
+    let all_frames = key("all frames", &x.frame_keys.iter().map(|k| &k.0[..]).collect::<Vec<_>>());
     let grid = match &out.vox {
-        Some(v) => {
-            let (lo, hi) = super::bounds(x, &frames)?.ok_or("the scene is empty")?;
-            let size = (1u32 << *v.get_ref()) as f32;
-            Some(Grid { lo: lo.to_array(), cell: (hi - lo).max_element().max(1e-9) / size, max: size - 1.0 })
-        }
+        Some(v) => Some(grid(x, *v.get_ref(), &all_frames)?),
         None => None,
     };
-    // Everything but the file name shapes the bytes.
-    let settings = format!(
-        "{n}|{:?}|{:?}|{:?}|{:?}|{only:?}|{corr}|{}|{:?}",
+    let reduces = grid.is_some() || out.voxel.is_some();
+    // What shapes the samples, and (separately) what shapes their reduction and encoding, so a change of voxel
+    // size re-runs only the reduction.
+    let sample_settings = format!("{n}|{only:?}|{corr}|{}", out.motion);
+    let reduce_settings = format!(
+        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
         out.voxel.as_ref().map(|v| *v.get_ref()),
         out.color_average,
         out.format,
         out.reduce,
-        out.motion,
+        out.position,
         out.vox.as_ref().map(|v| *v.get_ref()),
+        grid.map(|g| (g.lo, g.cell)),
     );
-    let all_frames = key("all frames", &x.frame_keys.iter().map(|k| &k.0[..]).collect::<Vec<_>>());
-    let mut poser = Poser::default();
-    let mut draws: Option<Vec<Draw>> = None;
-    for f in 0..x.plan.frames {
-        let mut parts: Vec<&[u8]> = vec![SAMPLE_SALT, &x.frame_keys[f].0, &seed, settings.as_bytes()];
-        if corr {
-            parts.push(&x.frame_keys[0].0);
-        }
-        if out.motion && f + 1 < x.plan.frames {
-            parts.push(&x.frame_keys[f + 1].0);
-        }
-        if grid.is_some() {
-            parts.push(&all_frames.0);
-        }
-        let k = key("ply sequence frame", &parts);
-        let d: Digest = x.cached(k, || {
-            let mut pose = |frame: usize| -> Result<PosedScene, String> {
-                Ok(match only {
-                    Some(i) => x.scene.pose_source(i, frame, &mut poser)?.clone(),
-                    None => x.scene.pose(frame, &mut poser)?.clone(),
-                })
-            };
-            let posed = pose(f)?;
-            let (pts, motion) = if corr {
-                let d = match &draws {
-                    Some(d) => d.clone(),
-                    None => {
-                        let first = pose(0)?;
-                        let d = sample::draw(&first, n, &[b"sequence corr", &seed]);
-                        draws = Some(d.clone());
-                        d
-                    }
+    let draws: OnceLock<Result<Vec<Draw>, String>> = OnceLock::new();
+    // Frames in parallel: each is an independent cached task with its own poser.
+    let made: Vec<Result<(Digest, usize), String>> = (0..frames)
+        .into_par_iter()
+        .map(|f| {
+            let mut parts: Vec<&[u8]> = vec![SAMPLE_SALT, &x.frame_keys[f].0, &seed, sample_settings.as_bytes()];
+            if corr {
+                parts.push(&x.frame_keys[0].0);
+            }
+            if out.motion && f + 1 < frames {
+                parts.push(&x.frame_keys[f + 1].0);
+            }
+            let sample_key = key("ply sequence samples", &parts);
+            let make = || -> Result<Samples, String> {
+                let mut poser = Poser::default();
+                let mut pose = |frame: usize| -> Result<PosedScene, String> {
+                    Ok(match only {
+                        Some(i) => x.scene.pose_source(i, frame, &mut poser)?.clone(),
+                        None => x.scene.pose(frame, &mut poser)?.clone(),
+                    })
                 };
-                let mut pts = sample::evaluate(&posed, &d)?;
+                let posed = pose(f)?;
+                if !corr {
+                    return Ok((sample::sample(&posed, n, &[b"sequence", &seed, &(f as u64).to_le_bytes()]), None));
+                }
+                let d = draws
+                    .get_or_init(|| Ok(sample::draw(&pose(0)?, n, &[b"sequence corr", &seed])))
+                    .as_ref()
+                    .map_err(Clone::clone)?;
+                let mut pts = sample::evaluate(&posed, d)?;
                 let motion = if out.motion {
-                    let next = if f + 1 < x.plan.frames { sample::evaluate(&pose(f + 1)?, &d)? } else { pts.clone() };
+                    let next = if f + 1 < frames { sample::evaluate(&pose(f + 1)?, d)? } else { pts.clone() };
                     Some(
                         pts.positions
                             .iter()
@@ -115,15 +119,81 @@ pub fn sequence(x: &Export, out: &Output, files: &mut Files) -> Result<(), Strin
                     None
                 };
                 pts.extend(&sample::points(&posed));
-                (pts, motion)
-            } else {
-                (sample::sample(&posed, n, &[b"sequence", &seed, &(f as u64).to_le_bytes()]), None)
+                Ok((pts, motion))
             };
-            Ok(encode(pts, motion, out, grid, corr, f))
-        })?;
-        files.blob(&format_frame(&pattern, f as i64)?, d)?;
+            let k = key("ply sequence frame", &[&sample_key.0, reduce_settings.as_bytes()]);
+            let d = x.cached(k, || {
+                let (pts, motion) = if reduces {
+                    // The unreduced samples are a task of their own (motion is never asked for here).
+                    let raw = x.cached(sample_key, || Ok(make()?.0.to_bytes()))?;
+                    (Points::from_bytes(&x.store.get(&raw).map_err(|e| format!("cache: {e}"))?)?, None)
+                } else {
+                    make()?
+                };
+                Ok(encode(pts, motion, out, grid, corr, f))
+            })?;
+            Ok((d, vertex_count(x, &d)?))
+        })
+        .collect();
+    let mut entries = Vec::with_capacity(frames);
+    for (f, r) in made.into_iter().enumerate() {
+        let (d, count) = r?;
+        let file = format_frame(&pattern, f as i64)?;
+        files.blob(&file, d)?;
+        entries.push(json!({ "index": f, "time": time_of(f, frames), "file": file, "points": count }));
     }
+    let mut seq = json!({
+        "points_sampled": n,
+        "correspondence": corr,
+        "motion": out.motion,
+        "voxel": out.voxel.as_ref().map(|v| *v.get_ref()),
+        "reduce": format!("{:?}", out.reduce.unwrap_or_default()).to_lowercase(),
+        "position": format!("{:?}", out.position.unwrap_or_default()).to_lowercase(),
+        "color_average": format!("{:?}", out.color_average.unwrap_or_default()).to_lowercase(),
+        "colors": "8-bit sRGB",
+        "frames": entries,
+    });
+    if let (Some(g), Some(v)) = (grid, &out.vox) {
+        let size = 1u32 << *v.get_ref();
+        seq["grid"] = json!({
+            "vox": v.get_ref(),
+            "size": size,
+            "origin": g.lo,
+            "cell": g.cell,
+            "bounds": [g.lo, g.lo.map(|l| l + g.cell * size as f32)],
+            "to_world": "world = origin + (integer coordinate + 0.5) * cell",
+        });
+    }
+    files.meta("sequence", seq);
     Ok(())
+}
+
+/// The sequence's integer grid: the bounds of every frame, cached under the frames' keys (so a no-op build does
+/// not pose the whole sequence again).
+fn grid(x: &Export, vox: u32, all_frames: &Digest) -> Result<Grid, String> {
+    let k = key("sequence grid", &[&all_frames.0, &vox.to_le_bytes()]);
+    let d = x.cached(k, || {
+        let frames: Vec<usize> = (0..x.plan.frames).collect();
+        let (lo, hi) = super::bounds(x, &frames)?.ok_or("the scene is empty")?;
+        let cell = (hi - lo).max_element().max(1e-9) / (1u32 << vox) as f32;
+        Ok([lo.x, lo.y, lo.z, cell].iter().flat_map(|v| v.to_le_bytes()).collect())
+    })?;
+    let b = x.store.get(&d).map_err(|e| format!("cache: {e}"))?;
+    let v: Vec<f32> = b.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
+    let [lx, ly, lz, cell] = v[..] else { return Err("cache: damaged sequence grid".into()) };
+    Ok(Grid { lo: [lx, ly, lz], cell, max: ((1u32 << vox) - 1) as f32 })
+}
+
+/// Points in a stored PLY frame, from its header.
+fn vertex_count(x: &Export, d: &Digest) -> Result<usize, String> {
+    use std::io::Read;
+    // The header is at the front; reading the whole frame back would cost as much as the build itself.
+    let mut head = Vec::new();
+    std::fs::File::open(x.store.object_path(d))
+        .and_then(|f| f.take(1 << 16).read_to_end(&mut head))
+        .map_err(|e| format!("cache: {e}"))?;
+    let h = ply::parse_header(&head).map_err(|e| format!("cache: {e}"))?;
+    Ok(h.elements.iter().find(|e| e.name == "vertex").map_or(0, |e| e.count))
 }
 
 /// Reduces and encodes one frame.
@@ -136,16 +206,17 @@ fn encode(
     f: usize,
 ) -> Vec<u8> {
     let srgb_mean = out.color_average == Some(ColorAverage::Srgb);
+    let how = Reduction { reduce: out.reduce.unwrap_or_default(), position: out.position.unwrap_or_default() };
     let reduce = |pts: &Points, size: f32| {
         if srgb_mean {
             // Average the stored sRGB values (Open3D's behaviour) by averaging in that space.
             let mut p = pts.clone();
             p.colors.iter_mut().for_each(|c| *c = c.map(linear_to_srgb));
-            let mut r = voxel::downsample(&p, size);
+            let mut r = voxel::downsample(&p, size, how);
             r.colors.iter_mut().for_each(|c| *c = c.map(srgb_to_linear));
             r
         } else {
-            voxel::downsample(pts, size)
+            voxel::downsample(pts, size, how)
         }
     };
     let mut comments = vec![format!("vvgen frame {f}")];

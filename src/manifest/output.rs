@@ -40,6 +40,8 @@ pub struct Output {
     pub motion: bool,
     /// `ply-sequence`: voxel reduction, `"mean"` (default), `"nearest"` or `"first"`.
     pub reduce: Option<Reduce>,
+    /// `ply-sequence`: where a voxel's point goes, `"points"` (the reduction's position, default) or `"center"`.
+    pub position: Option<VoxelPosition>,
     /// `ply-sequence`: colour averaging space, `"linear"` (default) or `"srgb"`.
     pub color_average: Option<ColorAverage>,
     /// `ply-sequence`: file name pattern (default `{name}_{frame:04}.ply`).
@@ -99,6 +101,7 @@ impl Writer {
                 "correspondence",
                 "motion",
                 "reduce",
+                "position",
                 "color_average",
                 "pattern",
                 "format",
@@ -120,6 +123,17 @@ pub enum Reduce {
     Nearest,
     /// The first point (in sample order).
     First,
+}
+
+/// Where a voxel's representative point is placed.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum VoxelPosition {
+    /// The reduction's own position: the mean, or the chosen point's.
+    #[default]
+    Points,
+    /// The voxel centre.
+    Center,
 }
 
 /// Colour averaging space.

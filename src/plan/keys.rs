@@ -10,9 +10,9 @@ use crate::plan::Image;
 use crate::scene::{Poser, Scene, SourceData};
 
 /// Version of the renderer's output: bump when a change moves rendered bytes.
-pub const RENDER_SALT: &[u8] = b"render 1";
+pub const RENDER_SALT: &[u8] = b"render 2";
 /// Version of the point sampler's output.
-pub const SAMPLE_SALT: &[u8] = b"sample 1";
+pub const SAMPLE_SALT: &[u8] = b"sample 2";
 
 /// The key of every scene frame.
 pub fn frame_keys(scene: &Scene, stat: &StatCache) -> Result<Vec<Digest>, String> {

@@ -128,17 +128,8 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
         far: cam.far as f32,
         size: (w * k, h * k),
     };
-    let mut tris = raster::setup(scene, &proj);
+    let tris = raster::setup(scene, &proj);
     let splats = splat::setup(scene, &proj, &s.splat, k as f32);
-    if s.splat.shape == SplatShape::Cube && scene.point_count() > 0 {
-        // A cube needs a world size; a pixel size is taken at unit distance.
-        let size = match s.splat.size {
-            SplatSize::World(w) => w,
-            SplatSize::Pixels(px) => px / cam.fx as f32,
-        };
-        let eye = cam.c2w.w_axis.truncate().as_vec3();
-        tris.extend(raster::setup(&splat::cube_faces(scene, eye, size), &proj));
-    }
     // Bin triangles into tiles in scene order: the depth test keeps the first of equal depths, so order matters
     // and must not depend on threads.
     let (tw, th) = ((w + TILE - 1) / TILE, (h + TILE - 1) / TILE);

@@ -5,6 +5,7 @@
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
+use super::splat::Rays;
 use crate::scene::material::AlphaMode;
 use crate::scene::{PosedScene, PrimKind};
 
@@ -323,10 +324,28 @@ pub fn raster_tile(scene: &PosedScene, work: TileWork<'_>, shade: &Shade, rect: 
             }
         }
     }
+    // Cube splats intersect each sample's ray with the box; the rays are made once per tile.
+    let rays = splat_bin.iter().any(|&si| splats[si as usize].cube.is_some()).then(|| Rays::new(proj, x0, y0, w, h));
     for &si in splat_bin {
         let sp = &splats[si as usize];
         let (bx0, by0) = (sp.bbox[0].max(x0), sp.bbox[1].max(y0));
         let (bx1, by1) = (sp.bbox[2].min(x0 + w - 1), sp.bbox[3].min(y0 + h - 1));
+        if let (Some((c, half)), Some(rays)) = (sp.cube, &rays) {
+            for sy in by0..=by1 {
+                for sx in bx0..=bx1 {
+                    let i = ((sy - y0) * w + (sx - x0)) as usize;
+                    if let Some((z, n)) = rays.hit(i, c, half) {
+                        if z < t.depth[i] && z >= near && z <= far {
+                            t.color[i] = sp.color.truncate().extend(1.0);
+                            t.depth[i] = z;
+                            t.normal[i] = n;
+                            t.object[i] = sp.object + 1;
+                        }
+                    }
+                }
+            }
+            continue;
+        }
         for sy in by0..=by1 {
             for sx in bx0..=bx1 {
                 let i = ((sy - y0) * w + (sx - x0)) as usize;

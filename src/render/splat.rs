@@ -1,5 +1,6 @@
 //! Point splats: screen-aligned squares and disks (one depth per splat, depth-tested against everything),
-//! and cubes, expanded into the camera-facing faces of a true 3D cube and drawn as triangles.
+//! and true 3D cubes, drawn by intersecting each covered sample's ray with the box (exact silhouette, depth
+//! and face normal per sample, no triangles).
 
 use glam::{Vec3, Vec4};
 
@@ -47,7 +48,7 @@ pub struct Splat {
     x: i64,
     y: i64,
     r: i64,
-    /// View depth.
+    /// View depth (of the centre; a cube's samples take their own depth).
     pub z: f32,
     /// Linear colour.
     pub color: Vec4,
@@ -58,28 +59,44 @@ pub struct Splat {
     /// Inclusive sample bounding box.
     pub bbox: [i64; 4],
     disk: bool,
+    /// For cubes: the centre relative to the eye (world axes) and half the edge.
+    pub cube: Option<(Vec3, f32)>,
 }
 
-/// Screen-space splats for every point primitive (squares and disks; cubes are triangles, see [`cube_faces`]).
+/// Screen-space splats for every point primitive, in scene order. Cubes are world-axis-aligned boxes of edge
+/// `size` around each point, drawn exactly by intersecting each sample's ray with the box (see [`Rays`]); their
+/// bounding box here is the projection of the circumscribed sphere.
 pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> Vec<Splat> {
-    let mut out = Vec::new();
-    if s.shape == Shape::Cube {
-        return out;
-    }
+    let mut out = Vec::with_capacity(scene.point_count());
     let [fx, fy, cx, cy] = p.f;
+    let eye = p.w2c.inverse().w_axis.truncate();
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
         for (i, pos) in prim.positions.iter().enumerate() {
             let v = p.w2c.transform_point3(*pos);
             let z = -v.z;
+            let (sx, sy) = (cx + fx * v.x / z, cy - fy * v.y / z);
+            let (half, cube) = match (s.shape, s.size) {
+                (Shape::Cube, size) => {
+                    // A pixel size is taken at unit distance.
+                    let h = 0.5
+                        * match size {
+                            Size::World(w) => w,
+                            Size::Pixels(px) => px * k / fx,
+                        };
+                    let reach = h * 3f32.sqrt();
+                    // The near plane would cut the cube: drop it (cubes are voxel-sized).
+                    if !(z - reach >= p.near && z - reach <= p.far) {
+                        continue;
+                    }
+                    (reach * fx.max(fy) / (z - reach), Some((*pos - eye, h)))
+                }
+                (_, Size::World(w)) => (0.5 * w * fx / z, None),
+                (_, Size::Pixels(px)) => (0.5 * px * k, None),
+            };
             if !(z >= p.near && z <= p.far) {
                 continue;
             }
-            let (sx, sy) = (cx + fx * v.x / z, cy - fy * v.y / z);
-            let half = match s.size {
-                Size::World(w) => 0.5 * w * fx / z,
-                Size::Pixels(px) => 0.5 * px * k,
-            };
             let (x, y, r) = (
                 (sx * SUBPIXEL as f32).round() as i64,
                 (sy * SUBPIXEL as f32).round() as i64,
@@ -105,6 +122,7 @@ pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> V
                 object: prim.object,
                 bbox,
                 disk: s.shape == Shape::Disk,
+                cube,
             });
         }
     }
@@ -125,51 +143,48 @@ impl Splat {
     }
 }
 
-/// The camera-facing faces of a cube of edge `size` around each point, as a triangle scene with the points'
-/// colours (flat, unlit: the colour goes to the vertex colours, the face normal to the normals).
-pub fn cube_faces(scene: &PosedScene, eye: Vec3, size: f32) -> PosedScene {
-    use std::sync::Arc;
-    let h = 0.5 * size;
-    let axes = [Vec3::X, Vec3::Y, Vec3::Z];
-    let mut out =
-        PosedScene { materials: scene.materials.clone(), textures: scene.textures.clone(), primitives: Vec::new() };
-    for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
-        let (mut pos, mut nrm, mut col, mut idx) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for (i, c) in prim.positions.iter().enumerate() {
-            let color = prim.colors.get(i).copied().unwrap_or(Vec4::ONE);
-            for (a, axis) in axes.iter().enumerate() {
-                // Of the two faces along this axis, at most the one toward the eye can be seen, and only when the eye
-                // is outside its plane.
-                let sign = if (eye - *c).dot(*axis) >= 0.0 { 1.0 } else { -1.0 };
-                let n = *axis * sign;
-                if (eye - (*c + n * h)).dot(n) <= 0.0 {
-                    continue;
-                }
-                let (u, v) = (axes[(a + 1) % 3] * h, axes[(a + 2) % 3] * h);
-                let centre = *c + n * h;
-                let base = pos.len() as u32;
-                // Counter-clockwise seen from outside.
-                let quad = if sign > 0.0 {
-                    [centre - u - v, centre + u - v, centre + u + v, centre - u + v]
-                } else {
-                    [centre - u - v, centre - u + v, centre + u + v, centre + u - v]
-                };
-                pos.extend_from_slice(&quad);
-                nrm.extend_from_slice(&[n; 4]);
-                col.extend_from_slice(&[color; 4]);
-                idx.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+/// Per-sample rays of a tile for cube splats: the reciprocal of each sample's world direction, scaled so that the
+/// ray parameter is the planar view depth.
+pub struct Rays {
+    inv: Vec<Vec3>,
+}
+
+impl Rays {
+    /// Rays through the sample centres of the `w × h` samples at (`x0`, `y0`).
+    pub fn new(p: &Projection, x0: i64, y0: i64, w: i64, h: i64) -> Rays {
+        let rot = glam::Mat3::from_mat4(p.w2c.inverse());
+        let [fx, fy, cx, cy] = p.f;
+        let mut inv = Vec::with_capacity((w * h) as usize);
+        for sy in y0..y0 + h {
+            for sx in x0..x0 + w {
+                // Camera space, looking down −Z: z = −1 makes the ray parameter the planar depth.
+                let d = Vec3::new((sx as f32 + 0.5 - cx) / fx, -(sy as f32 + 0.5 - cy) / fy, -1.0);
+                inv.push((rot * d).recip());
             }
         }
-        out.primitives.push(crate::scene::PosedPrimitive {
-            kind: PrimKind::Triangles,
-            positions: pos,
-            normals: nrm,
-            uvs: Arc::new(Vec::new()),
-            colors: Arc::new(col),
-            indices: Arc::new(idx),
-            material: prim.material,
-            object: prim.object,
-        });
+        Rays { inv }
     }
-    out
+
+    /// Where sample `i`'s ray enters the cube (centre `c` relative to the eye, half edge `h`): planar depth and
+    /// the entered face's normal; `None` on a miss.
+    #[inline]
+    pub fn hit(&self, i: usize, c: Vec3, h: f32) -> Option<(f32, Vec3)> {
+        let inv = self.inv[i];
+        let t1 = (c - Vec3::splat(h)) * inv;
+        let t2 = (c + Vec3::splat(h)) * inv;
+        let (lo, hi) = (t1.min(t2), t1.max(t2));
+        let enter = lo.max_element();
+        if enter > hi.min_element() {
+            return None;
+        }
+        // The entered face is on the axis that entered last, facing against the ray.
+        let n = if enter == lo.x {
+            Vec3::new(-inv.x.signum(), 0.0, 0.0)
+        } else if enter == lo.y {
+            Vec3::new(0.0, -inv.y.signum(), 0.0)
+        } else {
+            Vec3::new(0.0, 0.0, -inv.z.signum())
+        };
+        Some((enter, n))
+    }
 }

@@ -4,7 +4,16 @@
 //! sets published by Blender scripts.
 
 /// A stream of uniform numbers derived from a key.
-pub struct Keyed(blake3::OutputReader);
+pub struct Keyed {
+    reader: blake3::OutputReader,
+    /// Read ahead: blake3 computes whole 64-byte blocks (several at once with SIMD), so 8-byte reads straight
+    /// from the reader would recompute each block eight times. The stream's bytes are the same either way.
+    buf: [u8; BUF],
+    pos: usize,
+}
+
+/// Bytes read ahead from the XOF at a time.
+const BUF: usize = 512;
 
 impl Keyed {
     /// A stream for `domain` (what is being drawn) and the identity `parts`.
@@ -15,14 +24,31 @@ impl Keyed {
             h.update(&(p.len() as u64).to_le_bytes());
             h.update(p);
         }
-        Keyed(h.finalize_xof())
+        Keyed { reader: h.finalize_xof(), buf: [0; BUF], pos: BUF }
+    }
+
+    /// The next `N` bytes of the stream (a partial tail of the read-ahead is skipped, deterministically).
+    #[inline]
+    fn take<const N: usize>(&mut self) -> [u8; N] {
+        if self.pos + N > BUF {
+            self.reader.fill(&mut self.buf);
+            self.pos = 0;
+        }
+        let b: [u8; N] = self.buf[self.pos..self.pos + N].try_into().unwrap();
+        self.pos += N;
+        b
     }
 
     /// Next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        let mut b = [0u8; 8];
-        self.0.fill(&mut b);
-        u64::from_le_bytes(b)
+        u64::from_le_bytes(self.take())
+    }
+
+    /// Uniform in [0, 1) with 24 bits, from 32 bits of the stream: for bulk draws (surface samples) where an
+    /// f32 result is all that is kept, at half the stream cost of [`Keyed::uniform`].
+    #[inline]
+    pub fn uniform_f32(&mut self) -> f32 {
+        (u32::from_le_bytes(self.take()) >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
     }
 
     /// Uniform in [0, 1) with 53 bits.

@@ -15,6 +15,9 @@ use crate::scene::{PosedScene, PrimKind};
 /// Samples drawn per keyed chunk (the unit of parallel work).
 const CHUNK: usize = 1 << 16;
 
+/// First bytes of [`Points::to_bytes`].
+const RAW_MAGIC: &[u8; 8] = b"vvgenPT1";
+
 /// Sampled points.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Points {
@@ -42,6 +45,35 @@ impl Points {
         self.positions.extend_from_slice(&other.positions);
         self.normals.extend_from_slice(&other.normals);
         self.colors.extend_from_slice(&other.colors);
+    }
+
+    /// A compact binary form for the cache: magic, count, then positions, normals and colours as f32 LE.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(16 + self.len() * 36);
+        b.extend_from_slice(RAW_MAGIC);
+        b.extend_from_slice(&(self.len() as u64).to_le_bytes());
+        for v in [&self.positions, &self.normals, &self.colors] {
+            b.extend(v.iter().flatten().flat_map(|c| c.to_le_bytes()));
+        }
+        b
+    }
+
+    /// Reads [`Points::to_bytes`].
+    pub fn from_bytes(b: &[u8]) -> Result<Points, String> {
+        let bad = || "not a vvgen point blob (the cache entry is damaged)".to_string();
+        let n = b.strip_prefix(RAW_MAGIC).and_then(|r| r.get(..8)).ok_or_else(bad)?;
+        let n = u64::from_le_bytes(n.try_into().unwrap()) as usize;
+        let body = &b[16..];
+        if Some(body.len()) != n.checked_mul(36) {
+            return Err(bad());
+        }
+        let arr = |k: usize| -> Vec<[f32; 3]> {
+            body[k * 12 * n..(k + 1) * 12 * n]
+                .chunks_exact(12)
+                .map(|c| [0, 1, 2].map(|j| f32::from_le_bytes(c[4 * j..4 * j + 4].try_into().unwrap())))
+                .collect()
+        };
+        Ok(Points { positions: arr(0), normals: arr(1), colors: arr(2) })
     }
 
     /// Colours as 8-bit sRGB.
@@ -82,38 +114,52 @@ pub fn draw(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Vec<Draw> {
     if tris.is_empty() || n == 0 {
         return Vec::new();
     }
-    let chunks: Vec<Vec<Draw>> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut parts: Vec<&[u8]> = key.to_vec();
-            let cb = (c as u64).to_le_bytes();
-            parts.push(&cb);
-            let mut k = Keyed::new("surface", &parts);
-            (c * CHUNK..((c + 1) * CHUNK).min(n))
-                .map(|i| {
-                    // Stratified: sample i draws from the i-th of n equal slices of the total area.
-                    let u = (i as f64 + k.uniform()) / n as f64 * total;
-                    let t = cdf.partition_point(|&v| v <= u).min(tris.len() - 1);
-                    let (r1, r2) = (k.uniform() as f32, k.uniform() as f32);
-                    let s = r1.sqrt();
-                    Draw { prim: tris[t].0, first: tris[t].1, bary: [1.0 - s, s * (1.0 - r2), s * r2] }
-                })
-                .collect()
-        })
-        .collect();
-    chunks.concat()
+    let mut out = vec![Draw { prim: 0, first: 0, bary: [0.0; 3] }; n];
+    out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| {
+        let mut parts: Vec<&[u8]> = key.to_vec();
+        let cb = (c as u64).to_le_bytes();
+        parts.push(&cb);
+        let mut k = Keyed::new("surface", &parts);
+        let mut t = 0;
+        for (j, d) in chunk.iter_mut().enumerate() {
+            // Stratified: sample i draws from the i-th of n equal slices of the total area. The targets rise
+            // with i, so the triangle search walks forward from the last one.
+            let i = c * CHUNK + j;
+            let u = (i as f64 + k.uniform_f32() as f64) / n as f64 * total;
+            if j == 0 {
+                t = cdf.partition_point(|&v| v <= u);
+            }
+            while t < tris.len() - 1 && cdf[t] <= u {
+                t += 1;
+            }
+            t = t.min(tris.len() - 1);
+            let (r1, r2) = (k.uniform_f32(), k.uniform_f32());
+            let s = r1.sqrt();
+            *d = Draw { prim: tris[t].0, first: tris[t].1, bary: [1.0 - s, s * (1.0 - r2), s * r2] };
+        }
+    });
+    out
 }
 
 /// Evaluates `draws` on `scene` (the frame they were drawn on, or another frame of the same meshes).
 pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, String> {
-    let mut out = Points::default();
-    for d in draws {
-        let ok = scene.primitives.get(d.prim as usize).is_some_and(|p| (d.first as usize + 2) < p.indices.len());
-        if !ok {
-            return Err("the mesh's topology changed between frames: correspondence needs fixed triangles".into());
-        }
-        push_surface_point(scene, d.prim, d.first, d.bary, &mut out);
+    let fits =
+        |d: &Draw| scene.primitives.get(d.prim as usize).is_some_and(|p| (d.first as usize + 2) < p.indices.len());
+    if !draws.par_iter().all(fits) {
+        return Err("the mesh's topology changed between frames: correspondence needs fixed triangles".into());
     }
+    let n = draws.len();
+    let mut out = Points { positions: vec![[0.0; 3]; n], normals: vec![[0.0; 3]; n], colors: vec![[0.0; 3]; n] };
+    out.positions
+        .par_chunks_mut(CHUNK)
+        .zip(out.normals.par_chunks_mut(CHUNK))
+        .zip(out.colors.par_chunks_mut(CHUNK))
+        .zip(draws.par_chunks(CHUNK))
+        .for_each(|(((pos, nrm), col), d)| {
+            for (j, d) in d.iter().enumerate() {
+                (pos[j], nrm[j], col[j]) = surface_point(scene, d);
+            }
+        });
     Ok(out)
 }
 
@@ -140,9 +186,11 @@ pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
     out
 }
 
-fn push_surface_point(scene: &PosedScene, prim: u32, first: u32, b: [f32; 3], out: &mut Points) {
-    let p = &scene.primitives[prim as usize];
-    let idx = [0, 1, 2].map(|k| p.indices[(first + k) as usize] as usize);
+/// Position, unit normal and linear colour of the surface point `d`.
+#[inline]
+fn surface_point(scene: &PosedScene, d: &Draw) -> ([f32; 3], [f32; 3], [f32; 3]) {
+    let (p, b) = (&scene.primitives[d.prim as usize], d.bary);
+    let idx = [0, 1, 2].map(|k| p.indices[(d.first + k) as usize] as usize);
     let lerp3 = |v: &[Vec3]| v[idx[0]] * b[0] + v[idx[1]] * b[1] + v[idx[2]] * b[2];
     let pos = lerp3(&p.positions);
     let n = if p.normals.len() == p.positions.len() {
@@ -156,7 +204,5 @@ fn push_surface_point(scene: &PosedScene, prim: u32, first: u32, b: [f32; 3], ou
     let vc: Option<Vec4> = (p.colors.len() == p.positions.len())
         .then(|| p.colors[idx[0]] * b[0] + p.colors[idx[1]] * b[1] + p.colors[idx[2]] * b[2]);
     let c = scene.materials[p.material as usize].albedo(&scene.textures, uv, vc);
-    out.positions.push(pos.to_array());
-    out.normals.push(n.to_array());
-    out.colors.push(c.truncate().to_array());
+    (pos.to_array(), n.to_array(), c.truncate().to_array())
 }
