@@ -145,9 +145,15 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     for (i, t) in tris.iter().enumerate() {
         bin(&mut bins, i, &t.bbox);
     }
-    let mut splat_bins: Vec<Vec<u32>> = vec![Vec::new(); (tw * th) as usize];
-    for (i, sp) in splats.iter().enumerate() {
-        bin(&mut splat_bins, i, &sp.bbox);
+    // Splats are copied into their tiles (they are small), so each tile walks its own in order.
+    let mut splat_bins: Vec<Vec<splat::Splat>> = vec![Vec::new(); (tw * th) as usize];
+    for sp in &splats.splats {
+        let b = sp.bbox(proj.size);
+        for ty in b[1] / ts..=b[3] / ts {
+            for tx in b[0] / ts..=b[2] / ts {
+                splat_bins[(ty * tw + tx) as usize].push(*sp);
+            }
+        }
     }
     let shade = Shade {
         lambert: (s.shading == Shading::Lambert).then(|| {
@@ -159,23 +165,6 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             (s.ambient, lights)
         }),
     };
-    let tiles: Vec<_> = (0..tw * th)
-        .into_par_iter()
-        .map(|ti| {
-            let (tx, ty) = (ti % tw, ti / tw);
-            let (x0, y0) = (tx * TILE, ty * TILE);
-            let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
-            let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
-            let work = raster::TileWork {
-                tris: &tris,
-                bin: &bins[ti as usize],
-                splats: &splats,
-                splat_bin: &splat_bins[ti as usize],
-            };
-            let st = raster::raster_tile(scene, work, &shade, rect, &proj);
-            resolve(&st, k, s)
-        })
-        .collect();
     let n = (w * h) as usize;
     let mut f = Frame {
         width: cam.width,
@@ -186,57 +175,76 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
         object: vec![0; n],
         coverage: vec![0; n],
     };
-    for (ti, px) in tiles.into_iter().enumerate() {
-        let (x0, y0) = ((ti as i64 % tw) * TILE, (ti as i64 / tw) * TILE);
-        let pw = TILE.min(w - x0);
-        for (j, p) in px.into_iter().enumerate() {
-            let (x, y) = (x0 + j as i64 % pw, y0 + j as i64 / pw);
-            let i = (y * w + x) as usize;
-            f.rgba[i * 4..i * 4 + 4].copy_from_slice(&p.0);
-            f.depth[i] = match s.depth {
-                DepthKind::Planar => p.1,
-                DepthKind::Ray => {
-                    let (dx, dy) = ((x as f64 + 0.5 - cam.cx) / cam.fx, (y as f64 + 0.5 - cam.cy) / cam.fy);
-                    (p.1 as f64 * (dx * dx + dy * dy + 1.0).sqrt()) as f32
-                }
-            };
-            f.normal[i] = p.2;
-            f.object[i] = p.3;
-            f.coverage[i] = p.4;
-        }
-    }
+    // One task per band of TILE rows: its tiles run in order through one reused sample buffer and resolve
+    // straight into the band's rows of the frame (no per-tile allocation, no copy afterwards).
+    let band = (TILE * w) as usize;
+    f.rgba
+        .par_chunks_mut(band * 4)
+        .zip(f.depth.par_chunks_mut(band))
+        .zip(f.normal.par_chunks_mut(band))
+        .zip(f.object.par_chunks_mut(band))
+        .zip(f.coverage.par_chunks_mut(band))
+        .enumerate()
+        .for_each(|(ty, ((((rgba, depth), normal), object), coverage))| {
+            let ty = ty as i64;
+            let mut out = Pixels { rgba, depth, normal, object, coverage, width: w };
+            let mut st: Option<raster::SampleTile> = None;
+            for tx in 0..tw {
+                let (x0, y0) = (tx * TILE, ty * TILE);
+                let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
+                let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
+                let ti = (ty * tw + tx) as usize;
+                let work = raster::TileWork { tris: &tris, bin: &bins[ti], splats: &splat_bins[ti], points: &splats };
+                let st = st.get_or_insert_with(|| raster::SampleTile::new(rect));
+                raster::raster_tile(scene, work, &shade, rect, &proj, st);
+                resolve(st, k, s, cam, x0, &mut out);
+            }
+        });
     f
 }
 
-/// Resolves a tile's k×k samples per pixel: alpha is coverage, colour the mean of covered samples (straight).
-fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4], f32, Vec3, u32, u8)> {
+/// One band of the frame's buffers (rows `TILE·band ..`), written by [`resolve`].
+struct Pixels<'a> {
+    rgba: &'a mut [u8],
+    depth: &'a mut [f32],
+    normal: &'a mut [Vec3],
+    object: &'a mut [u32],
+    coverage: &'a mut [u8],
+    width: i64,
+}
+
+/// Resolves a tile's samples into its pixels of the band `out` (tile columns from `x0`): straight-alpha colour,
+/// majority depth / normal / object.
+fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0: i64, out: &mut Pixels) {
     let (pw, ph) = (st.w / k, st.h / k);
-    let mut out = Vec::with_capacity((pw * ph) as usize);
     let total = (k * k) as u32;
+    let y0 = st.y0 / k;
     // Most pixels of a dataset image are background: one precomputed value for them.
     let empty = match s.background {
-        Some(bg) => ([linear_to_srgb8(bg.x), linear_to_srgb8(bg.y), linear_to_srgb8(bg.z), 255], 0.0, Vec3::ZERO, 0, 0),
-        None => ([0; 4], 0.0, Vec3::ZERO, 0, 0),
+        Some(bg) => [linear_to_srgb8(bg.x), linear_to_srgb8(bg.y), linear_to_srgb8(bg.z), 255],
+        None => [0; 4],
     };
     let mut ids = [0u32; 16];
     for py in 0..ph {
         for px in 0..pw {
+            let i = (py * out.width + x0 + px) as usize;
             let (mut sum, mut covered, mut depth, mut normal) = (Vec4::ZERO, 0u32, 0f32, Vec3::ZERO);
             for sy in 0..k {
                 let row = ((py * k + sy) * st.w + px * k) as usize;
-                for i in row..row + k as usize {
-                    if st.object[i] == 0 {
+                for j in row..row + k as usize {
+                    if st.object[j] == 0 {
                         continue;
                     }
-                    ids[covered as usize] = st.object[i];
+                    ids[covered as usize] = st.object[j];
                     covered += 1;
-                    sum += st.color[i];
-                    depth += st.depth[i];
-                    normal += st.normal[i];
+                    sum += st.color[j];
+                    depth += st.depth[j];
+                    normal += st.normal[j];
                 }
             }
             if covered == 0 {
-                out.push(empty);
+                // The other buffers start zeroed.
+                out.rgba[i * 4..i * 4 + 4].copy_from_slice(&empty);
                 continue;
             }
             let alpha = covered as f32 / total as f32;
@@ -247,20 +255,30 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings) -> Vec<([u8; 4],
                 rgb = rgb * alpha + bg * (1.0 - alpha);
                 a8 = 255;
             }
-            let majority = 2 * covered >= total;
-            out.push((
-                [linear_to_srgb8(rgb.x), linear_to_srgb8(rgb.y), linear_to_srgb8(rgb.z), a8],
-                if majority { depth / covered as f32 } else { 0.0 },
-                if majority { normal.normalize_or_zero() } else { Vec3::ZERO },
-                majority_id(&ids[..covered as usize]),
-                coverage,
-            ));
+            out.rgba[i * 4..i * 4 + 4].copy_from_slice(&[
+                linear_to_srgb8(rgb.x),
+                linear_to_srgb8(rgb.y),
+                linear_to_srgb8(rgb.z),
+                a8,
+            ]);
+            out.coverage[i] = coverage;
+            out.object[i] = majority_id(&ids[..covered as usize]);
+            if 2 * covered >= total {
+                let z = depth / covered as f32;
+                out.depth[i] = match s.depth {
+                    DepthKind::Planar => z,
+                    DepthKind::Ray => {
+                        let (x, y) = ((x0 + px) as f64 + 0.5, (y0 + py) as f64 + 0.5);
+                        let (dx, dy) = ((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy);
+                        (z as f64 * (dx * dx + dy * dy + 1.0).sqrt()) as f32
+                    }
+                };
+                out.normal[i] = normal.normalize_or_zero();
+            }
         }
     }
-    out
 }
 
-/// The most frequent id (ties: the smallest), for at most 16 samples.
 fn majority_id(ids: &[u32]) -> u32 {
     let first = ids[0];
     if ids.iter().all(|&i| i == first) {

@@ -207,6 +207,38 @@ pub struct SampleTile {
     pub object: Vec<u32>,
 }
 
+impl SampleTile {
+    /// An empty tile with room for `rect`.
+    pub fn new(rect: Rect) -> SampleTile {
+        let mut t = SampleTile {
+            x0: 0,
+            y0: 0,
+            w: 0,
+            h: 0,
+            color: Vec::new(),
+            depth: Vec::new(),
+            normal: Vec::new(),
+            object: Vec::new(),
+        };
+        t.reset(rect);
+        t
+    }
+
+    /// Empties the tile and moves it to `rect` (keeping its allocations).
+    pub fn reset(&mut self, rect: Rect) {
+        let n = (rect.w * rect.h) as usize;
+        (self.x0, self.y0, self.w, self.h) = (rect.x0, rect.y0, rect.w, rect.h);
+        self.color.clear();
+        self.color.resize(n, Vec4::ZERO);
+        self.depth.clear();
+        self.depth.resize(n, f32::INFINITY);
+        self.normal.clear();
+        self.normal.resize(n, Vec3::ZERO);
+        self.object.clear();
+        self.object.resize(n, 0);
+    }
+}
+
 /// What shading needs besides the scene.
 #[derive(Debug, Clone)]
 pub struct Shade {
@@ -234,28 +266,26 @@ pub struct TileWork<'a> {
     pub tris: &'a [Tri],
     /// This tile's triangles.
     pub bin: &'a [u32],
-    /// All splats.
+    /// This tile's splats, in scene order.
     pub splats: &'a [super::splat::Splat],
-    /// This tile's splats.
-    pub splat_bin: &'a [u32],
+    /// The attributes of every splat's point.
+    pub points: &'a super::splat::Splats,
 }
 
 /// Rasterizes a tile's triangles, then its splats, with one depth buffer.
-pub fn raster_tile(scene: &PosedScene, work: TileWork<'_>, shade: &Shade, rect: Rect, proj: &Projection) -> SampleTile {
-    let TileWork { tris, bin, splats, splat_bin } = work;
+/// `t` is reused from tile to tile (a band of tiles shares one): it is reset to `rect`, empty, first.
+pub fn raster_tile(
+    scene: &PosedScene,
+    work: TileWork<'_>,
+    shade: &Shade,
+    rect: Rect,
+    proj: &Projection,
+    t: &mut SampleTile,
+) {
+    let TileWork { tris, bin, splats, points } = work;
     let Rect { x0, y0, w, h } = rect;
     let (near, far) = (proj.near, proj.far);
-    let n = (w * h) as usize;
-    let mut t = SampleTile {
-        x0,
-        y0,
-        w,
-        h,
-        color: vec![Vec4::ZERO; n],
-        depth: vec![f32::INFINITY; n],
-        normal: vec![Vec3::ZERO; n],
-        object: vec![0; n],
-    };
+    t.reset(rect);
     for &ti in bin {
         let tri = &tris[ti as usize];
         let (bx0, by0) = (tri.bbox[0].max(x0), tri.bbox[1].max(y0));
@@ -325,21 +355,26 @@ pub fn raster_tile(scene: &PosedScene, work: TileWork<'_>, shade: &Shade, rect: 
         }
     }
     // Cube splats intersect each sample's ray with the box; the rays are made once per tile.
-    let rays = splat_bin.iter().any(|&si| splats[si as usize].cube.is_some()).then(|| Rays::new(proj, x0, y0, w, h));
-    for &si in splat_bin {
-        let sp = &splats[si as usize];
-        let (bx0, by0) = (sp.bbox[0].max(x0), sp.bbox[1].max(y0));
-        let (bx1, by1) = (sp.bbox[2].min(x0 + w - 1), sp.bbox[3].min(y0 + h - 1));
+    let rays = splats.iter().any(|sp| sp.cube.is_some()).then(|| Rays::new(proj, x0, y0, w, h));
+    let write = |t: &mut SampleTile, i: usize, sp: &super::splat::Splat, z: f32, n: Vec3| {
+        // Points carry their own colour: unlit.
+        let j = sp.point as usize;
+        t.color[i] = points.colors[j].truncate().extend(1.0);
+        t.depth[i] = z;
+        t.normal[i] = n;
+        t.object[i] = points.objects[j] + 1;
+    };
+    for sp in splats {
+        let bbox = sp.bbox(proj.size);
+        let (bx0, by0) = (bbox[0].max(x0), bbox[1].max(y0));
+        let (bx1, by1) = (bbox[2].min(x0 + w - 1), bbox[3].min(y0 + h - 1));
         if let (Some((c, half)), Some(rays)) = (sp.cube, &rays) {
             for sy in by0..=by1 {
                 for sx in bx0..=bx1 {
                     let i = ((sy - y0) * w + (sx - x0)) as usize;
                     if let Some((z, n)) = rays.hit(i, c, half) {
                         if z < t.depth[i] && z >= near && z <= far {
-                            t.color[i] = sp.color.truncate().extend(1.0);
-                            t.depth[i] = z;
-                            t.normal[i] = n;
-                            t.object[i] = sp.object + 1;
+                            write(t, i, sp, z, n);
                         }
                     }
                 }
@@ -350,16 +385,11 @@ pub fn raster_tile(scene: &PosedScene, work: TileWork<'_>, shade: &Shade, rect: 
             for sx in bx0..=bx1 {
                 let i = ((sy - y0) * w + (sx - x0)) as usize;
                 if sp.z < t.depth[i] && sp.covers(sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2) {
-                    // Points carry their own colour: unlit.
-                    t.color[i] = sp.color.truncate().extend(1.0);
-                    t.depth[i] = sp.z;
-                    t.normal[i] = sp.normal;
-                    t.object[i] = sp.object + 1;
+                    write(t, i, sp, sp.z, points.normals[sp.point as usize]);
                 }
             }
         }
     }
-    t
 }
 
 /// The camera's backward axis in world space (the head light's direction toward the light).

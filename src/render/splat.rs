@@ -42,39 +42,57 @@ impl Default for SplatSettings {
     }
 }
 
-/// A screen-space splat, in fixed-point sample coordinates.
+/// A screen-space splat, in fixed-point sample coordinates: kept small (tiles copy the splats they overlap and
+/// walk them in order), with colour, normal and object looked up in [`Splats`] only when a sample is written.
 #[derive(Debug, Clone, Copy)]
 pub struct Splat {
-    x: i64,
-    y: i64,
-    r: i64,
+    x: i32,
+    y: i32,
+    r: i32,
     /// View depth (of the centre; a cube's samples take their own depth).
     pub z: f32,
-    /// Linear colour.
-    pub color: Vec4,
-    /// World normal.
-    pub normal: Vec3,
-    /// Object id.
-    pub object: u32,
-    /// Inclusive sample bounding box.
-    pub bbox: [i64; 4],
+    /// Index into [`Splats`]' attributes.
+    pub point: u32,
     disk: bool,
     /// For cubes: the centre relative to the eye (world axes) and half the edge.
     pub cube: Option<(Vec3, f32)>,
 }
 
+/// Every splat of a frame and the attributes of its point.
+#[derive(Debug, Default)]
+pub struct Splats {
+    /// Splats in scene order.
+    pub splats: Vec<Splat>,
+    /// Linear colour per splat.
+    pub colors: Vec<Vec4>,
+    /// World normal per splat.
+    pub normals: Vec<Vec3>,
+    /// Object id per splat.
+    pub objects: Vec<u32>,
+}
+
 /// Screen-space splats for every point primitive, in scene order. Cubes are world-axis-aligned boxes of edge
 /// `size` around each point, drawn exactly by intersecting each sample's ray with the box (see [`Rays`]); their
-/// bounding box here is the projection of the circumscribed sphere.
-pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> Vec<Splat> {
-    let mut out = Vec::with_capacity(scene.point_count());
+/// bounding box is the projection of the circumscribed sphere.
+pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> Splats {
+    let n = scene.point_count();
+    let mut out = Splats {
+        splats: Vec::with_capacity(n),
+        colors: Vec::with_capacity(n),
+        normals: Vec::with_capacity(n),
+        objects: Vec::with_capacity(n),
+    };
     let [fx, fy, cx, cy] = p.f;
     let eye = p.w2c.inverse().w_axis.truncate();
+    let lim = (p.size.0.max(p.size.1) + 2) as f32 * SUBPIXEL as f32;
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
         for (i, pos) in prim.positions.iter().enumerate() {
             let v = p.w2c.transform_point3(*pos);
             let z = -v.z;
+            if !(z >= p.near && z <= p.far) {
+                continue;
+            }
             let (sx, sy) = (cx + fx * v.x / z, cy - fy * v.y / z);
             let (half, cube) = match (s.shape, s.size) {
                 (Shape::Cube, size) => {
@@ -86,7 +104,7 @@ pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> V
                         };
                     let reach = h * 3f32.sqrt();
                     // The near plane would cut the cube: drop it (cubes are voxel-sized).
-                    if !(z - reach >= p.near && z - reach <= p.far) {
+                    if z - reach < p.near {
                         continue;
                     }
                     (reach * fx.max(fy) / (z - reach), Some((*pos - eye, h)))
@@ -94,51 +112,43 @@ pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> V
                 (_, Size::World(w)) => (0.5 * w * fx / z, None),
                 (_, Size::Pixels(px)) => (0.5 * px * k, None),
             };
-            if !(z >= p.near && z <= p.far) {
+            let fixed = |v: f32| (v * SUBPIXEL as f32).round().clamp(-lim, lim) as i32;
+            let sp =
+                Splat { x: fixed(sx), y: fixed(sy), r: fixed(half), z, point: 0, disk: s.shape == Shape::Disk, cube };
+            let b = sp.bbox(p.size);
+            if sp.r <= 0 || b[0] > b[2] || b[1] > b[3] {
                 continue;
             }
-            let (x, y, r) = (
-                (sx * SUBPIXEL as f32).round() as i64,
-                (sy * SUBPIXEL as f32).round() as i64,
-                (half * SUBPIXEL as f32).round() as i64,
-            );
-            let bbox = [
-                ((x - r) / SUBPIXEL - 1).max(0),
-                ((y - r) / SUBPIXEL - 1).max(0),
-                ((x + r) / SUBPIXEL + 1).min(p.size.0 - 1),
-                ((y + r) / SUBPIXEL + 1).min(p.size.1 - 1),
-            ];
-            if r <= 0 || bbox[0] > bbox[2] || bbox[1] > bbox[3] {
-                continue;
-            }
-            let color = base * prim.colors.get(i).copied().unwrap_or(Vec4::ONE);
-            out.push(Splat {
-                x,
-                y,
-                r,
-                z,
-                color,
-                normal: prim.normals[i],
-                object: prim.object,
-                bbox,
-                disk: s.shape == Shape::Disk,
-                cube,
-            });
+            out.splats.push(Splat { point: out.colors.len() as u32, ..sp });
+            out.colors.push(base * prim.colors.get(i).copied().unwrap_or(Vec4::ONE));
+            out.normals.push(prim.normals.get(i).copied().unwrap_or(Vec3::ZERO));
+            out.objects.push(prim.object);
         }
     }
     out
 }
 
 impl Splat {
+    /// Inclusive bounding box, within a `size` sample grid, of the samples whose centres lie in
+    /// [x − r, x + r) × [y − r, y + r): exactly the ones [`Splat::covers`] may accept (empty when min > max).
+    #[inline]
+    pub fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
+        let (x, y, r) = (self.x as i64, self.y as i64, self.r as i64);
+        // Sample s has its centre at s·S + S/2: the first centre ≥ a and the last centre < b.
+        let first = |a: i64| -(SUBPIXEL / 2 - a).div_euclid(SUBPIXEL);
+        let last = |b: i64| (b - 1 - SUBPIXEL / 2).div_euclid(SUBPIXEL);
+        [first(x - r).max(0), first(y - r).max(0), last(x + r).min(size.0 - 1), last(y + r).min(size.1 - 1)]
+    }
+
     /// Whether the sample centre (fixed point) is covered. Squares are half-open so that splats one size
     /// apart tile without double hits.
     #[inline]
     pub fn covers(&self, px: i64, py: i64) -> bool {
-        let (dx, dy) = (px - self.x, py - self.y);
+        let (dx, dy, r) = (px - self.x as i64, py - self.y as i64, self.r as i64);
         if self.disk {
-            dx * dx + dy * dy < self.r * self.r
+            dx * dx + dy * dy < r * r
         } else {
-            dx >= -self.r && dx < self.r && dy >= -self.r && dy < self.r
+            dx >= -r && dx < r && dy >= -r && dy < r
         }
     }
 }

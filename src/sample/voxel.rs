@@ -27,40 +27,48 @@ pub fn downsample(p: &Points, size: f32, how: Reduction) -> Points {
     let cell = |q: &[f32; 3]| q.map(|v| floor(v as f64 * inv));
     // Cell indices relative to the smallest, packed as z | y | x with as many bits as each axis spans, so
     // integer order is (z, y, x) order and the radix sort runs as few passes as the extent allows.
-    let (lo, hi) = p
+    // floor is monotonic, so the cells of the coordinate-wise extremes bound every cell.
+    let (min, max) = p
         .positions
         .par_iter()
-        .map(|q| {
-            let c = cell(q);
-            (c, c)
+        .fold_with(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), q| {
+            ([0, 1, 2].map(|k| lo[k].min(q[k])), [0, 1, 2].map(|k| hi[k].max(q[k])))
         })
         .reduce(
-            || ([i64::MAX; 3], [i64::MIN; 3]),
+            || ([f32::MAX; 3], [f32::MIN; 3]),
             |a, b| ([0, 1, 2].map(|k| a.0[k].min(b.0[k])), [0, 1, 2].map(|k| a.1[k].max(b.1[k]))),
         );
+    let (lo, hi) = (cell(&min), cell(&max));
     let bits = [0, 1, 2].map(|k| 64 - ((hi[k] as i128 - lo[k] as i128) as u64).leading_zeros());
-    if p.is_empty() || bits.iter().sum::<u32>() > 64 {
+    // Each entry is one u64: the packed cell above the point's index. Sorting on the cell bits alone, stably,
+    // leaves each voxel's points in input order.
+    let idx_bits = 64 - (p.len().max(2) as u64 - 1).leading_zeros();
+    let key_bits: u32 = bits.iter().sum();
+    if p.is_empty() || key_bits + idx_bits > 64 {
         return downsample_wide(p, size, how);
     }
     let pack = |c: [i64; 3]| {
         let [x, y, z] = [0, 1, 2].map(|k| c[k].wrapping_sub(lo[k]) as u64);
         (z << bits[1] << bits[0]) | (y << bits[0]) | x
     };
-    let keyed: Vec<(u64, u32)> = p.positions.par_iter().enumerate().map(|(i, q)| (pack(cell(q)), i as u32)).collect();
-    let order = radix_sort(keyed, bits.iter().sum());
+    let keyed: Vec<u64> =
+        p.positions.par_iter().enumerate().map(|(i, q)| pack(cell(q)) << idx_bits | i as u64).collect();
+    let order = sort_packed(keyed, idx_bits, key_bits);
+    let idx_mask = (1u64 << idx_bits) - 1;
     let unpack = |k: u64| {
         let m = |b: u32| (1u64 << b) - 1;
         [k & m(bits[0]), (k >> bits[0]) & m(bits[1]), k >> bits[0] >> bits[1]].map(|v| v as f64)
     };
-    let starts: Vec<usize> = (0..order.len()).filter(|&i| i == 0 || order[i].0 != order[i - 1].0).collect();
+    let starts: Vec<usize> =
+        (0..order.len()).filter(|&i| i == 0 || order[i] >> idx_bits != order[i - 1] >> idx_bits).collect();
     let reps: Vec<([f32; 3], [f32; 3], [f32; 3])> = starts
         .par_iter()
         .enumerate()
         .map(|(r, &s)| {
             let e = starts.get(r + 1).copied().unwrap_or(order.len());
-            let c = unpack(order[s].0);
+            let c = unpack(order[s] >> idx_bits);
             let centre = [0, 1, 2].map(|k| ((c[k] + lo[k] as f64 + 0.5) * size as f64) as f32);
-            reduce_run(p, order[s..e].iter().map(|o| o.1 as usize), centre, how)
+            reduce_run(p, order[s..e].iter().map(|o| (o & idx_mask) as usize), centre, how)
         })
         .collect();
     let mut out = Points::default();
@@ -82,17 +90,41 @@ fn floor(x: f64) -> i64 {
     t - i64::from((t as f64) > x)
 }
 
-/// Stable LSD radix sort of (key, index) pairs on the low `bits` bits of the key: entries with equal keys keep
-/// their input (index) order, so each voxel's points are summed in the same order on every run.
-fn radix_sort(mut v: Vec<(u64, u32)>, bits: u32) -> Vec<(u64, u32)> {
+/// Sorts the packed entries ascending (they are distinct: the low bits are the index): halves sorted in
+/// parallel and merged, each leaf by [`radix_sort`]. The result is the one sorted order, however it was split.
+fn sort_packed(mut v: Vec<u64>, from: u32, bits: u32) -> Vec<u64> {
+    if v.len() < 1 << 18 {
+        return radix_sort(v, from, bits);
+    }
+    let right = v.split_off(v.len() / 2);
+    let (a, b) = rayon::join(|| sort_packed(v, from, bits), || sort_packed(right, from, bits));
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        if a[i] < b[j] {
+            out.push(a[i]);
+            i += 1;
+        } else {
+            out.push(b[j]);
+            j += 1;
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
+}
+
+/// Stable LSD radix sort of `v` on bits `from .. from + bits`: entries equal there keep their input order, so
+/// each voxel's points are summed in the same order on every run.
+fn radix_sort(mut v: Vec<u64>, from: u32, bits: u32) -> Vec<u64> {
     const DIGIT: u32 = 12;
     let mask = (1u64 << DIGIT) - 1;
-    let mut tmp = vec![(0u64, 0u32); v.len()];
-    let mut shift = 0;
-    while shift < bits {
+    let mut tmp = vec![0u64; v.len()];
+    let mut shift = from;
+    while shift < from + bits {
         let mut start = vec![0usize; 1 << DIGIT];
         for e in &v {
-            start[((e.0 >> shift) & mask) as usize] += 1;
+            start[((e >> shift) & mask) as usize] += 1;
         }
         if start.contains(&v.len()) {
             // One digit value for all: the pass would not move anything.
@@ -104,7 +136,7 @@ fn radix_sort(mut v: Vec<(u64, u32)>, bits: u32) -> Vec<(u64, u32)> {
             (*c, sum) = (sum, sum + *c);
         }
         for e in &v {
-            let b = ((e.0 >> shift) & mask) as usize;
+            let b = ((e >> shift) & mask) as usize;
             tmp[start[b]] = *e;
             start[b] += 1;
         }
