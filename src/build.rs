@@ -71,6 +71,8 @@ pub struct Report {
     pub total_seconds: f64,
     /// Each output's dataset (none for a shard build).
     pub outputs: Vec<(String, Written)>,
+    /// The outputs of the `[dataset] after` manifests, named `file.toml/output`.
+    pub after: Vec<(String, Written)>,
     /// Warnings from the scene and the plan.
     pub warnings: Vec<String>,
 }
@@ -134,7 +136,10 @@ pub struct Prepared {
 /// Opens the scene, plans, and keys every frame.
 pub fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, String> {
     check_directories(m)?;
-    let scene = Scene::open(m)?;
+    let scene = Scene::open(m).map_err(|e| match m.after.is_empty() {
+        true => e,
+        false => format!("{e} (an `after` manifest may write it: `vvgen build` builds those first)"),
+    })?;
     let plan = Plan::new(m, scene.frames)?;
     let store = Store::open(cache).map_err(|e| format!("cache {}: {e}", cache.display()))?;
     let stat = store.stat_cache(&m.out_dir());
@@ -143,8 +148,16 @@ pub fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, String> {
 }
 
 /// Builds every output of `m`, using the store at `cache`: renders only images the cache lacks.
+/// The `[dataset] after` manifests are built first, whole (also for a shard build: this manifest's sources may
+/// be their outputs), through the same cache.
 pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress) -> Result<Report, String> {
     let t0 = Instant::now();
+    let mut before = Vec::new();
+    for a in &m.after {
+        let file = a.path.file_name().map_or(String::new(), |f| f.to_string_lossy().into_owned());
+        let r = build(a, cache, Options::default(), progress).map_err(|e| format!("`after` manifest {file}: {e}"))?;
+        before.extend(r.after.into_iter().chain(r.outputs.into_iter().map(|(name, w)| (format!("{file}/{name}"), w))));
+    }
     let p = prepare(m, cache)?;
     // Only image writers need renders.
     let needs_images = m.outputs.values().any(|o| o.writer.get_ref().renders_images());
@@ -168,6 +181,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         render_seconds,
         total_seconds: 0.0,
         outputs: Vec::new(),
+        after: before,
         warnings,
     };
     if opts.shard.is_some() {

@@ -357,3 +357,44 @@ fn cli_check_exits_2_with_line_and_suggestion() {
     let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).args(["check", "-q"]).arg(&path).output().unwrap();
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn after_manifests_vouch_for_the_sequences_they_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb");
+    let points = format!(
+        "[dataset]\nname = \"m\"\nout = \"out\"\n[source.a]\ngltf = \"{}\"\nframes = {{ count = 2 }}\n\
+         [output.v]\nwriter = \"ply-sequence\"\npoints = 1000\ndir = \"v\"\npattern = \"{{name}}_{{frame:03}}.ply\"\n",
+        glb.display()
+    );
+    std::fs::write(d.join("points.toml"), &points).unwrap();
+    let render = |after: &str, pattern: &str| {
+        format!(
+            "[dataset]\nname = \"r\"\nout = \"out\"\nafter = [\"{after}\"]\n\
+             [source.c]\nply_sequence = \"{pattern}\"\nframes = {{ start = 0, end = 1 }}\n"
+        )
+    };
+    let load = |name: &str, text: &str| {
+        std::fs::write(d.join(name), text).unwrap();
+        manifest::load(&d.join(name))
+    };
+    // Not built yet, but `points.toml` writes exactly these files.
+    let (m, _) = load("r.toml", &render("points.toml", "out/v/./m_{frame:03}.ply"))
+        .unwrap_or_else(|r| panic!("{}", r.render(false)));
+    assert_eq!(m.after.len(), 1);
+    // A path no prerequisite writes is still checked.
+    let err = load("r.toml", &render("points.toml", "out/v/m_{frame:04}.ply")).unwrap_err().render(false);
+    assert!(err.contains("frame 0 is missing") && err.contains("r.toml:6:16"), "{err}");
+    // A prerequisite with errors, or that is missing, is an error at the `after` entry.
+    std::fs::write(d.join("points.toml"), points.replace("points = 1000", "pionts = 1000")).unwrap();
+    let err = load("r.toml", &render("points.toml", "out/v/m_{frame:03}.ply")).unwrap_err().render(false);
+    assert!(err.contains("points.toml` has ") && err.contains("needs `points`"), "{err}");
+    let err = load("r.toml", &render("nope.toml", "x_{frame}.ply")).unwrap_err().render(false);
+    assert!(err.contains("cannot read") && err.contains("r.toml:4:10"), "{err}");
+    // Cycles are named.
+    std::fs::write(d.join("points.toml"), points.replace("out = \"out\"\n", "out = \"out\"\nafter = [\"r.toml\"]\n"))
+        .unwrap();
+    let err = load("r.toml", &render("points.toml", "out/v/m_{frame:03}.ply")).unwrap_err().render(false);
+    assert!(err.contains("`after` cycle:") && err.contains("r.toml → "), "{err}");
+}

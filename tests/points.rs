@@ -296,23 +296,25 @@ fn round_trip_the_vox_sequence_renders_back_as_cubes_where_the_mesh_was() {
     let d = dir.path();
     let view = "[render]\nresolution = [64, 64]\nsamples = 4\nsplat = { shape = \"cube\" }\n\
                 [rig.o]\nkind = \"orbit\"\nradius = 4.0\nelevation_deg = 20.0\n[split.test]\nrig = \"o\"\nviews = 2\n";
-    // Step 1: the mesh, rendered, and as a vox9 sequence; step 2 (its own manifest, same `out`): the sequence
-    // as a source, rendered from the same cameras.
-    let mesh = cesium_manifest(
+    // Step 1: the mesh, rendered, and as a vox9 sequence; step 2 (its own manifest, same `out`, step 1 as its
+    // `after`): the sequence as a source, rendered from the same cameras. One build call does both, and the
+    // second manifest checks before the sequence exists.
+    cesium_manifest(
         d,
         &format!(
             "{view}[output.v]\nwriter = \"ply-sequence\"\npoints = 200000\nvox = 9\n[output.d]\nwriter = \"dnerf\"\n"
         ),
     );
-    build(&mesh, 2);
     let cloud = d.join("cloud.toml");
     let text = format!(
-        "[dataset]\nname = \"m\"\nout = \"out\"\ncache = \"cache\"\nseed = 3\n\
+        "[dataset]\nname = \"m\"\nout = \"out\"\ncache = \"cache\"\nseed = 3\nafter = [\"m.toml\"]\n\
          [source.c]\nply_sequence = \"out/m_points/m_{{frame:04}}.ply\"\nframes = {{ start = 0, end = 2, fps = 2 }}\n\
          [transform]\nfit = {{ height = 1.8 }}\ncenter = \"bbox\"\nover = \"all-frames\"\n{view}[output.d]\nwriter = \"dnerf\"\ndir = \"cloud\"\n"
     );
     std::fs::write(&cloud, text).unwrap();
-    build(&cloud, 2);
+    let report = build(&cloud, 2);
+    let after: Vec<&str> = report.after.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(after, ["m.toml/d", "m.toml/v"]);
     assert!(d.join("out/m_points/m_0002.ply").exists(), "the second manifest pruned the first one's files");
     let alpha = |p: PathBuf| {
         image::open(&p)

@@ -87,7 +87,7 @@ pub fn run(manifest: &Path, jobs: Option<usize>, shard: Option<Shard>, ui: Ui) -
         for w in &report.warnings {
             eprintln!("warning: {w}");
         }
-        for (name, w) in &report.outputs {
+        for (name, w) in report.after.iter().chain(&report.outputs) {
             for warning in &w.warnings {
                 eprintln!("warning: output `{name}`: {warning}");
             }

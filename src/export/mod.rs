@@ -159,19 +159,7 @@ pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, String> {
 
 /// The output's directory name under `[dataset] out`.
 pub fn dir_name(m: &Manifest, out: &Output) -> String {
-    if let Some(d) = &out.dir {
-        return d.get_ref().clone();
-    }
-    let suffix = match *out.writer.get_ref() {
-        Writer::Dnerf => "dnerf",
-        Writer::Nerfstudio => "nerfstudio",
-        Writer::InstantNgp => "ngp",
-        Writer::Colmap => "colmap",
-        Writer::Dynerf => "dynerf",
-        Writer::StaticFrames => "static",
-        Writer::PlySequence => "points",
-    };
-    format!("{}_{suffix}", m.dataset.name.get_ref())
+    out.dir_name(m.dataset.name.get_ref())
 }
 
 /// Indices of the images of the output's splits, split by split (manifest order), time-major within each.

@@ -22,9 +22,6 @@ use crate::scene::material::{linear_to_srgb, srgb_to_linear};
 use crate::scene::ply::{self, PlyOut};
 use crate::scene::{PosedScene, Poser, SourceData};
 
-/// Default file name pattern; `{name}` is the dataset name.
-pub const DEFAULT_PATTERN: &str = "{name}_{frame:04}.ply";
-
 /// The integer grid of `vox`: origin and cell edge, fixed for the whole sequence.
 #[derive(Debug, Clone, Copy)]
 struct Grid {
@@ -38,8 +35,7 @@ type Samples = (Points, Option<Vec<[f32; 3]>>);
 
 pub fn sequence(x: &Export, out: &Output, files: &mut Files) -> Result<(), String> {
     let n = out.points.as_ref().map_or(0, |p| *p.get_ref()) as usize;
-    let pattern = out.pattern.as_ref().map_or(DEFAULT_PATTERN, |p| p.get_ref().as_str());
-    let pattern = pattern.replace("{name}", x.manifest.dataset.name.get_ref());
+    let pattern = out.file_pattern(x.manifest.dataset.name.get_ref());
     let seed = x.manifest.dataset.seed.to_le_bytes();
     let only = match &out.source {
         Some(s) => Some(x.scene.source_index(s.get_ref()).ok_or_else(|| format!("no source `{}`", s.get_ref()))?),

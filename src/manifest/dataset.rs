@@ -23,6 +23,10 @@ pub struct Dataset {
     /// overrides both).
     #[serde(default)]
     pub cache: Option<Spanned<String>>,
+    /// Manifests (manifest-relative) that `vvgen build` builds before this one, e.g. the one writing the
+    /// point-cloud sequence a `ply_sequence` source here renders.
+    #[serde(default)]
+    pub after: Vec<Spanned<String>>,
 }
 
 impl Dataset {

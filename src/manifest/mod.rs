@@ -5,6 +5,7 @@
 //! span tables (references, file existence, writer/render contradictions). The manifest reference is
 //! `docs/manifest.md`.
 
+mod after;
 pub mod dataset;
 pub mod diag;
 pub mod frames;
@@ -61,6 +62,8 @@ pub struct Manifest {
     pub splits: BTreeMap<String, Split>,
     /// `[output.NAME]`.
     pub outputs: BTreeMap<String, Output>,
+    /// The `[dataset] after` manifests, loaded and checked, in the order given.
+    pub after: Vec<Manifest>,
 }
 
 impl Manifest {
@@ -89,8 +92,13 @@ pub fn load(path: &Path) -> Result<(Manifest, Report), Report> {
 
 /// Checks manifest `text` as if read from `path` (paths in it resolve against `path`'s directory).
 pub fn parse(text: &str, path: &Path) -> Result<(Manifest, Report), Report> {
+    parse_with(text, path, &mut vec![after::identity(path)])
+}
+
+/// [`parse`], with the `after` manifests being loaded around this one (outermost first).
+fn parse_with(text: &str, path: &Path, stack: &mut Vec<PathBuf>) -> Result<(Manifest, Report), Report> {
     let mut diags = Vec::new();
-    let manifest = parse_inner(text, path, &mut diags);
+    let manifest = parse_inner(text, path, stack, &mut diags);
     // Report in reading order; problems without a place come last.
     diags.sort_by_key(|d| d.span.as_ref().map_or(usize::MAX, |s| s.start));
     let report = Report { path: path.to_path_buf(), source: text.to_string(), diagnostics: diags };
@@ -100,7 +108,7 @@ pub fn parse(text: &str, path: &Path) -> Result<(Manifest, Report), Report> {
     }
 }
 
-fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<Manifest> {
+fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Vec<Diagnostic>) -> Option<Manifest> {
     let (root, syntax) = DeTable::parse_recoverable(text);
     if !syntax.is_empty() {
         for e in syntax {
@@ -157,6 +165,17 @@ fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<M
         r.validate(diags);
     }
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut after = Vec::new();
+    for a in dataset.iter().flat_map(|d| &d.after) {
+        match after::load(&dir, a.get_ref(), stack) {
+            Ok(m) => after.push(m),
+            Err(e) => diags.push(
+                Diagnostic::error(format!("`after` manifest: {e}"), Some(a.span()))
+                    .with_help("`after` lists manifests, relative to this one's folder, built before it"),
+            ),
+        }
+    }
+    let produced = after::produced_sequences(&after);
     {
         let (sources, _) = &sources;
         if sources.is_empty() {
@@ -168,7 +187,7 @@ fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<M
         }
         for (name, (s, span, _)) in sources {
             s.validate(name, span.clone(), diags);
-            check_source_files(&dir, s, diags);
+            check_source_files(&dir, s, &produced, diags);
         }
     }
     {
@@ -215,6 +234,7 @@ fn parse_inner(text: &str, path: &Path, diags: &mut Vec<Diagnostic>) -> Option<M
         rigs: strip(rigs.0),
         splits: strip(splits.0),
         outputs: strip(outputs.0),
+        after,
     };
     cross_check(&manifest, &broken, diags);
     Some(manifest)
@@ -267,7 +287,9 @@ fn named<T: serde::de::DeserializeOwned>(
     (out, broken)
 }
 
-fn check_source_files(dir: &Path, s: &Source, diags: &mut Vec<Diagnostic>) {
+/// Checks that a source's files exist; a `ply_sequence` that an `after` manifest writes (`produced`) counts as
+/// present, since `vvgen build` writes it first.
+fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut Vec<Diagnostic>) {
     let Some((kind, p)) = s.kind() else { return };
     match kind {
         SourceKind::Gltf | SourceKind::Mesh => {
@@ -280,6 +302,9 @@ fn check_source_files(dir: &Path, s: &Source, diags: &mut Vec<Diagnostic>) {
             }
         }
         SourceKind::PlySequence => {
+            if produced.contains(&after::lexical(&dir.join(p.get_ref()))) {
+                return;
+            }
             let frames = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
             if let Err(e) = sequence::resolve(dir, p.get_ref(), &frames) {
                 diags.push(

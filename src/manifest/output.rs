@@ -50,6 +50,34 @@ pub struct Output {
     pub format: Option<PlyFormat>,
 }
 
+/// Default `ply-sequence` file name pattern; `{name}` is the dataset name.
+pub const DEFAULT_PATTERN: &str = "{name}_{frame:04}.ply";
+
+impl Output {
+    /// The output's directory name under `[dataset] out`: `dir`, else `<dataset>_<writer suffix>`.
+    pub fn dir_name(&self, dataset: &str) -> String {
+        if let Some(d) = &self.dir {
+            return d.get_ref().clone();
+        }
+        let suffix = match *self.writer.get_ref() {
+            Writer::Dnerf => "dnerf",
+            Writer::Nerfstudio => "nerfstudio",
+            Writer::InstantNgp => "ngp",
+            Writer::Colmap => "colmap",
+            Writer::Dynerf => "dynerf",
+            Writer::StaticFrames => "static",
+            Writer::PlySequence => "points",
+        };
+        format!("{dataset}_{suffix}")
+    }
+
+    /// A `ply-sequence` output's file name pattern with `{name}` substituted (`{frame}` left for each frame).
+    pub fn file_pattern(&self, dataset: &str) -> String {
+        let pattern = self.pattern.as_ref().map_or(DEFAULT_PATTERN, |p| p.get_ref().as_str());
+        pattern.replace("{name}", dataset)
+    }
+}
+
 /// Dataset writers.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[serde(rename_all = "kebab-case")]
