@@ -316,3 +316,67 @@ init_points = 0
     assert!(st.stale[0].1[0].contains("scene content"), "{:?}", st.stale[0].1);
     assert_eq!(run(d, text).renders, 4);
 }
+
+/// The channels of a float EXR, by name.
+fn exr_channels(p: &Path) -> std::collections::BTreeMap<String, Vec<f32>> {
+    use exr::prelude::*;
+    let img = read_all_flat_layers_from_file(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    assert_eq!(img.layer_data.len(), 1);
+    img.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| match &c.sample_data {
+            FlatSamples::F32(v) => (c.name.to_string(), v.clone()),
+            _ => panic!("{}: channel {} is not f32", p.display(), c.name),
+        })
+        .collect()
+}
+
+#[test]
+fn float_exr_files_carry_the_png_passes_at_full_precision() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let passes = "passes = [\"rgba\", \"depth\", \"normal\"]";
+    run(d, &cesium(2, passes, ""));
+    let read = |rel: &str| std::fs::read(d.join("out/m_dnerf").join(rel)).unwrap();
+    let pngs = [read("test/r_0001.png"), read("depth/test/r_0001.png"), read("normal/test/r_0001.png")];
+    // Asking for the float files re-renders every image (3 views × 2 frames); the PNGs keep their bytes.
+    let exr = format!("{passes}\ndepth = {{ exr = true }}\nnormal = {{ exr = true }}");
+    assert_eq!(run(d, &cesium(2, &exr, "")).renders, 6);
+    assert_eq!([read("test/r_0001.png"), read("depth/test/r_0001.png"), read("normal/test/r_0001.png")], pngs);
+    let root = d.join("out/m_dnerf");
+    let mut covered = 0;
+    for i in 0..2 {
+        let depth_png = image::open(root.join(format!("depth/test/r_000{i}.png"))).unwrap().to_luma16();
+        let depth = &exr_channels(&root.join(format!("depth/test/r_000{i}.exr")))["Y"];
+        let normal_png = image::open(root.join(format!("normal/test/r_000{i}.png"))).unwrap().to_rgb8();
+        let n = exr_channels(&root.join(format!("normal/test/r_000{i}.exr")));
+        assert_eq!(n.keys().collect::<Vec<_>>(), ["B", "G", "R"]);
+        for (k, (mm, rgb)) in depth_png.pixels().zip(normal_png.pixels()).enumerate() {
+            let (mm, z) = (mm[0] as f32, depth[k]);
+            if mm == 0.0 {
+                assert_eq!(z, 0.0, "background is 0 in both");
+                continue;
+            }
+            covered += 1;
+            assert!((z * 1000.0 - mm).abs() <= 0.5 + 1e-3, "pixel {k}: {z} m vs {mm} mm");
+            let v = [n["R"][k], n["G"][k], n["B"][k]];
+            let len = v.iter().map(|c| c * c).sum::<f32>().sqrt();
+            assert!((len - 1.0).abs() < 1e-3, "pixel {k}: |n| = {len}");
+            for (c, p) in v.iter().zip(rgb.0) {
+                assert!(((c + 1.0) * 0.5 * 255.0 - p as f32).abs() <= 0.5 + 1e-3, "pixel {k}: {v:?} vs {:?}", rgb.0);
+            }
+        }
+    }
+    assert!(covered > 300, "the subject covers {covered} pixels");
+    let meta = std::fs::read_to_string(root.join("vvgen.json")).unwrap();
+    assert!(meta.contains("\"depth_exr\": \"depth/test/r_0001.exr\""), "vvgen.json lists the float files");
+    // Reproducible bytes on one thread too (a fresh cache renders everything again).
+    let other = tempfile::tempdir().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    pool.install(|| run(other.path(), &cesium(2, &exr, "")));
+    for rel in ["depth/test/r_0001.exr", "normal/train/r_0002.exr"] {
+        assert_eq!(std::fs::read(other.path().join("out/m_dnerf").join(rel)).unwrap(), read(rel), "{rel}");
+    }
+}

@@ -19,8 +19,12 @@ pub struct Rendered {
     pub rgba: Option<Digest>,
     /// 16-bit PNG, millimetres.
     pub depth: Option<Digest>,
+    /// 32-bit float OpenEXR, metres (`[render.depth] exr`).
+    pub depth_exr: Option<Digest>,
     /// RGB8 PNG, `(n + 1) / 2`.
     pub normal: Option<Digest>,
+    /// 32-bit float OpenEXR of unit normals (`[render.normal] exr`).
+    pub normal_exr: Option<Digest>,
     /// 8-bit PNG coverage.
     pub mask: Option<Digest>,
     /// 16-bit PNG instance ids (object + 1, 0 = background), with `mask` when the scene has several objects.
@@ -46,7 +50,11 @@ impl Shard {
 /// The keys of an image's requested passes, in `[render] passes` order.
 pub fn image_keys(plan: &Plan, frame_keys: &[Digest], r: &Render, settings: &[u8], i: usize) -> Vec<(Pass, Digest)> {
     let img = &plan.images[i];
-    r.passes.get_ref().iter().map(|&p| (p, keys::pass_key(&frame_keys[img.frame], img, settings, p))).collect()
+    r.passes
+        .get_ref()
+        .iter()
+        .map(|&p| (p, keys::pass_key(&frame_keys[img.frame], img, settings, &keys::pass_tag(r, p))))
+        .collect()
 }
 
 /// The cached result of image `i`, when every pass ran before and its blobs are intact.
@@ -57,7 +65,9 @@ pub fn lookup(store: &Store, stat: &StatCache, keys: &[(Pass, Digest)]) -> Optio
         match (pass, blobs.as_slice()) {
             (Pass::Rgba, [d]) => out.rgba = Some(*d),
             (Pass::Depth, [d]) => out.depth = Some(*d),
+            (Pass::Depth, [d, e]) => (out.depth, out.depth_exr) = (Some(*d), Some(*e)),
             (Pass::Normal, [d]) => out.normal = Some(*d),
+            (Pass::Normal, [d, e]) => (out.normal, out.normal_exr) = (Some(*d), Some(*e)),
             (Pass::Mask, [d]) => out.mask = Some(*d),
             (Pass::Mask, [d, e]) => (out.mask, out.instance) = (Some(*d), Some(*e)),
             _ => return None,
@@ -147,8 +157,8 @@ fn record(store: &Store, keys: &[(Pass, Digest)], r: &Rendered) -> Result<(), St
     for (pass, k) in keys {
         let blobs: Vec<Digest> = match pass {
             Pass::Rgba => r.rgba.into_iter().collect(),
-            Pass::Depth => r.depth.into_iter().collect(),
-            Pass::Normal => r.normal.into_iter().collect(),
+            Pass::Depth => r.depth.into_iter().chain(r.depth_exr).collect(),
+            Pass::Normal => r.normal.into_iter().chain(r.normal_exr).collect(),
             Pass::Mask => r.mask.into_iter().chain(r.instance).collect(),
         };
         store.record_action(k, &blobs).map_err(|e| format!("cache: {e}"))?;
@@ -175,7 +185,9 @@ pub fn render_image(
             match slot {
                 Slot::Rgba => out.rgba = d,
                 Slot::Depth => out.depth = d,
+                Slot::DepthExr => out.depth_exr = d,
                 Slot::Normal => out.normal = d,
+                Slot::NormalExr => out.normal_exr = d,
                 Slot::Mask => out.mask = d,
                 Slot::Instance => out.instance = d,
             }
@@ -187,7 +199,9 @@ pub fn render_image(
 enum Slot {
     Rgba,
     Depth,
+    DepthExr,
     Normal,
+    NormalExr,
     Mask,
     Instance,
 }
@@ -196,22 +210,36 @@ fn encode_pass(f: &Frame, pass: Pass, r: &Render, image: &Image, instances: bool
     let (w, h, c): (u32, u32, PngCompression) = (f.width, f.height, r.png_compression);
     match pass {
         Pass::Rgba => vec![(Slot::Rgba, encode::rgba_png(&f.rgba, w, h, c))],
-        Pass::Depth => vec![(Slot::Depth, encode::depth_mm_png(&f.depth, w, h, c))],
+        Pass::Depth => {
+            let mut v = vec![(Slot::Depth, encode::depth_mm_png(&f.depth, w, h, c))];
+            if r.depth.exr {
+                v.push((Slot::DepthExr, encode::f32_exr(&[("Y", &f.depth)], w, h, c)));
+            }
+            v
+        }
         Pass::Normal => {
             // Camera space: the inverse rotation of the (orthonormal) camera-to-world.
             let rot = glam::DMat3::from_mat4(image.camera.c2w).transpose().as_mat3();
-            let rgb: Vec<u8> = f
-                .normal
+            let normals: Vec<Vec3> = match r.normal.space {
+                NormalSpace::Camera => f.normal.iter().map(|n| rot * *n).collect(),
+                NormalSpace::World => f.normal.clone(),
+            };
+            let rgb: Vec<u8> = normals
                 .iter()
                 .flat_map(|n| {
                     if *n == Vec3::ZERO {
                         return [0, 0, 0];
                     }
-                    let n = if r.normal.space == NormalSpace::Camera { rot * *n } else { *n };
                     n.to_array().map(|v| ((v + 1.0) * 0.5 * 255.0).round().clamp(0.0, 255.0) as u8)
                 })
                 .collect();
-            vec![(Slot::Normal, encode::rgb_png(&rgb, w, h, c))]
+            let mut v = vec![(Slot::Normal, encode::rgb_png(&rgb, w, h, c))];
+            if r.normal.exr {
+                let axis = |i: usize| normals.iter().map(|n| n[i]).collect::<Vec<f32>>();
+                let (x, y, z) = (axis(0), axis(1), axis(2));
+                v.push((Slot::NormalExr, encode::f32_exr(&[("R", &x), ("G", &y), ("B", &z)], w, h, c)));
+            }
+            v
         }
         Pass::Mask => {
             let mut v = vec![(Slot::Mask, encode::gray8_png(&f.coverage, w, h, c))];

@@ -59,10 +59,12 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
         "depth": {
             "kind": match m.render.depth.kind { DepthKind::Planar => "planar z-depth", DepthKind::Ray => "ray distance" },
             "encoding": "16-bit PNG, millimetres (1 world unit = 1 m), 0 = background",
+            "exr": m.render.depth.exr.then_some("32-bit float OpenEXR beside each PNG, metres, channel Y, 0 = background"),
         },
         "normal": {
             "space": match m.render.normal.space { NormalSpace::World => "world", NormalSpace::Camera => "camera (OpenGL axes)" },
             "encoding": "8-bit RGB PNG, (n + 1) / 2, 0 = background",
+            "exr": m.render.normal.exr.then_some("32-bit float OpenEXR beside each PNG, unit normals in R G B, 0 = background"),
         },
         "rgba": "8-bit sRGB PNG, straight (un-premultiplied) alpha = coverage",
         "images": entries,

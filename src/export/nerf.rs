@@ -32,15 +32,17 @@ fn names(split: &str, base: &str) -> Names {
 fn place(x: &Export, i: usize, n: &Names, prefix: &str, files: &mut Files) -> Result<(), String> {
     let r = &x.rendered[i];
     let passes = [
-        ("rgba", r.rgba, &n.rgba),
-        ("depth", r.depth, &n.depth),
-        ("normal", r.normal, &n.normal),
-        ("mask", r.mask, &n.mask),
-        ("instance", r.instance, &n.instance),
+        ("rgba", r.rgba, &n.rgba, "png"),
+        ("depth", r.depth, &n.depth, "png"),
+        ("depth_exr", r.depth_exr, &n.depth, "exr"),
+        ("normal", r.normal, &n.normal, "png"),
+        ("normal_exr", r.normal_exr, &n.normal, "exr"),
+        ("mask", r.mask, &n.mask, "png"),
+        ("instance", r.instance, &n.instance, "png"),
     ];
-    for (pass, d, rel) in passes {
+    for (pass, d, rel, ext) in passes {
         if let Some(d) = d {
-            files.image_blob(i, pass, &format!("{prefix}{rel}.png"), d)?;
+            files.image_blob(i, pass, &format!("{prefix}{rel}.{ext}"), d)?;
         }
     }
     Ok(())

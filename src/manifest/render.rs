@@ -146,6 +146,9 @@ pub struct DepthOptions {
     /// `"planar"` z-depth (default, what nerfstudio and instant-ngp read) or `"ray"` distance.
     #[serde(default)]
     pub kind: DepthKind,
+    /// Also write a 32-bit float OpenEXR (metres, one channel `Y`) beside each 16-bit PNG.
+    #[serde(default)]
+    pub exr: bool,
 }
 
 /// Depth convention.
@@ -166,6 +169,9 @@ pub struct NormalOptions {
     /// `"world"` (default) or `"camera"` (OpenGL camera axes).
     #[serde(default)]
     pub space: NormalSpace,
+    /// Also write a 32-bit float OpenEXR (unit normals in channels `R G B`) beside each 8-bit PNG.
+    #[serde(default)]
+    pub exr: bool,
 }
 
 /// Normal pass coordinate frame.

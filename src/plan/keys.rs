@@ -62,8 +62,19 @@ pub fn render_settings(r: &Render, voxel: Option<f32>) -> Vec<u8> {
     .into_bytes()
 }
 
-/// The key of one pass of one image.
-pub fn pass_key(frame: &Digest, image: &Image, settings: &[u8], pass: Pass) -> Digest {
+/// What a pass writes, as it enters the pass's key: the pass, and `+exr` when its float file is asked for (so
+/// asking for EXR re-renders only that pass).
+pub fn pass_tag(r: &Render, pass: Pass) -> String {
+    let exr = match pass {
+        Pass::Depth => r.depth.exr,
+        Pass::Normal => r.normal.exr,
+        Pass::Rgba | Pass::Mask => false,
+    };
+    format!("{pass:?}{}", if exr { "+exr" } else { "" })
+}
+
+/// The key of one pass of one image; `tag` is [`pass_tag`].
+pub fn pass_key(frame: &Digest, image: &Image, settings: &[u8], tag: &str) -> Digest {
     let c = &image.camera;
     let mut cam = Vec::with_capacity(8 * 22);
     for v in [c.width as f64, c.height as f64, c.fx, c.fy, c.cx, c.cy, c.near, c.far] {
@@ -72,6 +83,5 @@ pub fn pass_key(frame: &Digest, image: &Image, settings: &[u8], pass: Pass) -> D
     for v in c.c2w.to_cols_array() {
         cam.extend_from_slice(&v.to_le_bytes());
     }
-    let pass = format!("{pass:?}");
-    key("render", &[RENDER_SALT, pass.as_bytes(), &frame.0, &cam, settings])
+    key("render", &[RENDER_SALT, tag.as_bytes(), &frame.0, &cam, settings])
 }

@@ -44,6 +44,25 @@ pub fn rgb_png(rgb: &[u8], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
     buf
 }
 
+/// A single-part, scan-line, 32-bit float OpenEXR with the given channels (each `w·h` values, row-major, top
+/// row first). Written in increasing line order on one thread, so the bytes are reproducible; RLE with
+/// `png_compression = "fast"` (cheap, and the empty background compresses), ZIP otherwise.
+pub fn f32_exr(channels: &[(&str, &[f32])], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
+    use exr::prelude::*;
+    let list: Vec<AnyChannel<FlatSamples>> =
+        channels.iter().map(|(name, v)| AnyChannel::new(*name, FlatSamples::F32(v.to_vec()))).collect();
+    let compression = match c {
+        PngCompression::Fast => Compression::RLE,
+        PngCompression::Default | PngCompression::Best => Compression::ZIP16,
+    };
+    let encoding = Encoding { compression, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
+    let layer =
+        Layer::new((w as usize, h as usize), LayerAttributes::default(), encoding, AnyChannels::sort(list.into()));
+    let mut buf = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer).write().non_parallel().to_buffered(&mut buf).expect("BUG: an in-memory EXR writes");
+    buf.into_inner()
+}
+
 /// 16-bit single-channel PNG of depth in millimetres (0 = no depth; clamped at 65.535 m).
 pub fn depth_mm_png(depth: &[f32], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
     let mm: Vec<u16> = depth.iter().map(|d| (d * 1000.0).round().clamp(0.0, 65535.0) as u16).collect();
