@@ -67,7 +67,7 @@ fn torus_100k() -> PosedScene {
             [(x / 4) as u8, (y / 4) as u8, ((x ^ y) & 0xff) as u8, 255]
         })
         .collect();
-    let texture = Texture { width: size, height: size, rgba, srgb: true };
+    let texture = Texture::new(size, size, rgba, true);
     let material = Material {
         base_color: Vec4::ONE,
         base_color_texture: Some(TextureRef {

@@ -137,7 +137,7 @@ fn textured_quad() -> (PosedScene, Vec<u8>) {
             base_color_texture: Some(tex),
             ..Material::default()
         }]),
-        textures: Arc::new(vec![Texture { width: size, height: size, rgba: rgba.clone(), srgb: true }]),
+        textures: Arc::new(vec![Texture::new(size, size, rgba.clone(), true)]),
     };
     (scene, rgba)
 }

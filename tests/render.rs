@@ -1,11 +1,11 @@
 //! The rasterizer against analytic scenes: exact coverage, depth, watertight shared edges, near clipping,
-//! straight alpha, silhouette area, and thread-count independence.
+//! straight alpha, silhouette area, texel lookup and mip filtering, and thread-count independence.
 
 use std::sync::Arc;
 
-use glam::{DMat4, Mat4, Vec3, Vec4};
+use glam::{DMat4, Mat4, Vec2, Vec3, Vec4};
 use vvgen::render::{render, Camera, RenderSettings};
-use vvgen::scene::material::Material;
+use vvgen::scene::material::{Material, Texture, TextureRef, Wrap};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 fn mesh(positions: Vec<Vec3>, indices: Vec<u32>, material: Material) -> PosedScene {
@@ -308,4 +308,83 @@ mod splats {
         assert_eq!(&f.rgba[centre..centre + 4], &[255, 0, 0, 255]);
         assert!((f.depth[32 * 64 + 32] - 1.0).abs() < 1e-5);
     }
+}
+
+/// The unit square z = 0 (uv = (x + ½, ½ − y), glTF's top-left origin) with a `size`² texture whose texel
+/// (i, j) is `texel(i, j)`, seen from (0, 0, 2) with focal `f` on a 64² image.
+fn textured_square(size: u32, texel: impl Fn(u32, u32) -> [u8; 3], nearest: bool, f: f64) -> vvgen::render::Frame {
+    let positions = vec![
+        Vec3::new(-0.5, -0.5, 0.0),
+        Vec3::new(0.5, -0.5, 0.0),
+        Vec3::new(0.5, 0.5, 0.0),
+        Vec3::new(-0.5, 0.5, 0.0),
+    ];
+    let uvs = positions.iter().map(|p| Vec2::new(p.x + 0.5, 0.5 - p.y)).collect();
+    let rgba = (0..size * size)
+        .flat_map(|k| {
+            let [r, g, b] = texel(k % size, k / size);
+            [r, g, b, 255]
+        })
+        .collect();
+    let tex =
+        TextureRef { texture: 0, tex_coord: 0, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat, nearest, transform: None };
+    let mut scene =
+        mesh(positions, vec![0, 1, 2, 0, 2, 3], Material { base_color_texture: Some(tex), ..Material::default() });
+    scene.primitives[0].uvs = Arc::new(uvs);
+    scene.textures = Arc::new(vec![Texture::new(size, size, rgba, true)]);
+    let c = cam(64, 64, f, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
+    render(&scene, &c, &RenderSettings::default())
+}
+
+#[test]
+fn textured_square_samples_the_right_texels() {
+    // Every texel names itself (red = column, green = row); nearest filtering, 6.25 pixels per texel.
+    let f = textured_square(8, |i, j| [i as u8 * 32, j as u8 * 32, 90], true, 100.0);
+    let mut checked = 0;
+    for y in 7..57u32 {
+        for x in 7..57u32 {
+            // Pixel centre → world (X, Y) on the square → uv → texel, by the pinhole model alone.
+            let (wx, wy) = ((x as f64 + 0.5 - 32.0) / 50.0, -(y as f64 + 0.5 - 32.0) / 50.0);
+            let (u, v) = ((wx + 0.5) * 8.0, (0.5 - wy) * 8.0);
+            if (u - u.round()).abs() < 1e-3 || (v - v.round()).abs() < 1e-3 {
+                continue; // on a texel border: either side is right
+            }
+            let p = &f.rgba[((y * 64 + x) * 4) as usize..][..4];
+            assert_eq!(p, [u as u8 * 32, v as u8 * 32, 90, 255], "pixel ({x}, {y}) should show texel ({u:.2}, {v:.2})");
+            checked += 1;
+        }
+    }
+    assert!(checked > 2000);
+}
+
+#[test]
+fn minified_textures_are_filtered_through_mip_levels() {
+    // A one-texel black/white checker, 6.4 texels per pixel: point-sampling it would alias into noise; every mip
+    // level from 1 on is uniform mid-grey (linear 0.5, sRGB ≈ 187.5).
+    let f = textured_square(256, |i, j| [if (i + j) % 2 == 0 { 255 } else { 0 }; 3], false, 80.0);
+    for y in 14..50u32 {
+        for x in 14..50u32 {
+            let p = &f.rgba[((y * 64 + x) * 4) as usize..][..4];
+            for c in &p[..3] {
+                assert!((*c as f32 - 187.5).abs() <= 1.5, "pixel ({x}, {y}) = {p:?}: aliased");
+            }
+        }
+    }
+    // The level follows texels per pixel: one texel per pixel (pixel centres on texel centres) reads level 0
+    // exactly; three per pixel is past level 1, uniform grey again. A derivative off by 2× either way fails one.
+    let checker = |i: u32, j: u32| [if (i + j) % 2 == 0 { 255 } else { 0 }; 3];
+    let f = textured_square(50, checker, false, 100.0);
+    for (x, y) in [(7, 7), (8, 7), (30, 41), (31, 41)] {
+        let expect = if (x + y) % 2 == 0 { 255 } else { 0 };
+        assert_eq!(f.rgba[((y * 64 + x) * 4) as usize], expect, "pixel ({x}, {y}) at one texel per pixel");
+    }
+    let f = textured_square(150, checker, false, 100.0);
+    for (x, y) in [(9, 9), (10, 9), (30, 41), (31, 41)] {
+        let c = f.rgba[((y * 64 + x) * 4) as usize];
+        assert!((c as f32 - 187.5).abs() <= 1.5, "pixel ({x}, {y}) = {c} at three texels per pixel");
+    }
+    // Magnified, the same texture stays sharp: neighbouring texels are black and white.
+    let f = textured_square(4, |i, j| [if (i + j) % 2 == 0 { 255 } else { 0 }; 3], false, 100.0);
+    let at = |x: u32, y: u32| f.rgba[((y * 64 + x) * 4) as usize];
+    assert!(at(13, 13) > 240 && at(25, 13) < 70, "{} {}: blurred", at(13, 13), at(25, 13));
 }

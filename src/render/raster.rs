@@ -43,6 +43,10 @@ pub struct Tri {
     uv: [Vec2; 3],
     normal: [Vec3; 3],
     color: [Vec4; 3],
+    /// Per sample step along x and y: the change of Σ bᵢ·uvᵢ/zᵢ and of Σ bᵢ/zᵢ (constants of the triangle), from
+    /// which the perspective-correct uv derivative at any sample follows for the mip level.
+    duv_step: [Vec2; 2],
+    ds_step: [f32; 2],
     /// Inclusive sample bounding box.
     pub bbox: [i64; 4],
     /// Material index.
@@ -159,12 +163,27 @@ fn project(v: [ClipVert; 3], p: &Projection, double_sided: bool, material: u32, 
     if bbox[0] > bbox[2] || bbox[1] > bbox[3] {
         return None;
     }
+    let inv_z = [inv_z[idx[0]], inv_z[idx[1]], inv_z[idx[2]]];
+    let uv = [v[idx[0]].uv, v[idx[1]].uv, v[idx[2]].uv];
+    // Weight i is edge (a, b) / area, and edge(a, b, p) changes by −(y_b − y_a) per unit of p.x and by
+    // (x_b − x_a) per unit of p.y; one sample step is SUBPIXEL units.
+    let (mut duv_step, mut ds_step) = ([Vec2::ZERO; 2], [0.0f32; 2]);
+    let step = SUBPIXEL as f32 / area.abs() as f32;
+    for (i, (a, b)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
+        let db = [-(y[b] - y[a]) as f32 * step, (x[b] - x[a]) as f32 * step];
+        for axis in 0..2 {
+            duv_step[axis] += uv[i] * (db[axis] * inv_z[i]);
+            ds_step[axis] += db[axis] * inv_z[i];
+        }
+    }
     Some(Tri {
         x,
         y,
         area: area.abs(),
-        inv_z: [inv_z[idx[0]], inv_z[idx[1]], inv_z[idx[2]]],
-        uv: [v[idx[0]].uv, v[idx[1]].uv, v[idx[2]].uv],
+        inv_z,
+        uv,
+        duv_step,
+        ds_step,
         normal: [v[idx[0]].normal, v[idx[1]].normal, v[idx[2]].normal],
         color: [v[idx[0]].color, v[idx[1]].color, v[idx[2]].color],
         bbox,
@@ -329,7 +348,10 @@ pub fn raster_tile(
                 let vc = tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2];
                 let mut albedo = mat.base_color * vc;
                 if let Some((r, texture)) = tex {
-                    albedo *= texture.sample(&r, uv);
+                    // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
+                    let dx = (tri.duv_step[0] - uv * tri.ds_step[0]) * z;
+                    let dy = (tri.duv_step[1] - uv * tri.ds_step[1]) * z;
+                    albedo *= texture.sample_footprint(&r, uv, dx, dy);
                 }
                 match mat.alpha_mode {
                     AlphaMode::Mask if albedo.w < mat.alpha_cutoff => continue,

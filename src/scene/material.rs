@@ -1,7 +1,7 @@
 //! Materials and textures as the renderer and the point sampler read them (glTF metallic-roughness, base
 //! colour only: vvgen renders albedo or Lambert, not PBR).
 
-use std::sync::LazyLock;
+use std::sync::{LazyLock, OnceLock};
 
 use glam::{Vec2, Vec3, Vec4};
 
@@ -16,6 +16,9 @@ pub struct Texture {
     pub rgba: Vec<u8>,
     /// Whether the bytes are sRGB-encoded (base colour and emissive textures are; data textures are not).
     pub srgb: bool,
+    /// Levels 1.. of the mip chain, built on the renderer's first minified lookup (the point sampler reads
+    /// level 0 only and never pays for it).
+    mips: OnceLock<Vec<Texture>>,
 }
 
 /// Texture wrap mode (glTF sampler).
@@ -141,6 +144,47 @@ pub fn srgb8_to_linear(v: u8) -> f32 {
 }
 
 impl Texture {
+    /// A texture of `width × height` RGBA8 texels, top row first.
+    pub fn new(width: u32, height: u32, rgba: Vec<u8>, srgb: bool) -> Texture {
+        Texture { width, height, rgba, srgb, mips: OnceLock::new() }
+    }
+
+    /// Levels 1.. of the mip chain: each halves the previous level (rounding down, at least 1) by averaging
+    /// 2×2 texels in linear light (a non-power-of-two level drops its odd last row/column: a small, documented
+    /// approximation), down to 1×1.
+    fn mips(&self) -> &[Texture] {
+        self.mips.get_or_init(|| {
+            let mut levels: Vec<Texture> = Vec::new();
+            while let Some(next) = levels.last().unwrap_or(self).half() {
+                levels.push(next);
+            }
+            levels
+        })
+    }
+
+    /// The next mip level, or `None` at 1×1.
+    fn half(&self) -> Option<Texture> {
+        if self.width <= 1 && self.height <= 1 {
+            return None;
+        }
+        let (w, h) = ((self.width / 2).max(1), (self.height / 2).max(1));
+        let (sx, sy) = (u32::from(self.width > 1), u32::from(self.height > 1));
+        let enc = |v: f32| if self.srgb { linear_to_srgb8(v) } else { (v * 255.0).round().clamp(0.0, 255.0) as u8 };
+        let mut rgba = Vec::with_capacity((w * h * 4) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let (x0, y0) = (x * 2, y * 2);
+                let sum = self.texel(x0, y0)
+                    + self.texel(x0 + sx, y0)
+                    + self.texel(x0, y0 + sy)
+                    + self.texel(x0 + sx, y0 + sy);
+                let c = sum * 0.25;
+                rgba.extend_from_slice(&[enc(c.x), enc(c.y), enc(c.z), (c.w * 255.0).round().clamp(0.0, 255.0) as u8]);
+            }
+        }
+        Some(Texture::new(w, h, rgba, self.srgb))
+    }
+
     /// Linear RGBA of texel (x, y) (sRGB decoded when the texture is sRGB).
     #[inline]
     pub fn texel(&self, x: u32, y: u32) -> Vec4 {
@@ -153,9 +197,41 @@ impl Texture {
         }
     }
 
-    /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light.
+    /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light,
+    /// from the full-resolution level.
     pub fn sample(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
+        self.filter(r, r.map(uv))
+    }
+
+    /// Samples with a screen footprint: `duv_dx`, `duv_dy` are the uv's derivatives along one sample step. When a
+    /// step spans more than one texel the lookup is trilinear between the two mip levels around
+    /// `log2(texels per step)` (OpenGL's isotropic level choice); magnified and `nearest` lookups read level 0.
+    pub fn sample_footprint(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec4 {
         let uv = r.map(uv);
+        let (dx, dy) = match &r.transform {
+            Some([x, y, _]) => (*x * duv_dx.x + *y * duv_dx.y, *x * duv_dy.x + *y * duv_dy.y),
+            None => (duv_dx, duv_dy),
+        };
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        let rho2 = (dx * size).length_squared().max((dy * size).length_squared());
+        if r.nearest || !(rho2 > 1.0) {
+            return self.filter(r, uv);
+        }
+        let lod = 0.5 * rho2.log2();
+        let mips = self.mips();
+        let level = |i: usize| if i == 0 { self } else { &mips[(i - 1).min(mips.len() - 1)] };
+        let base = lod.floor();
+        let i = base as usize;
+        let t = lod - base;
+        let a = level(i).filter(r, uv);
+        if t == 0.0 || i >= mips.len() {
+            return a;
+        }
+        a.lerp(level(i + 1).filter(r, uv), t)
+    }
+
+    /// Bilinear (or nearest) lookup of already transformed `uv` in this level.
+    fn filter(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
         let (w, h) = (self.width as f32, self.height as f32);
         if self.width == 0 || self.height == 0 {
             return Vec4::ONE;

@@ -172,7 +172,7 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
             images[img_index] = Some(decoded.to_rgba8());
         }
         let img = images[img_index].as_ref().unwrap();
-        textures.push(Texture { width: img.width(), height: img.height(), rgba: img.as_raw().clone(), srgb: true });
+        textures.push(Texture::new(img.width(), img.height(), img.as_raw().clone(), true));
     }
 
     let mut materials: Vec<Material> = doc.materials().map(|m| material(&m)).collect();
