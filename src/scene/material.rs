@@ -214,7 +214,8 @@ impl Texture {
         };
         let size = Vec2::new(self.width as f32, self.height as f32);
         let rho2 = (dx * size).length_squared().max((dy * size).length_squared());
-        if r.nearest || !(rho2 > 1.0) {
+        // Magnified, degenerate (NaN from a sliver) or nearest: level 0.
+        if r.nearest || rho2.is_nan() || rho2 <= 1.0 {
             return self.filter(r, uv);
         }
         let lod = 0.5 * rho2.log2();
