@@ -171,7 +171,7 @@ fn same_bytes_whatever_the_thread_count() {
     let asset = vvgen::scene::gltf::load(&path, None).unwrap();
     let mut posed = PosedScene {
         materials: Arc::new(asset.materials.clone()),
-        textures: Arc::new(asset.textures.clone()),
+        textures: Arc::clone(&asset.textures),
         ..Default::default()
     };
     asset.pose(&[0], 0.7, Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2), &mut Default::default(), &mut posed);

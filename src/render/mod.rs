@@ -194,6 +194,19 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
                 let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
                 let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
                 let ti = (ty * tw + tx) as usize;
+                if bins[ti].is_empty() && splat_bins[ti].is_empty() {
+                    // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
+                    // the other buffers start zeroed.
+                    if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
+                        for py in 0..ph {
+                            let row = ((py * w + x0) * 4) as usize;
+                            for px in out.rgba[row..row + (pw * 4) as usize].chunks_exact_mut(4) {
+                                px.copy_from_slice(&bg);
+                            }
+                        }
+                    }
+                    continue;
+                }
                 let work = raster::TileWork { tris: &tris, bin: &bins[ti], splats: &splat_bins[ti], points: &splats };
                 let st = st.get_or_insert_with(|| raster::SampleTile::new(rect));
                 raster::raster_tile(scene, work, &shade, rect, &proj, st);
@@ -220,10 +233,7 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0
     let total = (k * k) as u32;
     let y0 = st.y0 / k;
     // Most pixels of a dataset image are background: one precomputed value for them.
-    let empty = match s.background {
-        Some(bg) => [linear_to_srgb8(bg.x), linear_to_srgb8(bg.y), linear_to_srgb8(bg.z), 255],
-        None => [0; 4],
-    };
+    let empty = empty_pixel(s).unwrap_or([0; 4]);
     let mut ids = [0u32; 16];
     for py in 0..ph {
         for px in 0..pw {
@@ -277,6 +287,11 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0
             }
         }
     }
+}
+
+/// The RGBA8 of a pixel nothing covers: the opaque background, or `None` when it is transparent.
+fn empty_pixel(s: &RenderSettings) -> Option<[u8; 4]> {
+    s.background.map(|bg| [linear_to_srgb8(bg.x), linear_to_srgb8(bg.y), linear_to_srgb8(bg.z), 255])
 }
 
 fn majority_id(ids: &[u32]) -> u32 {

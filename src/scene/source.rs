@@ -71,7 +71,7 @@ impl LoadedSource {
                 let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
                 let mut posed = PosedScene {
                     materials: Arc::new(asset.materials.clone()),
-                    textures: Arc::new(asset.textures.clone()),
+                    textures: Arc::clone(&asset.textures),
                     ..Default::default()
                 };
                 asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
@@ -120,7 +120,7 @@ impl LoadedSource {
             SourceData::Gltf { asset, clips, times } => {
                 if out.materials.len() != asset.materials.len() || out.textures.len() != asset.textures.len() {
                     out.materials = Arc::new(asset.materials.clone());
-                    out.textures = Arc::new(asset.textures.clone());
+                    out.textures = Arc::clone(&asset.textures);
                     out.primitives.clear();
                 }
                 let t = times[frame.min(times.len() - 1)];

@@ -2,6 +2,7 @@
 //! the file's folder), decoded textures, materials, rest-pose primitives, nodes, skins and animations.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use base64::Engine as _;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
@@ -22,8 +23,9 @@ pub struct GltfAsset {
     pub path: PathBuf,
     /// Materials (index = glTF material index; the last one is the default material).
     pub materials: Vec<Material>,
-    /// Decoded textures (index = glTF texture index).
-    pub textures: Vec<Texture>,
+    /// Decoded textures (index = glTF texture index), shared with every posed frame (so their mip chains are
+    /// built once per build, not once per frame or per poser).
+    pub textures: Arc<Vec<Texture>>,
     /// Meshes: rest-pose primitives.
     pub meshes: Vec<Vec<Primitive>>,
     /// Nodes.
@@ -326,7 +328,7 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
     let mut asset = GltfAsset {
         path: path.to_path_buf(),
         materials,
-        textures,
+        textures: Arc::new(textures),
         meshes,
         nodes,
         skins,
