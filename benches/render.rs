@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use glam::{Vec3, Vec4};
 use vvgen::manifest::render::{PngCompression, Shading};
-use vvgen::render::{encode, render, Camera, RenderSettings, SplatSettings, SplatShape, SplatSize};
+use vvgen::render::{encode, render, Buffers, Camera, RenderSettings, SplatSettings, SplatShape, SplatSize};
 use vvgen::scene::material::Material;
 use vvgen::scene::ply::{self, PlyOut};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
@@ -67,6 +67,8 @@ fn one(scene: &PosedScene, c: &Camera, s: &RenderSettings) -> f64 {
 /// the coverage.
 fn per_image(scene: &PosedScene, cams: &[Camera], s: &RenderSettings, runs: usize) -> (f64, f64, f64) {
     use rayon::prelude::*;
+    // `passes = ["rgba"]`, as the shipped examples' colour images: no depth, normal or object buffers.
+    let s = &RenderSettings { buffers: Buffers { depth: false, normal: false, object: false }, ..s.clone() };
     let (mut serial, mut parallel) = (Vec::new(), Vec::new());
     let mut coverage = 0.0;
     for _ in 0..runs {

@@ -186,6 +186,12 @@ fn same_bytes_whatever_the_thread_count() {
     colours.sort();
     colours.dedup();
     assert!(colours.len() > 50, "{}", colours.len());
+    // Without the auxiliary buffers: the same colour, and nothing allocated for them.
+    let lean = vvgen::render::Buffers { depth: false, normal: false, object: false };
+    let bare = render(&posed, &c, &RenderSettings { buffers: lean, ..s.clone() });
+    assert_eq!((bare.rgba, bare.coverage), (one.rgba, one.coverage));
+    assert!(bare.depth.is_empty() && bare.normal.is_empty() && bare.object.is_empty());
+    assert!(one.depth.iter().filter(|d| **d > 0.0).count() > 1000);
 }
 
 fn points(positions: Vec<Vec3>, color: Vec4) -> PosedScene {

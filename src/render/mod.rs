@@ -39,6 +39,26 @@ pub struct RenderSettings {
     pub depth: DepthKind,
     /// How point primitives are drawn.
     pub splat: SplatSettings,
+    /// Which auxiliary buffers to fill; the others stay empty in the [`Frame`] (an 800² normal buffer alone is
+    /// 7.7 MB to allocate and fault in per image).
+    pub buffers: Buffers,
+}
+
+/// Auxiliary buffers of a [`Frame`] (colour and coverage are always made).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Buffers {
+    /// Depth.
+    pub depth: bool,
+    /// Normals.
+    pub normal: bool,
+    /// Object ids.
+    pub object: bool,
+}
+
+impl Default for Buffers {
+    fn default() -> Self {
+        Buffers { depth: true, normal: true, object: true }
+    }
 }
 
 impl Default for RenderSettings {
@@ -51,6 +71,7 @@ impl Default for RenderSettings {
             background: None,
             depth: DepthKind::Planar,
             splat: SplatSettings::default(),
+            buffers: Buffers::default(),
         }
     }
 }
@@ -89,6 +110,11 @@ impl RenderSettings {
             background,
             depth: r.depth.kind,
             splat: SplatSettings { shape, size },
+            buffers: Buffers {
+                depth: r.has_pass(crate::manifest::render::Pass::Depth),
+                normal: r.has_pass(crate::manifest::render::Pass::Normal),
+                object: r.has_pass(crate::manifest::render::Pass::Mask),
+            },
         }
     }
 }
@@ -103,10 +129,13 @@ pub struct Frame {
     /// sRGB RGBA8, straight alpha, rows top first.
     pub rgba: Vec<u8>,
     /// Depth in scene units (planar or ray, per the settings); 0 where less than half the pixel is covered.
+    /// Empty unless [`Buffers::depth`].
     pub depth: Vec<f32>,
-    /// World-space unit normals (zero where less than half the pixel is covered).
+    /// World-space unit normals (zero where less than half the pixel is covered). Empty unless
+    /// [`Buffers::normal`].
     pub normal: Vec<Vec3>,
-    /// Object id + 1 of the majority of the pixel's covered samples (0 = background).
+    /// Object id + 1 of the majority of the pixel's covered samples (0 = background). Empty unless
+    /// [`Buffers::object`].
     pub object: Vec<u32>,
     /// Coverage in 0..=255 (the alpha of a transparent background, whatever the background).
     pub coverage: Vec<u8>,
@@ -166,53 +195,60 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
         }),
     };
     let n = (w * h) as usize;
+    let b = s.buffers;
     let mut f = Frame {
         width: cam.width,
         height: cam.height,
         rgba: vec![0; n * 4],
-        depth: vec![0.0; n],
-        normal: vec![Vec3::ZERO; n],
-        object: vec![0; n],
+        depth: if b.depth { vec![0.0; n] } else { Vec::new() },
+        normal: if b.normal { vec![Vec3::ZERO; n] } else { Vec::new() },
+        object: if b.object { vec![0; n] } else { Vec::new() },
         coverage: vec![0; n],
     };
     // One task per band of TILE rows: its tiles run in order through one reused sample buffer and resolve
-    // straight into the band's rows of the frame (no per-tile allocation, no copy afterwards).
+    // straight into the band's rows of the frame (no per-tile allocation, no copy afterwards). Buffers not
+    // asked for give every band an empty slice.
     let band = (TILE * w) as usize;
-    f.rgba
-        .par_chunks_mut(band * 4)
-        .zip(f.depth.par_chunks_mut(band))
-        .zip(f.normal.par_chunks_mut(band))
-        .zip(f.object.par_chunks_mut(band))
-        .zip(f.coverage.par_chunks_mut(band))
-        .enumerate()
-        .for_each(|(ty, ((((rgba, depth), normal), object), coverage))| {
-            let ty = ty as i64;
-            let mut out = Pixels { rgba, depth, normal, object, coverage, width: w };
-            let mut st: Option<raster::SampleTile> = None;
-            for tx in 0..tw {
-                let (x0, y0) = (tx * TILE, ty * TILE);
-                let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
-                let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
-                let ti = (ty * tw + tx) as usize;
-                if bins[ti].is_empty() && splat_bins[ti].is_empty() {
-                    // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
-                    // the other buffers start zeroed.
-                    if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
-                        for py in 0..ph {
-                            let row = ((py * w + x0) * 4) as usize;
-                            for px in out.rgba[row..row + (pw * 4) as usize].chunks_exact_mut(4) {
-                                px.copy_from_slice(&bg);
-                            }
+    let (mut rgba, mut depth) = (f.rgba.chunks_mut(band * 4), f.depth.chunks_mut(band));
+    let (mut normal, mut object) = (f.normal.chunks_mut(band), f.object.chunks_mut(band));
+    let mut coverage = f.coverage.chunks_mut(band);
+    let bands: Vec<Pixels> = (0..th)
+        .map(|_| Pixels {
+            rgba: rgba.next().expect("BUG: one chunk per band"),
+            depth: depth.next().unwrap_or_default(),
+            normal: normal.next().unwrap_or_default(),
+            object: object.next().unwrap_or_default(),
+            coverage: coverage.next().expect("BUG: one chunk per band"),
+            width: w,
+        })
+        .collect();
+    bands.into_par_iter().enumerate().for_each(|(ty, mut out)| {
+        let ty = ty as i64;
+        let mut st: Option<raster::SampleTile> = None;
+        for tx in 0..tw {
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
+            let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
+            let ti = (ty * tw + tx) as usize;
+            if bins[ti].is_empty() && splat_bins[ti].is_empty() {
+                // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
+                // the other buffers start zeroed.
+                if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
+                    for py in 0..ph {
+                        let row = ((py * w + x0) * 4) as usize;
+                        for px in out.rgba[row..row + (pw * 4) as usize].chunks_exact_mut(4) {
+                            px.copy_from_slice(&bg);
                         }
                     }
-                    continue;
                 }
-                let work = raster::TileWork { tris: &tris, bin: &bins[ti], splats: &splat_bins[ti], points: &splats };
-                let st = st.get_or_insert_with(|| raster::SampleTile::new(rect));
-                raster::raster_tile(scene, work, &shade, rect, &proj, st);
-                resolve(st, k, s, cam, x0, &mut out);
+                continue;
             }
-        });
+            let work = raster::TileWork { tris: &tris, bin: &bins[ti], splats: &splat_bins[ti], points: &splats };
+            let st = st.get_or_insert_with(|| raster::SampleTile::new(rect));
+            raster::raster_tile(scene, work, &shade, rect, &proj, st);
+            resolve(st, k, s, cam, x0, &mut out);
+        }
+    });
     f
 }
 
@@ -272,8 +308,10 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0
                 a8,
             ]);
             out.coverage[i] = coverage;
-            out.object[i] = majority_id(&ids[..covered as usize]);
-            if 2 * covered >= total {
+            if !out.object.is_empty() {
+                out.object[i] = majority_id(&ids[..covered as usize]);
+            }
+            if 2 * covered >= total && !out.depth.is_empty() {
                 let z = depth / covered as f32;
                 out.depth[i] = match s.depth {
                     DepthKind::Planar => z,
@@ -283,6 +321,8 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0
                         (z as f64 * (dx * dx + dy * dy + 1.0).sqrt()) as f32
                     }
                 };
+            }
+            if 2 * covered >= total && !out.normal.is_empty() {
                 out.normal[i] = normal.normalize_or_zero();
             }
         }

@@ -4,6 +4,7 @@
 //! triangle order. Tiles are independent, so the image is the same whatever the thread count.
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use rayon::prelude::*;
 
 use super::splat::Rays;
 use crate::scene::material::AlphaMode;
@@ -72,52 +73,70 @@ pub struct Projection {
     pub size: (i64, i64),
 }
 
-/// Clips, projects and orients every triangle of the scene, in scene order.
+/// Triangles per setup task: large enough to amortize the task, small enough to balance two cores.
+const SETUP_CHUNK: usize = 4096;
+
+/// Clips, projects and orients every triangle of the scene, in scene order (chunks run in parallel and are
+/// concatenated in order, so the order does not depend on threads).
 pub fn setup(scene: &PosedScene, p: &Projection) -> Vec<Tri> {
     let mut out = Vec::new();
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Triangles) {
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
-        let view: Vec<Vec3> = prim.positions.iter().map(|v| p.w2c.transform_point3(*v)).collect();
-        for t in prim.indices.chunks_exact(3) {
-            let vert = |i: u32| {
-                let i = i as usize;
-                ClipVert {
-                    view: view[i],
-                    uv: prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO),
-                    normal: prim.normals[i],
-                    color: prim.colors.get(i).copied().unwrap_or(Vec4::ONE),
+        let view: Vec<Vec3> = prim.positions.par_iter().map(|v| p.w2c.transform_point3(*v)).collect();
+        let chunks: Vec<Vec<Tri>> = prim
+            .indices
+            .par_chunks(3 * SETUP_CHUNK)
+            .map(|chunk| {
+                let mut tris = Vec::with_capacity(chunk.len() / 3);
+                for t in chunk.chunks_exact(3) {
+                    let vert = |i: u32| {
+                        let i = i as usize;
+                        ClipVert {
+                            view: view[i],
+                            uv: prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO),
+                            normal: prim.normals[i],
+                            color: prim.colors.get(i).copied().unwrap_or(Vec4::ONE),
+                        }
+                    };
+                    let (poly, n) = clip_near([vert(t[0]), vert(t[1]), vert(t[2])], p.near);
+                    for k in 1..n.saturating_sub(1) {
+                        let fan = [poly[0], poly[k], poly[k + 1]];
+                        if let Some(tri) = project(fan, p, double_sided, prim.material, prim.object) {
+                            tris.push(tri);
+                        }
+                    }
                 }
-            };
-            let poly = clip_near([vert(t[0]), vert(t[1]), vert(t[2])], p.near);
-            for k in 1..poly.len().saturating_sub(1) {
-                if let Some(tri) = project([poly[0], poly[k], poly[k + 1]], p, double_sided, prim.material, prim.object)
-                {
-                    out.push(tri);
-                }
-            }
-        }
+                tris
+            })
+            .collect();
+        out.extend(chunks.into_iter().flatten());
     }
     out
 }
 
-/// Sutherland–Hodgman against the plane −z = near: the visible part of a triangle (0, 3 or 4 vertices).
-fn clip_near(tri: [ClipVert; 3], near: f32) -> Vec<ClipVert> {
+/// Sutherland–Hodgman against the plane −z = near: the visible part of a triangle, as its first 0, 3 or 4
+/// vertices (no allocation: this runs for every triangle of every view).
+fn clip_near(tri: [ClipVert; 3], near: f32) -> ([ClipVert; 4], usize) {
     let inside = |v: &ClipVert| -v.view.z >= near;
+    let mut out = [tri[0]; 4];
     if tri.iter().all(inside) {
-        return tri.to_vec();
+        out[..3].copy_from_slice(&tri);
+        return (out, 3);
     }
-    let mut out = Vec::with_capacity(4);
+    let mut n = 0;
     for i in 0..3 {
         let (a, b) = (&tri[i], &tri[(i + 1) % 3]);
         if inside(a) {
-            out.push(*a);
+            out[n] = *a;
+            n += 1;
         }
         if inside(a) != inside(b) {
             let (da, db) = (-a.view.z - near, -b.view.z - near);
-            out.push(a.lerp(b, da / (da - db)));
+            out[n] = a.lerp(b, da / (da - db));
+            n += 1;
         }
     }
-    out
+    (out, n)
 }
 
 fn project(v: [ClipVert; 3], p: &Projection, double_sided: bool, material: u32, object: u32) -> Option<Tri> {
@@ -313,29 +332,32 @@ pub fn raster_tile(
             continue;
         }
         let (x, y) = (tri.x, tri.y);
-        // Edge i is opposite vertex i: (1→2), (2→0), (0→1).
+        // Edge i is opposite vertex i: (1→2), (2→0), (0→1). Each is evaluated once at the first sample and then
+        // stepped (it is linear in the sample position). A sample exactly on an edge belongs to the triangle only
+        // if the edge owns it: `bias` is −1 for the others, so "inside" is `v + bias ≥ 0` for all three.
         let e = [(1, 2), (2, 0), (0, 1)];
-        let own: [bool; 3] = e.map(|(a, b)| owns(x[b] - x[a], y[b] - y[a]));
+        let bias: [i64; 3] = e.map(|(a, b)| if owns(x[b] - x[a], y[b] - y[a]) { 0 } else { -1 });
+        let step_x: [i64; 3] = e.map(|(a, b)| -(y[b] - y[a]) * SUBPIXEL);
+        let step_y: [i64; 3] = e.map(|(a, b)| (x[b] - x[a]) * SUBPIXEL);
+        let (px0, py0) = (bx0 * SUBPIXEL + SUBPIXEL / 2, by0 * SUBPIXEL + SUBPIXEL / 2);
+        let mut row: [i64; 3] = e.map(|(a, b)| edge(x[a], y[a], x[b], y[b], px0, py0));
+        let inv_area = 1.0 / tri.area as f32;
         let mat = &scene.materials[tri.material as usize];
         let tex = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
         for sy in by0..=by1 {
-            let py = sy * SUBPIXEL + SUBPIXEL / 2;
+            let mut wgt = row;
+            for i in 0..3 {
+                row[i] += step_y[i];
+            }
             for sx in bx0..=bx1 {
-                let px = sx * SUBPIXEL + SUBPIXEL / 2;
-                let mut wgt = [0i64; 3];
-                let mut inside = true;
-                for (i, &(a, b)) in e.iter().enumerate() {
-                    let v = edge(x[a], y[a], x[b], y[b], px, py);
-                    if v < 0 || (v == 0 && !own[i]) {
-                        inside = false;
-                        break;
-                    }
-                    wgt[i] = v;
+                let v = wgt;
+                for i in 0..3 {
+                    wgt[i] += step_x[i];
                 }
-                if !inside {
+                if ((v[0] + bias[0]) | (v[1] + bias[1]) | (v[2] + bias[2])) < 0 {
                     continue;
                 }
-                let b = wgt.map(|v| v as f32 / tri.area as f32);
+                let b = v.map(|v| v as f32 * inv_area);
                 let pb = [b[0] * tri.inv_z[0], b[1] * tri.inv_z[1], b[2] * tri.inv_z[2]];
                 let s = pb[0] + pb[1] + pb[2];
                 let z = 1.0 / s;
