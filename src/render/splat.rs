@@ -3,6 +3,7 @@
 //! and face normal per sample, no triangles).
 
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 
 use super::raster::{Projection, SUBPIXEL};
 use crate::scene::{PosedScene, PrimKind};
@@ -82,50 +83,74 @@ pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> S
         normals: Vec::with_capacity(n),
         objects: Vec::with_capacity(n),
     };
-    let [fx, fy, cx, cy] = p.f;
     let eye = p.w2c.inverse().w_axis.truncate();
-    let lim = (p.size.0.max(p.size.1) + 2) as f32 * SUBPIXEL as f32;
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
-        for (i, pos) in prim.positions.iter().enumerate() {
-            let v = p.w2c.transform_point3(*pos);
-            let z = -v.z;
-            if !(z >= p.near && z <= p.far) {
-                continue;
-            }
-            let (sx, sy) = (cx + fx * v.x / z, cy - fy * v.y / z);
-            let (half, cube) = match (s.shape, s.size) {
-                (Shape::Cube, size) => {
-                    // A pixel size is taken at unit distance.
-                    let h = 0.5
-                        * match size {
-                            Size::World(w) => w,
-                            Size::Pixels(px) => px * k / fx,
-                        };
-                    let reach = h * 3f32.sqrt();
-                    // The near plane would cut the cube: drop it (cubes are voxel-sized).
-                    if z - reach < p.near {
-                        continue;
-                    }
-                    (reach * fx.max(fy) / (z - reach), Some((*pos - eye, h)))
+        // Chunks in parallel, concatenated in order: the splat order (which decides depth ties) is the scene's.
+        let chunks: Vec<Splats> = prim
+            .positions
+            .par_chunks(SETUP_CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut part = Splats::default();
+                for (j, pos) in chunk.iter().enumerate() {
+                    let Some(sp) = project(*pos, p, s, k, eye) else { continue };
+                    let i = c * SETUP_CHUNK + j;
+                    part.splats.push(Splat { point: part.colors.len() as u32, ..sp });
+                    part.colors.push(base * prim.colors.get(i).copied().unwrap_or(Vec4::ONE));
+                    part.normals.push(prim.normals.get(i).copied().unwrap_or(Vec3::ZERO));
+                    part.objects.push(prim.object);
                 }
-                (_, Size::World(w)) => (0.5 * w * fx / z, None),
-                (_, Size::Pixels(px)) => (0.5 * px * k, None),
-            };
-            let fixed = |v: f32| (v * SUBPIXEL as f32).round().clamp(-lim, lim) as i32;
-            let sp =
-                Splat { x: fixed(sx), y: fixed(sy), r: fixed(half), z, point: 0, disk: s.shape == Shape::Disk, cube };
-            let b = sp.bbox(p.size);
-            if sp.r <= 0 || b[0] > b[2] || b[1] > b[3] {
-                continue;
-            }
-            out.splats.push(Splat { point: out.colors.len() as u32, ..sp });
-            out.colors.push(base * prim.colors.get(i).copied().unwrap_or(Vec4::ONE));
-            out.normals.push(prim.normals.get(i).copied().unwrap_or(Vec3::ZERO));
-            out.objects.push(prim.object);
+                part
+            })
+            .collect();
+        for part in chunks {
+            let offset = out.colors.len() as u32;
+            out.splats.extend(part.splats.into_iter().map(|sp| Splat { point: sp.point + offset, ..sp }));
+            out.colors.extend(part.colors);
+            out.normals.extend(part.normals);
+            out.objects.extend(part.objects);
         }
     }
     out
+}
+
+/// Points per setup task.
+const SETUP_CHUNK: usize = 16384;
+
+/// The splat of the point at world `pos`, or `None` when it is clipped or falls outside the image.
+#[inline]
+fn project(pos: Vec3, p: &Projection, s: &SplatSettings, k: f32, eye: Vec3) -> Option<Splat> {
+    let [fx, fy, cx, cy] = p.f;
+    let lim = (p.size.0.max(p.size.1) + 2) as f32 * SUBPIXEL as f32;
+    let v = p.w2c.transform_point3(pos);
+    let z = -v.z;
+    if !(z >= p.near && z <= p.far) {
+        return None;
+    }
+    let (sx, sy) = (cx + fx * v.x / z, cy - fy * v.y / z);
+    let (half, cube) = match (s.shape, s.size) {
+        (Shape::Cube, size) => {
+            // A pixel size is taken at unit distance.
+            let h = 0.5
+                * match size {
+                    Size::World(w) => w,
+                    Size::Pixels(px) => px * k / fx,
+                };
+            let reach = h * 3f32.sqrt();
+            // The near plane would cut the cube: drop it (cubes are voxel-sized).
+            if z - reach < p.near {
+                return None;
+            }
+            (reach * fx.max(fy) / (z - reach), Some((pos - eye, h)))
+        }
+        (_, Size::World(w)) => (0.5 * w * fx / z, None),
+        (_, Size::Pixels(px)) => (0.5 * px * k, None),
+    };
+    let fixed = |v: f32| (v * SUBPIXEL as f32).round().clamp(-lim, lim) as i32;
+    let sp = Splat { x: fixed(sx), y: fixed(sy), r: fixed(half), z, point: 0, disk: s.shape == Shape::Disk, cube };
+    let b = sp.bbox(p.size);
+    (sp.r > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp)
 }
 
 impl Splat {
