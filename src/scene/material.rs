@@ -131,10 +131,27 @@ static SRGB8_TO_LINEAR: LazyLock<[f32; 256]> =
 static SRGB8_STEPS: LazyLock<[f32; 255]> =
     LazyLock::new(|| std::array::from_fn(|k| srgb_to_linear((k as f32 + 0.5) / 255.0)));
 
-/// Linear float → nearest sRGB byte (a binary search over the code boundaries, no `powf`).
+/// Buckets of [`SRGB8_START`]: fine enough that a bucket spans at most a few codes (the darkest codes are
+/// 1/(255·12.92) ≈ 3e-4 apart in linear light).
+const SRGB8_BUCKETS: usize = 4096;
+
+/// The sRGB code of each bucket's lower end, `i / SRGB8_BUCKETS`: where [`linear_to_srgb8`] starts walking.
+static SRGB8_START: LazyLock<[u8; SRGB8_BUCKETS + 1]> = LazyLock::new(|| {
+    std::array::from_fn(|i| SRGB8_STEPS.partition_point(|&t| t <= i as f32 / SRGB8_BUCKETS as f32) as u8)
+});
+
+/// Linear float → nearest sRGB byte: the number of code boundaries at or below `c`, found from its bucket's
+/// first code by a short walk (exactly what a binary search over the boundaries gives, without its dozen
+/// unpredictable branches; this runs three times per covered pixel).
 #[inline]
 pub fn linear_to_srgb8(c: f32) -> u8 {
-    SRGB8_STEPS.partition_point(|&t| t <= c) as u8
+    let steps: &[f32; 255] = &SRGB8_STEPS;
+    // NaN and negatives land in bucket 0 and stay at code 0; values above 1 walk to 255.
+    let mut code = SRGB8_START[(c.clamp(0.0, 1.0) * SRGB8_BUCKETS as f32) as usize] as usize;
+    while code < 255 && steps[code] <= c {
+        code += 1;
+    }
+    code as u8
 }
 
 /// sRGB byte → linear float, tabulated.
@@ -296,5 +313,25 @@ impl Material {
             c *= v;
         }
         c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb8_encoding_is_the_exact_nearest_code() {
+        // Every boundary, just below and at it, and a dense sweep: the bucketed walk equals the binary search.
+        let reference = |c: f32| SRGB8_STEPS.partition_point(|&t| t <= c) as u8;
+        let mut probes: Vec<f32> = SRGB8_STEPS.iter().flat_map(|&t| [t, f32::from_bits(t.to_bits() - 1)]).collect();
+        probes.extend((0..=100_000).map(|i| i as f32 / 100_000.0));
+        probes.extend([-1.0, 0.0, 1.0, 1.5, f32::NAN, f32::INFINITY, f32::NEG_INFINITY]);
+        for c in probes {
+            assert_eq!(linear_to_srgb8(c), reference(c), "{c}");
+        }
+        for v in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb8_to_linear(v)), v, "round trip of {v}");
+        }
     }
 }
