@@ -164,15 +164,12 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     let (tw, th) = ((w + TILE - 1) / TILE, (h + TILE - 1) / TILE);
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); (tw * th) as usize];
     let ts = TILE * k;
-    let bin = |bins: &mut Vec<Vec<u32>>, i: usize, bbox: &[i64; 4]| {
-        for ty in bbox[1] / ts..=bbox[3] / ts {
-            for tx in bbox[0] / ts..=bbox[2] / ts {
-                bins[(ty * tw + tx) as usize].push(i as u32);
+    for (id, t) in tris.iter() {
+        for ty in t.bbox[1] / ts..=t.bbox[3] / ts {
+            for tx in t.bbox[0] / ts..=t.bbox[2] / ts {
+                bins[(ty * tw + tx) as usize].push(id);
             }
         }
-    };
-    for (i, t) in tris.iter().enumerate() {
-        bin(&mut bins, i, &t.bbox);
     }
     // Splats are copied into their tiles (they are small), so each tile walks its own in order.
     let mut splat_bins: Vec<Vec<splat::Splat>> = vec![Vec::new(); (tw * th) as usize];

@@ -76,10 +76,37 @@ pub struct Projection {
 /// Triangles per setup task: large enough to amortize the task, small enough to balance two cores.
 const SETUP_CHUNK: usize = 4096;
 
-/// Clips, projects and orients every triangle of the scene, in scene order (chunks run in parallel and are
-/// concatenated in order, so the order does not depend on threads).
-pub fn setup(scene: &PosedScene, p: &Projection) -> Vec<Tri> {
-    let mut out = Vec::new();
+/// Bits of a [`Tris`] id that index within a chunk: a chunk of [`SETUP_CHUNK`] triangles yields at most twice
+/// as many (a near-clipped triangle becomes two).
+const CHUNK_BITS: u32 = 13;
+
+/// The set-up triangles of a view, as the setup tasks made them (chunks in scene order): not concatenated, since
+/// copying a 100k-triangle view's 25 MB costs more than the indirection.
+#[derive(Debug, Default)]
+pub struct Tris {
+    chunks: Vec<Vec<Tri>>,
+}
+
+impl Tris {
+    /// Every triangle with its id, in scene order.
+    pub fn iter(&self) -> impl Iterator<Item = (u32, &Tri)> {
+        self.chunks
+            .iter()
+            .enumerate()
+            .flat_map(|(c, v)| v.iter().enumerate().map(move |(i, t)| (((c as u32) << CHUNK_BITS) | i as u32, t)))
+    }
+
+    /// The triangle with id `id`.
+    #[inline]
+    pub fn get(&self, id: u32) -> &Tri {
+        &self.chunks[(id >> CHUNK_BITS) as usize][(id & ((1 << CHUNK_BITS) - 1)) as usize]
+    }
+}
+
+/// Clips, projects and orients every triangle of the scene, in scene order (chunks run in parallel and keep
+/// their order, so the order does not depend on threads).
+pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
+    let mut out = Tris::default();
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Triangles) {
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
         let view: Vec<Vec3> = prim.positions.par_iter().map(|v| p.w2c.transform_point3(*v)).collect();
@@ -109,7 +136,7 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Vec<Tri> {
                 tris
             })
             .collect();
-        out.extend(chunks.into_iter().flatten());
+        out.chunks.extend(chunks);
     }
     out
 }
@@ -301,7 +328,7 @@ pub struct Rect {
 #[derive(Debug, Clone, Copy)]
 pub struct TileWork<'a> {
     /// All triangles.
-    pub tris: &'a [Tri],
+    pub tris: &'a Tris,
     /// This tile's triangles.
     pub bin: &'a [u32],
     /// This tile's splats, in scene order.
@@ -325,7 +352,7 @@ pub fn raster_tile(
     let (near, far) = (proj.near, proj.far);
     t.reset(rect);
     for &ti in bin {
-        let tri = &tris[ti as usize];
+        let tri = tris.get(ti);
         let (bx0, by0) = (tri.bbox[0].max(x0), tri.bbox[1].max(y0));
         let (bx1, by1) = (tri.bbox[2].min(x0 + w - 1), tri.bbox[3].min(y0 + h - 1));
         if bx0 > bx1 || by0 > by1 {
