@@ -200,11 +200,15 @@ fn project(v: [ClipVert; 3], p: &Projection, double_sided: bool, material: u32, 
     }
     let pick = |a: [i64; 3]| [a[idx[0]], a[idx[1]], a[idx[2]]];
     let (x, y) = (pick(x), pick(y));
+    // The samples whose centres (s·S + S/2) lie within the vertices' extent, inclusive: nothing outside can be
+    // inside the triangle, and a triangle between sample centres is dropped here.
+    let first = |a: i64| -(SUBPIXEL / 2 - a).div_euclid(SUBPIXEL);
+    let last = |b: i64| (b - SUBPIXEL / 2).div_euclid(SUBPIXEL);
     let bbox = [
-        (*x.iter().min().unwrap() / SUBPIXEL - 1).max(0),
-        (*y.iter().min().unwrap() / SUBPIXEL - 1).max(0),
-        (*x.iter().max().unwrap() / SUBPIXEL + 1).min(p.size.0 - 1),
-        (*y.iter().max().unwrap() / SUBPIXEL + 1).min(p.size.1 - 1),
+        first(*x.iter().min().unwrap()).max(0),
+        first(*y.iter().min().unwrap()).max(0),
+        last(*x.iter().max().unwrap()).min(p.size.0 - 1),
+        last(*y.iter().max().unwrap()).min(p.size.1 - 1),
     ];
     if bbox[0] > bbox[2] || bbox[1] > bbox[3] {
         return None;
@@ -392,11 +396,11 @@ pub fn raster_tile(
                 if !(z >= near && z <= far) || z >= t.depth[i] {
                     continue;
                 }
-                let k = [pb[0] / s, pb[1] / s, pb[2] / s];
-                let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
+                let k = [pb[0] * z, pb[1] * z, pb[2] * z];
                 let vc = tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2];
                 let mut albedo = mat.base_color * vc;
                 if let Some((r, texture)) = tex {
+                    let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
                     // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
                     let dx = (tri.duv_step[0] - uv * tri.ds_step[0]) * z;
                     let dy = (tri.duv_step[1] - uv * tri.ds_step[1]) * z;
