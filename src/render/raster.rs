@@ -444,9 +444,15 @@ pub fn raster_tile(
         let (bx0, by0) = (bbox[0].max(x0), bbox[1].max(y0));
         let (bx1, by1) = (bbox[2].min(x0 + w - 1), bbox[3].min(y0 + h - 1));
         if let (Some((c, half)), Some(rays)) = (sp.cube, &rays) {
+            // No part of the cube is nearer than its centre less the half diagonal: a sample already holding
+            // something at least that near cannot change (dense clouds overdraw many times), so skip its ray test.
+            let nearest = sp.z - half * 3f32.sqrt();
             for sy in by0..=by1 {
                 for sx in bx0..=bx1 {
                     let i = ((sy - y0) * w + (sx - x0)) as usize;
+                    if nearest >= t.depth[i] {
+                        continue;
+                    }
                     if let Some((z, n)) = rays.hit(i, c, half) {
                         if z < t.depth[i] && z >= near && z <= far {
                             write(t, i, sp, z, n);
