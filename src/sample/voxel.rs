@@ -59,8 +59,10 @@ pub fn downsample(p: &Points, size: f32, how: Reduction) -> Points {
         let m = |b: u32| (1u64 << b) - 1;
         [k & m(bits[0]), (k >> bits[0]) & m(bits[1]), k >> bits[0] >> bits[1]].map(|v| v as f64)
     };
-    let starts: Vec<usize> =
-        (0..order.len()).filter(|&i| i == 0 || order[i] >> idx_bits != order[i - 1] >> idx_bits).collect();
+    let starts: Vec<usize> = (0..order.len())
+        .into_par_iter()
+        .filter(|&i| i == 0 || order[i] >> idx_bits != order[i - 1] >> idx_bits)
+        .collect();
     let reps: Vec<([f32; 3], [f32; 3], [f32; 3])> = starts
         .par_iter()
         .enumerate()
@@ -100,14 +102,12 @@ fn sort_packed(mut v: Vec<u64>, from: u32, bits: u32) -> Vec<u64> {
     let (a, b) = rayon::join(|| sort_packed(v, from, bits), || sort_packed(right, from, bits));
     let mut out = Vec::with_capacity(a.len() + b.len());
     let (mut i, mut j) = (0, 0);
+    // Branch-free: which side is smaller is a coin flip for keys of one cloud's two halves.
     while i < a.len() && j < b.len() {
-        if a[i] < b[j] {
-            out.push(a[i]);
-            i += 1;
-        } else {
-            out.push(b[j]);
-            j += 1;
-        }
+        let take_a = a[i] < b[j];
+        out.push(if take_a { a[i] } else { b[j] });
+        i += usize::from(take_a);
+        j += usize::from(!take_a);
     }
     out.extend_from_slice(&a[i..]);
     out.extend_from_slice(&b[j..]);
