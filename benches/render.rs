@@ -8,7 +8,6 @@
 
 use std::f32::consts::{PI, TAU};
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
@@ -16,7 +15,7 @@ use vvgen::manifest::render::{PngCompression, Shading};
 use vvgen::render::{encode, render, Buffers, Camera, RenderSettings, SplatSettings, SplatShape, SplatSize};
 use vvgen::scene::material::Material;
 use vvgen::scene::ply::{self, PlyOut};
-use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
+use vvgen::scene::{PosedScene, PrimKind};
 
 const RES: u32 = 800;
 
@@ -128,20 +127,8 @@ fn torus_100k() -> PosedScene {
 }
 
 fn mesh(positions: Vec<Vec3>, normals: Vec<Vec3>, colors: Vec<Vec4>, indices: Vec<u32>, kind: PrimKind) -> PosedScene {
-    PosedScene {
-        primitives: vec![PosedPrimitive {
-            kind,
-            positions,
-            normals,
-            uvs: Arc::new(Vec::new()),
-            colors: Arc::new(colors),
-            indices: Arc::new(indices),
-            material: 0,
-            object: 0,
-        }],
-        materials: Arc::new(vec![Material { double_sided: true, ..Material::default() }]),
-        textures: Arc::new(Vec::new()),
-    }
+    let material = Material { double_sided: true, ..Material::default() };
+    PosedScene::single(kind, positions, normals, colors, indices, material)
 }
 
 /// A scan-like cloud of `n` points spanning ~2 m (make_pointclouds.py's recipe: a sphere shell over a ground

@@ -50,6 +50,31 @@ pub struct PosedScene {
 }
 
 impl PosedScene {
+    /// A scene of one untextured primitive (object 0) with one material: a PLY mesh or cloud, a test fixture.
+    pub fn single(
+        kind: PrimKind,
+        positions: Vec<Vec3>,
+        normals: Vec<Vec3>,
+        colors: Vec<Vec4>,
+        indices: Vec<u32>,
+        material: Material,
+    ) -> PosedScene {
+        PosedScene {
+            primitives: vec![PosedPrimitive {
+                kind,
+                positions,
+                normals,
+                uvs: Arc::new(Vec::new()),
+                colors: Arc::new(colors),
+                indices: Arc::new(indices),
+                material: 0,
+                object: 0,
+            }],
+            materials: Arc::new(vec![material]),
+            textures: Arc::new(Vec::new()),
+        }
+    }
+
     /// Axis-aligned bounds of every position, or `None` when empty.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut it = self.primitives.iter().flat_map(|p| p.positions.iter());

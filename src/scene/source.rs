@@ -194,20 +194,7 @@ pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, String> {
         .unwrap_or_default();
     // Scans rarely have consistent winding: draw both sides.
     let material = Material { double_sided: true, ..Material::default() };
-    Ok(PosedScene {
-        primitives: vec![PosedPrimitive {
-            kind,
-            positions,
-            normals,
-            uvs: Arc::new(Vec::new()),
-            colors: Arc::new(colors),
-            indices: Arc::new(d.triangles),
-            material: 0,
-            object: 0,
-        }],
-        materials: Arc::new(vec![material]),
-        textures: Arc::new(Vec::new()),
-    })
+    Ok(PosedScene::single(kind, positions, normals, colors, d.triangles, material))
 }
 
 /// Copies `rest` into `out` with `m` applied, reusing `out`'s buffers.
