@@ -237,12 +237,14 @@ impl Texture {
         }
         let lod = 0.5 * rho2.log2();
         let mips = self.mips();
-        let level = |i: usize| if i == 0 { self } else { &mips[(i - 1).min(mips.len() - 1)] };
+        // Level i is the texture itself for 0, else mips[i − 1]; past the 1×1 level (or for a 1×1 texture,
+        // which has no mips) the coarsest level answers alone.
+        let level = |i: usize| if i == 0 { self } else { &mips[i - 1] };
         let base = lod.floor();
-        let i = base as usize;
+        let i = (base as usize).min(mips.len());
         let t = lod - base;
         let a = level(i).filter(r, uv);
-        if t == 0.0 || i >= mips.len() {
+        if t == 0.0 || i == mips.len() {
             return a;
         }
         a.lerp(level(i + 1).filter(r, uv), t)
@@ -332,6 +334,27 @@ mod tests {
         }
         for v in 0..=255u8 {
             assert_eq!(linear_to_srgb8(srgb8_to_linear(v)), v, "round trip of {v}");
+        }
+    }
+
+    #[test]
+    fn minified_lookups_past_the_last_level_read_the_coarsest() {
+        let r = TextureRef {
+            texture: 0,
+            tex_coord: 0,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            nearest: false,
+            transform: None,
+        };
+        // A 1×1 texture has no mip levels; a 2×2 one has one. Footprints of 1 and 1000 texels per step.
+        let one = Texture::new(1, 1, vec![255, 0, 0, 255], true);
+        let two = Texture::new(2, 2, [[255, 255, 255, 255], [0, 0, 0, 255]].repeat(2).concat(), true);
+        for d in [1.5, 1000.0] {
+            let step = Vec2::new(d, 0.0);
+            assert_eq!(one.sample_footprint(&r, Vec2::splat(0.3), step, Vec2::ZERO), Vec4::new(1.0, 0.0, 0.0, 1.0));
+            let grey = two.sample_footprint(&r, Vec2::splat(0.3), step, Vec2::ZERO);
+            assert!(grey.x > 0.2 && grey.x < 0.8, "{grey}");
         }
     }
 }
