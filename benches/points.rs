@@ -6,17 +6,18 @@
 //! (default `target/bench-data`) as `points_1m.ply`, so Open3D can downsample the same points in the same run
 //! (see `benches/README.md`). `--quick` skips the 60-frame sequence.
 
-use std::f32::consts::TAU;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use vvgen::sample::{self, voxel};
-use vvgen::scene::material::{AlphaMode, Material, Texture, TextureRef, Wrap};
+use vvgen::scene::material::{AlphaMode, Material, Texture, TextureRef};
 use vvgen::scene::ply::{self, PlyOut};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
+
+mod common;
 
 /// Median wall time of `runs` calls.
 fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> Duration {
@@ -38,27 +39,7 @@ fn ms(d: Duration) -> String {
 /// The peers' bumpy torus (bench_python.py `make_mesh_100k`: 500 × 100 grid, 100 000 triangles) with uvs, a
 /// 1024² sRGB texture and per-vertex colours, so every sample pays for texture and vertex-colour lookups.
 fn torus_100k() -> PosedScene {
-    let (nu, nv) = (500usize, 100usize);
-    let mut positions = Vec::with_capacity(nu * nv);
-    let mut uvs = Vec::with_capacity(nu * nv);
-    for i in 0..nu {
-        for j in 0..nv {
-            let (u, w) = (TAU * i as f32 / nu as f32, TAU * j as f32 / nv as f32);
-            let r = 0.3 * (1.0 + 0.15 * (7.0 * u).sin() * (5.0 * w).cos());
-            positions.push(Vec3::new((0.8 + r * w.cos()) * u.cos(), (0.8 + r * w.cos()) * u.sin(), r * w.sin()));
-            uvs.push(Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32));
-        }
-    }
-    let (lo, hi) = positions.iter().fold((Vec3::MAX, Vec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)));
-    let colors: Vec<Vec4> = positions.iter().map(|p| ((*p - lo) / (hi - lo)).extend(1.0)).collect();
-    let mut indices = Vec::with_capacity(6 * nu * nv);
-    let id = |i: usize, j: usize| ((i % nu) * nv + j % nv) as u32;
-    for i in 0..nu {
-        for j in 0..nv {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            indices.extend_from_slice(&[a, b, c, a, c, d]);
-        }
-    }
+    let common::Torus { positions, uvs, colors, indices } = common::torus_100k();
     let normals = vec![Vec3::ZERO; 0];
     let size = 1024u32;
     let rgba: Vec<u8> = (0..size * size)
@@ -70,14 +51,7 @@ fn torus_100k() -> PosedScene {
     let texture = Texture::new(size, size, rgba, true);
     let material = Material {
         base_color: Vec4::ONE,
-        base_color_texture: Some(TextureRef {
-            texture: 0,
-            tex_coord: 0,
-            wrap_s: Wrap::Repeat,
-            wrap_t: Wrap::Repeat,
-            nearest: false,
-            transform: None,
-        }),
+        base_color_texture: Some(TextureRef::new(0)),
         alpha_mode: AlphaMode::Opaque,
         alpha_cutoff: 0.5,
         double_sided: false,

@@ -17,6 +17,8 @@ use vvgen::scene::material::Material;
 use vvgen::scene::ply::{self, PlyOut};
 use vvgen::scene::{PosedScene, PrimKind};
 
+mod common;
+
 const RES: u32 = 800;
 
 /// xorshift: the bench's own fixed stream (no need for keyed identity here).
@@ -97,26 +99,8 @@ fn line(label: &str, (ms, par, cov): (f64, f64, f64)) {
 
 /// The peers' bumpy torus: 500 × 100 grid, 100 000 triangles, colours by position.
 fn torus_100k() -> PosedScene {
-    let (nu, nv) = (500usize, 100usize);
-    let mut positions = Vec::with_capacity(nu * nv);
-    for i in 0..nu {
-        for j in 0..nv {
-            let (u, w) = (TAU * i as f32 / nu as f32, TAU * j as f32 / nv as f32);
-            let r = 0.3 * (1.0 + 0.15 * (7.0 * u).sin() * (5.0 * w).cos());
-            positions.push(Vec3::new((0.8 + r * w.cos()) * u.cos(), (0.8 + r * w.cos()) * u.sin(), r * w.sin()));
-        }
-    }
-    let (lo, hi) = positions.iter().fold((Vec3::MAX, Vec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)));
-    let colors: Vec<Vec4> = positions.iter().map(|p| ((*p - lo) / (hi - lo)).extend(1.0)).collect();
-    let id = |i: usize, j: usize| ((i % nu) * nv + j % nv) as u32;
-    let mut indices = Vec::with_capacity(6 * nu * nv);
+    let common::Torus { positions, colors, indices, .. } = common::torus_100k();
     let mut normals = vec![Vec3::ZERO; positions.len()];
-    for i in 0..nu {
-        for j in 0..nv {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            indices.extend_from_slice(&[a, b, c, a, c, d]);
-        }
-    }
     for t in indices.chunks_exact(3) {
         let [a, b, c] = [0, 1, 2].map(|k| positions[t[k] as usize]);
         let n = (b - a).cross(c - a);

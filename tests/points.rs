@@ -113,14 +113,7 @@ fn textured_quad() -> (PosedScene, Vec<u8>) {
     let positions =
         vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
     let uvs = positions.iter().map(|p| Vec2::new(p.x, 1.0 - p.y)).collect();
-    let tex = TextureRef {
-        texture: 0,
-        tex_coord: 0,
-        wrap_s: Wrap::Clamp,
-        wrap_t: Wrap::Clamp,
-        nearest: false,
-        transform: None,
-    };
+    let tex = TextureRef { wrap_s: Wrap::Clamp, wrap_t: Wrap::Clamp, ..TextureRef::new(0) };
     let scene = PosedScene {
         primitives: vec![PosedPrimitive {
             kind: PrimKind::Triangles,

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{DMat4, Mat4, Vec2, Vec3, Vec4};
 use vvgen::render::{render, Camera, RenderSettings};
-use vvgen::scene::material::{Material, Texture, TextureRef, Wrap};
+use vvgen::scene::material::{Material, Texture, TextureRef};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 fn mesh(positions: Vec<Vec3>, indices: Vec<u32>, material: Material) -> PosedScene {
@@ -332,8 +332,7 @@ fn textured_square(size: u32, texel: impl Fn(u32, u32) -> [u8; 3], nearest: bool
             [r, g, b, 255]
         })
         .collect();
-    let tex =
-        TextureRef { texture: 0, tex_coord: 0, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat, nearest, transform: None };
+    let tex = TextureRef { nearest, ..TextureRef::new(0) };
     let mut scene =
         mesh(positions, vec![0, 1, 2, 0, 2, 3], Material { base_color_texture: Some(tex), ..Material::default() });
     scene.primitives[0].uvs = Arc::new(uvs);

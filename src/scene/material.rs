@@ -50,6 +50,19 @@ pub struct TextureRef {
 }
 
 impl TextureRef {
+    /// A use of texture `texture` with glTF's default sampler: TEXCOORD_0, REPEAT both ways, linear filtering,
+    /// no transform.
+    pub fn new(texture: u32) -> TextureRef {
+        TextureRef {
+            texture,
+            tex_coord: 0,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            nearest: false,
+            transform: None,
+        }
+    }
+
     /// Applies the texture transform to a uv.
     #[inline]
     pub fn map(&self, uv: Vec2) -> Vec2 {
@@ -339,14 +352,7 @@ mod tests {
 
     #[test]
     fn minified_lookups_past_the_last_level_read_the_coarsest() {
-        let r = TextureRef {
-            texture: 0,
-            tex_coord: 0,
-            wrap_s: Wrap::Repeat,
-            wrap_t: Wrap::Repeat,
-            nearest: false,
-            transform: None,
-        };
+        let r = TextureRef::new(0);
         // A 1×1 texture has no mip levels; a 2×2 one has one. Footprints of 1 and 1000 texels per step.
         let one = Texture::new(1, 1, vec![255, 0, 0, 255], true);
         let two = Texture::new(2, 2, [[255, 255, 255, 255], [0, 0, 0, 255]].repeat(2).concat(), true);
