@@ -74,6 +74,8 @@ fn torus_100k() -> PosedScene {
 }
 
 fn main() {
+    // As the `vvgen` binary does.
+    vvgen::alloc::retain_freed_memory();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
     let out: PathBuf = args

@@ -141,6 +141,8 @@ fn cloud(n: usize, seed: u64) -> (Vec<Vec3>, Vec<Vec4>) {
 }
 
 fn main() {
+    // As the `vvgen` binary does.
+    vvgen::alloc::retain_freed_memory();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let out: PathBuf =
         args.iter().find(|a| !a.starts_with('-')).map(PathBuf::from).unwrap_or("target/bench-data".into());

@@ -1,3 +1,4 @@
 fn main() -> std::process::ExitCode {
+    vvgen::alloc::retain_freed_memory();
     vvgen::cli::run()
 }

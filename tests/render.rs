@@ -299,6 +299,36 @@ mod splats {
     }
 
     #[test]
+    fn equal_depths_show_the_first_in_scene_order_across_bands() {
+        // Splats are drawn per band of 32 rows: a 40-px square centred on row 32 straddles two bands and three tile
+        // columns. Red, then green at the same place and depth, then a nearer blue one, each its own primitive.
+        let c = pixel_camera(96, 96);
+        let prim = |x: f32, y: f32, z: f32, color: Vec4, object: u32| PosedPrimitive {
+            object,
+            ..points(vec![Vec3::new(x * z, -y * z, -z)], color).primitives.remove(0)
+        };
+        let (red, green, blue) = (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 1.0, 0.0, 1.0), Vec4::Z + Vec4::W);
+        let mut s = points(Vec::new(), Vec4::ONE);
+        s.primitives =
+            vec![prim(48.0, 32.0, 1.0, red, 0), prim(48.0, 32.0, 1.0, green, 1), prim(80.0, 80.0, 0.5, blue, 2)];
+        let f = render(&s, &c, &settings(SplatShape::Square, SplatSize::Pixels(40.0), 1));
+        for y in 0..96 {
+            for x in 0..96 {
+                let i = (y * 96 + x) as usize;
+                let px = &f.rgba[i * 4..i * 4 + 4];
+                let (in_red, in_blue) = ((28..68).contains(&x) && (12..52).contains(&y), x >= 60 && y >= 60);
+                if in_blue {
+                    assert_eq!((px, f.object[i]), (&[0, 0, 255, 255][..], 3), "({x}, {y})");
+                } else if in_red {
+                    assert_eq!((px, f.object[i]), (&[255, 0, 0, 255][..], 1), "({x}, {y})");
+                } else {
+                    assert_eq!(px[3], 0, "({x}, {y})");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn splats_are_depth_tested_against_triangles() {
         let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
         let mut s = mesh(

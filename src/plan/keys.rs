@@ -10,7 +10,7 @@ use crate::plan::Image;
 use crate::scene::{Poser, Scene, SourceData};
 
 /// Version of the renderer's output: bump when a change moves rendered bytes.
-pub const RENDER_SALT: &[u8] = b"render 5";
+pub const RENDER_SALT: &[u8] = b"render 6";
 /// Version of the point sampler's output.
 pub const SAMPLE_SALT: &[u8] = b"sample 2";
 

@@ -158,26 +158,16 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
         size: (w * k, h * k),
     };
     let tris = raster::setup(scene, &proj);
-    let splats = splat::setup(scene, &proj, &s.splat, k as f32);
+    let (tw, th) = ((w + TILE - 1) / TILE, (h + TILE - 1) / TILE);
+    let ts = TILE * k;
+    let splats = splat::setup(scene, &proj, &s.splat, k as f32, ts);
     // Bin triangles into tiles in scene order: the depth test keeps the first of equal depths, so order matters
     // and must not depend on threads.
-    let (tw, th) = ((w + TILE - 1) / TILE, (h + TILE - 1) / TILE);
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); (tw * th) as usize];
-    let ts = TILE * k;
     for (id, t) in tris.iter() {
         for ty in t.bbox[1] / ts..=t.bbox[3] / ts {
             for tx in t.bbox[0] / ts..=t.bbox[2] / ts {
                 bins[(ty * tw + tx) as usize].push(id);
-            }
-        }
-    }
-    // Splats are copied into their tiles (they are small), so each tile walks its own in order.
-    let mut splat_bins: Vec<Vec<splat::Splat>> = vec![Vec::new(); (tw * th) as usize];
-    for sp in &splats.splats {
-        let b = sp.bbox(proj.size);
-        for ty in b[1] / ts..=b[3] / ts {
-            for tx in b[0] / ts..=b[2] / ts {
-                splat_bins[(ty * tw + tx) as usize].push(*sp);
             }
         }
     }
@@ -219,15 +209,18 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             width: w,
         })
         .collect();
-    bands.into_par_iter().enumerate().for_each(|(ty, mut out)| {
-        let ty = ty as i64;
-        let mut st: Option<raster::SampleTile> = None;
+    // Sample buffers are reused by the bands a worker takes.
+    let scratch = || (None::<raster::SampleTile>, splat::Layer::default());
+    bands.into_par_iter().enumerate().for_each_init(scratch, |(st, layer), (band, mut out)| {
+        let ty = band as i64;
+        let drawn = !splats.is_empty() && splats.draw_band(band, &proj, layer);
         for tx in 0..tw {
             let (x0, y0) = (tx * TILE, ty * TILE);
             let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));
             let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
             let ti = (ty * tw + tx) as usize;
-            if bins[ti].is_empty() && splat_bins[ti].is_empty() {
+            let has_splats = drawn && layer.any(rect.x0, rect.w);
+            if bins[ti].is_empty() && !has_splats {
                 // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
                 // the other buffers start zeroed.
                 if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
@@ -240,7 +233,8 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
                 }
                 continue;
             }
-            let work = raster::TileWork { tris: &tris, bin: &bins[ti], splats: &splat_bins[ti], points: &splats };
+            let work =
+                raster::TileWork { tris: &tris, bin: &bins[ti], splats: has_splats.then_some((&splats, &*layer)) };
             let st = st.get_or_insert_with(|| raster::SampleTile::new(rect));
             raster::raster_tile(scene, work, &shade, rect, &proj, st);
             resolve(st, k, s, cam, x0, &mut out);

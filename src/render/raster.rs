@@ -6,12 +6,21 @@
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::splat::Rays;
+use super::splat::{Layer, Splats};
 use crate::scene::material::AlphaMode;
 use crate::scene::{PosedScene, PrimKind};
 
 /// Sub-sample precision of the fixed-point grid (8 bits).
 pub const SUBPIXEL: i64 = 256;
+
+/// The fixed-point value (1/[`SUBPIXEL`] sample) nearest `v` samples, ties to even, for |v · SUBPIXEL| < 2⁵⁰.
+/// Adding 1.5·2⁵² leaves that integer in the low bits of the f64's mantissa: exact, the same on every machine,
+/// and without the libm call `f64::round` is on baseline x86-64 (six per triangle, three per splat).
+#[inline]
+pub fn snap(v: f64) -> i64 {
+    const MAGIC: f64 = 6755399441055744.0;
+    ((v * SUBPIXEL as f64 + MAGIC).to_bits() & ((1 << 52) - 1)) as i64 - (1 << 51)
+}
 
 /// A vertex in view space with its attributes, for clipping.
 #[derive(Debug, Clone, Copy)]
@@ -177,9 +186,9 @@ fn project(v: [ClipVert; 3], p: &Projection, double_sided: bool, material: u32, 
         let sy = cy - fy * v[i].view.y / z;
         // Far beyond the image, snapping would overflow: such triangles are clipped by the bbox anyway, but keep
         // the arithmetic in range.
-        let lim = 1i64 << 40;
-        x[i] = ((sx as f64 * SUBPIXEL as f64).round() as i64).clamp(-lim, lim);
-        y[i] = ((sy as f64 * SUBPIXEL as f64).round() as i64).clamp(-lim, lim);
+        let lim = (1u64 << 32) as f64;
+        x[i] = snap((sx as f64).clamp(-lim, lim));
+        y[i] = snap((sy as f64).clamp(-lim, lim));
         inv_z[i] = 1.0 / z;
     }
     if v.iter().all(|c| -c.view.z > p.far) {
@@ -328,20 +337,19 @@ pub struct Rect {
     pub h: i64,
 }
 
-/// What one tile draws: indices (in scene order) into the frame's triangles and splats.
+/// What one tile draws: indices (in scene order) into the frame's triangles, and its band's splats.
 #[derive(Debug, Clone, Copy)]
 pub struct TileWork<'a> {
     /// All triangles.
     pub tris: &'a Tris,
     /// This tile's triangles.
     pub bin: &'a [u32],
-    /// This tile's splats, in scene order.
-    pub splats: &'a [super::splat::Splat],
-    /// The attributes of every splat's point.
-    pub points: &'a super::splat::Splats,
+    /// The frame's splats and the band's layer of them, when it has any.
+    pub splats: Option<(&'a Splats<'a>, &'a Layer)>,
 }
 
-/// Rasterizes a tile's triangles, then its splats, with one depth buffer.
+/// Rasterizes a tile's triangles, then merges its band's splats behind them (a splat shows where it is strictly
+/// nearer, as if drawn after the triangles with the same depth test).
 /// `t` is reused from tile to tile (a band of tiles shares one): it is reset to `rect`, empty, first.
 pub fn raster_tile(
     scene: &PosedScene,
@@ -351,7 +359,7 @@ pub fn raster_tile(
     proj: &Projection,
     t: &mut SampleTile,
 ) {
-    let TileWork { tris, bin, splats, points } = work;
+    let TileWork { tris, bin, splats } = work;
     let Rect { x0, y0, w, h } = rect;
     let (near, far) = (proj.near, proj.far);
     t.reset(rect);
@@ -429,45 +437,18 @@ pub fn raster_tile(
             }
         }
     }
-    // Cube splats intersect each sample's ray with the box; the rays are made once per tile.
-    let rays = splats.iter().any(|sp| sp.cube.is_some()).then(|| Rays::new(proj, x0, y0, w, h));
-    let write = |t: &mut SampleTile, i: usize, sp: &super::splat::Splat, z: f32, n: Vec3| {
-        // Points carry their own colour: unlit.
-        let j = sp.point as usize;
-        t.color[i] = points.colors[j].truncate().extend(1.0);
-        t.depth[i] = z;
-        t.normal[i] = n;
-        t.object[i] = points.objects[j] + 1;
-    };
-    for sp in splats {
-        let bbox = sp.bbox(proj.size);
-        let (bx0, by0) = (bbox[0].max(x0), bbox[1].max(y0));
-        let (bx1, by1) = (bbox[2].min(x0 + w - 1), bbox[3].min(y0 + h - 1));
-        if let (Some((c, half)), Some(rays)) = (sp.cube, &rays) {
-            // No part of the cube is nearer than its centre less the half diagonal: a sample already holding
-            // something at least that near cannot change (dense clouds overdraw many times), so skip its ray test.
-            let nearest = sp.z - half * 3f32.sqrt();
-            for sy in by0..=by1 {
-                for sx in bx0..=bx1 {
-                    let i = ((sy - y0) * w + (sx - x0)) as usize;
-                    if nearest >= t.depth[i] {
-                        continue;
-                    }
-                    if let Some((z, n)) = rays.hit(i, c, half) {
-                        if z < t.depth[i] && z >= near && z <= far {
-                            write(t, i, sp, z, n);
-                        }
-                    }
-                }
-            }
-            continue;
-        }
-        for sy in by0..=by1 {
-            for sx in bx0..=bx1 {
-                let i = ((sy - y0) * w + (sx - x0)) as usize;
-                if sp.z < t.depth[i] && sp.covers(sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2) {
-                    write(t, i, sp, sp.z, points.normals[sp.point as usize]);
-                }
+    let Some((splats, layer)) = splats else { return };
+    for sy in y0..y0 + h {
+        let row = ((sy - layer.y0) * layer.w) as usize;
+        for sx in x0..x0 + w {
+            let (i, j) = (((sy - y0) * w + (sx - x0)) as usize, row + sx as usize);
+            if layer.depth[j] < t.depth[i] {
+                // Points carry their own colour: unlit.
+                let (color, normal, object) = splats.attributes(layer, j);
+                t.color[i] = color.truncate().extend(1.0);
+                t.depth[i] = layer.depth[j];
+                t.normal[i] = normal;
+                t.object[i] = object + 1;
             }
         }
     }

@@ -1,12 +1,22 @@
-//! Point splats: screen-aligned squares and disks (one depth per splat, depth-tested against everything),
-//! and true 3D cubes, drawn by intersecting each covered sample's ray with the box (exact silhouette, depth
-//! and face normal per sample, no triangles).
+//! Point splats: screen-aligned squares and disks (one depth per splat), and true 3D cubes, drawn by
+//! intersecting each covered sample's ray with the box (exact silhouette, depth and face per sample, no
+//! triangles).
+//!
+//! An 800k-point frame is dominated by per-point overhead and cache misses, so:
+//! - a splat is a small record carrying what drawing needs; colour, normal and object are read from its
+//!   primitive only for the samples that end up showing it;
+//! - binning happens inside the parallel setup: each chunk of points sorts its splats by band of tile rows (a
+//!   stable counting sort into a few sequential streams), and a band walks the chunks' slices in chunk order,
+//!   which is the scene's whatever the thread count;
+//! - a band's splats are drawn on their own into a [`Layer`] (nearest splat per sample, first in scene order among
+//!   equals), which each tile then merges behind its triangles: the same result as drawing the splats after the
+//!   triangles, since "first nearest" of a sequence is the first nearest of its head and of the rest.
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::raster::{Projection, SUBPIXEL};
-use crate::scene::{PosedScene, PrimKind};
+use super::raster::{snap, Projection, SUBPIXEL};
+use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 /// Splat shape.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -43,121 +53,169 @@ impl Default for SplatSettings {
     }
 }
 
-/// A screen-space splat, in fixed-point sample coordinates: kept small (tiles copy the splats they overlap and
-/// walk them in order), with colour, normal and object looked up in [`Splats`] only when a sample is written.
+/// A screen-space splat in fixed-point sample coordinates: centre, half size, a depth and its point.
 #[derive(Debug, Clone, Copy)]
 pub struct Splat {
     x: i32,
     y: i32,
     r: i32,
-    /// View depth (of the centre; a cube's samples take their own depth).
-    pub z: f32,
-    /// Index into [`Splats`]' attributes.
-    pub point: u32,
-    disk: bool,
-    /// For cubes: the centre relative to the eye (world axes) and half the edge.
-    pub cube: Option<(Vec3, f32)>,
+    /// View depth of a square or disk; for a cube, the nearest depth any of its samples can have (the centre's
+    /// less the half diagonal), which lets a sample already holding something nearer skip the ray test.
+    z: f32,
+    /// The point's index over the scene's point primitives, in order.
+    point: u32,
+    /// For cubes, the centre relative to the eye: carried here, since reading it back from the positions
+    /// misses the cache once per splat when a cloud's order is not spatial.
+    centre: Vec3,
 }
 
-/// Every splat of a frame and the attributes of its point.
+/// The splats of one setup chunk, sorted by band: band `b`'s are `splats[start[b]..start[b + 1]]`, in scene order.
 #[derive(Debug, Default)]
-pub struct Splats {
-    /// Splats in scene order.
-    pub splats: Vec<Splat>,
-    /// Linear colour per splat.
-    pub colors: Vec<Vec4>,
-    /// World normal per splat.
-    pub normals: Vec<Vec3>,
-    /// Object id per splat.
-    pub objects: Vec<u32>,
+struct Bin {
+    splats: Vec<Splat>,
+    start: Vec<u32>,
 }
 
-/// Screen-space splats for every point primitive, in scene order. Cubes are world-axis-aligned boxes of edge
-/// `size` around each point, drawn exactly by intersecting each sample's ray with the box (see [`Rays`]); their
-/// bounding box is the projection of the circumscribed sphere.
-pub fn setup(scene: &PosedScene, p: &Projection, s: &SplatSettings, k: f32) -> Splats {
-    let n = scene.point_count();
-    let mut out = Splats {
-        splats: Vec::with_capacity(n),
-        colors: Vec::with_capacity(n),
-        normals: Vec::with_capacity(n),
-        objects: Vec::with_capacity(n),
-    };
-    let eye = p.w2c.inverse().w_axis.truncate();
-    for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
-        let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
-        // Chunks in parallel, concatenated in order: the splat order (which decides depth ties) is the scene's.
-        let chunks: Vec<Splats> = prim
-            .positions
-            .par_chunks(SETUP_CHUNK)
-            .enumerate()
-            .map(|(c, chunk)| {
-                let mut part = Splats::default();
-                for (j, pos) in chunk.iter().enumerate() {
-                    let Some(sp) = project(*pos, p, s, k, eye) else { continue };
-                    let i = c * SETUP_CHUNK + j;
-                    part.splats.push(Splat { point: part.colors.len() as u32, ..sp });
-                    part.colors.push(base * prim.colors.get(i).copied().unwrap_or(Vec4::ONE));
-                    part.normals.push(prim.normals.get(i).copied().unwrap_or(Vec3::ZERO));
-                    part.objects.push(prim.object);
-                }
-                part
-            })
-            .collect();
-        for part in chunks {
-            let offset = out.colors.len() as u32;
-            out.splats.extend(part.splats.into_iter().map(|sp| Splat { point: sp.point + offset, ..sp }));
-            out.colors.extend(part.colors);
-            out.normals.extend(part.normals);
-            out.objects.extend(part.objects);
-        }
-    }
-    out
+/// One point primitive, as splats read it.
+#[derive(Debug)]
+struct Source<'a> {
+    /// Index of its first point over all point primitives.
+    first: u32,
+    prim: &'a PosedPrimitive,
+    /// The material's base colour (points are unlit: colour = base × COLOR_0).
+    base: Vec4,
+}
+
+/// Every splat of a frame, binned by band, and what they point at.
+#[derive(Debug)]
+pub struct Splats<'a> {
+    sources: Vec<Source<'a>>,
+    bins: Vec<Bin>,
+    /// Half the edge of a cube splat (`None`: squares or disks).
+    cube: Option<f32>,
+    disk: bool,
+    /// Sample rows per band.
+    band_rows: i64,
 }
 
 /// Points per setup task.
 const SETUP_CHUNK: usize = 16384;
 
-/// The splat of the point at world `pos`, or `None` when it is clipped or falls outside the image.
+/// What [`project`] needs of the settings: the cube's half edge (or none), the size, samples per pixel side,
+/// the larger focal length, the eye.
+struct Footprint {
+    cube: Option<f32>,
+    size: Size,
+    k: f32,
+    f: f32,
+    /// The eye in world space (cube centres are taken relative to it).
+    eye: Vec3,
+}
+
+/// Projects every point of the scene's point primitives and bins the splats by band of `band_rows` sample rows.
+pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f32, band_rows: i64) -> Splats<'a> {
+    let [fx, fy, ..] = p.f;
+    // Half the edge of a cube; a pixel size is taken at unit distance.
+    let half = |size: Size| {
+        0.5 * match size {
+            Size::World(w) => w,
+            Size::Pixels(px) => px * k / fx,
+        }
+    };
+    let mut out = Splats {
+        sources: Vec::new(),
+        bins: Vec::new(),
+        cube: (s.shape == Shape::Cube).then(|| half(s.size)),
+        disk: s.shape == Shape::Disk,
+        band_rows,
+    };
+    let foot = Footprint { cube: out.cube, size: s.size, k, f: fx.max(fy), eye: p.w2c.inverse().w_axis.truncate() };
+    let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
+    let mut first = 0u32;
+    for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
+        let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
+        out.sources.push(Source { first, prim, base });
+        let bins: Vec<Bin> = prim
+            .positions
+            .par_chunks(SETUP_CHUNK)
+            .enumerate()
+            .map_init(Vec::new, |scratch, (c, chunk)| {
+                // Each splat with its first and last band, computed once for the count and the scatter.
+                scratch.clear();
+                let offset = first + (c * SETUP_CHUNK) as u32;
+                for (j, pos) in chunk.iter().enumerate() {
+                    if let Some(sp) = project(*pos, p, &foot, offset + j as u32) {
+                        let (y0, y1) = sp.rows(p.size);
+                        scratch.push((sp, (y0 / band_rows) as u16, (y1 / band_rows) as u16));
+                    }
+                }
+                bin(scratch, bands)
+            })
+            .collect();
+        out.bins.extend(bins);
+        first += prim.positions.len() as u32;
+    }
+    out
+}
+
+/// Stable counting sort of one chunk's splats by band (a splat overlapping several bands is in each).
+fn bin(ranged: &[(Splat, u16, u16)], bands: usize) -> Bin {
+    let mut start = vec![0u32; bands + 1];
+    for &(_, b0, b1) in ranged {
+        for b in b0..=b1 {
+            start[b as usize + 1] += 1;
+        }
+    }
+    for b in 0..bands {
+        start[b + 1] += start[b];
+    }
+    let mut next = start.clone();
+    let mut out = vec![Splat { x: 0, y: 0, r: 0, z: 0.0, point: 0, centre: Vec3::ZERO }; start[bands] as usize];
+    for &(sp, b0, b1) in ranged {
+        for b in b0..=b1 {
+            out[next[b as usize] as usize] = sp;
+            next[b as usize] += 1;
+        }
+    }
+    Bin { splats: out, start }
+}
+
+/// The splat of point `point` at world `pos`, or `None` when it is clipped or falls outside the image.
 #[inline]
-fn project(pos: Vec3, p: &Projection, s: &SplatSettings, k: f32, eye: Vec3) -> Option<Splat> {
+fn project(pos: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Splat> {
     let [fx, fy, cx, cy] = p.f;
-    let lim = (p.size.0.max(p.size.1) + 2) as f32 * SUBPIXEL as f32;
+    let lim = (p.size.0.max(p.size.1) + 2) as f32;
     let v = p.w2c.transform_point3(pos);
     let z = -v.z;
     if !(z >= p.near && z <= p.far) {
         return None;
     }
-    let (sx, sy) = (cx + fx * v.x / z, cy - fy * v.y / z);
-    let (half, cube) = match (s.shape, s.size) {
-        (Shape::Cube, size) => {
-            // A pixel size is taken at unit distance.
-            let h = 0.5
-                * match size {
-                    Size::World(w) => w,
-                    Size::Pixels(px) => px * k / fx,
-                };
+    let iz = 1.0 / z;
+    let (sx, sy) = (cx + fx * v.x * iz, cy - fy * v.y * iz);
+    let (half, depth) = match (s.cube, s.size) {
+        (Some(h), _) => {
             let reach = h * 3f32.sqrt();
             // The near plane would cut the cube: drop it (cubes are voxel-sized).
             if z - reach < p.near {
                 return None;
             }
-            (reach * fx.max(fy) / (z - reach), Some((pos - eye, h)))
+            (reach * s.f / (z - reach), z - reach)
         }
-        (_, Size::World(w)) => (0.5 * w * fx / z, None),
-        (_, Size::Pixels(px)) => (0.5 * px * k, None),
+        (None, Size::World(w)) => (0.5 * w * fx * iz, z),
+        (None, Size::Pixels(px)) => (0.5 * px * s.k, z),
     };
-    let fixed = |v: f32| (v * SUBPIXEL as f32).round().clamp(-lim, lim) as i32;
-    let sp = Splat { x: fixed(sx), y: fixed(sy), r: fixed(half), z, point: 0, disk: s.shape == Shape::Disk, cube };
+    let fixed = |v: f32| snap(v.clamp(-lim, lim) as f64) as i32;
+    let centre = if s.cube.is_some() { pos - s.eye } else { Vec3::ZERO };
+    let sp = Splat { x: fixed(sx), y: fixed(sy), r: fixed(half.min(lim)), z: depth, point, centre };
     let b = sp.bbox(p.size);
     (sp.r > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp)
 }
 
 impl Splat {
     /// Inclusive bounding box, within a `size` sample grid, of the samples whose centres lie in
-    /// [x − r, x + r) × [y − r, y + r): exactly the ones [`Splat::covers`] may accept (empty when min > max).
+    /// [x − r, x + r) × [y − r, y + r): exactly the ones [`Splats::covers`] may accept (empty when min > max).
     #[inline]
-    pub fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
+    fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
         let (x, y, r) = (self.x as i64, self.y as i64, self.r as i64);
         // Sample s has its centre at s·S + S/2: the first centre ≥ a and the last centre < b.
         let first = |a: i64| -(SUBPIXEL / 2 - a).div_euclid(SUBPIXEL);
@@ -165,28 +223,156 @@ impl Splat {
         [first(x - r).max(0), first(y - r).max(0), last(x + r).min(size.0 - 1), last(y + r).min(size.1 - 1)]
     }
 
-    /// Whether the sample centre (fixed point) is covered. Squares are half-open so that splats one size
-    /// apart tile without double hits.
+    /// First and last sample row of the bounding box.
     #[inline]
-    pub fn covers(&self, px: i64, py: i64) -> bool {
-        let (dx, dy, r) = (px - self.x as i64, py - self.y as i64, self.r as i64);
+    fn rows(&self, size: (i64, i64)) -> (i64, i64) {
+        let b = self.bbox(size);
+        (b[1], b[3])
+    }
+}
+
+impl<'a> Splats<'a> {
+    /// Whether there are no splats at all.
+    pub fn is_empty(&self) -> bool {
+        self.bins.iter().all(|b| b.splats.is_empty())
+    }
+
+    /// Band `b`'s splats, in scene order.
+    fn band(&self, b: usize) -> impl Iterator<Item = &Splat> {
+        self.bins.iter().flat_map(move |bin| &bin.splats[bin.start[b] as usize..bin.start[b + 1] as usize])
+    }
+
+    /// The primitive and index within it of point `i`.
+    #[inline]
+    fn source(&self, i: u32) -> (&Source<'a>, usize) {
+        let s = match self.sources.len() {
+            1 => &self.sources[0],
+            _ => &self.sources[self.sources.partition_point(|s| s.first <= i) - 1],
+        };
+        (s, (i - s.first) as usize)
+    }
+
+    /// Linear colour (base × COLOR_0), world normal and object id that sample `j` of `layer` shows (the cube face's
+    /// normal, or the point's own for squares and disks, zero when unknown).
+    #[inline]
+    pub fn attributes(&self, layer: &Layer, j: usize) -> (Vec4, Vec3, u32) {
+        let (s, i) = self.source(layer.point[j]);
+        let color = s.base * s.prim.colors.get(i).copied().unwrap_or(Vec4::ONE);
+        let normal = match self.cube {
+            Some(_) => FACES[layer.face[j] as usize],
+            None => s.prim.normals.get(i).copied().unwrap_or(Vec3::ZERO),
+        };
+        (color, normal, s.prim.object)
+    }
+
+    /// Whether the sample centre (fixed point) is covered by a square or disk splat. Squares are half-open so
+    /// that splats one size apart tile without double hits.
+    #[inline]
+    fn covers(&self, sp: &Splat, px: i64, py: i64) -> bool {
+        let (dx, dy, r) = (px - sp.x as i64, py - sp.y as i64, sp.r as i64);
         if self.disk {
             dx * dx + dy * dy < r * r
         } else {
             dx >= -r && dx < r && dy >= -r && dy < r
         }
     }
+
+    /// Draws band `band` (sample rows from `band · band_rows`) into `layer`: per sample, the nearest splat and its
+    /// depth, the first in scene order among equals. Returns whether any sample was written.
+    pub fn draw_band(&self, band: usize, p: &Projection, layer: &mut Layer) -> bool {
+        if self.band(band).next().is_none() {
+            return false;
+        }
+        let y0 = band as i64 * self.band_rows;
+        let (w, h) = (p.size.0, self.band_rows.min(p.size.1 - y0));
+        layer.reset(y0, w, h);
+        let rays = self.cube.map(|half| (Rays::new(p, 0, y0, w, h), half));
+        let mut any = false;
+        for sp in self.band(band) {
+            let b = sp.bbox(p.size);
+            let (by0, by1) = (b[1].max(y0), b[3].min(y0 + h - 1));
+            if let Some((rays, half)) = &rays {
+                for sy in by0..=by1 {
+                    for sx in b[0]..=b[2] {
+                        let i = ((sy - y0) * w + sx) as usize;
+                        // No part of the cube is nearer than `sp.z`: a sample already holding something at
+                        // least that near cannot change (dense clouds overdraw many times), so skip its ray test.
+                        if sp.z >= layer.depth[i] {
+                            continue;
+                        }
+                        if let Some((z, face)) = rays.hit(i, sp.centre, *half) {
+                            if z < layer.depth[i] && z >= p.near && z <= p.far {
+                                (layer.depth[i], layer.point[i], layer.face[i]) = (z, sp.point, face);
+                                any = true;
+                            }
+                        }
+                    }
+                }
+                continue;
+            }
+            for sy in by0..=by1 {
+                for sx in b[0]..=b[2] {
+                    let i = ((sy - y0) * w + sx) as usize;
+                    if sp.z < layer.depth[i]
+                        && self.covers(sp, sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2)
+                    {
+                        (layer.depth[i], layer.point[i]) = (sp.z, sp.point);
+                        any = true;
+                    }
+                }
+            }
+        }
+        any
+    }
 }
 
-/// Per-sample rays of a tile for cube splats: the reciprocal of each sample's world direction, scaled so that the
+/// A band's splats drawn alone, full image width: per sample the nearest splat's depth, point and (cubes) face.
+#[derive(Debug, Default)]
+pub struct Layer {
+    /// First sample row.
+    pub y0: i64,
+    /// Width in samples.
+    pub w: i64,
+    /// View depth, +∞ where no splat.
+    pub depth: Vec<f32>,
+    /// The point shown (meaningful where `depth` is finite).
+    point: Vec<u32>,
+    /// The entered face of a cube, an index into [`FACES`].
+    face: Vec<u8>,
+}
+
+impl Layer {
+    /// Whether any sample of columns `x0 .. x0 + w` shows a splat.
+    pub fn any(&self, x0: i64, w: i64) -> bool {
+        self.depth
+            .chunks_exact(self.w as usize)
+            .any(|row| row[x0 as usize..(x0 + w) as usize].iter().any(|d| d.is_finite()))
+    }
+
+    fn reset(&mut self, y0: i64, w: i64, h: i64) {
+        let n = (w * h) as usize;
+        (self.y0, self.w) = (y0, w);
+        self.depth.clear();
+        self.depth.resize(n, f32::INFINITY);
+        self.point.clear();
+        self.point.resize(n, 0);
+        self.face.clear();
+        self.face.resize(n, 0);
+    }
+}
+
+/// Cube face normals: −x, +x, −y, +y, −z, +z.
+const FACES: [Vec3; 6] = [Vec3::NEG_X, Vec3::X, Vec3::NEG_Y, Vec3::Y, Vec3::NEG_Z, Vec3::Z];
+
+/// Per-sample rays of a band for cube splats: the reciprocal of each sample's world direction, scaled so that the
 /// ray parameter is the planar view depth.
-pub struct Rays {
+struct Rays {
     inv: Vec<Vec3>,
 }
 
 impl Rays {
     /// Rays through the sample centres of the `w × h` samples at (`x0`, `y0`).
-    pub fn new(p: &Projection, x0: i64, y0: i64, w: i64, h: i64) -> Rays {
+    fn new(p: &Projection, x0: i64, y0: i64, w: i64, h: i64) -> Rays {
         let rot = glam::Mat3::from_mat4(p.w2c.inverse());
         let [fx, fy, cx, cy] = p.f;
         let mut inv = Vec::with_capacity((w * h) as usize);
@@ -201,9 +387,9 @@ impl Rays {
     }
 
     /// Where sample `i`'s ray enters the cube (centre `c` relative to the eye, half edge `h`): planar depth and
-    /// the entered face's normal; `None` on a miss.
+    /// the entered face (an index into [`FACES`]); `None` on a miss.
     #[inline]
-    pub fn hit(&self, i: usize, c: Vec3, h: f32) -> Option<(f32, Vec3)> {
+    fn hit(&self, i: usize, c: Vec3, h: f32) -> Option<(f32, u8)> {
         let inv = self.inv[i];
         let t1 = (c - Vec3::splat(h)) * inv;
         let t2 = (c + Vec3::splat(h)) * inv;
@@ -213,13 +399,13 @@ impl Rays {
             return None;
         }
         // The entered face is on the axis that entered last, facing against the ray.
-        let n = if enter == lo.x {
-            Vec3::new(-inv.x.signum(), 0.0, 0.0)
+        let axis = if enter == lo.x {
+            0
         } else if enter == lo.y {
-            Vec3::new(0.0, -inv.y.signum(), 0.0)
+            1
         } else {
-            Vec3::new(0.0, 0.0, -inv.z.signum())
+            2
         };
-        Some((enter, n))
+        Some((enter, 2 * axis + (inv[axis as usize] < 0.0) as u8))
     }
 }
