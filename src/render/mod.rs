@@ -180,6 +180,7 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             };
             (s.ambient, lights)
         }),
+        normals: s.shading == Shading::Lambert || s.buffers.normal,
     };
     let n = (w * h) as usize;
     let b = s.buffers;
@@ -286,7 +287,8 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0
             }
             let alpha = covered as f32 / total as f32;
             let mut rgb = sum.truncate() / covered as f32;
-            let coverage = (alpha * 255.0).round() as u8;
+            // covered·255/total rounded half up, in integers.
+            let coverage = ((covered * 510 + total) / (2 * total)) as u8;
             let mut a8 = coverage;
             if let Some(bg) = s.background {
                 rgb = rgb * alpha + bg * (1.0 - alpha);

@@ -322,6 +322,8 @@ impl SampleTile {
 pub struct Shade {
     /// `None` for unlit; else ambient and lights as (direction toward the light, intensity).
     pub lambert: Option<(f32, Vec<(Vec3, f32)>)>,
+    /// Whether anything reads the normals (Lambert or the normal pass): if not, they are not interpolated.
+    pub normals: bool,
 }
 
 /// A rectangle of samples.
@@ -420,9 +422,12 @@ pub fn raster_tile(
                     AlphaMode::Blend if albedo.w < 0.5 => continue,
                     _ => {}
                 }
-                let mut nrm = (tri.normal[0] * k[0] + tri.normal[1] * k[1] + tri.normal[2] * k[2]).normalize_or_zero();
-                if tri.back {
-                    nrm = -nrm;
+                let mut nrm = Vec3::ZERO;
+                if shade.normals {
+                    nrm = (tri.normal[0] * k[0] + tri.normal[1] * k[1] + tri.normal[2] * k[2]).normalize_or_zero();
+                    if tri.back {
+                        nrm = -nrm;
+                    }
                 }
                 let mut rgb = albedo.truncate();
                 if let Some((ambient, lights)) = &shade.lambert {

@@ -140,31 +140,30 @@ pub fn linear_to_srgb(c: f32) -> f32 {
 static SRGB8_TO_LINEAR: LazyLock<[f32; 256]> =
     LazyLock::new(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)));
 
-/// Linear values where the sRGB byte code steps up: code k+1 starts at `linear(k + 0.5)`.
-static SRGB8_STEPS: LazyLock<[f32; 255]> =
-    LazyLock::new(|| std::array::from_fn(|k| srgb_to_linear((k as f32 + 0.5) / 255.0)));
-
-/// Buckets of [`SRGB8_START`]: fine enough that a bucket spans at most a few codes (the darkest codes are
-/// 1/(255·12.92) ≈ 3e-4 apart in linear light).
-const SRGB8_BUCKETS: usize = 4096;
-
-/// The sRGB code of each bucket's lower end, `i / SRGB8_BUCKETS`: where [`linear_to_srgb8`] starts walking.
-static SRGB8_START: LazyLock<[u8; SRGB8_BUCKETS + 1]> = LazyLock::new(|| {
-    std::array::from_fn(|i| SRGB8_STEPS.partition_point(|&t| t <= i as f32 / SRGB8_BUCKETS as f32) as u8)
+/// Linear values where the sRGB byte code steps up: code k+1 starts at `linear(k + 0.5)`; entry 255 is +∞.
+static SRGB8_STEPS: LazyLock<[f32; 256]> = LazyLock::new(|| {
+    std::array::from_fn(|k| if k < 255 { srgb_to_linear((k as f32 + 0.5) / 255.0) } else { f32::INFINITY })
 });
 
-/// Linear float → nearest sRGB byte: the number of code boundaries at or below `c`, found from its bucket's
-/// first code by a short walk (exactly what a binary search over the boundaries gives, without its dozen
-/// unpredictable branches; this runs three times per covered pixel).
+/// Buckets of [`SRGB8_START`]: the top 16 bits of an f32 in [0, 1] (exponent and 7 mantissa bits, so each bucket
+/// spans 1/128 of its octave). That is fine enough for at most one code boundary per bucket: boundaries are
+/// ≥ 3e-4 apart in linear light where buckets are narrower still, and 0.009 apart near 1, where they are 0.004.
+const SRGB8_BUCKETS: usize = (1.0f32.to_bits() >> 16) as usize + 1;
+
+/// The sRGB code at each bucket's lower end: where [`linear_to_srgb8`] starts.
+static SRGB8_START: LazyLock<[u8; SRGB8_BUCKETS]> = LazyLock::new(|| {
+    std::array::from_fn(|i| SRGB8_STEPS.partition_point(|&t| t <= f32::from_bits((i as u32) << 16)) as u8)
+});
+
+/// Linear float → nearest sRGB byte: the number of code boundaries at or below `c`, from its bucket's first code
+/// and one comparison with the next boundary (exactly what a binary search over the boundaries gives, without
+/// its unpredictable branches; this runs three times per covered pixel).
 #[inline]
 pub fn linear_to_srgb8(c: f32) -> u8 {
-    let steps: &[f32; 255] = &SRGB8_STEPS;
-    // NaN and negatives land in bucket 0 and stay at code 0; values above 1 walk to 255.
-    let mut code = SRGB8_START[(c.clamp(0.0, 1.0) * SRGB8_BUCKETS as f32) as usize] as usize;
-    while code < 255 && steps[code] <= c {
-        code += 1;
-    }
-    code as u8
+    // NaN, negatives and −0 become +0; values above 1 become 1, code 255.
+    let c = if c > 0.0 { c.min(1.0) } else { 0.0 };
+    let code = SRGB8_START[(c.to_bits() >> 16) as usize];
+    code + (c >= SRGB8_STEPS[code as usize]) as u8
 }
 
 /// sRGB byte → linear float, tabulated.
@@ -221,7 +220,8 @@ impl Texture {
         let i = ((y * self.width + x) * 4) as usize;
         let t = &self.rgba[i..i + 4];
         if self.srgb {
-            Vec4::new(srgb8_to_linear(t[0]), srgb8_to_linear(t[1]), srgb8_to_linear(t[2]), t[3] as f32 / 255.0)
+            let lut: &[f32; 256] = &SRGB8_TO_LINEAR;
+            Vec4::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize], t[3] as f32 / 255.0)
         } else {
             Vec4::new(t[0] as f32, t[1] as f32, t[2] as f32, t[3] as f32) / 255.0
         }
@@ -248,7 +248,7 @@ impl Texture {
         if r.nearest || rho2.is_nan() || rho2 <= 1.0 {
             return self.filter(r, uv);
         }
-        let lod = 0.5 * rho2.log2();
+        let lod = 0.5 * log2(rho2);
         let mips = self.mips();
         // Level i is the texture itself for 0, else mips[i − 1]; past the 1×1 level (or for a 1×1 texture,
         // which has no mips) the coarsest level answers alone.
@@ -283,6 +283,21 @@ impl Texture {
         let bottom = self.texel(xs[0], ys[1]).lerp(self.texel(xs[1], ys[1]), tx);
         top.lerp(bottom, ty)
     }
+}
+
+/// log2 of a positive normal `x` to within 1e-6, from its exponent and an atanh series for the mantissa: only
+/// IEEE arithmetic, so the mip level is the same on every machine (libm's `log2f` is not bound to be), and no
+/// libm call in the texturing loop.
+#[inline]
+fn log2(x: f32) -> f32 {
+    let bits = x.to_bits();
+    let e = ((bits >> 23) & 0xff) as i32 - 127;
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000); // [1, 2)
+                                                                // ln m = 2·atanh(s) = 2(s + s³/3 + s⁵/5 + …), s = (m − 1)/(m + 1) < 1/3.
+    let s = (m - 1.0) / (m + 1.0);
+    let s2 = s * s;
+    let series = s * (1.0 + s2 * (1.0 / 3.0 + s2 * (1.0 / 5.0 + s2 * (1.0 / 7.0 + s2 * (1.0 / 9.0 + s2 / 11.0)))));
+    e as f32 + 2.0 * std::f32::consts::LOG2_E * series
 }
 
 /// `x.floor() as i64` without the libm call baseline x86-64 makes of `floor` (no SSE4.1 `roundss`); this is in
@@ -337,17 +352,28 @@ mod tests {
 
     #[test]
     fn srgb8_encoding_is_the_exact_nearest_code() {
-        // Every boundary, just below and at it, and a dense sweep: the bucketed walk equals the binary search.
-        let reference = |c: f32| SRGB8_STEPS.partition_point(|&t| t <= c) as u8;
-        let mut probes: Vec<f32> = SRGB8_STEPS.iter().flat_map(|&t| [t, f32::from_bits(t.to_bits() - 1)]).collect();
+        // Every boundary, just below and at it, and a dense sweep: the bucketed lookup equals the binary search.
+        let reference = |c: f32| SRGB8_STEPS[..255].partition_point(|&t| t <= c) as u8;
+        let mut probes: Vec<f32> =
+            SRGB8_STEPS[..255].iter().flat_map(|&t| [t, f32::from_bits(t.to_bits() - 1)]).collect();
         probes.extend((0..=100_000).map(|i| i as f32 / 100_000.0));
-        probes.extend([-1.0, 0.0, 1.0, 1.5, f32::NAN, f32::INFINITY, f32::NEG_INFINITY]);
+        probes.extend([-1.0, -0.0, 0.0, 1.0, 1.5, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE / 2.0]);
         for c in probes {
             assert_eq!(linear_to_srgb8(c), reference(c), "{c}");
         }
         for v in 0..=255u8 {
             assert_eq!(linear_to_srgb8(srgb8_to_linear(v)), v, "round trip of {v}");
         }
+    }
+
+    #[test]
+    fn log2_is_within_a_millionth() {
+        for i in 0..100_000 {
+            let x = 1.0 + i as f32 * 0.37;
+            assert!((log2(x) - x.log2()).abs() < 1e-6 * x.log2().max(1.0), "{x}: {} vs {}", log2(x), x.log2());
+        }
+        assert_eq!(log2(1.0), 0.0);
+        assert_eq!(log2(1024.0), 10.0);
     }
 
     #[test]
