@@ -118,7 +118,16 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
     let mut out = Tris::default();
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Triangles) {
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
-        let view: Vec<Vec3> = prim.positions.par_iter().map(|v| p.w2c.transform_point3(*v)).collect();
+        // Vertices are shared by about six triangles of a mesh: project each once. Triangles wholly in front of
+        // the near plane use these; clipped ones project their new vertices the same way.
+        let view: Vec<(Vec3, Screen)> = prim
+            .positions
+            .par_iter()
+            .map(|v| {
+                let v = p.w2c.transform_point3(*v);
+                (v, Screen::of(v, p))
+            })
+            .collect();
         let chunks: Vec<Vec<Tri>> = prim
             .indices
             .par_chunks(3 * SETUP_CHUNK)
@@ -128,18 +137,23 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
                     let vert = |i: u32| {
                         let i = i as usize;
                         ClipVert {
-                            view: view[i],
+                            view: view[i].0,
                             uv: prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO),
                             normal: prim.normals[i],
                             color: prim.colors.get(i).copied().unwrap_or(Vec4::ONE),
                         }
                     };
-                    let (poly, n) = clip_near([vert(t[0]), vert(t[1]), vert(t[2])], p.near);
+                    let v = [vert(t[0]), vert(t[1]), vert(t[2])];
+                    if v.iter().all(|c| -c.view.z >= p.near) {
+                        let screen = [0, 1, 2].map(|k| view[t[k] as usize].1);
+                        tris.extend(assemble(v, screen, p, double_sided, prim.material, prim.object));
+                        continue;
+                    }
+                    let (poly, n) = clip_near(v, p.near);
                     for k in 1..n.saturating_sub(1) {
                         let fan = [poly[0], poly[k], poly[k + 1]];
-                        if let Some(tri) = project(fan, p, double_sided, prim.material, prim.object) {
-                            tris.push(tri);
-                        }
+                        let screen = fan.map(|c| Screen::of(c.view, p));
+                        tris.extend(assemble(fan, screen, p, double_sided, prim.material, prim.object));
                     }
                 }
                 tris
@@ -175,22 +189,42 @@ fn clip_near(tri: [ClipVert; 3], near: f32) -> ([ClipVert; 4], usize) {
     (out, n)
 }
 
-fn project(v: [ClipVert; 3], p: &Projection, double_sided: bool, material: u32, object: u32) -> Option<Tri> {
-    let [fx, fy, cx, cy] = p.f;
-    let mut x = [0i64; 3];
-    let mut y = [0i64; 3];
-    let mut inv_z = [0f32; 3];
-    for i in 0..3 {
-        let z = -v[i].view.z;
-        let sx = cx + fx * v[i].view.x / z;
-        let sy = cy - fy * v[i].view.y / z;
+/// A vertex in front of the near plane, projected: snapped sample position and 1 / view depth.
+#[derive(Debug, Clone, Copy)]
+struct Screen {
+    x: i64,
+    y: i64,
+    inv_z: f32,
+}
+
+impl Screen {
+    /// The projection of view-space `v` (meaningful when in front of the near plane).
+    #[inline]
+    fn of(v: Vec3, p: &Projection) -> Screen {
+        let [fx, fy, cx, cy] = p.f;
+        let z = -v.z;
+        let sx = cx + fx * v.x / z;
+        let sy = cy - fy * v.y / z;
         // Far beyond the image, snapping would overflow: such triangles are clipped by the bbox anyway, but keep
         // the arithmetic in range.
         let lim = (1u64 << 32) as f64;
-        x[i] = snap((sx as f64).clamp(-lim, lim));
-        y[i] = snap((sy as f64).clamp(-lim, lim));
-        inv_z[i] = 1.0 / z;
+        Screen { x: snap((sx as f64).clamp(-lim, lim)), y: snap((sy as f64).clamp(-lim, lim)), inv_z: 1.0 / z }
     }
+}
+
+/// The triangle of the view-space vertices `v` (in front of the near plane) projected to `screen`, oriented and
+/// bounded; `None` when beyond the far plane, degenerate, culled or outside the image.
+fn assemble(
+    v: [ClipVert; 3],
+    screen: [Screen; 3],
+    p: &Projection,
+    double_sided: bool,
+    material: u32,
+    object: u32,
+) -> Option<Tri> {
+    let x = screen.map(|s| s.x);
+    let y = screen.map(|s| s.y);
+    let inv_z = screen.map(|s| s.inv_z);
     if v.iter().all(|c| -c.view.z > p.far) {
         return None;
     }

@@ -277,6 +277,13 @@ impl Texture {
         let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
         let (x0, y0) = (floor(fx), floor(fy));
         let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
+        if x0 >= 0 && y0 >= 0 && x0 + 1 < self.width as i64 && y0 + 1 < self.height as i64 {
+            // All four texels inside (almost every lookup): no wrapping.
+            let (x, y) = (x0 as u32, y0 as u32);
+            let top = self.texel(x, y).lerp(self.texel(x + 1, y), tx);
+            let bottom = self.texel(x, y + 1).lerp(self.texel(x + 1, y + 1), tx);
+            return top.lerp(bottom, ty);
+        }
         let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0 + 1, self.width)];
         let ys = [wrap(r.wrap_t, y0, self.height), wrap(r.wrap_t, y0 + 1, self.height)];
         let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), tx);
