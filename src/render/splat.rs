@@ -53,14 +53,15 @@ impl Default for SplatSettings {
     }
 }
 
-/// A screen-space splat in fixed-point sample coordinates: centre, half size, a depth and its point.
+/// A screen-space splat in fixed-point sample coordinates: centre, half width and height, a depth and its point.
 #[derive(Debug, Clone, Copy)]
 pub struct Splat {
     x: i32,
     y: i32,
-    r: i32,
-    /// View depth of a square or disk; for a cube, the nearest depth any of its samples can have (the centre's
-    /// less the half diagonal), which lets a sample already holding something nearer skip the ray test.
+    rx: i32,
+    ry: i32,
+    /// View depth of a square or disk; for a cube, the nearest depth any of its samples can have (the near side of
+    /// its view-space bounding box), which lets a sample already holding something nearer skip the ray test.
     z: f32,
     /// The point's index over the scene's point primitives, in order.
     point: u32,
@@ -101,20 +102,20 @@ pub struct Splats<'a> {
 /// Points per setup task.
 const SETUP_CHUNK: usize = 16384;
 
-/// What [`project`] needs of the settings: the cube's half edge (or none), the size, samples per pixel side,
-/// the larger focal length, the eye.
+/// What [`project`] needs of the settings: the cube's half edge (or none) and the half extents of its view-space
+/// bounding box, the size, samples per pixel side, the eye.
 struct Footprint {
     cube: Option<f32>,
+    extent: Vec3,
     size: Size,
     k: f32,
-    f: f32,
     /// The eye in world space (cube centres are taken relative to it).
     eye: Vec3,
 }
 
 /// Projects every point of the scene's point primitives and bins the splats by band of `band_rows` sample rows.
 pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f32, band_rows: i64) -> Splats<'a> {
-    let [fx, fy, ..] = p.f;
+    let [fx, ..] = p.f;
     // Half the edge of a cube; a pixel size is taken at unit distance.
     let half = |size: Size| {
         0.5 * match size {
@@ -129,7 +130,13 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
         disk: s.shape == Shape::Disk,
         band_rows,
     };
-    let foot = Footprint { cube: out.cube, size: s.size, k, f: fx.max(fy), eye: p.w2c.inverse().w_axis.truncate() };
+    // A world-axis-aligned cube of half edge h spans h·Σⱼ|Rᵢⱼ| along view axis i (R: the view rotation), a box
+    // much tighter than the circumscribed sphere; widened by a hair so that rounding never trims a sample.
+    let rot = glam::Mat3::from_mat4(p.w2c).transpose();
+    let extent = [rot.x_axis, rot.y_axis, rot.z_axis].map(|row| row.abs().element_sum());
+    let extent = Vec3::from(extent) * out.cube.unwrap_or(0.0) * (1.0 + 1e-4);
+    let eye = p.w2c.inverse().w_axis.truncate();
+    let foot = Footprint { cube: out.cube, extent, size: s.size, k, eye };
     let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
     let mut first = 0u32;
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
@@ -170,7 +177,7 @@ fn bin(ranged: &[(Splat, u16, u16)], bands: usize) -> Bin {
         start[b + 1] += start[b];
     }
     let mut next = start.clone();
-    let mut out = vec![Splat { x: 0, y: 0, r: 0, z: 0.0, point: 0, centre: Vec3::ZERO }; start[bands] as usize];
+    let mut out = vec![Splat { x: 0, y: 0, rx: 0, ry: 0, z: 0.0, point: 0, centre: Vec3::ZERO }; start[bands] as usize];
     for &(sp, b0, b1) in ranged {
         for b in b0..=b1 {
             out[next[b as usize] as usize] = sp;
@@ -191,36 +198,53 @@ fn project(pos: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Splat
         return None;
     }
     let iz = 1.0 / z;
-    let (sx, sy) = (cx + fx * v.x * iz, cy - fy * v.y * iz);
-    let (half, depth) = match (s.cube, s.size) {
+    let fixed = |v: f32| snap(v.clamp(-lim, lim) as f64) as i32;
+    let sp = match (s.cube, s.size) {
         (Some(h), _) => {
-            let reach = h * 3f32.sqrt();
             // The near plane would cut the cube: drop it (cubes are voxel-sized).
-            if z - reach < p.near {
+            if z - h * 3f32.sqrt() < p.near {
                 return None;
             }
-            (reach * s.f / (z - reach), z - reach)
+            // The screen box of the view-space box: each side's extreme ratio X / depth is at the box's nearer
+            // or farther depth, by the sign of X.
+            let e = s.extent;
+            let (near_z, far_z) = (z - e.z, z + e.z);
+            let ratio = |lo: f32, hi: f32| {
+                (lo / if lo >= 0.0 { far_z } else { near_z }, hi / if hi >= 0.0 { near_z } else { far_z })
+            };
+            let (x0, x1) = ratio(v.x - e.x, v.x + e.x);
+            let (y0, y1) = ratio(v.y - e.y, v.y + e.y);
+            let (sx0, sx1) = (cx + fx * x0, cx + fx * x1);
+            let (sy0, sy1) = (cy - fy * y1, cy - fy * y0);
+            // One fixed-point unit more on each side, for the rounding of centre and half size.
+            let (rx, ry) = (fixed((sx1 - sx0) / 2.0) + 1, fixed((sy1 - sy0) / 2.0) + 1);
+            let (x, y) = (fixed((sx0 + sx1) / 2.0), fixed((sy0 + sy1) / 2.0));
+            Splat { x, y, rx, ry, z: near_z, point, centre: pos - s.eye }
         }
-        (None, Size::World(w)) => (0.5 * w * fx * iz, z),
-        (None, Size::Pixels(px)) => (0.5 * px * s.k, z),
+        (None, size) => {
+            let half = match size {
+                Size::World(w) => 0.5 * w * fx * iz,
+                Size::Pixels(px) => 0.5 * px * s.k,
+            };
+            let r = fixed(half.min(lim));
+            let (x, y) = (fixed(cx + fx * v.x * iz), fixed(cy - fy * v.y * iz));
+            Splat { x, y, rx: r, ry: r, z, point, centre: Vec3::ZERO }
+        }
     };
-    let fixed = |v: f32| snap(v.clamp(-lim, lim) as f64) as i32;
-    let centre = if s.cube.is_some() { pos - s.eye } else { Vec3::ZERO };
-    let sp = Splat { x: fixed(sx), y: fixed(sy), r: fixed(half.min(lim)), z: depth, point, centre };
     let b = sp.bbox(p.size);
-    (sp.r > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp)
+    (sp.rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp)
 }
 
 impl Splat {
     /// Inclusive bounding box, within a `size` sample grid, of the samples whose centres lie in
-    /// [x − r, x + r) × [y − r, y + r): exactly the ones [`Splats::covers`] may accept (empty when min > max).
+    /// [x − rx, x + rx) × [y − ry, y + ry): exactly the ones [`Splats::covers`] may accept (empty when min > max).
     #[inline]
     fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
-        let (x, y, r) = (self.x as i64, self.y as i64, self.r as i64);
+        let (x, y, rx, ry) = (self.x as i64, self.y as i64, self.rx as i64, self.ry as i64);
         // Sample s has its centre at s·S + S/2: the first centre ≥ a and the last centre < b.
         let first = |a: i64| -(SUBPIXEL / 2 - a).div_euclid(SUBPIXEL);
         let last = |b: i64| (b - 1 - SUBPIXEL / 2).div_euclid(SUBPIXEL);
-        [first(x - r).max(0), first(y - r).max(0), last(x + r).min(size.0 - 1), last(y + r).min(size.1 - 1)]
+        [first(x - rx).max(0), first(y - ry).max(0), last(x + rx).min(size.0 - 1), last(y + ry).min(size.1 - 1)]
     }
 
     /// First and last sample row of the bounding box.
@@ -269,7 +293,7 @@ impl<'a> Splats<'a> {
     /// that splats one size apart tile without double hits.
     #[inline]
     fn covers(&self, sp: &Splat, px: i64, py: i64) -> bool {
-        let (dx, dy, r) = (px - sp.x as i64, py - sp.y as i64, sp.r as i64);
+        let (dx, dy, r) = (px - sp.x as i64, py - sp.y as i64, sp.rx as i64);
         if self.disk {
             dx * dx + dy * dy < r * r
         } else {
