@@ -120,6 +120,48 @@ fn near_plane_clipping_keeps_the_visible_part() {
 }
 
 #[test]
+fn a_huge_ground_plane_through_the_near_plane_is_drawn_exactly() {
+    // A 4 km ground quad, the camera 1.6 m above it, rolled and pitched down a little, near = 5 mm: clipped
+    // vertices project tens of millions of samples off-screen in both x and y, where exact edge functions would
+    // overflow without a guard band.
+    let (h, k) = (1.6f64, 2_000.0f64);
+    let ground = mesh(
+        [[-k, k], [k, k], [k, -k], [-k, -k]].iter().map(|&[x, z]| Vec3::new(x as f32, -h as f32, z as f32)).collect(),
+        vec![0, 1, 2, 0, 2, 3],
+        Material { double_sided: true, ..Material::default() },
+    );
+    let c2w = DMat4::from_rotation_z(0.5) * DMat4::from_rotation_x(-0.2);
+    let c = Camera { near: 0.005, far: 1e5, ..cam(64, 48, 40.0, c2w) };
+    let f = render(&ground, &c, &RenderSettings::default());
+    let mut covered = 0;
+    for y in 0..48 {
+        for x in 0..64 {
+            // The pixel centre's ray meets the plane y = −h within the quad?
+            let d = c2w.transform_vector3(glam::DVec3::new(
+                (x as f64 + 0.5 - 32.0) / 40.0,
+                -(y as f64 + 0.5 - 24.0) / 40.0,
+                -1.0,
+            ));
+            let t = -h / d.y;
+            let hit = t > 0.0 && (t * d.x).abs() <= k && (t * d.z).abs() <= k;
+            assert_eq!(alpha(&f, x, y), if hit { 255 } else { 0 }, "({x}, {y})");
+            if hit {
+                covered += 1;
+                // Planar depth: t along a ray whose view z is −1. Near the horizon depth magnifies the 1/256-sample
+                // vertex snapping (at 10 m a pixel is 6 rows below it), so check the nearer ground.
+                let z = f.depth[(y * 64 + x) as usize] as f64;
+                assert!(t > 10.0 || (z - t).abs() < 1e-3 * t, "({x}, {y}): {z} vs {t}");
+            }
+        }
+    }
+    assert!(covered > 1000, "{covered}");
+    // Supersampled, the same scene still renders (no overflow) with the same coverage at pixel centres' majority.
+    let f4 = render(&ground, &c, &RenderSettings { samples: 4, ..Default::default() });
+    let full = (0..48 * 64).filter(|&i| f4.coverage[i] == 255).count();
+    assert!((full as i64 - covered as i64).abs() < 64, "{full} vs {covered}");
+}
+
+#[test]
 fn edge_pixels_keep_straight_colour() {
     let red = Material { base_color: Vec4::new(1.0, 0.0, 0.0, 1.0), ..Material::default() };
     let tri =

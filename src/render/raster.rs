@@ -118,14 +118,15 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
     let mut out = Tris::default();
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Triangles) {
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
-        // Vertices are shared by about six triangles of a mesh: project each once. Triangles wholly in front of
-        // the near plane use these; clipped ones project their new vertices the same way.
-        let view: Vec<(Vec3, Screen)> = prim
+        // Vertices are shared by about six triangles of a mesh: project each once. Triangles whose vertices are
+        // all inside the clip planes use these; clipped ones project their new vertices the same way.
+        let planes = clip_planes(p);
+        let view: Vec<(Vec3, Screen, bool)> = prim
             .positions
             .par_iter()
             .map(|v| {
                 let v = p.w2c.transform_point3(*v);
-                (v, Screen::of(v, p))
+                (v, Screen::of(v, p), planes.iter().all(|&q| side(q, v) >= 0.0))
             })
             .collect();
         let chunks: Vec<Vec<Tri>> = prim
@@ -144,12 +145,12 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
                         }
                     };
                     let v = [vert(t[0]), vert(t[1]), vert(t[2])];
-                    if v.iter().all(|c| -c.view.z >= p.near) {
+                    if t.iter().all(|&i| view[i as usize].2) {
                         let screen = [0, 1, 2].map(|k| view[t[k] as usize].1);
                         tris.extend(assemble(v, screen, p, double_sided, prim.material, prim.object));
                         continue;
                     }
-                    let (poly, n) = clip_near(v, p.near);
+                    let (poly, n) = clip(v, &planes);
                     for k in 1..n.saturating_sub(1) {
                         let fan = [poly[0], poly[k], poly[k + 1]];
                         let screen = fan.map(|c| Screen::of(c.view, p));
@@ -164,29 +165,62 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
     out
 }
 
-/// Sutherland–Hodgman against the plane −z = near: the visible part of a triangle, as its first 0, 3 or 4
-/// vertices (no allocation: this runs for every triangle of every view).
-fn clip_near(tri: [ClipVert; 3], near: f32) -> ([ClipVert; 4], usize) {
-    let inside = |v: &ClipVert| -v.view.z >= near;
-    let mut out = [tri[0]; 4];
-    if tri.iter().all(inside) {
-        out[..3].copy_from_slice(&tri);
-        return (out, 3);
-    }
-    let mut n = 0;
-    for i in 0..3 {
-        let (a, b) = (&tri[i], &tri[(i + 1) % 3]);
-        if inside(a) {
-            out[n] = *a;
-            n += 1;
+/// How far beyond the image (in samples) a triangle may reach before it is clipped: coordinates stay within
+/// ±2²¹ samples (2²⁹ in fixed point), so edge functions, products of two coordinate differences, stay below 2⁶¹.
+const GUARD: f32 = (1 << 20) as f32;
+
+/// The planes a triangle is clipped against, as (a, b, c, e) with inside meaning a·x + b·y + c·(−z) + e ≥ 0 in
+/// view space: the near plane first (so that the others only see vertices in front of the eye), then the four
+/// sides of the image widened by [`GUARD`] samples. The sides cut only triangles reaching millions of samples
+/// off-screen (a ground plane running under the camera), whose visible part they keep.
+fn clip_planes(p: &Projection) -> [Vec4; 5] {
+    let [fx, fy, cx, cy] = p.f;
+    let (w, h) = (p.size.0 as f32, p.size.1 as f32);
+    [
+        Vec4::new(0.0, 0.0, 1.0, -p.near),
+        Vec4::new(fx, 0.0, cx + GUARD, 0.0),      // sx ≥ −GUARD
+        Vec4::new(-fx, 0.0, w + GUARD - cx, 0.0), // sx ≤ w + GUARD
+        Vec4::new(0.0, -fy, cy + GUARD, 0.0),     // sy ≥ −GUARD
+        Vec4::new(0.0, fy, h + GUARD - cy, 0.0),  // sy ≤ h + GUARD
+    ]
+}
+
+/// The signed distance-like value of view-space `v` to `plane` (≥ 0 inside).
+#[inline]
+fn side(plane: Vec4, v: Vec3) -> f32 {
+    plane.x * v.x + plane.y * v.y + plane.z * -v.z + plane.w
+}
+
+/// Sutherland–Hodgman against [`clip_planes`]: the visible part of a triangle, as its first `n` vertices (0 or
+/// 3 to 8; no allocation: this runs for every triangle that needs it).
+fn clip(tri: [ClipVert; 3], planes: &[Vec4; 5]) -> ([ClipVert; 8], usize) {
+    let mut poly = [tri[0]; 8];
+    poly[..3].copy_from_slice(&tri);
+    let mut n = 3;
+    for &plane in planes {
+        if poly[..n].iter().all(|v| side(plane, v.view) >= 0.0) {
+            continue;
         }
-        if inside(a) != inside(b) {
-            let (da, db) = (-a.view.z - near, -b.view.z - near);
-            out[n] = a.lerp(b, da / (da - db));
-            n += 1;
+        let mut out = [tri[0]; 8];
+        let mut m = 0;
+        for i in 0..n {
+            let (a, b) = (&poly[i], &poly[(i + 1) % n]);
+            let (da, db) = (side(plane, a.view), side(plane, b.view));
+            if da >= 0.0 {
+                out[m] = *a;
+                m += 1;
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                out[m] = a.lerp(b, da / (da - db));
+                m += 1;
+            }
+        }
+        (poly, n) = (out, m);
+        if n < 3 {
+            return (poly, 0);
         }
     }
-    (out, n)
+    (poly, n)
 }
 
 /// A vertex in front of the near plane, projected: snapped sample position and 1 / view depth.
