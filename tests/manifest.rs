@@ -214,6 +214,16 @@ fn unknown_table_and_enum_value_suggest() {
 }
 
 #[test]
+fn a_table_for_a_one_word_value_gets_one_error() {
+    // `time` takes a word; a table is read as serde's one-key enum form. The unknown key is the error; dropping it
+    // to go on must not add "wanted exactly 1 element, found 0 elements" for the emptied table.
+    let text = full_manifest().replacen("time = \"all\"", "time = { frames = [0, 12] }", 1);
+    let l = lines(&errors(&text));
+    assert_eq!(l.len(), 1, "{l:?}");
+    assert_eq!(l[0].1, "unknown value `frames`", "{l:?}");
+}
+
+#[test]
 fn wrong_type_is_named() {
     let text = full_manifest().replace("samples = 9", "samples = \"nine\"");
     let line = text.lines().position(|l| l.starts_with("samples")).unwrap() + 1;

@@ -34,8 +34,10 @@ pub fn typed<T: DeserializeOwned>(value: &Raw<'_>, diags: &mut Vec<Diagnostic>) 
             Err(e) => {
                 let span = e.span().unwrap_or_else(|| value.span());
                 let message = e.message().trim().to_string();
-                // A key we removed to keep going must not come back as "missing".
-                let follow_on = removed.iter().any(|k| message == format!("missing field `{k}`"));
+                // A key we removed to keep going must not come back as "missing", nor leave a one-key (enum)
+                // table empty and complain of that.
+                let follow_on = removed.iter().any(|k| message == format!("missing field `{k}`"))
+                    || (!removed.is_empty() && message == "wanted exactly 1 element, found 0 elements");
                 if !follow_on {
                     diags.push(translate(&message, span.clone()));
                 }
