@@ -157,20 +157,12 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
         far: cam.far as f32,
         size: (w * k, h * k),
     };
-    let tris = raster::setup(scene, &proj);
     let (tw, th) = ((w + TILE - 1) / TILE, (h + TILE - 1) / TILE);
     let ts = TILE * k;
+    // Triangles and splats are binned in scene order: the depth test keeps the first of equal depths, so order
+    // matters and must not depend on threads.
+    let tris = raster::setup(scene, &proj, raster::Tiles { side: ts, across: tw, down: th });
     let splats = splat::setup(scene, &proj, &s.splat, k as f32, ts);
-    // Bin triangles into tiles in scene order: the depth test keeps the first of equal depths, so order matters
-    // and must not depend on threads.
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); (tw * th) as usize];
-    for (id, t) in tris.iter() {
-        for ty in t.bbox[1] / ts..=t.bbox[3] / ts {
-            for tx in t.bbox[0] / ts..=t.bbox[2] / ts {
-                bins[(ty * tw + tx) as usize].push(id);
-            }
-        }
-    }
     let shade = Shade {
         lambert: (s.shading == Shading::Lambert).then(|| {
             let lights = if s.lights.is_empty() {
@@ -221,7 +213,7 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             let rect = raster::Rect { x0: x0 * k, y0: y0 * k, w: pw * k, h: ph * k };
             let ti = (ty * tw + tx) as usize;
             let has_splats = drawn && layer.any(rect.x0, rect.w);
-            if bins[ti].is_empty() && !has_splats {
+            if tris.tile_is_empty(ti) && !has_splats {
                 // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
                 // the other buffers start zeroed.
                 if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
@@ -234,8 +226,7 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
                 }
                 continue;
             }
-            let work =
-                raster::TileWork { tris: &tris, bin: &bins[ti], splats: has_splats.then_some((&splats, &*layer)) };
+            let work = raster::TileWork { tris: &tris, tile: ti, splats: has_splats.then_some((&splats, &*layer)) };
             let st = st.get_or_insert_with(|| raster::SampleTile::new(rect));
             raster::raster_tile(scene, work, &shade, rect, &proj, st);
             resolve(st, k, s, cam, x0, &mut out);

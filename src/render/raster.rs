@@ -90,31 +90,88 @@ const SETUP_CHUNK: usize = 4096;
 const CHUNK_BITS: u32 = 13;
 
 /// The set-up triangles of a view, as the setup tasks made them (chunks in scene order): not concatenated, since
-/// copying a 100k-triangle view's 25 MB costs more than the indirection.
+/// copying a 100k-triangle view's 25 MB costs more than the indirection. Each chunk also bins its triangles by
+/// tile, in the same parallel task (a stable counting sort), so a tile walks the chunks' lists in scene order.
 #[derive(Debug, Default)]
 pub struct Tris {
-    chunks: Vec<Vec<Tri>>,
+    chunks: Vec<Chunk>,
+}
+
+/// One setup task's triangles and their tile bins: tile `t`'s are `bins[start[t]..start[t + 1]]` (indices into
+/// `tris`).
+#[derive(Debug, Default)]
+struct Chunk {
+    tris: Vec<Tri>,
+    start: Vec<u32>,
+    bins: Vec<u32>,
+}
+
+/// The tiles of a frame: side in samples, tiles across and down.
+#[derive(Debug, Clone, Copy)]
+pub struct Tiles {
+    /// Tile side in samples.
+    pub side: i64,
+    /// Tiles across.
+    pub across: i64,
+    /// Tiles down.
+    pub down: i64,
+}
+
+impl Chunk {
+    fn new(tris: Vec<Tri>, g: Tiles) -> Chunk {
+        let tiles = (g.across * g.down) as usize;
+        let range = |t: &Tri| (t.bbox[0] / g.side, t.bbox[1] / g.side, t.bbox[2] / g.side, t.bbox[3] / g.side);
+        let mut start = vec![0u32; tiles + 1];
+        for t in &tris {
+            let (x0, y0, x1, y1) = range(t);
+            for ty in y0..=y1 {
+                for tx in x0..=x1 {
+                    start[(ty * g.across + tx) as usize + 1] += 1;
+                }
+            }
+        }
+        for t in 0..tiles {
+            start[t + 1] += start[t];
+        }
+        let mut next = start.clone();
+        let mut bins = vec![0u32; start[tiles] as usize];
+        for (i, t) in tris.iter().enumerate() {
+            let (x0, y0, x1, y1) = range(t);
+            for ty in y0..=y1 {
+                for tx in x0..=x1 {
+                    let k = (ty * g.across + tx) as usize;
+                    bins[next[k] as usize] = i as u32;
+                    next[k] += 1;
+                }
+            }
+        }
+        Chunk { tris, start, bins }
+    }
 }
 
 impl Tris {
-    /// Every triangle with its id, in scene order.
-    pub fn iter(&self) -> impl Iterator<Item = (u32, &Tri)> {
-        self.chunks
-            .iter()
-            .enumerate()
-            .flat_map(|(c, v)| v.iter().enumerate().map(move |(i, t)| (((c as u32) << CHUNK_BITS) | i as u32, t)))
+    /// The ids of tile `t`'s triangles, in scene order.
+    pub fn tile(&self, t: usize) -> impl Iterator<Item = u32> + '_ {
+        self.chunks.iter().enumerate().flat_map(move |(c, ch)| {
+            ch.bins[ch.start[t] as usize..ch.start[t + 1] as usize].iter().map(move |&i| ((c as u32) << CHUNK_BITS) | i)
+        })
+    }
+
+    /// Whether no triangle reaches tile `t`.
+    pub fn tile_is_empty(&self, t: usize) -> bool {
+        self.chunks.iter().all(|ch| ch.start[t] == ch.start[t + 1])
     }
 
     /// The triangle with id `id`.
     #[inline]
     pub fn get(&self, id: u32) -> &Tri {
-        &self.chunks[(id >> CHUNK_BITS) as usize][(id & ((1 << CHUNK_BITS) - 1)) as usize]
+        &self.chunks[(id >> CHUNK_BITS) as usize].tris[(id & ((1 << CHUNK_BITS) - 1)) as usize]
     }
 }
 
 /// Clips, projects and orients every triangle of the scene, in scene order (chunks run in parallel and keep
-/// their order, so the order does not depend on threads).
-pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
+/// their order, so the order does not depend on threads), and bins them by tile.
+pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles) -> Tris {
     let mut out = Tris::default();
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Triangles) {
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
@@ -129,7 +186,7 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
                 (v, Screen::of(v, p), planes.iter().all(|&q| side(q, v) >= 0.0))
             })
             .collect();
-        let chunks: Vec<Vec<Tri>> = prim
+        let chunks: Vec<Chunk> = prim
             .indices
             .par_chunks(3 * SETUP_CHUNK)
             .map(|chunk| {
@@ -157,7 +214,7 @@ pub fn setup(scene: &PosedScene, p: &Projection) -> Tris {
                         tris.extend(assemble(fan, screen, p, double_sided, prim.material, prim.object));
                     }
                 }
-                tris
+                Chunk::new(tris, tiles)
             })
             .collect();
         out.chunks.extend(chunks);
@@ -412,8 +469,8 @@ pub struct Rect {
 pub struct TileWork<'a> {
     /// All triangles.
     pub tris: &'a Tris,
-    /// This tile's triangles.
-    pub bin: &'a [u32],
+    /// This tile's index.
+    pub tile: usize,
     /// The frame's splats and the band's layer of them, when it has any.
     pub splats: Option<(&'a Splats<'a>, &'a Layer)>,
 }
@@ -429,11 +486,11 @@ pub fn raster_tile(
     proj: &Projection,
     t: &mut SampleTile,
 ) {
-    let TileWork { tris, bin, splats } = work;
+    let TileWork { tris, tile, splats } = work;
     let Rect { x0, y0, w, h } = rect;
     let (near, far) = (proj.near, proj.far);
     t.reset(rect);
-    for &ti in bin {
+    for ti in tris.tile(tile) {
         let tri = tris.get(ti);
         let (bx0, by0) = (tri.bbox[0].max(x0), tri.bbox[1].max(y0));
         let (bx1, by1) = (tri.bbox[2].min(x0 + w - 1), tri.bbox[3].min(y0 + h - 1));
