@@ -3,6 +3,7 @@
 //! colour (alpha = coverage), depth and normal. Tiles run in parallel with rayon and never share
 //! accumulators, so the bytes do not depend on the thread count.
 
+pub mod bin;
 pub mod camera;
 pub mod encode;
 pub mod raster;
@@ -206,7 +207,7 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     let scratch = || (None::<raster::SampleTile>, splat::Layer::default());
     bands.into_par_iter().enumerate().for_each_init(scratch, |(st, layer), (band, mut out)| {
         let ty = band as i64;
-        let drawn = !splats.is_empty() && splats.draw_band(band, &proj, layer);
+        let drawn = splats.draw_band(band, &proj, layer);
         for tx in 0..tw {
             let (x0, y0) = (tx * TILE, ty * TILE);
             let (pw, ph) = (TILE.min(w - x0), TILE.min(h - y0));

@@ -6,6 +6,7 @@
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::bin::Binned;
 use super::splat::{Layer, Splats};
 use crate::scene::material::AlphaMode;
 use crate::scene::{PosedScene, PrimKind};
@@ -97,13 +98,11 @@ pub struct Tris {
     chunks: Vec<Chunk>,
 }
 
-/// One setup task's triangles and their tile bins: tile `t`'s are `bins[start[t]..start[t + 1]]` (indices into
-/// `tris`).
+/// One setup task's triangles and their tile bins (indices into `tris`).
 #[derive(Debug, Default)]
 struct Chunk {
     tris: Vec<Tri>,
-    start: Vec<u32>,
-    bins: Vec<u32>,
+    bins: Binned<u32>,
 }
 
 /// The tiles of a frame: side in samples, tiles across and down.
@@ -119,47 +118,24 @@ pub struct Tiles {
 
 impl Chunk {
     fn new(tris: Vec<Tri>, g: Tiles) -> Chunk {
-        let tiles = (g.across * g.down) as usize;
-        let range = |t: &Tri| (t.bbox[0] / g.side, t.bbox[1] / g.side, t.bbox[2] / g.side, t.bbox[3] / g.side);
-        let mut start = vec![0u32; tiles + 1];
-        for t in &tris {
-            let (x0, y0, x1, y1) = range(t);
-            for ty in y0..=y1 {
-                for tx in x0..=x1 {
-                    start[(ty * g.across + tx) as usize + 1] += 1;
-                }
-            }
-        }
-        for t in 0..tiles {
-            start[t + 1] += start[t];
-        }
-        let mut next = start.clone();
-        let mut bins = vec![0u32; start[tiles] as usize];
-        for (i, t) in tris.iter().enumerate() {
-            let (x0, y0, x1, y1) = range(t);
-            for ty in y0..=y1 {
-                for tx in x0..=x1 {
-                    let k = (ty * g.across + tx) as usize;
-                    bins[next[k] as usize] = i as u32;
-                    next[k] += 1;
-                }
-            }
-        }
-        Chunk { tris, start, bins }
+        let rect = |t: &Tri| t.bbox.map(|v| (v / g.side) as usize);
+        let bins = Binned::sort(&tris, g.across as usize, (g.across * g.down) as usize, rect, |i, _| i as u32);
+        Chunk { tris, bins }
     }
 }
 
 impl Tris {
     /// The ids of tile `t`'s triangles, in scene order.
     pub fn tile(&self, t: usize) -> impl Iterator<Item = u32> + '_ {
-        self.chunks.iter().enumerate().flat_map(move |(c, ch)| {
-            ch.bins[ch.start[t] as usize..ch.start[t + 1] as usize].iter().map(move |&i| ((c as u32) << CHUNK_BITS) | i)
-        })
+        self.chunks
+            .iter()
+            .enumerate()
+            .flat_map(move |(c, ch)| ch.bins.cell(t).iter().map(move |&i| ((c as u32) << CHUNK_BITS) | i))
     }
 
     /// Whether no triangle reaches tile `t`.
     pub fn tile_is_empty(&self, t: usize) -> bool {
-        self.chunks.iter().all(|ch| ch.start[t] == ch.start[t + 1])
+        self.chunks.iter().all(|ch| ch.bins.cell(t).is_empty())
     }
 
     /// The triangle with id `id`.

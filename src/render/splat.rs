@@ -15,6 +15,7 @@
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::bin::Binned;
 use super::raster::{snap, Projection, SUBPIXEL};
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 
@@ -54,7 +55,7 @@ impl Default for SplatSettings {
 }
 
 /// A screen-space splat in fixed-point sample coordinates: centre, half width and height, a depth and its point.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct Splat {
     x: i32,
     y: i32,
@@ -68,13 +69,6 @@ pub struct Splat {
     /// For cubes, the centre relative to the eye: carried here, since reading it back from the positions
     /// misses the cache once per splat when a cloud's order is not spatial.
     centre: Vec3,
-}
-
-/// The splats of one setup chunk, sorted by band: band `b`'s are `splats[start[b]..start[b + 1]]`, in scene order.
-#[derive(Debug, Default)]
-struct Bin {
-    splats: Vec<Splat>,
-    start: Vec<u32>,
 }
 
 /// One point primitive, as splats read it.
@@ -91,7 +85,8 @@ struct Source<'a> {
 #[derive(Debug)]
 pub struct Splats<'a> {
     sources: Vec<Source<'a>>,
-    bins: Vec<Bin>,
+    /// Each setup chunk's splats, binned by band.
+    bins: Vec<Binned<Splat>>,
     /// Half the edge of a cube splat (`None`: squares or disks).
     cube: Option<f32>,
     disk: bool,
@@ -142,7 +137,7 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
         out.sources.push(Source { first, prim, base });
-        let bins: Vec<Bin> = prim
+        let bins: Vec<Binned<Splat>> = prim
             .positions
             .par_chunks(SETUP_CHUNK)
             .enumerate()
@@ -156,35 +151,14 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
                         scratch.push((sp, (y0 / band_rows) as u16, (y1 / band_rows) as u16));
                     }
                 }
-                bin(scratch, bands)
+                // A splat overlapping two bands is in each.
+                Binned::sort(scratch, 1, bands, |&(_, b0, b1)| [0, b0 as usize, 0, b1 as usize], |_, &(sp, ..)| sp)
             })
             .collect();
         out.bins.extend(bins);
         first += prim.positions.len() as u32;
     }
     out
-}
-
-/// Stable counting sort of one chunk's splats by band (a splat overlapping several bands is in each).
-fn bin(ranged: &[(Splat, u16, u16)], bands: usize) -> Bin {
-    let mut start = vec![0u32; bands + 1];
-    for &(_, b0, b1) in ranged {
-        for b in b0..=b1 {
-            start[b as usize + 1] += 1;
-        }
-    }
-    for b in 0..bands {
-        start[b + 1] += start[b];
-    }
-    let mut next = start.clone();
-    let mut out = vec![Splat { x: 0, y: 0, rx: 0, ry: 0, z: 0.0, point: 0, centre: Vec3::ZERO }; start[bands] as usize];
-    for &(sp, b0, b1) in ranged {
-        for b in b0..=b1 {
-            out[next[b as usize] as usize] = sp;
-            next[b as usize] += 1;
-        }
-    }
-    Bin { splats: out, start }
 }
 
 /// The splat of point `point` at world `pos`, or `None` when it is clipped or falls outside the image.
@@ -256,14 +230,9 @@ impl Splat {
 }
 
 impl<'a> Splats<'a> {
-    /// Whether there are no splats at all.
-    pub fn is_empty(&self) -> bool {
-        self.bins.iter().all(|b| b.splats.is_empty())
-    }
-
     /// Band `b`'s splats, in scene order.
     fn band(&self, b: usize) -> impl Iterator<Item = &Splat> {
-        self.bins.iter().flat_map(move |bin| &bin.splats[bin.start[b] as usize..bin.start[b + 1] as usize])
+        self.bins.iter().flat_map(move |bin| bin.cell(b))
     }
 
     /// The primitive and index within it of point `i`.
