@@ -11,6 +11,7 @@ pub mod alloc;
 pub mod atomic;
 pub mod build;
 pub mod cache;
+pub mod camera;
 pub mod cli;
 pub mod execute;
 pub mod export;

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::build::{self, Options, Silent};
-use crate::cache::Digest;
+use crate::build::{self, Error, Options, Silent};
+use crate::cache::{self, Digest};
 use crate::manifest::Manifest;
 use crate::scene::SourceData;
 
@@ -39,16 +39,14 @@ pub struct FileEntry {
     pub blake3: String,
 }
 
-/// Writes `vvgen.lock` into every output root of `m`; refuses when any image is not built.
-pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, String> {
-    let st = build::status(m, cache)?;
-    let pending = st.stale.len() + st.new.len();
+/// Writes `vvgen.lock` into every output root of `m`; refuses while any action of its graph is not built.
+pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
+    let st = build::status(m, cache, false)?;
+    let pending = st.pending();
     if pending > 0 {
-        return Err(format!(
-            "{pending} image(s) are not built: run `vvgen build` first (`vvgen plan --explain` says why)"
-        ));
+        return Err(Error::NotBuilt { pending });
     }
-    // Everything is cached: this build renders nothing and only (re)materializes and rewrites metadata.
+    // Every action is cached: this build runs none and only (re)places files and rewrites metadata.
     let report = build::build(m, cache, Options::default(), &Silent)?;
     let p = build::prepare(m, cache)?;
     let mut inputs = BTreeMap::new();
@@ -59,7 +57,7 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, String> {
             SourceData::Static(_) => cfg.mesh.iter().chain(&cfg.gltf).map(|f| m.resolve(f.get_ref())).collect(),
         };
         for f in files {
-            let d = p.stat.digest(&f).map_err(|e| format!("{}: {e}", f.display()))?;
+            let d = p.stat.digest(&f).map_err(|e| Error::cache(m, cache::Error::io(&f, e)))?;
             let name = f.strip_prefix(&m.dir).unwrap_or(&f).to_string_lossy().replace('\\', "/");
             inputs.insert(name, d.hex());
         }
@@ -68,7 +66,8 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, String> {
     for (_, w) in &report.outputs {
         let mut files = BTreeMap::new();
         for (rel, d) in &w.files {
-            let size = std::fs::metadata(w.root.join(rel)).map_err(|e| format!("{rel}: {e}"))?.len();
+            let path = w.root.join(rel);
+            let size = std::fs::metadata(&path).map_err(|e| Error::cache(m, cache::Error::io(&path, e)))?.len();
             files.insert(rel.clone(), FileEntry { size, blake3: d.hex() });
         }
         let lock = Lock {
@@ -80,7 +79,8 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, String> {
         };
         let mut text = serde_json::to_string_pretty(&lock).expect("BUG: the lock serializes");
         text.push('\n');
-        crate::atomic::write(&w.root.join(LOCK), text.as_bytes()).map_err(|e| format!("{}: {e}", w.root.display()))?;
+        let path = w.root.join(LOCK);
+        crate::atomic::write(&path, text.as_bytes()).map_err(|e| Error::cache(m, cache::Error::io(&path, e)))?;
         roots.push(w.root.clone());
     }
     Ok(roots)
@@ -106,12 +106,36 @@ impl Verification {
     }
 }
 
+/// Why a dataset cannot be verified at all.
+#[derive(Debug, thiserror::Error)]
+pub enum VerifyError {
+    /// The lock or the directory cannot be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The lock is not a vvgen lock.
+    #[error("{}: not a vvgen lock: {source}", path.display())]
+    NotALock {
+        /// The lock file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: serde_json::Error,
+    },
+}
+
 /// Checks `dir` against its `vvgen.lock`, hashing every file.
-pub fn verify(dir: &Path) -> Result<Verification, String> {
+pub fn verify(dir: &Path) -> Result<Verification, VerifyError> {
     let lock_path = dir.join(LOCK);
-    let text = std::fs::read_to_string(&lock_path).map_err(|e| format!("{}: {e}", lock_path.display()))?;
+    let text =
+        std::fs::read_to_string(&lock_path).map_err(|e| VerifyError::Io { path: lock_path.clone(), source: e })?;
     let lock: Lock =
-        serde_json::from_str(&text).map_err(|e| format!("{}: not a vvgen lock: {e}", lock_path.display()))?;
+        serde_json::from_str(&text).map_err(|e| VerifyError::NotALock { path: lock_path.clone(), source: e })?;
     let mut v = Verification::default();
     for (rel, entry) in &lock.files {
         let p = dir.join(rel);
@@ -127,7 +151,7 @@ pub fn verify(dir: &Path) -> Result<Verification, String> {
     }
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).map_err(|e| format!("{}: {e}", d.display()))?.flatten() {
+        for e in std::fs::read_dir(&d).map_err(|e| VerifyError::Io { path: d.clone(), source: e })?.flatten() {
             let p = e.path();
             if p.is_dir() {
                 stack.push(p);

@@ -49,8 +49,10 @@ init_points = 300
 fn build(manifest: &Path, threads: usize) -> vvgen::build::Report {
     let (m, _) = vvgen::manifest::load(manifest).unwrap_or_else(|r| panic!("{}", r.render(false)));
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    pool.install(|| vvgen::build::build(&m, &vvgen::build::cache_dir(&m), Default::default(), &vvgen::build::Silent))
-        .unwrap()
+    pool.install(|| {
+        vvgen::build::build(&m, &vvgen::build::default_cache_dir(&m), Default::default(), &vvgen::build::Silent)
+    })
+    .unwrap()
 }
 
 #[test]
@@ -58,8 +60,13 @@ fn same_bytes_with_one_and_two_threads() {
     let points = "[output.p]\nwriter = \"ply-sequence\"\npoints = 5000\nvoxel = 0.02\n";
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let ra = build(&write_manifest(a.path(), points), 1);
-    build(&write_manifest(b.path(), points), 2);
-    assert_eq!(ra.images, 6);
+    let rb = build(&write_manifest(b.path(), points), 2);
+    // Both builds did the work themselves (each has its own cache, whatever VVGEN_CACHE says to the CLI).
+    for r in [&ra, &rb] {
+        assert_eq!((r.images, r.renders), (6, 6));
+        assert_eq!(r.ran(vvgen::plan::actions::Kind::PointFrame), 2);
+        assert_eq!(r.ran(vvgen::plan::actions::Kind::SampleFrame), 2);
+    }
     let (ta, tb) = (tree(&a.path().join("out")), tree(&b.path().join("out")));
     assert!(ta.len() > 20, "{:?}", ta.keys().collect::<Vec<_>>());
     assert_eq!(ta.keys().collect::<Vec<_>>(), tb.keys().collect::<Vec<_>>());
@@ -128,7 +135,13 @@ fn two_outputs_in_one_directory_are_refused() {
     let (m, _) = vvgen::manifest::load(&write_manifest(dir.path(), extra)).unwrap();
     let err =
         vvgen::build::build(&m, &dir.path().join("cache"), Default::default(), &vvgen::build::Silent).unwrap_err();
-    assert!(err.contains("`d` and `e`") && err.contains("m_dnerf"), "{err}");
+    match &err {
+        vvgen::build::Error::SharedDirectory { first, second, dir, .. } => {
+            assert_eq!((first.as_str(), second.as_str(), dir.as_str()), ("d", "e", "m_dnerf"));
+        }
+        e => panic!("{e}"),
+    }
+    assert_eq!(err.exit_code(), 2);
     assert!(!dir.path().join("out").exists(), "refused before anything was written");
 }
 

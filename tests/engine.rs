@@ -9,6 +9,7 @@ mod common;
 use common::{animated_triangle, tree};
 use vvgen::build::{build, Options, Report, Silent};
 use vvgen::execute::Shard;
+use vvgen::plan::actions::Kind;
 
 fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
@@ -211,11 +212,11 @@ fn locks_match_across_jobs_and_shards_and_verify_catches_damage() {
     let status = Command::new(env!("CARGO_BIN_EXE_vvgen")).arg("-q").arg("verify").arg(&root).output().unwrap();
     assert!(!status.status.success());
     assert!(String::from_utf8_lossy(&status.stdout).contains("modified train/r_0003.png"));
-    // Release refuses while something is stale.
+    // Release refuses while something is stale: a sixth training view at both frames, two passes each.
     std::fs::write(a.path().join("m.toml"), cesium(6, "passes = [\"rgba\", \"mask\"]", "")).unwrap();
     let (m, _) = vvgen::manifest::load(&a.path().join("m.toml")).unwrap();
     let err = vvgen::release::release(&m, &a.path().join("cache")).unwrap_err();
-    assert!(err.contains("not built"), "{err}");
+    assert!(matches!(err, vvgen::build::Error::NotBuilt { pending: 4 }), "{err}");
 }
 
 #[test]
@@ -309,11 +310,18 @@ init_points = 0
     // Frames at t = 0, 0.5, …, 3 s: moving the key at t = 3 changes only t ∈ (2, 3], i.e. frames 5 and 6.
     std::fs::write(d.join("tri.gltf"), animated_triangle(0.9)).unwrap();
     let (m, _) = vvgen::manifest::load(&d.join("m.toml")).unwrap();
-    let st = vvgen::build::status(&m, &d.join("cache")).unwrap();
-    let mut stale: Vec<&str> = st.stale.iter().map(|(id, _)| id.as_str()).collect();
-    stale.sort_unstable();
-    assert_eq!(stale, ["train/0/5", "train/0/6", "train/1/5", "train/1/6"]);
-    assert!(st.stale[0].1[0].contains("scene content"), "{:?}", st.stale[0].1);
+    let st = vvgen::build::status(&m, &d.join("cache"), true).unwrap();
+    let stale: Vec<&vvgen::build::ActionStatus> =
+        st.actions.iter().filter(|a| a.state == vvgen::build::State::Run && a.kind == Kind::RenderPass).collect();
+    let mut labels: Vec<&str> = stale.iter().map(|a| a.label.as_str()).collect();
+    labels.sort_unstable();
+    assert_eq!(
+        labels,
+        ["render train/0/5 rgba", "render train/0/6 rgba", "render train/1/5 rgba", "render train/1/6 rgba"]
+    );
+    // The one field that changed is named, from the same walk that keyed it.
+    assert_eq!(stale[0].reasons.len(), 1, "{:?}", stale[0].reasons);
+    assert!(stale[0].reasons[0].starts_with("frame content: "), "{:?}", stale[0].reasons);
     assert_eq!(run(d, text).renders, 4);
 }
 

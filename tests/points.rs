@@ -27,8 +27,10 @@ fn cesium_manifest(dir: &Path, output: &str) -> PathBuf {
 fn build(manifest: &Path, threads: usize) -> vvgen::build::Report {
     let (m, _) = vvgen::manifest::load(manifest).unwrap_or_else(|r| panic!("{}", r.render(false)));
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    pool.install(|| vvgen::build::build(&m, &vvgen::build::cache_dir(&m), Default::default(), &vvgen::build::Silent))
-        .unwrap()
+    pool.install(|| {
+        vvgen::build::build(&m, &vvgen::build::default_cache_dir(&m), Default::default(), &vvgen::build::Silent)
+    })
+    .unwrap()
 }
 
 fn read_ply(p: &Path) -> ply::PlyData {

@@ -138,7 +138,7 @@ fn build(opaque: bool) -> Built {
         let path = tmp.path().join("m.toml");
         std::fs::write(&path, manifest_text(&out, &tmp.path().join("cache"), opaque)).unwrap();
         let (m, _) = vvgen::manifest::load(&path).unwrap_or_else(|r| panic!("{}", r.render(false)));
-        let cache = vvgen::build::cache_dir(&m);
+        let cache = vvgen::build::default_cache_dir(&m);
         vvgen::build::build(&m, &cache, Default::default(), &vvgen::build::Silent).unwrap();
         let scene = Scene::open(&m).unwrap();
         Built { _tmp: tmp, out, scene }

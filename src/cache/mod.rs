@@ -11,6 +11,44 @@ use std::path::{Path, PathBuf};
 use crate::atomic;
 pub use stat::StatCache;
 
+/// What can go wrong in the cache.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Reading or writing a cache file (or a dataset file placed from it) failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A blob's content does not match its name (the file was damaged on disk).
+    #[error("cache blob {digest} is corrupt (its content does not match its name)")]
+    Corrupt {
+        /// The blob's name.
+        digest: String,
+    },
+    /// A blob holds bytes of the wrong form for what reads it.
+    #[error("cache blob {digest} is damaged: {why}")]
+    Damaged {
+        /// The blob's name.
+        digest: String,
+        /// What is wrong with it.
+        why: String,
+    },
+}
+
+impl Error {
+    /// An I/O error on `path`.
+    pub fn io(path: &Path, source: std::io::Error) -> Error {
+        Error::Io { path: path.to_path_buf(), source }
+    }
+}
+
+/// First line of an action record; records of another version are skipped (a miss), never misread.
+const ACTION_MAGIC: &str = "vvgen-action 2";
+
 /// A blob's name: blake3 of its content.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Digest(pub [u8; 32]);
@@ -37,7 +75,8 @@ impl Digest {
     }
 }
 
-/// Builds a key: blake3 in derive-key mode over a task kind and length-prefixed parts.
+/// Builds a content key: blake3 in derive-key mode over a kind and length-prefixed parts (source frames'
+/// content keys; actions are keyed by [`crate::plan::key`]).
 pub fn key(kind: &str, parts: &[&[u8]]) -> Digest {
     let mut h = blake3::Hasher::new_derive_key(&format!("vvgen key {kind}"));
     for p in parts {
@@ -55,8 +94,9 @@ pub struct Store {
 
 impl Store {
     /// Opens (creating) the store at `root`.
-    pub fn open(root: &Path) -> std::io::Result<Store> {
-        fs::create_dir_all(root.join("objects"))?;
+    pub fn open(root: &Path) -> Result<Store, Error> {
+        let objects = root.join("objects");
+        fs::create_dir_all(&objects).map_err(|e| Error::io(&objects, e))?;
         Ok(Store { root: root.to_path_buf() })
     }
 
@@ -72,35 +112,33 @@ impl Store {
     }
 
     /// Stores `bytes` (atomically; an intact blob already present is not rewritten) and returns its digest.
-    pub fn put(&self, bytes: &[u8], stat: &StatCache) -> std::io::Result<Digest> {
+    pub fn put(&self, bytes: &[u8], stat: &StatCache) -> Result<Digest, Error> {
         let d = Digest::of(bytes);
         let p = self.object_path(&d);
         if !stat.holds(&p, &d) {
-            atomic::write(&p, bytes)?;
+            atomic::write(&p, bytes).map_err(|e| Error::io(&p, e))?;
             stat.record(&p, d);
         }
         Ok(d)
     }
 
     /// Reads blob `d`, verifying its digest.
-    pub fn get(&self, d: &Digest) -> std::io::Result<Vec<u8>> {
-        let bytes = fs::read(self.object_path(d))?;
+    pub fn get(&self, d: &Digest) -> Result<Vec<u8>, Error> {
+        let p = self.object_path(d);
+        let bytes = fs::read(&p).map_err(|e| Error::io(&p, e))?;
         if Digest::of(&bytes) != *d {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidData,
-                format!("cache blob {} is corrupt (its content does not match its name)", d.hex()),
-            ));
+            return Err(Error::Corrupt { digest: d.hex() });
         }
         Ok(bytes)
     }
 
     /// Places blob `d` at `dest` (hard link, else copy), atomically; a `dest` already holding `d` (by the stat
     /// cache) is left alone.
-    pub fn materialize(&self, d: &Digest, dest: &Path, stat: &StatCache) -> std::io::Result<()> {
+    pub fn materialize(&self, d: &Digest, dest: &Path, stat: &StatCache) -> Result<(), Error> {
         if stat.holds(dest, d) {
             return Ok(());
         }
-        atomic::link_or_copy(&self.object_path(d), dest)?;
+        atomic::link_or_copy(&self.object_path(d), dest).map_err(|e| Error::io(dest, e))?;
         stat.record(dest, *d);
         Ok(())
     }
@@ -123,16 +161,47 @@ impl Store {
         self.root.join("actions").join(&hex[..2]).join(&hex[2..])
     }
 
-    /// The blobs a task with `key` produced, if it ran before.
+    /// The blobs the action `key` produced, if it ran before.
     pub fn action(&self, key: &Digest) -> Option<Vec<Digest>> {
         let text = fs::read_to_string(self.action_path(key)).ok()?;
-        text.lines().map(Digest::from_hex).collect()
+        let mut lines = text.lines();
+        if lines.next() != Some(ACTION_MAGIC) {
+            return None;
+        }
+        lines.map_while(|l| l.strip_prefix("blob ")).map(Digest::from_hex).collect()
     }
 
-    /// Records that the task `key` produced `blobs` (after the blobs are stored).
-    pub fn record_action(&self, key: &Digest, blobs: &[Digest]) -> std::io::Result<()> {
-        let text: String = blobs.iter().map(|d| d.hex() + "\n").collect();
-        atomic::write(&self.action_path(key), text.as_bytes())
+    /// The `(field, value)` pairs the action `key` was keyed by, as recorded when it ran.
+    pub fn action_fields(&self, key: &Digest) -> Option<Vec<(String, String)>> {
+        let text = fs::read_to_string(self.action_path(key)).ok()?;
+        let mut lines = text.lines();
+        if lines.next() != Some(ACTION_MAGIC) {
+            return None;
+        }
+        let fields = lines.filter_map(|l| l.strip_prefix("field ")?.split_once('\t'));
+        Some(fields.map(|(k, v)| (k.to_string(), v.to_string())).collect())
+    }
+
+    /// Records that the action `key` produced `blobs` (after the blobs are stored), with the fields it was
+    /// keyed by (what `plan --explain` compares a later key against). One atomic write: a record is whole or
+    /// absent.
+    pub fn record_action(&self, key: &Digest, blobs: &[Digest], fields: &[(String, String)]) -> Result<(), Error> {
+        let mut text = format!("{ACTION_MAGIC}\n");
+        for d in blobs {
+            text.push_str(&format!("blob {}\n", d.hex()));
+        }
+        for (k, v) in fields {
+            // Field names and values are single-line by construction; keep it so.
+            let (k, v) = (k.replace(['\t', '\n'], " "), v.replace(['\t', '\n'], " "));
+            text.push_str(&format!("field {k}\t{v}\n"));
+        }
+        let p = self.action_path(key);
+        atomic::write(&p, text.as_bytes()).map_err(|e| Error::io(&p, e))
+    }
+
+    /// Whether an action record exists for `key` (whatever its blobs' state).
+    pub fn has_action(&self, key: &Digest) -> bool {
+        self.action_path(key).exists()
     }
 
     /// The blobs of task `key` when it ran before and they are all intact.

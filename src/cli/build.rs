@@ -8,7 +8,7 @@ use std::sync::Mutex;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use super::{load_manifest, Ui, EXIT_INVALID};
+use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
 use crate::build::{self, Options, Progress};
 use crate::execute::Shard;
 
@@ -25,12 +25,12 @@ impl Progress for Display {
             b.set_length(work as u64);
             b.set_message(format!("({hits} cached)"));
         } else if !self.quiet {
-            eprintln!("{hits} images cached, rendering {work}");
+            eprintln!("{hits} actions cached, running {work}");
         }
         self.plain.lock().unwrap().0 = work;
     }
 
-    fn rendered(&self, done: usize) {
+    fn ran(&self, done: usize) {
         if let Some(b) = &self.bar {
             b.set_position(done as u64);
             return;
@@ -39,7 +39,7 @@ impl Progress for Display {
         let tenth = (done * 10).checked_div(p.0).unwrap_or(10);
         if tenth > p.1 && !self.quiet {
             p.1 = tenth;
-            eprintln!("rendered {done}/{}", p.0);
+            eprintln!("ran {done}/{}", p.0);
         }
     }
 
@@ -70,19 +70,19 @@ pub fn run(manifest: &Path, jobs: Option<usize>, shard: Option<Shard>, ui: Ui) -
     let bar = (!ui.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
         b.set_style(
-            ProgressStyle::with_template("{bar:40} {pos}/{len} images  {per_sec}  eta {eta}  {msg}")
+            ProgressStyle::with_template("{bar:40} {pos}/{len} actions  {per_sec}  eta {eta}  {msg}")
                 .expect("BUG: valid template"),
         );
         b
     });
     let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
-    let cache = build::cache_dir(&m);
+    let cache = cache_dir(&m);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.unwrap_or(0)).build()?;
     let result = pool.install(|| build::build(&m, &cache, Options { shard }, &display));
     if let Some(b) = &display.bar {
         b.finish_and_clear();
     }
-    let report = result.map_err(anyhow::Error::msg)?;
+    let report = result?;
     if !ui.quiet {
         for w in &report.warnings {
             eprintln!("warning: {w}");
@@ -93,16 +93,24 @@ pub fn run(manifest: &Path, jobs: Option<usize>, shard: Option<Shard>, ui: Ui) -
             }
             eprintln!("{name}: {} files in {}", w.files.len(), w.root.display());
         }
-        let rate = if report.render_seconds > 0.0 { report.renders as f64 / report.render_seconds } else { 0.0 };
+        let rate = if report.run_seconds > 0.0 { report.renders as f64 / report.run_seconds } else { 0.0 };
         eprintln!(
-            "{} images: {} cached, {} rendered in {:.2} s ({rate:.1} images/s){}; {:.2} s in all",
-            report.images,
-            report.hits,
-            report.renders,
-            report.render_seconds,
-            if report.elsewhere > 0 { format!(", {} left to other shards", report.elsewhere) } else { String::new() },
-            report.total_seconds
+            "{} images: {} cached, {} rendered ({rate:.1} images/s); {:.2} s in all",
+            report.images, report.hits, report.renders, report.total_seconds
         );
+        let kinds: Vec<String> = report
+            .actions
+            .iter()
+            .map(|(k, c)| {
+                let shards = if c.elsewhere > 0 { format!(", {} to other shards", c.elsewhere) } else { String::new() };
+                format!("{} {}/{} run{shards}", k.name(), c.ran, c.planned)
+            })
+            .collect();
+        if report.nothing_to_do() {
+            eprintln!("nothing to do: every action cached, every output up to date");
+        } else {
+            eprintln!("actions: {}", kinds.join(", "));
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

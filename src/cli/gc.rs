@@ -1,12 +1,10 @@
 //! `vvgen gc`: cache garbage collection.
 
-use std::collections::HashSet;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::{load_manifest, Ui, EXIT_INVALID};
-use crate::cache::{gc, Digest};
-use crate::{build, execute};
+use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
+use crate::build;
 
 /// Parses a size like `500M`, `20G` or `1048576`.
 pub fn parse_size(s: &str) -> Result<u64, String> {
@@ -25,46 +23,17 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
     Ok((v * mult as f64) as u64)
 }
 
-/// The cache entries a manifest needs: its render records and their blobs, and its datasets' files.
-fn needed(m: &crate::manifest::Manifest, cache: &Path, keep: &mut HashSet<Digest>) -> Result<(), String> {
-    let p = build::prepare(m, cache)?;
-    let settings = crate::plan::keys::render_settings(&m.render, p.scene.voxel_size());
-    for i in 0..p.plan.images.len() {
-        for (_, k) in execute::image_keys(&p.plan, &p.frame_keys, &m.render, &settings, i) {
-            keep.insert(k);
-            keep.extend(p.store.action(&k).unwrap_or_default());
-        }
-    }
-    for (root, files) in build::last_build(&p.store, m).outputs.values() {
-        for f in files {
-            if let Ok(d) = p.stat.digest(&root.join(f)) {
-                keep.insert(d);
-            }
-        }
-    }
-    Ok(())
-}
-
 pub fn run(manifests: &[PathBuf], max_size: Option<u64>, cache: Option<PathBuf>, ui: Ui) -> anyhow::Result<ExitCode> {
     let mut loaded = Vec::new();
     for p in manifests {
         let Some(m) = load_manifest(p, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
         loaded.push(m);
     }
-    let cache = cache.unwrap_or_else(|| loaded.first().map_or_else(|| PathBuf::from("cache"), build::cache_dir));
-    let keep = if loaded.is_empty() {
-        None
-    } else {
-        let mut keep = HashSet::new();
-        for m in &loaded {
-            needed(m, &cache, &mut keep).map_err(anyhow::Error::msg)?;
-        }
-        Some(keep)
-    };
-    if keep.is_none() && max_size.is_none() {
+    let cache = cache.unwrap_or_else(|| loaded.first().map_or_else(|| PathBuf::from("cache"), cache_dir));
+    if loaded.is_empty() && max_size.is_none() {
         anyhow::bail!("nothing to do: give --keep MANIFEST… and/or --max-size");
     }
-    let c = gc::collect(&cache, keep.as_ref(), max_size);
+    let c = build::collect_garbage(&loaded, &cache, max_size)?;
     println!(
         "{}: removed {} files ({:.1} MB), {:.1} MB left",
         cache.display(),

@@ -23,7 +23,7 @@ pub fn run(
     let Some(m) = load_manifest(path, ui) else {
         return Ok(ExitCode::from(super::EXIT_INVALID));
     };
-    let scene = Scene::open(&m).map_err(anyhow::Error::msg)?;
+    let scene = Scene::open(&m)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -74,7 +74,7 @@ pub fn run(
                     frames[0].path.display(),
                     frames[frames.len() - 1].path.display()
                 );
-                let digest = s.content_digest(frame, &frames[0].path).map_err(anyhow::Error::msg)?;
+                let digest = s.content_digest(frame, &frames[0].path)?;
                 let shown = frames[frame.min(frames.len() - 1)].path.display();
                 let _ = writeln!(out, "  frame {frame}: {shown} (blake3 {digest})");
             }
@@ -88,12 +88,12 @@ pub fn run(
     let mut poser = Poser::default();
     let (mut lo, mut hi) = (glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY));
     for f in 0..scene.frames {
-        if let Some((a, b)) = scene.pose(f, &mut poser).map_err(anyhow::Error::msg)?.bounds() {
+        if let Some((a, b)) = scene.pose(f, &mut poser)?.bounds() {
             lo = lo.min(a);
             hi = hi.max(b);
         }
     }
-    let posed = scene.pose(frame, &mut poser).map_err(anyhow::Error::msg)?;
+    let posed = scene.pose(frame, &mut poser)?;
     let _ = writeln!(
         out,
         "scene: {} frame(s); bounds over all frames {:.4?} … {:.4?}",

@@ -166,8 +166,21 @@ pub fn run() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            // The library decides what is the input's fault; anything else is a failure.
+            match e.downcast_ref::<crate::build::Error>() {
+                Some(b) => ExitCode::from(b.exit_code()),
+                None if e.downcast_ref::<crate::scene::Error>().is_some() => ExitCode::from(EXIT_INVALID),
+                None => ExitCode::FAILURE,
+            }
         }
+    }
+}
+
+/// The cache a command uses: `VVGEN_CACHE` when set (shared caches on clusters), else the manifest's.
+pub(crate) fn cache_dir(m: &crate::manifest::Manifest) -> PathBuf {
+    match std::env::var_os("VVGEN_CACHE").filter(|p| !p.is_empty()) {
+        Some(p) => PathBuf::from(p),
+        None => crate::build::default_cache_dir(m),
     }
 }
 

@@ -3,66 +3,53 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use super::{load_manifest, Ui, EXIT_INVALID};
-use crate::build;
+use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
+use crate::build::{self, State};
 
 pub fn run(manifest: &Path, explain: bool, json: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let t = std::time::Instant::now();
-    let st = build::status(&m, &build::cache_dir(&m)).map_err(anyhow::Error::msg)?;
+    let st = build::status(&m, &cache_dir(&m), explain || json)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&st)?);
         return Ok(ExitCode::SUCCESS);
     }
+    for (kind, k) in &st.kinds {
+        let unneeded = if k.unneeded > 0 { format!(", {} not needed", k.unneeded) } else { String::new() };
+        println!("{:<14} {:>6} planned: {} cached, {} to run{unneeded}", kind.name(), k.planned, k.cached, k.run);
+    }
     println!(
-        "render: {} images: {} fresh, {} stale, {} new  (planned in {:.0} ms)",
-        st.images,
-        st.fresh,
-        st.stale.len(),
-        st.new.len(),
+        "{}  (planned in {:.0} ms)",
+        if st.up_to_date() { "nothing to do" } else { "work to do" },
         t.elapsed().as_secs_f64() * 1000.0
     );
     if explain {
-        for (id, why) in &st.stale {
-            println!("  stale {id}: {}", why.join("; "));
+        for a in st.actions.iter().filter(|a| a.state == State::Run) {
+            println!("  {}: {}", a.label, a.reasons.join("; "));
         }
-        if !st.new.is_empty() {
-            println!("  new: {}", summarize(&st.new));
-        }
-    }
-    for d in &st.damaged_outputs {
-        println!("  output {d}");
     }
     Ok(ExitCode::SUCCESS)
 }
 
-/// The first few and a count.
-fn summarize(ids: &[String]) -> String {
-    let head: Vec<&str> = ids.iter().take(5).map(String::as_str).collect();
-    if ids.len() > head.len() {
-        format!("{} … ({} in all)", head.join(", "), ids.len())
-    } else {
-        head.join(", ")
-    }
-}
-
 pub fn status(manifest: &Path, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
-    let cache = build::cache_dir(&m);
-    let st = build::status(&m, &cache).map_err(anyhow::Error::msg)?;
-    let built = st.stale.is_empty() && st.new.is_empty() && st.damaged_outputs.is_empty();
+    let cache = cache_dir(&m);
+    let st = build::status(&m, &cache, false)?;
+    let total: usize = st.kinds.values().map(|k| k.planned).sum();
+    let done: usize = st.kinds.values().map(|k| k.cached).sum();
     println!(
-        "{}: {} of {} images built{}",
+        "{}: {done} of {total} actions built{}",
         m.dataset.name.get_ref(),
-        st.fresh,
-        st.images,
-        if built { " (up to date)" } else { "" }
+        if st.up_to_date() { " (up to date)" } else { "" }
     );
-    if !st.stale.is_empty() || !st.new.is_empty() {
-        println!("  {} stale, {} new: `vvgen plan --explain` says why", st.stale.len(), st.new.len());
+    for (kind, k) in st.kinds.iter().filter(|(_, k)| k.run > 0) {
+        println!("  {}: {} to run", kind.name(), k.run);
     }
-    for d in &st.damaged_outputs {
-        println!("  output {d}");
+    if !st.up_to_date() {
+        println!("  `vvgen plan --explain` says why");
+    }
+    for a in st.actions.iter().filter(|a| a.state == State::Run && !a.reasons.is_empty()) {
+        println!("  {}: {}", a.label, a.reasons.join("; "));
     }
     let (files, bytes) = dir_size(&cache);
     println!("cache {}: {files} files, {:.1} MB", cache.display(), bytes as f64 / 1e6);

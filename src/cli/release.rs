@@ -3,27 +3,19 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use super::{load_manifest, Ui, EXIT_INVALID};
-use crate::{build, release as rel};
+use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
+use crate::release as rel;
 
 pub fn release(manifest: &Path, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
-    match rel::release(&m, &build::cache_dir(&m)) {
-        Ok(roots) => {
-            for r in roots {
-                println!("{}", r.join(rel::LOCK).display());
-            }
-            Ok(ExitCode::SUCCESS)
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            Ok(ExitCode::FAILURE)
-        }
+    for r in rel::release(&m, &cache_dir(&m))? {
+        println!("{}", r.join(rel::LOCK).display());
     }
+    Ok(ExitCode::SUCCESS)
 }
 
 pub fn verify(dir: &Path, _ui: Ui) -> anyhow::Result<ExitCode> {
-    let v = rel::verify(dir).map_err(anyhow::Error::msg)?;
+    let v = rel::verify(dir)?;
     for f in &v.missing {
         println!("missing  {f}");
     }

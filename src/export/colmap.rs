@@ -8,11 +8,10 @@ use std::fmt::Write;
 
 use glam::{DMat3, DQuat};
 
-use super::{frames_of, init_cloud, init_points, opaque_background, opaque_rgb, pad_for, Export, Files};
-use crate::cache::key;
+use super::{init_points, pad_for, Error, Export, Files};
+use crate::camera::Camera;
 use crate::manifest::output::Output;
-use crate::plan::keys::SAMPLE_SALT;
-use crate::render::Camera;
+use crate::plan::actions::Action;
 
 /// COLMAP's world→camera rotation (Hamilton quaternion `w x y z`, scalar first, `w ≥ 0`) and translation.
 pub fn colmap_pose(c: &Camera) -> ([f64; 4], [f64; 3]) {
@@ -22,9 +21,8 @@ pub fn colmap_pose(c: &Camera) -> ([f64; 4], [f64; 3]) {
     ([q.w, q.x, q.y, q.z], w2c.w_axis.truncate().to_array())
 }
 
-pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
-    let frames = frames_of(x, images);
-    let bg = opaque_background(x.manifest);
+pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
+    let frames = x.plan.frames_of(images);
     let fpad = pad_for(x.plan.frames);
     let n_points = init_points(out);
     for &f in &frames {
@@ -50,7 +48,7 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
             let img = &x.plan.images[i];
             let split = &x.plan.splits[img.split].name;
             let name = format!("{split}_{:0vpad$}.png", img.view);
-            files.image_blob(i, "rgb", &format!("{prefix}images/{name}"), opaque_rgb(x, i, bg)?)?;
+            files.image_blob(i, "rgb", &format!("{prefix}images/{name}"), x.opaque_rgb(i)?)?;
             let (q, t) = colmap_pose(&img.camera);
             let _ = writeln!(
                 imgs,
@@ -65,20 +63,7 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
                 ryu_f64(t[2])
             );
         }
-        let (nb, seed) = ((n_points as u64).to_le_bytes(), x.manifest.dataset.seed.to_le_bytes());
-        let parts: [&[u8]; 4] = [&x.frame_keys[f].0, SAMPLE_SALT, &nb, &seed];
-        let pts = x.cached(key("colmap points", &parts), || {
-            let mut pts = String::from(
-                "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[]\n",
-            );
-            if n_points > 0 {
-                let cloud = init_cloud(x, &[f], n_points)?;
-                for (k, (p, c)) in cloud.positions.iter().zip(cloud.srgb8()).enumerate() {
-                    let _ = writeln!(pts, "{} {} {} {} {} {} {} 0", k + 1, p[0], p[1], p[2], c[0], c[1], c[2]);
-                }
-            }
-            Ok(pts.into_bytes())
-        })?;
+        let pts = x.blob(&Action::ColmapPoints { frame: f, points: n_points })?;
         files.bytes(&format!("{prefix}sparse/0/cameras.txt"), cameras.as_bytes())?;
         files.bytes(&format!("{prefix}sparse/0/images.txt"), imgs.as_bytes())?;
         files.blob(&format!("{prefix}sparse/0/points3D.txt"), pts)?;

@@ -5,11 +5,10 @@
 
 use glam::{DMat4, DVec3, Vec3};
 
-use super::{frames_of, init_ply_blob, init_points, opaque_background, opaque_rgb, Export, Files};
+use super::{init_points, Error, Export, Files};
 use crate::manifest::output::Output;
-use crate::manifest::split::TimeMode;
 
-pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     let root = files.root.to_string_lossy().to_string();
     if root.contains("dnerf") || root.contains("lego") {
         files.warn(format!("{root}: K-Planes reads a path containing `dnerf` or `lego` as D-NeRF data"));
@@ -17,8 +16,8 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
     if root.contains('.') {
         files.warn(format!("{root}: 4DGaussians treats the first `.` of the path as the extension"));
     }
-    let frames = frames_of(x, images);
-    // Cameras: split by split, `test` first; each split must see every frame (synchronized video).
+    let frames = x.plan.frames_of(images);
+    // Cameras: split by split, `test` first; the plan checked each split sees every frame (synchronized video).
     let mut splits: Vec<usize> = Vec::new();
     for &i in images {
         let s = x.plan.images[i].split;
@@ -30,12 +29,6 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
     let mut cams: Vec<(usize, u32)> = Vec::new();
     for &s in &splits {
         let sp = &x.plan.splits[s];
-        if sp.time != TimeMode::All || sp.frames != frames {
-            return Err(format!(
-                "split `{}`: the dynerf layout needs every camera at every frame (time = \"all\" over the same frames)",
-                sp.name
-            ));
-        }
         cams.extend((0..sp.poses.len() as u32).map(|v| (s, v)));
     }
     let c0 = &x.plan.images[images[0]].camera;
@@ -49,8 +42,7 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
         ));
     }
     files.warn("no cam*.mp4 videos are written: K-Planes and 4DGaussians need them encoded from frames/".to_string());
-    let bounds = super::bounds(x, &frames)?;
-    let bg = opaque_background(x.manifest);
+    let bounds = x.bounds(&frames)?;
     let mut rows: Vec<f64> = Vec::new();
     for (ci, &(s, v)) in cams.iter().enumerate() {
         let c2w = x.plan.splits[s].poses[v as usize];
@@ -63,14 +55,14 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
                 .iter()
                 .copied()
                 .find(|&i| x.plan.images[i].frame == f && x.plan.images[i].view == v)
-                .ok_or("BUG: a time = all split lacks an image")?;
-            files.image_blob(img, "rgb", &format!("frames/cam{ci:02}/{fi:04}.png"), opaque_rgb(x, img, bg)?)?;
+                .ok_or_else(|| Error::Unplanned(format!("image of camera {v} at frame {f}")))?;
+            files.image_blob(img, "rgb", &format!("frames/cam{ci:02}/{fi:04}.png"), x.opaque_rgb(img)?)?;
         }
     }
     files.bytes("poses_bounds.npy", &npy_f64(&rows, cams.len(), 17))?;
     let n = init_points(out);
     if n > 0 {
-        files.blob("points3D_downsample2.ply", init_ply_blob(x, &frames, n)?)?;
+        files.blob("points3D_downsample2.ply", x.init_cloud(&frames, n)?)?;
     }
     Ok(())
 }

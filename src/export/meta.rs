@@ -4,11 +4,11 @@
 
 use serde_json::{json, Value};
 
-use super::{Export, Files};
+use super::{Error, Export, Files};
 use crate::manifest::output::Output;
 use crate::manifest::render::{DepthKind, NormalSpace};
 
-pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     let m = x.manifest;
     let sources: Vec<Value> = x
         .scene

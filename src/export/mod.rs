@@ -14,47 +14,106 @@ use std::path::PathBuf;
 use glam::{DMat4, Vec3};
 
 use crate::atomic;
-use crate::cache::{key, Digest, StatCache, Store};
-use crate::execute::Rendered;
+use crate::cache::{self, Digest, StatCache, Store};
 use crate::manifest::output::{Output, Writer};
+use crate::manifest::render::Pass;
 use crate::manifest::Manifest;
+use crate::plan::actions::Action;
+use crate::plan::graph::Graph;
 use crate::plan::{Image, Plan};
-use crate::sample::{self, Points};
-use crate::scene::{Poser, Scene};
+use crate::scene::Scene;
 
-/// Default number of points in an image dataset's initialization cloud.
-pub const DEFAULT_INIT_POINTS: u64 = 100_000;
+/// What can go wrong writing a dataset.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Placing a file or writing the dataset directory failed.
+    #[error(transparent)]
+    Cache(#[from] cache::Error),
+    /// A file name pattern cannot be formatted.
+    #[error("file pattern: {0}")]
+    Pattern(String),
+    /// The geometry has no extent where a writer needs bounds.
+    #[error("the scene is empty: there are no bounds to write")]
+    EmptyScene,
+    /// A writer asked for an action the graph did not plan (a bug: all work is planned).
+    #[error("BUG: the plan has no {0}")]
+    Unplanned(String),
+}
 
 /// Everything the writers read.
 pub struct Export<'a> {
     /// The manifest.
     pub manifest: &'a Manifest,
-    /// The loaded scene (posed again for point clouds and bounds).
+    /// The loaded scene (names and transforms for vvgen.json).
     pub scene: &'a Scene,
-    /// The plan.
+    /// The image plan.
     pub plan: &'a Plan,
-    /// The plan's rendered blobs, by image.
-    pub rendered: &'a [Rendered],
+    /// The action graph.
+    pub graph: &'a Graph<'a>,
+    /// Per graph node, its blobs.
+    pub blobs: &'a [Option<Vec<Digest>>],
     /// Where the blobs are.
     pub store: &'a Store,
     /// The dataset's stat cache.
     pub stat: &'a StatCache,
-    /// Key of every scene frame.
-    pub frame_keys: &'a [Digest],
 }
 
 impl Export<'_> {
-    /// The blob of the task `key`, from the cache, or made by `make` and recorded.
-    fn cached(&self, key: Digest, make: impl FnOnce() -> Result<Vec<u8>, String>) -> Result<Digest, String> {
-        if let Some(b) = self.store.hit(&key, self.stat) {
-            if let [d] = b.as_slice() {
-                return Ok(*d);
+    /// The blobs of `action`, which the graph planned and the build ran (or found).
+    fn blobs_of(&self, action: &Action) -> Result<&[Digest], Error> {
+        let id = self.graph.id(action).ok_or_else(|| Error::Unplanned(format!("{action:?}")))?;
+        self.blobs[id.0 as usize].as_deref().ok_or_else(|| Error::Unplanned(format!("result of {action:?}")))
+    }
+
+    /// The one blob of `action`.
+    fn blob(&self, action: &Action) -> Result<Digest, Error> {
+        self.blobs_of(action)?.first().copied().ok_or_else(|| Error::Unplanned(format!("blob of {action:?}")))
+    }
+
+    /// The rendered files of plan image `image`.
+    fn rendered(&self, image: usize) -> Result<Rendered, Error> {
+        let mut r = Rendered::default();
+        for &pass in self.manifest.render.passes.get_ref() {
+            let b = self.blobs_of(&Action::RenderPass { image, pass })?;
+            let (first, second) = (b.first().copied(), b.get(1).copied());
+            match pass {
+                Pass::Rgba => r.rgba = first,
+                Pass::Depth => (r.depth, r.depth_exr) = (first, second),
+                Pass::Normal => (r.normal, r.normal_exr) = (first, second),
+                Pass::Mask => (r.mask, r.instance) = (first, second),
             }
         }
-        let d = self.store.put(&make()?, self.stat).map_err(|e| format!("cache: {e}"))?;
-        self.store.record_action(&key, &[d]).map_err(|e| format!("cache: {e}"))?;
-        Ok(d)
+        Ok(r)
     }
+
+    /// Bounds of the geometry over `frames`, from their bounds action.
+    fn bounds(&self, frames: &[usize]) -> Result<Option<(Vec3, Vec3)>, Error> {
+        let d = self.blob(&Action::Bounds { frames: frames.to_vec() })?;
+        Ok(crate::execute::decode_bounds(&self.store.get(&d)?))
+    }
+
+    /// The initialization cloud of `frames` with `n` points.
+    fn init_cloud(&self, frames: &[usize], n: u64) -> Result<Digest, Error> {
+        self.blob(&Action::InitCloud { frames: frames.to_vec(), points: n })
+    }
+
+    /// Image `image` composited over the opaque background.
+    fn opaque_rgb(&self, image: usize) -> Result<Digest, Error> {
+        let background = crate::plan::graph::opaque_background(self.manifest);
+        self.blob(&Action::Composite { image, background })
+    }
+}
+
+/// The files of one rendered image, one per requested pass.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+struct Rendered {
+    rgba: Option<Digest>,
+    depth: Option<Digest>,
+    depth_exr: Option<Digest>,
+    normal: Option<Digest>,
+    normal_exr: Option<Digest>,
+    mask: Option<Digest>,
+    instance: Option<Digest>,
 }
 
 /// What one writer produced.
@@ -95,27 +154,27 @@ impl<'a> Files<'a> {
     }
 
     /// Places stored blob `d` at `rel` as pass `pass` of plan image `image`.
-    fn image_blob(&mut self, image: usize, pass: &'static str, rel: &str, d: Digest) -> Result<(), String> {
+    fn image_blob(&mut self, image: usize, pass: &'static str, rel: &str, d: Digest) -> Result<(), Error> {
         self.placed.entry(image).or_default().insert(pass, rel.to_string());
         self.blob(rel, d)
     }
 
     /// Places stored blob `d` at `rel`.
-    fn blob(&mut self, rel: &str, d: Digest) -> Result<(), String> {
+    fn blob(&mut self, rel: &str, d: Digest) -> Result<(), Error> {
         let dest = self.root.join(rel);
-        self.store.materialize(&d, &dest, self.stat).map_err(|e| format!("{}: {e}", dest.display()))?;
+        self.store.materialize(&d, &dest, self.stat)?;
         self.files.push((rel.to_string(), d));
         Ok(())
     }
 
     /// Writes `bytes` at `rel` (through the store, so identical files are stored once).
-    fn bytes(&mut self, rel: &str, bytes: &[u8]) -> Result<(), String> {
-        let d = self.store.put(bytes, self.stat).map_err(|e| format!("cache: {e}"))?;
+    fn bytes(&mut self, rel: &str, bytes: &[u8]) -> Result<(), Error> {
+        let d = self.store.put(bytes, self.stat)?;
         self.blob(rel, d)
     }
 
     /// Writes pretty JSON at `rel`.
-    fn json(&mut self, rel: &str, v: &serde_json::Value) -> Result<(), String> {
+    fn json(&mut self, rel: &str, v: &serde_json::Value) -> Result<(), Error> {
         self.bytes(rel, json_text(v).as_bytes())
     }
 
@@ -133,17 +192,18 @@ impl<'a> Files<'a> {
     }
 }
 
-/// Runs the writer of `[output.name]`.
-pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, String> {
+/// Runs the writer of `[output.name]`: places its actions' blobs and writes its metadata.
+pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Error> {
     let root = x.manifest.out_dir().join(dir_name(x.manifest, out));
-    std::fs::create_dir_all(&root).map_err(|e| format!("{}: {e}", root.display()))?;
+    std::fs::create_dir_all(&root).map_err(|e| cache::Error::io(&root, e))?;
     atomic::clean_debris(&root);
     let mut files = Files::new(root, x.store, x.stat);
     let writer = *out.writer.get_ref();
-    let images = selected_images(x, out)?;
-    if writer.renders_images() && images.is_empty() {
-        return Err(format!("output `{name}` has no images (its splits are empty)"));
-    }
+    let images = if writer.renders_images() {
+        x.graph.images_of(out).map_err(|e| Error::Unplanned(e.to_string()))?
+    } else {
+        Vec::new()
+    };
     match writer {
         Writer::Dnerf => nerf::dnerf(x, out, &images, &mut files)?,
         Writer::Nerfstudio => nerf::nerfstudio(x, out, &images, &mut files)?,
@@ -151,7 +211,7 @@ pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, String> {
         Writer::StaticFrames => nerf::static_frames(x, out, &images, &mut files)?,
         Writer::Colmap => colmap::write(x, out, &images, &mut files)?,
         Writer::Dynerf => dynerf::write(x, out, &images, &mut files)?,
-        Writer::PlySequence => points::sequence(x, out, &mut files)?,
+        Writer::PlySequence => points::sequence(x, name, &mut files)?,
     }
     meta::write(x, name, out, &images, &mut files)?;
     Ok(files.finish())
@@ -160,20 +220,6 @@ pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, String> {
 /// The output's directory name under `[dataset] out`.
 pub fn dir_name(m: &Manifest, out: &Output) -> String {
     out.dir_name(m.dataset.name.get_ref())
-}
-
-/// Indices of the images of the output's splits, split by split (manifest order), time-major within each.
-fn selected_images(x: &Export, out: &Output) -> Result<Vec<usize>, String> {
-    let names: Vec<&str> = match &out.splits {
-        Some(list) => list.iter().map(|s| s.get_ref().as_str()).collect(),
-        None => x.plan.splits.iter().map(|s| s.name.as_str()).collect(),
-    };
-    let mut v = Vec::new();
-    for n in names {
-        let s = x.plan.splits.iter().find(|s| s.name == n).ok_or_else(|| format!("no split `{n}`"))?;
-        v.extend(&s.images);
-    }
-    Ok(v)
 }
 
 /// The rows of a 4×4 matrix, as written in transforms.json files.
@@ -192,101 +238,9 @@ fn r_name(img: &Image, pad: usize) -> String {
     format!("r_{:0pad$}", img.index)
 }
 
-/// The initialization cloud: `n` surface samples spread over `frames` (the union of the motion), in world space.
-fn init_cloud(x: &Export, frames: &[usize], n: usize) -> Result<Points, String> {
-    let mut out = Points::default();
-    if n == 0 || frames.is_empty() {
-        return Ok(out);
-    }
-    let mut poser = Poser::default();
-    let seed = x.manifest.dataset.seed.to_le_bytes();
-    for (i, &f) in frames.iter().enumerate() {
-        // An even share per frame; the first frames take the remainder.
-        let share = n / frames.len() + usize::from(i < n % frames.len());
-        let posed = x.scene.pose(f, &mut poser)?;
-        out.extend(&sample::sample(posed, share, &[b"init", &seed, &(f as u64).to_le_bytes()]));
-    }
-    Ok(out)
-}
-
-/// [`init_cloud`] encoded by [`init_ply`], through the cache (keyed by the frames' content, `n` and the seed).
-fn init_ply_blob(x: &Export, frames: &[usize], n: usize) -> Result<Digest, String> {
-    let mut parts: Vec<&[u8]> = frames.iter().map(|&f| &x.frame_keys[f].0[..]).collect();
-    let (nb, seed) = ((n as u64).to_le_bytes(), x.manifest.dataset.seed.to_le_bytes());
-    parts.extend([crate::plan::keys::SAMPLE_SALT, &nb[..], &seed[..]]);
-    x.cached(key("init cloud", &parts), || Ok(init_ply(&init_cloud(x, frames, n)?)))
-}
-
-/// Bounds of the geometry over `frames`.
-fn bounds(x: &Export, frames: &[usize]) -> Result<Option<(Vec3, Vec3)>, String> {
-    let mut poser = Poser::default();
-    let mut b: Option<(Vec3, Vec3)> = None;
-    for &f in frames {
-        if let Some((lo, hi)) = x.scene.pose(f, &mut poser)?.bounds() {
-            b = Some(b.map_or((lo, hi), |(a, c)| (a.min(lo), c.max(hi))));
-        }
-    }
-    Ok(b)
-}
-
-/// Distinct frames of `images`, ascending.
-fn frames_of(x: &Export, images: &[usize]) -> Vec<usize> {
-    let mut f: Vec<usize> = images.iter().map(|&i| x.plan.images[i].frame).collect();
-    f.sort_unstable();
-    f.dedup();
-    f
-}
-
-/// The init cloud as the PLY 3DGS-family loaders read: x y z, nx ny nz (float), red green blue (uchar).
-fn init_ply(p: &Points) -> Vec<u8> {
-    let colors = p.srgb8();
-    crate::scene::ply::write(&crate::scene::ply::PlyOut {
-        positions: &p.positions,
-        normals: Some(&p.normals),
-        colors: Some(&colors),
-        extra_u32: &[],
-        extra_f32: &[],
-        triangles: None,
-        comments: &["generated by vvgen: surface samples over the union of the frames"],
-        ascii: false,
-    })
-}
-
 /// Number of init points an image output asks for.
-fn init_points(out: &Output) -> usize {
-    out.init_points.as_ref().map_or(DEFAULT_INIT_POINTS, |p| *p.get_ref()) as usize
-}
-
-/// The RGBA blob of an image composited over an opaque background (sRGB bytes, as loaders composite), as an RGB
-/// PNG in the store: for consumers that do not read alpha (COLMAP, DyNeRF).
-fn opaque_rgb(x: &Export, image: usize, bg: [u8; 3]) -> Result<Digest, String> {
-    let d = x.rendered[image].rgba.ok_or("the `rgba` pass is needed for this writer")?;
-    let png_setting = format!("{:?}", x.manifest.render.png_compression);
-    x.cached(key("composite 1", &[&d.0, &bg, png_setting.as_bytes()]), || {
-        let png = x.store.get(&d).map_err(|e| format!("cache: {e}"))?;
-        let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
-            .map_err(|e| format!("cache blob {}: {e}", d.hex()))?
-            .into_rgba8();
-        let (w, h) = img.dimensions();
-        let rgb: Vec<u8> = img
-            .pixels()
-            .flat_map(|p| {
-                let a = p[3] as u32;
-                [0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8)
-            })
-            .collect();
-        Ok(crate::render::encode::rgb_png(&rgb, w, h, x.manifest.render.png_compression))
-    })
-}
-
-/// The background that opaque exports bake in: the manifest's, else white (NeRF-synthetic's convention).
-fn opaque_background(m: &Manifest) -> [u8; 3] {
-    use crate::manifest::render::Background;
-    match m.render.background.as_ref().map(|b| b.get_ref()) {
-        Some(Background::Named(n)) if n == "black" => [0, 0, 0],
-        Some(Background::Rgb(c)) => c.map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8),
-        _ => [255, 255, 255],
-    }
+fn init_points(out: &Output) -> u64 {
+    out.init_points.as_ref().map_or(crate::plan::graph::DEFAULT_INIT_POINTS, |p| *p.get_ref())
 }
 
 /// JSON with two-space indentation where arrays of plain numbers (matrix rows, vectors) stay on one line.

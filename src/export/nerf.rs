@@ -4,7 +4,7 @@
 
 use serde_json::{json, Map, Value};
 
-use super::{frames_of, init_ply_blob, init_points, pad_for, r_name, rows, Export, Files};
+use super::{init_points, pad_for, r_name, rows, Error, Export, Files};
 use crate::manifest::output::Output;
 use crate::manifest::render::Pass;
 use crate::plan::Image;
@@ -29,8 +29,8 @@ fn names(split: &str, base: &str) -> Names {
 }
 
 /// Materializes every pass of image `i` under `prefix` (`""` or `t_0003/`).
-fn place(x: &Export, i: usize, n: &Names, prefix: &str, files: &mut Files) -> Result<(), String> {
-    let r = &x.rendered[i];
+fn place(x: &Export, i: usize, n: &Names, prefix: &str, files: &mut Files) -> Result<(), Error> {
+    let r = x.rendered(i)?;
     let passes = [
         ("rgba", r.rgba, &n.rgba, "png"),
         ("depth", r.depth, &n.depth, "png"),
@@ -55,7 +55,7 @@ fn placed_entry(
     split: &str,
     pad: usize,
     files: &mut Files,
-) -> Result<(Names, Map<String, Value>), String> {
+) -> Result<(Names, Map<String, Value>), Error> {
     let img = &x.plan.images[i];
     let n = names(split, &r_name(img, pad));
     place(x, i, &n, "", files)?;
@@ -111,7 +111,7 @@ fn warn_common(x: &Export, images: &[usize], files: &mut Files) {
 
 /// `dnerf`: transforms_{split}.json with `camera_angle_x` and fl_x…, time-major `./<split>/r_<i>` paths, times
 /// in [0, 1]; points3d.ply and an identical fused.ply.
-pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     warn_common(x, images, files);
     let root = files.root.to_string_lossy().to_string();
     if !root.contains("dnerf") && !root.contains("lego") {
@@ -120,9 +120,6 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
     let pad = pad(x, images);
     let groups = by_split(x, images);
     for (split, list) in &groups {
-        if split.contains("_r") {
-            return Err(format!("split `{split}`: K-Planes misreads file paths containing `_r`; rename the split"));
-        }
         let mut frames = Vec::new();
         for &i in list {
             let img = &x.plan.images[i];
@@ -155,7 +152,7 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
     }
     let n = init_points(out);
     if n > 0 {
-        let ply = init_ply_blob(x, &frames_of(x, images), n)?;
+        let ply = x.init_cloud(&x.plan.frames_of(images), n)?;
         files.blob("points3d.ply", ply)?;
         files.blob("fused.ply", ply)?;
     }
@@ -164,7 +161,7 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
 
 /// `nerfstudio`: one transforms.json with fl_x…, `camera_model`, paths with extension, the three
 /// `*_filenames` lists, optional depth/mask paths, `ply_file_path`, identity `applied_transform`, `time`.
-pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     warn_common(x, images, files);
     let pad = pad(x, images);
     let r = &x.manifest.render;
@@ -212,7 +209,7 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
     doc.insert("test_filenames".into(), json!(test));
     let n = init_points(out);
     if n > 0 {
-        files.blob("points3d.ply", init_ply_blob(x, &frames_of(x, images), n)?)?;
+        files.blob("points3d.ply", x.init_cloud(&x.plan.frames_of(images), n)?)?;
         doc.insert("ply_file_path".into(), json!("points3d.ply"));
     }
     doc.insert("frames".into(), Value::Array(frames));
@@ -221,9 +218,9 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
 
 /// `instant-ngp`: transforms_{split}.json with fl_x…, `aabb_scale`, and `scale`/`offset` that put the content
 /// (over all frames) in NGP's unit cube; `integer_depth_scale` + `depth_path` with a depth pass.
-pub fn instant_ngp(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+pub fn instant_ngp(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     let pad = pad(x, images);
-    let (lo, hi) = super::bounds(x, &frames_of(x, images))?.ok_or("the scene is empty")?;
+    let (lo, hi) = x.bounds(&x.plan.frames_of(images))?.ok_or(Error::EmptyScene)?;
     let (c, half) = ((lo + hi) * 0.5, ((hi - lo) * 0.5).max_element().max(1e-6));
     // NGP maps p ↦ p·scale + offset (in NeRF axes, before cycling them) into [0, 1]³; keep a 10 % margin.
     let scale = 0.5 / (half as f64 * 1.1);
@@ -259,9 +256,9 @@ pub fn instant_ngp(x: &Export, out: &Output, images: &[usize], files: &mut Files
 
 /// `static-frames`: one NeRF-synthetic dataset per time step, `t_<frame>/transforms_{split}.json` with
 /// `<split>/r_<view>` images and its own points3d.ply (what the 6-DoF toolkit does for 8i sequences).
-pub fn static_frames(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), String> {
+pub fn static_frames(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     warn_common(x, images, files);
-    let frames = frames_of(x, images);
+    let frames = x.plan.frames_of(images);
     let views = images.iter().map(|&i| x.plan.images[i].view as usize + 1).max().unwrap_or(1);
     let vpad = pad_for(views);
     let fpad = pad_for(x.plan.frames);
@@ -287,7 +284,7 @@ pub fn static_frames(x: &Export, out: &Output, images: &[usize], files: &mut Fil
             files.json(&format!("{prefix}transforms_{split}.json"), &Value::Object(doc))?;
         }
         if n > 0 {
-            files.blob(&format!("{prefix}points3d.ply"), init_ply_blob(x, &[f], n)?)?;
+            files.blob(&format!("{prefix}points3d.ply"), x.init_cloud(&[f], n)?)?;
         }
     }
     Ok(())

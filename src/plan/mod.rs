@@ -1,17 +1,116 @@
-//! The plan: a manifest and its scene's frame count → the explicit list of images to render, each a
-//! (split, view, frame) with its camera and normalized time. Everything after this (rendering, caching, writing)
-//! works from this list, so what a build will do is known before it does anything.
+//! The plan: a manifest and its scene → the explicit list of images (each a (split, view, frame) with its camera
+//! and normalized time, [`Plan`]) and the graph of every action a build runs ([`graph::Graph`]), each keyed by
+//! one canonical walk ([`key`], [`actions`]). Everything after this (executing, caching, writing) works from the
+//! graph, so what a build will do is known, and explained, before it does anything.
 
+pub mod actions;
+pub mod graph;
+pub mod key;
 pub mod keys;
 
 use std::collections::BTreeSet;
+use std::path::PathBuf;
 
 use glam::DMat4;
 
+use crate::camera::Camera;
 use crate::manifest::split::TimeMode;
 use crate::manifest::Manifest;
-use crate::render::Camera;
 use crate::rig::{self, random::Keyed, Identity};
+
+/// What can go wrong planning a build. Every variant but [`Error::Input`] is decided by the manifest and its
+/// inputs' content (exit 2 at the CLI).
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A split names a rig that does not exist.
+    #[error("split `{split}`: no rig `{rig}`")]
+    NoRig {
+        /// The split.
+        split: String,
+        /// The rig it names.
+        rig: String,
+    },
+    /// A split's frame selection is empty.
+    #[error("split `{split}` selects no frames of the scene's {frames}")]
+    NoFrames {
+        /// The split.
+        split: String,
+        /// Frames in the scene.
+        frames: usize,
+    },
+    /// A rig cannot place its cameras.
+    #[error("split `{split}`, rig `{rig}`: {message}")]
+    Rig {
+        /// The split.
+        split: String,
+        /// The rig.
+        rig: String,
+        /// Why.
+        message: String,
+    },
+    /// A split has no cameras.
+    #[error("split `{split}` has no cameras")]
+    NoCameras {
+        /// The split.
+        split: String,
+    },
+    /// An output's splits hold no images.
+    #[error("output `{output}` has no images (its splits are empty)")]
+    NoImages {
+        /// The output.
+        output: String,
+    },
+    /// An output names a split that does not exist.
+    #[error("no split `{split}`")]
+    NoSplit {
+        /// The split.
+        split: String,
+    },
+    /// A writer needs a pass `[render] passes` does not ask for.
+    #[error("output `{output}`: the `{pass}` pass is needed for this writer; add it to `[render] passes`")]
+    NeedsPass {
+        /// The output.
+        output: String,
+        /// The pass.
+        pass: &'static str,
+    },
+    /// The DyNeRF layout needs synchronized video.
+    #[error(
+        "split `{split}`: the dynerf layout needs every camera at every frame (time = \"all\" over the same frames)"
+    )]
+    NotSynchronized {
+        /// The split.
+        split: String,
+    },
+    /// A point output names a source that does not exist.
+    #[error("output `{output}`: no source `{source_name}`")]
+    NoSource {
+        /// The output.
+        output: String,
+        /// The source it names.
+        source_name: String,
+    },
+    /// A point output's settings contradict each other or the scene.
+    #[error("output `{output}` (ply-sequence): {why}")]
+    PointSettings {
+        /// The output.
+        output: String,
+        /// Why.
+        why: String,
+    },
+    /// An input file cannot be read while keying it.
+    #[error("{}: {source}", path.display())]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Posing a frame to key it failed.
+    #[error(transparent)]
+    Scene(#[from] crate::scene::Error),
+}
 
 /// Poses of two splits closer than this (in every matrix entry) count as shared.
 const SHARED_POSE_EPS: f64 = 1e-6;
@@ -78,14 +177,15 @@ pub fn time_of(frame: usize, frames: usize) -> f64 {
 
 impl Plan {
     /// Plans every split of `m` over a scene of `frames` frames.
-    pub fn new(m: &Manifest, frames: usize) -> Result<Plan, String> {
+    pub fn new(m: &Manifest, frames: usize) -> Result<Plan, Error> {
         let (w, h) = m.render.size();
         let (fx, fy, cx, cy) = m.render.intrinsics();
         let (near, far) = (m.render.near.unwrap_or(0.05), m.render.far.unwrap_or(1000.0));
         let mut plan = Plan { splits: Vec::new(), images: Vec::new(), frames, warnings: Vec::new() };
         for (si, (name, split)) in m.splits.iter().enumerate() {
             let rig_name = split.rig.get_ref();
-            let rig = m.rigs.get(rig_name).ok_or_else(|| format!("split `{name}`: no rig `{rig_name}`"))?;
+            let rig =
+                m.rigs.get(rig_name).ok_or_else(|| Error::NoRig { split: name.clone(), rig: rig_name.clone() })?;
             let selected: Vec<usize> = match &split.frames {
                 Some(f) => {
                     let s: BTreeSet<u64> = f.get_ref().select(frames as u64).into_iter().collect();
@@ -94,7 +194,7 @@ impl Plan {
                 None => (0..frames).collect(),
             };
             if selected.is_empty() {
-                return Err(format!("split `{name}` selects no frames of the scene's {frames}"));
+                return Err(Error::NoFrames { split: name.clone(), frames });
             }
             let views = match (split.views.as_ref(), split.time) {
                 (Some(v), _) => *v.get_ref(),
@@ -104,9 +204,9 @@ impl Plan {
             };
             let seed = split_seed(m, name);
             let poses = rig::poses(rig, Identity { rig: rig_name, seed }, views, &m.dir)
-                .map_err(|e| format!("split `{name}`, rig `{rig_name}`: {e}"))?;
+                .map_err(|message| Error::Rig { split: name.clone(), rig: rig_name.clone(), message })?;
             if poses.is_empty() {
-                return Err(format!("split `{name}` has no cameras"));
+                return Err(Error::NoCameras { split: name.clone() });
             }
             let pairs: Vec<(usize, u32)> = match split.time {
                 TimeMode::All => selected.iter().flat_map(|&f| (0..poses.len() as u32).map(move |v| (f, v))).collect(),
@@ -155,6 +255,14 @@ impl Plan {
                 }
             }
         }
+    }
+
+    /// Distinct frames of `images` (indices into [`Plan::images`]), ascending.
+    pub fn frames_of(&self, images: &[usize]) -> Vec<usize> {
+        let mut f: Vec<usize> = images.iter().map(|&i| self.images[i].frame).collect();
+        f.sort_unstable();
+        f.dedup();
+        f
     }
 
     /// Images of frame `f`, as indices into [`Plan::images`].

@@ -3,7 +3,32 @@
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
 
-use crate::manifest::render::PngCompression;
+use crate::manifest::render::{NormalSpace, PngCompression};
+
+/// How rendered passes become files: the settings of encoding, apart from those of rendering.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Encoding {
+    /// PNG deflate effort (and EXR compression).
+    pub png: PngCompression,
+    /// The space normals are written in.
+    pub normal_space: NormalSpace,
+    /// Also write depth as float OpenEXR.
+    pub depth_exr: bool,
+    /// Also write normals as float OpenEXR.
+    pub normal_exr: bool,
+}
+
+impl Encoding {
+    /// The encoding `[render]` asks for.
+    pub fn from_manifest(r: &crate::manifest::render::Render) -> Encoding {
+        Encoding {
+            png: r.png_compression,
+            normal_space: r.normal.space,
+            depth_exr: r.depth.exr,
+            normal_exr: r.normal.exr,
+        }
+    }
+}
 
 fn encoder(buf: &mut Vec<u8>, c: PngCompression) -> PngEncoder<&mut Vec<u8>> {
     let ct = match c {
@@ -55,7 +80,7 @@ pub fn f32_exr(channels: &[(&str, &[f32])], w: u32, h: u32, c: PngCompression) -
         PngCompression::Fast => Compression::RLE,
         PngCompression::Default | PngCompression::Best => Compression::ZIP16,
     };
-    let encoding = Encoding { compression, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
+    let encoding = exr::prelude::Encoding { compression, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
     let layer =
         Layer::new((w as usize, h as usize), LayerAttributes::default(), encoding, AnyChannels::sort(list.into()));
     let mut buf = std::io::Cursor::new(Vec::new());

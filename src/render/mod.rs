@@ -4,7 +4,6 @@
 //! accumulators, so the bytes do not depend on the thread count.
 
 pub mod bin;
-pub mod camera;
 pub mod encode;
 pub mod raster;
 pub mod splat;
@@ -12,7 +11,7 @@ pub mod splat;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-pub use camera::Camera;
+pub use crate::camera::Camera;
 pub use splat::{Shape as SplatShape, Size as SplatSize, SplatSettings};
 
 use crate::manifest::render::{DepthKind, Shading};

@@ -10,8 +10,8 @@ use std::path::Path;
 
 use glam::{DMat3, DMat4, DVec3};
 
+use crate::camera::Camera;
 use crate::manifest::rig::{Band, ForwardLayout, OrbitSchedule, Rig, RigKind, NERF_RADIUS};
-use crate::render::Camera;
 use random::{Keyed, Mt19937};
 
 /// NeRF-synthetic's starting camera position before the tilt and azimuth: (0, 4, 0.5).

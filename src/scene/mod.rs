@@ -9,6 +9,7 @@ pub mod posed;
 pub mod source;
 pub mod transform;
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::Mat4;
@@ -20,6 +21,53 @@ use crate::manifest::transform::{Over, Transform, UpAxis};
 use crate::manifest::Manifest;
 use gltf::PoseScratch;
 use transform::Stats;
+
+/// What can go wrong opening or posing a scene. Every variant is a problem with the input (exit 2 at the CLI).
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A source file cannot be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A glTF file is malformed or uses what vvgen does not support.
+    #[error("{}: {message}", path.display())]
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, with the glTF object it is in (`accessor 3`, `animation 0 channel 2`).
+        message: String,
+    },
+    /// A PLY file is malformed.
+    #[error("{}: {source}", path.display())]
+    Ply {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        #[source]
+        source: ply::PlyError,
+    },
+    /// A source's settings do not fit its file (an animation it lacks, a sequence with no frames).
+    #[error("source `{name}`: {message}")]
+    Source {
+        /// The source.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `[transform]` cannot be resolved (fitting a source with no extent).
+    #[error("{table}: {message}")]
+    Transform {
+        /// `source `NAME`` or `[transform]`.
+        table: String,
+        /// What is wrong.
+        message: String,
+    },
+}
 
 /// Every source of a manifest, loaded, with its resolved transform.
 #[derive(Debug)]
@@ -47,7 +95,7 @@ pub struct Poser {
 impl Scene {
     /// Loads every source and resolves the transforms (reading every frame once when a transform needs the
     /// bounds of all frames).
-    pub fn open(m: &Manifest) -> Result<Scene, String> {
+    pub fn open(m: &Manifest) -> Result<Scene, Error> {
         let mut sources = Vec::new();
         for (name, s) in &m.sources {
             sources.push(LoadedSource::load(name, s, &m.dir)?);
@@ -70,7 +118,10 @@ impl Scene {
             if transform::needs_stats(&t) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut stats)?;
             }
-            locals.push(transform::resolve(&t, up, &stats).map_err(|e| format!("source `{}`: {e}", src.name))?);
+            let table = || format!("source `{}`", src.name);
+            locals.push(
+                transform::resolve(&t, up, &stats).map_err(|message| Error::Transform { table: table(), message })?,
+            );
         }
         // The global table's `up` is only the sources' default: the rotation was applied per source.
         let g = Transform { up: None, ..m.transform.clone() };
@@ -81,7 +132,8 @@ impl Scene {
                 gather(src, g_pre * *local, g.over.unwrap_or_default(), &mut scratch, &mut posed, &mut stats)?;
             }
         }
-        let global = transform::resolve(&g, UpAxis::Z, &stats).map_err(|e| format!("[transform]: {e}"))?;
+        let global = transform::resolve(&g, UpAxis::Z, &stats)
+            .map_err(|message| Error::Transform { table: "[transform]".into(), message })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
         Ok(Scene { sources, locals, global, frames, warnings })
     }
@@ -99,7 +151,7 @@ impl Scene {
     }
 
     /// Poses frame `frame` of source `i` alone, in world space.
-    pub fn pose_source<'a>(&self, i: usize, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, String> {
+    pub fn pose_source<'a>(&self, i: usize, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, Error> {
         poser.scratch.resize_with(self.sources.len(), PoseScratch::default);
         self.sources[i].pose(frame, self.world_from_source(i), &mut poser.scratch[i], &mut poser.out)?;
         Ok(&poser.out)
@@ -111,7 +163,7 @@ impl Scene {
     }
 
     /// Poses frame `frame` of every source, in world space.
-    pub fn pose<'a>(&self, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, String> {
+    pub fn pose<'a>(&self, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, Error> {
         let n = self.sources.len();
         poser.scratch.resize_with(n, PoseScratch::default);
         if n == 1 {
@@ -135,7 +187,7 @@ fn gather(
     scratch: &mut PoseScratch,
     posed: &mut PosedScene,
     stats: &mut Stats,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let frames = if over == Over::First { 1 } else { src.frame_count() };
     // Fresh buffers per source (another source's materials must not carry over), reused across its frames.
     *posed = PosedScene::default();

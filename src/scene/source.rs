@@ -7,8 +7,8 @@ use glam::{Mat4, Vec3, Vec4};
 
 use super::gltf::{GltfAsset, PoseScratch};
 use super::material::{srgb_to_linear, Material};
-use super::ply;
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use super::{ply, Error};
 use crate::manifest::sequence::{self, SequenceFrame};
 use crate::manifest::source::{AnimationSel, ClipRef};
 use crate::manifest::transform::UpAxis;
@@ -45,14 +45,15 @@ pub struct LoadedSource {
 
 impl LoadedSource {
     /// Loads a manifest source; `dir` is the manifest's folder.
-    pub fn load(name: &str, s: &Source, dir: &std::path::Path) -> Result<LoadedSource, String> {
-        let (kind, path) = s.kind().ok_or_else(|| format!("source `{name}` names no file"))?;
+    pub fn load(name: &str, s: &Source, dir: &std::path::Path) -> Result<LoadedSource, Error> {
+        let invalid = |message: String| Error::Source { name: name.to_string(), message };
+        let (kind, path) = s.kind().ok_or_else(|| invalid("names no file".into()))?;
         let full: PathBuf = dir.join(path.get_ref());
         let is_ply = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
         let data = match kind {
             SourceKind::Gltf => {
                 let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
-                let clips = select_clips(&asset, s.animation.as_ref().map(|a| a.get_ref()))?;
+                let clips = select_clips(&asset, s.animation.as_ref().map(|a| a.get_ref())).map_err(invalid)?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
                 let f = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
                 let fps = f.fps();
@@ -79,9 +80,7 @@ impl LoadedSource {
             }
             SourceKind::PlySequence => {
                 let frames = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
-                SourceData::Sequence(
-                    sequence::resolve(dir, path.get_ref(), &frames).map_err(|e| format!("source `{name}`: {e}"))?,
-                )
+                SourceData::Sequence(sequence::resolve(dir, path.get_ref(), &frames).map_err(invalid)?)
             }
         };
         let default_up = if is_ply || kind == SourceKind::PlySequence { UpAxis::Z } else { UpAxis::Y };
@@ -90,12 +89,12 @@ impl LoadedSource {
 
     /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
     /// (whose per-frame content is the posed geometry, hashed by [`PosedScene::digest`]).
-    pub fn content_digest(&self, frame: usize, file: &std::path::Path) -> Result<blake3::Hash, String> {
+    pub fn content_digest(&self, frame: usize, file: &std::path::Path) -> Result<blake3::Hash, Error> {
         let path = match &self.data {
             SourceData::Sequence(frames) => frames[frame.min(frames.len() - 1)].path.as_path(),
             _ => file,
         };
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
         Ok(blake3::hash(&bytes))
     }
 
@@ -109,13 +108,7 @@ impl LoadedSource {
     }
 
     /// Poses frame `frame` (clamped to the last) with `post` applied, into `out`.
-    pub fn pose(
-        &self,
-        frame: usize,
-        post: Mat4,
-        scratch: &mut PoseScratch,
-        out: &mut PosedScene,
-    ) -> Result<(), String> {
+    pub fn pose(&self, frame: usize, post: Mat4, scratch: &mut PoseScratch, out: &mut PosedScene) -> Result<(), Error> {
         match &self.data {
             SourceData::Gltf { asset, clips, times } => {
                 if out.materials.len() != asset.materials.len() || out.textures.len() != asset.textures.len() {
@@ -166,9 +159,9 @@ fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usi
 }
 
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.
-pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-    let d = ply::read(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, Error> {
+    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let d = ply::read(&bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
     let kind = if d.triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
     let positions: Vec<Vec3> = d.positions.iter().map(|p| Vec3::from(*p)).collect();
     let normals = match (&d.normals, kind) {

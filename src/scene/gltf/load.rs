@@ -118,13 +118,13 @@ pub struct Skin {
     pub inverse_bind: Vec<Mat4>,
 }
 
-fn err(path: &Path, msg: impl std::fmt::Display) -> String {
-    format!("{}: {msg}", path.display())
+fn err(path: &Path, msg: impl std::fmt::Display) -> crate::scene::Error {
+    crate::scene::Error::Gltf { path: path.to_path_buf(), message: msg.to_string() }
 }
 
 /// Loads a `.gltf` or `.glb`. `scene`: which scene (default: the file's default, else all).
-pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, String> {
-    let bytes = std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene::Error> {
+    let bytes = std::fs::read(path).map_err(|e| crate::scene::Error::Io { path: path.to_path_buf(), source: e })?;
     let gltf = parse(&bytes).map_err(|e| err(path, e))?;
     let doc = &gltf.document;
     for ext in doc.extensions_required() {

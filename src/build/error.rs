@@ -1,0 +1,123 @@
+//! The build's error: one enum wrapping each stage's, with the manifest (and output) it concerns, sources
+//! chained. [`Error::exit_code`] is where the CLI's 2 (bad input) and 1 (failure) are decided.
+
+use std::path::PathBuf;
+
+use crate::manifest::{Manifest, Report};
+use crate::{cache, execute, export, plan, scene};
+
+/// What can go wrong in a build, `status`, `release` or `gc`.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The manifest is invalid (every problem, with its place, is in the report).
+    #[error("{} is invalid ({} error(s))", .0.path.display(), .0.error_count())]
+    Manifest(Box<Report>),
+    /// A source cannot be opened or posed.
+    #[error("{}: {source}{hint}", manifest.display())]
+    Scene {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<scene::Error>,
+        /// A hint for the user, or empty.
+        hint: &'static str,
+    },
+    /// The build cannot be planned.
+    #[error("{}: {source}", manifest.display())]
+    Plan {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<plan::Error>,
+    },
+    /// Two outputs would write one directory.
+    #[error("{}: outputs `{first}` and `{second}` both write to `{dir}`: give one of them its own `dir`", manifest.display())]
+    SharedDirectory {
+        /// The manifest.
+        manifest: PathBuf,
+        /// The first output.
+        first: String,
+        /// The second output.
+        second: String,
+        /// The directory.
+        dir: String,
+    },
+    /// An action failed.
+    #[error("{}: {source}", manifest.display())]
+    Execute {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<execute::Error>,
+    },
+    /// Writing an output failed.
+    #[error("{}: output `{output}`: {source}", manifest.display())]
+    Export {
+        /// The manifest.
+        manifest: PathBuf,
+        /// The output.
+        output: String,
+        /// Why.
+        #[source]
+        source: Box<export::Error>,
+    },
+    /// The cache cannot be read or written.
+    #[error("{}: cache: {source}", manifest.display())]
+    Cache {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<cache::Error>,
+    },
+    /// A `[dataset] after` manifest failed.
+    #[error("`after` manifest {}: {source}", manifest.display())]
+    After {
+        /// The `after` manifest.
+        manifest: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<Error>,
+    },
+    /// `release` refuses: actions are not built.
+    #[error("{pending} action(s) are not built: run `vvgen build` first (`vvgen plan --explain` says why)")]
+    NotBuilt {
+        /// Actions that would run.
+        pending: usize,
+    },
+}
+
+impl Error {
+    pub(crate) fn plan(m: &Manifest, source: plan::Error) -> Error {
+        Error::Plan { manifest: m.path.clone(), source: Box::new(source) }
+    }
+
+    pub(crate) fn cache(m: &Manifest, source: cache::Error) -> Error {
+        Error::Cache { manifest: m.path.clone(), source: Box::new(source) }
+    }
+
+    /// Whether the error is the input's fault (the manifest, a source file): the user must change something.
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            Error::Manifest(_) | Error::Scene { .. } | Error::Plan { .. } | Error::SharedDirectory { .. } => true,
+            Error::Execute { source, .. } => {
+                matches!(**source, execute::Error::Scene { .. } | execute::Error::Content { .. })
+            }
+            Error::Export { source, .. } => matches!(**source, export::Error::Pattern(_) | export::Error::EmptyScene),
+            Error::After { source, .. } => source.is_bad_input(),
+            Error::Cache { .. } | Error::NotBuilt { .. } => false,
+        }
+    }
+
+    /// The process exit code for this error: 2 for bad input, 1 for any other failure.
+    pub fn exit_code(&self) -> u8 {
+        if self.is_bad_input() {
+            2
+        } else {
+            1
+        }
+    }
+}

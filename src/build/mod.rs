@@ -1,0 +1,416 @@
+//! A build, end to end: manifest → scene → plan (the action graph, every action keyed) → execute (run what the
+//! cache lacks) → export (place blobs, write metadata). [`Build`] is the entry point for Rust callers; the
+//! command line only adds progress display and exit codes. [`status`] answers what a build would do, and why,
+//! from the same graph; [`reachable`] is what `gc --keep` keeps.
+
+mod error;
+pub mod record;
+mod status;
+
+use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+pub use error::Error;
+pub use status::{status, ActionStatus, KindStatus, State, Status};
+
+use crate::cache::{gc, Digest, StatCache, Store};
+use crate::execute::{self, Counts, Inputs, Shard};
+use crate::export::{self, Export, Written};
+use crate::manifest::Manifest;
+use crate::plan::actions::Kind;
+use crate::plan::graph::Graph;
+use crate::plan::{keys, Plan};
+use crate::scene::Scene;
+use record::{LastBuild, OutputRecord};
+
+/// A build of one manifest, configured up front (ripgrep's builders): where the cache is, the shard.
+///
+/// ```
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let ply = dir.path().join("tri.ply");
+/// # std::fs::write(&ply, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+/// #   property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+/// #   0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+/// let manifest = r#"
+///     [dataset]
+///     name = "tri"
+///     out  = "out"
+///     [source.tri]
+///     mesh = "tri.ply"
+///     [render]
+///     resolution = [32, 32]
+///     [rig.ring]
+///     kind = "orbit"
+///     radius = 3
+///     [split.train]
+///     rig   = "ring"
+///     views = 4
+///     [output.cloud]
+///     writer = "ply-sequence"
+///     points = 100
+///     [output.images]
+///     writer = "dnerf"
+///     init_points = 0
+/// "#;
+/// let report = vvgen::build::Build::from_manifest_str(manifest, dir.path())?
+///     .cache(dir.path().join("cache"))
+///     .run(&vvgen::build::Silent)?;
+/// assert_eq!(report.ran(vvgen::plan::actions::Kind::RenderPass), 4);
+/// assert_eq!(report.ran(vvgen::plan::actions::Kind::PointFrame), 1);
+/// # Ok::<(), vvgen::build::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct Build {
+    manifest: Manifest,
+    cache: Option<PathBuf>,
+    shard: Option<Shard>,
+}
+
+impl Build {
+    /// A build of `manifest`.
+    pub fn new(manifest: Manifest) -> Build {
+        Build { manifest, cache: None, shard: None }
+    }
+
+    /// A build of the manifest `text`, whose relative paths resolve against `base_dir`.
+    pub fn from_manifest_str(text: &str, base_dir: &Path) -> Result<Build, Error> {
+        let path = base_dir.join("manifest.toml");
+        let (m, _) = crate::manifest::parse(text, &path).map_err(|r| Error::Manifest(Box::new(r)))?;
+        Ok(Build::new(m))
+    }
+
+    /// A build of the manifest file at `path`.
+    pub fn from_manifest_file(path: &Path) -> Result<Build, Error> {
+        let (m, _) = crate::manifest::load(path).map_err(|r| Error::Manifest(Box::new(r)))?;
+        Ok(Build::new(m))
+    }
+
+    /// Uses the cache at `dir` (default: the manifest's `[dataset] cache`, else `cache/` in the working
+    /// directory).
+    pub fn cache(mut self, dir: impl Into<PathBuf>) -> Build {
+        self.cache = Some(dir.into());
+        self
+    }
+
+    /// Runs only shard `shard`'s part of the actions into the cache, and writes no outputs.
+    pub fn shard(mut self, shard: Option<Shard>) -> Build {
+        self.shard = shard;
+        self
+    }
+
+    /// The manifest.
+    pub fn manifest(&self) -> &Manifest {
+        &self.manifest
+    }
+
+    /// The cache directory this build uses.
+    pub fn cache_dir(&self) -> PathBuf {
+        self.cache.clone().unwrap_or_else(|| default_cache_dir(&self.manifest))
+    }
+
+    /// Runs the build.
+    pub fn run(&self, progress: &dyn Progress) -> Result<Report, Error> {
+        build(&self.manifest, &self.cache_dir(), Options { shard: self.shard }, progress)
+    }
+
+    /// What the build would do, and (with `explain`) why.
+    pub fn status(&self, explain: bool) -> Result<Status, Error> {
+        status(&self.manifest, &self.cache_dir(), explain)
+    }
+}
+
+/// The manifest's cache: `[dataset] cache` (manifest-relative), else `cache/` in the working directory. (The
+/// CLI's `VVGEN_CACHE` overrides both; the library reads no environment.)
+pub fn default_cache_dir(m: &Manifest) -> PathBuf {
+    match &m.dataset.cache {
+        Some(c) => m.resolve(c.get_ref()),
+        None => PathBuf::from("cache"),
+    }
+}
+
+/// Progress events of a build.
+pub trait Progress: Sync {
+    /// The cache has been consulted: `cached` actions are cached, `work` will run here.
+    fn started(&self, cached: usize, work: usize);
+    /// `done` of the `work` actions have run.
+    fn ran(&self, done: usize);
+    /// Output `name` is being written.
+    fn writing(&self, name: &str);
+}
+
+/// A progress sink that ignores everything.
+pub struct Silent;
+
+impl Progress for Silent {
+    fn started(&self, _: usize, _: usize) {}
+    fn ran(&self, _: usize) {}
+    fn writing(&self, _: &str) {}
+}
+
+/// Build options.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Options {
+    /// Run only this shard's part of the actions and write no outputs.
+    pub shard: Option<Shard>,
+}
+
+/// What a build did.
+#[derive(Debug)]
+pub struct Report {
+    /// Per action kind: planned, cached, run, left to other shards. Outputs count as cached when they were
+    /// already up to date.
+    pub actions: BTreeMap<Kind, Counts>,
+    /// Images in the plan that some output renders.
+    pub images: usize,
+    /// Images whose every pass was cached.
+    pub hits: usize,
+    /// Images rendered (some pass ran) by this build.
+    pub renders: usize,
+    /// Seconds spent running actions.
+    pub run_seconds: f64,
+    /// Seconds in all.
+    pub total_seconds: f64,
+    /// Each output's dataset (none for a shard build).
+    pub outputs: Vec<(String, Written)>,
+    /// The outputs of the `[dataset] after` manifests, named `file.toml/output`.
+    pub after: Vec<(String, Written)>,
+    /// Warnings from the scene and the plan.
+    pub warnings: Vec<String>,
+}
+
+impl Report {
+    /// Actions of `kind` run by this build.
+    pub fn ran(&self, kind: Kind) -> usize {
+        self.actions.get(&kind).map_or(0, |c| c.ran)
+    }
+
+    /// Actions of `kind` left to other shards.
+    pub fn elsewhere(&self, kind: Kind) -> usize {
+        self.actions.get(&kind).map_or(0, |c| c.elsewhere)
+    }
+
+    /// Whether the build ran nothing: every action was cached and every output up to date.
+    pub fn nothing_to_do(&self) -> bool {
+        self.actions.values().all(|c| c.ran == 0)
+    }
+}
+
+/// Everything up to the graph: shared by `build`, `status`, `release` and `gc`.
+pub struct Prepared {
+    /// The scene.
+    pub scene: Scene,
+    /// The image plan.
+    pub plan: Plan,
+    /// The store.
+    pub store: Store,
+    /// The dataset's stat cache.
+    pub stat: StatCache,
+    /// Key of every scene frame.
+    pub frame_keys: Vec<Digest>,
+}
+
+impl Prepared {
+    /// The action graph of `m` (the manifest this was prepared from).
+    pub fn graph(&self, m: &Manifest) -> Result<Graph<'_>, Error> {
+        Graph::new(m, &self.plan, &self.scene, &self.frame_keys).map_err(|e| Error::plan(m, e))
+    }
+}
+
+/// Opens the scene, plans the images and keys every frame.
+pub fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, Error> {
+    check_directories(m)?;
+    let scene = Scene::open(m).map_err(|source| Error::Scene {
+        manifest: m.path.clone(),
+        source: Box::new(source),
+        hint: if m.after.is_empty() {
+            ""
+        } else {
+            " (an `after` manifest may write it: `vvgen build` builds those first)"
+        },
+    })?;
+    let plan = Plan::new(m, scene.frames).map_err(|e| Error::plan(m, e))?;
+    let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
+    let stat = store.stat_cache(&m.out_dir());
+    let frame_keys = keys::frame_keys(&scene, &stat).map_err(|e| Error::plan(m, e))?;
+    Ok(Prepared { scene, plan, store, stat, frame_keys })
+}
+
+/// Builds every output of `m`, using the store at `cache`: runs only the actions the cache lacks. The
+/// `[dataset] after` manifests are built first, whole (also for a shard build: this manifest's sources may be
+/// their outputs), through the same cache.
+pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress) -> Result<Report, Error> {
+    let t0 = Instant::now();
+    let mut before = Vec::new();
+    for a in &m.after {
+        let file = a.path.file_name().map_or(String::new(), |f| f.to_string_lossy().into_owned());
+        let r = build(a, cache, Options::default(), progress)
+            .map_err(|e| Error::After { manifest: a.path.clone(), source: Box::new(e) })?;
+        before.extend(r.after.into_iter().chain(r.outputs.into_iter().map(|(name, w)| (format!("{file}/{name}"), w))));
+    }
+    let p = prepare(m, cache)?;
+    let g = p.graph(m)?;
+    let last = record::read(&p.store, m);
+    let look = execute::lookup(&g, &p.store, &p.stat);
+    // Outputs already up to date count as cached; judged before this build rewrites anything.
+    let outputs_fresh: Vec<bool> = g
+        .ids()
+        .filter(|id| g.node(*id).action.kind() == Kind::WriteOutput)
+        .map(|id| status::output_reasons(&g, id, &last, &p.stat).is_empty())
+        .collect();
+    let t1 = Instant::now();
+    let inputs = Inputs { scene: &p.scene, store: &p.store, stat: &p.stat };
+    let outcome = execute::run(&g, &inputs, look, opts.shard, &|c, w| progress.started(c, w), &|n| progress.ran(n))
+        .map_err(|source| Error::Execute { manifest: m.path.clone(), source: Box::new(source) })?;
+    let run_seconds = t1.elapsed().as_secs_f64();
+    let (images, hits, renders) = image_counts(&g, &outcome);
+    let mut warnings = p.scene.warnings.clone();
+    warnings.extend(p.plan.warnings.iter().cloned());
+    let mut report = Report {
+        actions: outcome.counts.clone(),
+        images,
+        hits,
+        renders,
+        run_seconds,
+        total_seconds: 0.0,
+        outputs: Vec::new(),
+        after: before,
+        warnings,
+    };
+    if opts.shard.is_some() {
+        // A shard only fills the cache; the final unsharded build writes the datasets.
+        let _ = p.stat.save();
+        report.total_seconds = t0.elapsed().as_secs_f64();
+        return Ok(report);
+    }
+    let x = Export {
+        manifest: m,
+        scene: &p.scene,
+        plan: &p.plan,
+        graph: &g,
+        blobs: &outcome.blobs,
+        store: &p.store,
+        stat: &p.stat,
+    };
+    let mut record = LastBuild::new();
+    let write_ids: Vec<_> = g.ids().filter(|id| g.node(*id).action.kind() == Kind::WriteOutput).collect();
+    let written = report.actions.entry(Kind::WriteOutput).or_default();
+    for fresh in &outputs_fresh {
+        written.planned += 1;
+        if *fresh {
+            written.cached += 1;
+        } else {
+            written.ran += 1;
+        }
+    }
+    for ((name, out), id) in m.outputs.iter().zip(&write_ids) {
+        progress.writing(name);
+        let w = export::write(&x, name, out).map_err(|source| Error::Export {
+            manifest: m.path.clone(),
+            output: name.clone(),
+            source: Box::new(source),
+        })?;
+        record.outputs.insert(
+            name.clone(),
+            OutputRecord {
+                root: w.root.clone(),
+                key: g.node(*id).key.hex(),
+                manifest: g.keying.manifest.hex(),
+                files: w.files.iter().map(|(f, d)| (f.clone(), d.hex())).collect(),
+            },
+        );
+        report.outputs.push((name.clone(), w));
+    }
+    prune(&last, &record);
+    record.actions = g.ids().map(|id| (g.node(id).label.clone(), g.node(id).key.hex())).collect();
+    record::write(&p.store, m, &record, &last).map_err(|e| Error::cache(m, e))?;
+    p.stat.save().map_err(|e| Error::cache(m, crate::cache::Error::io(p.store.root(), e)))?;
+    report.total_seconds = t0.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Images planned, found whole in the cache, and rendered (some pass ran), from the render-pass actions.
+fn image_counts(g: &Graph, outcome: &execute::Outcome) -> (usize, usize, usize) {
+    use crate::plan::actions::Action;
+    // Per image: (every pass cached, some pass ran).
+    let mut images: BTreeMap<usize, (bool, bool)> = BTreeMap::new();
+    for id in g.ids() {
+        if let Action::RenderPass { image, .. } = g.node(id).action {
+            let e = images.entry(image).or_insert((true, false));
+            e.0 &= outcome.cached[id.0 as usize];
+            e.1 |= outcome.ran[id.0 as usize];
+        }
+    }
+    let hits = images.values().filter(|v| v.0).count();
+    let renders = images.values().filter(|v| v.1).count();
+    (images.len(), hits, renders)
+}
+
+/// Removes files the previous build produced and this one did not (a split that shrank, a renamed output).
+fn prune(previous: &LastBuild, now: &LastBuild) {
+    let keep: BTreeSet<PathBuf> =
+        now.outputs.values().flat_map(|o| o.files.iter().map(move |(f, _)| o.root.join(f))).collect();
+    for o in previous.outputs.values() {
+        for (f, _) in &o.files {
+            let p = o.root.join(f);
+            if !keep.contains(&p) {
+                let _ = std::fs::remove_file(&p);
+            }
+        }
+    }
+}
+
+/// Every cache entry `m`'s graph reaches: each action's record and blobs (intermediate ones included, so a
+/// reduction change still finds its samples), and the blobs of the files its outputs last wrote.
+pub fn reachable(m: &Manifest, cache: &Path, keep: &mut HashSet<Digest>) -> Result<(), Error> {
+    for a in &m.after {
+        reachable(a, cache, keep)?;
+    }
+    let p = prepare(m, cache)?;
+    let g = p.graph(m)?;
+    for id in g.ids() {
+        let n = g.node(id);
+        if n.action.kind().cached() {
+            keep.insert(n.key);
+            keep.extend(p.store.action(&n.key).unwrap_or_default());
+        }
+    }
+    for o in record::read(&p.store, m).outputs.values() {
+        keep.extend(o.files.iter().filter_map(|(_, d)| Digest::from_hex(d)));
+    }
+    Ok(())
+}
+
+/// Collects the cache at `cache`: drops what none of `keep` reaches (when any is given), then the oldest
+/// beyond `max_bytes` (when given); nothing younger than [`gc::GRACE`].
+pub fn collect_garbage(keep: &[Manifest], cache: &Path, max_bytes: Option<u64>) -> Result<gc::Collected, Error> {
+    let reach = if keep.is_empty() {
+        None
+    } else {
+        let mut set = HashSet::new();
+        for m in keep {
+            reachable(m, cache, &mut set)?;
+        }
+        Some(set)
+    };
+    Ok(gc::collect(cache, reach.as_ref(), max_bytes))
+}
+
+/// Two outputs writing one directory would overwrite each other's `vvgen.json` (and possibly images).
+fn check_directories(m: &Manifest) -> Result<(), Error> {
+    let mut seen: Vec<(String, &str)> = Vec::new();
+    for (name, out) in &m.outputs {
+        let dir = export::dir_name(m, out);
+        let norm = dir.trim_end_matches('/').to_string();
+        if let Some((_, other)) = seen.iter().find(|(d, _)| *d == norm) {
+            return Err(Error::SharedDirectory {
+                manifest: m.path.clone(),
+                first: other.to_string(),
+                second: name.clone(),
+                dir,
+            });
+        }
+        seen.push((norm, name));
+    }
+    Ok(())
+}

@@ -1,0 +1,152 @@
+//! What a build would do, and why: every action of the graph with its state, and for each that would run the
+//! fields that changed since the last build. The reasons come from the keyed walk that made the key (the
+//! current fields) and from the fields recorded with the last build's result, so they cannot drift from keying.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::Serialize;
+
+pub use crate::execute::State;
+
+use super::record::{self, LastBuild};
+use super::{prepare, Error};
+use crate::cache::{Digest, StatCache, Store};
+use crate::execute;
+use crate::manifest::Manifest;
+use crate::plan::actions::{Action, Kind};
+use crate::plan::graph::{ActionId, Graph};
+use crate::plan::key;
+
+/// Counts of one action kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct KindStatus {
+    /// Actions of this kind in the graph.
+    pub planned: usize,
+    /// Cached (outputs: up to date on disk).
+    pub cached: usize,
+    /// To run.
+    pub run: usize,
+    /// Not cached, but not needed: everything that reads them is cached.
+    pub unneeded: usize,
+}
+
+/// One action's state.
+#[derive(Debug, Clone, Serialize)]
+pub struct ActionStatus {
+    /// Its kind.
+    pub kind: Kind,
+    /// Its label, e.g. `render train/3/12 depth`.
+    pub label: String,
+    /// Its key (hex).
+    pub key: String,
+    /// Cached, to run, or not needed.
+    pub state: State,
+    /// Why it runs (with `explain`, or always for outputs), one line per changed field.
+    pub reasons: Vec<String>,
+}
+
+/// What a build of a manifest would do.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Status {
+    /// Per kind.
+    pub kinds: BTreeMap<Kind, KindStatus>,
+    /// Every action, in graph order (inputs first).
+    pub actions: Vec<ActionStatus>,
+}
+
+impl Status {
+    /// Actions of cached kinds that would run (what `release` refuses on).
+    pub fn pending(&self) -> usize {
+        self.kinds.iter().filter(|(k, _)| k.cached()).map(|(_, s)| s.run).sum()
+    }
+
+    /// Actions of `kind` that would run.
+    pub fn to_run(&self, kind: Kind) -> usize {
+        self.kinds.get(&kind).map_or(0, |s| s.run)
+    }
+
+    /// Whether a build would do nothing: every action cached and every output up to date on disk.
+    pub fn up_to_date(&self) -> bool {
+        self.kinds.values().all(|s| s.run == 0)
+    }
+}
+
+/// Plans `m` and classifies every action as cached, to run or not needed; with `explain`, says why each action
+/// that would run does. Outputs are judged by their files on disk and their key.
+pub fn status(m: &Manifest, cache: &Path, explain: bool) -> Result<Status, Error> {
+    let p = prepare(m, cache)?;
+    let g = p.graph(m)?;
+    let look = execute::lookup(&g, &p.store, &p.stat);
+    let last = record::read(&p.store, m);
+    let mut st = Status::default();
+    for id in g.ids() {
+        let n = g.node(id);
+        let kind = n.action.kind();
+        let (state, reasons) = if kind == Kind::WriteOutput {
+            let r = output_reasons(&g, id, &last, &p.stat);
+            (if r.is_empty() { State::Cached } else { State::Run }, r)
+        } else {
+            let s = look.state[id.0 as usize];
+            let r = if explain && s == State::Run { action_reasons(&g, id, &last, &p.store) } else { Vec::new() };
+            (s, r)
+        };
+        let k = st.kinds.entry(kind).or_default();
+        k.planned += 1;
+        match state {
+            State::Cached => k.cached += 1,
+            State::Run => k.run += 1,
+            State::Unneeded => k.unneeded += 1,
+        }
+        st.actions.push(ActionStatus { kind, label: n.label.clone(), key: n.key.hex(), state, reasons });
+    }
+    Ok(st)
+}
+
+/// Why a cached-kind action must run: new, its result lost, or the fields that changed since the last build.
+fn action_reasons(g: &Graph, id: ActionId, last: &LastBuild, store: &Store) -> Vec<String> {
+    let n = g.node(id);
+    match last.actions.get(&n.label) {
+        None => vec!["new: the last build had no such action".into()],
+        Some(k) if *k == n.key.hex() => {
+            vec!["cached result missing or corrupt (cache cleared, collected or damaged)".into()]
+        }
+        Some(k) => match Digest::from_hex(k).and_then(|d| store.action_fields(&d)) {
+            Some(before) => {
+                let d = key::diff(&before, &g.explain(id));
+                if d.is_empty() {
+                    vec!["its key changed".into()]
+                } else {
+                    d
+                }
+            }
+            None => vec!["its inputs changed since the last build (whose record of them was collected)".into()],
+        },
+    }
+}
+
+/// Why an output must be written again (empty when it is up to date): new, the manifest or an input changed, or
+/// files the last build wrote are missing or modified on disk.
+pub(super) fn output_reasons(g: &Graph, id: ActionId, last: &LastBuild, stat: &StatCache) -> Vec<String> {
+    let n = g.node(id);
+    let Action::WriteOutput { output } = &n.action else { return Vec::new() };
+    let Some(rec) = last.outputs.get(output) else { return vec!["new: the last build did not write it".into()] };
+    let mut r = Vec::new();
+    if rec.manifest != g.keying.manifest.hex() {
+        r.push("the manifest changed (vvgen.json records its digest)".to_string());
+    } else if rec.key != n.key.hex() {
+        r.push("its inputs changed (a source, a setting, or a result it places)".to_string());
+    }
+    let damaged: Vec<&str> = rec
+        .files
+        .iter()
+        .filter(|(f, d)| Digest::from_hex(d).is_none_or(|d| !stat.holds(&rec.root.join(f), &d)))
+        .map(|(f, _)| f.as_str())
+        .collect();
+    if !damaged.is_empty() {
+        let head: Vec<&str> = damaged.iter().take(3).copied().collect();
+        let more = if damaged.len() > head.len() { format!(" … ({} in all)", damaged.len()) } else { String::new() };
+        r.push(format!("files missing or modified on disk: {}{more}", head.join(", ")));
+    }
+    r
+}

@@ -1,0 +1,134 @@
+//! Image actions: render passes and composites. Each frame is posed once and shared by every view of that
+//! frame; views render and encode in parallel (PNG encoding costs as much as rendering, so it must not
+//! serialize on one thread). One render serves every pass of an image that must run.
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::{Error, Inputs, Made};
+use crate::cache::Digest;
+use crate::manifest::render::{NormalSpace, Pass};
+use crate::plan::actions::Action;
+use crate::plan::graph::{ActionId, Graph};
+use crate::render::encode::{self, Encoding};
+use crate::render::{self, Frame};
+use crate::scene::Poser;
+
+/// Runs the render-pass actions `ids`.
+pub(super) fn passes(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() + Sync)) -> Result<Made, Error> {
+    let plan = g.keying.plan;
+    // Frame → image → its passes to run.
+    let mut by_frame: BTreeMap<usize, BTreeMap<usize, Vec<(ActionId, Pass)>>> = BTreeMap::new();
+    for &id in ids {
+        if let Action::RenderPass { image, pass } = g.node(id).action {
+            by_frame.entry(plan.images[image].frame).or_default().entry(image).or_default().push((id, pass));
+        }
+    }
+    let mut poser = Poser::default();
+    let mut out = Vec::with_capacity(ids.len());
+    for (frame, images) in by_frame {
+        let first = images.values().next().and_then(|v| v.first()).map(|(id, _)| *id);
+        let label = first.map_or_else(String::new, |id| g.node(id).label.clone());
+        let posed = x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: label, source })?;
+        let instances = posed.primitives.iter().map(|p| p.object).max().map_or(0, |m| m + 1) > 1;
+        let images: Vec<(usize, Vec<(ActionId, Pass)>)> = images.into_iter().collect();
+        let made: Vec<Result<Made, Error>> = images
+            .par_iter()
+            .map(|(image, todo)| {
+                let camera = &plan.images[*image].camera;
+                let f = render::render(posed, camera, &g.keying.render);
+                let mut v = Vec::with_capacity(todo.len());
+                for &(id, pass) in todo {
+                    let bytes = encode_pass(&f, pass, &g.keying.encoding, &camera.c2w, instances);
+                    v.push((id, x.store(g, id, &bytes)?));
+                    done();
+                }
+                Ok(v)
+            })
+            .collect();
+        for m in made {
+            out.extend(m?);
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the composite actions `ids`: the RGBA blob over an opaque background (sRGB bytes, as loaders
+/// composite), as an RGB PNG, for consumers that do not read alpha (COLMAP, DyNeRF).
+pub(super) fn composites(
+    g: &Graph,
+    x: &Inputs,
+    blobs: &[Option<Vec<Digest>>],
+    ids: &[ActionId],
+    done: &(dyn Fn() + Sync),
+) -> Result<Made, Error> {
+    ids.par_iter()
+        .map(|&id| {
+            let n = g.node(id);
+            let Action::Composite { background: bg, .. } = n.action else { unreachable!("a composite") };
+            let png = x.read(g, blobs, n.deps[0], 0)?;
+            let damaged = |e: image::ImageError| Error::Content { action: n.label.clone(), message: e.to_string() };
+            let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png).map_err(damaged)?.into_rgba8();
+            let (w, h) = img.dimensions();
+            let rgb: Vec<u8> = img
+                .pixels()
+                .flat_map(|p| {
+                    let a = p[3] as u32;
+                    [0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8)
+                })
+                .collect();
+            let blobs = x.store(g, id, &[encode::rgb_png(&rgb, w, h, g.keying.encoding.png)])?;
+            done();
+            Ok((id, blobs))
+        })
+        .collect()
+}
+
+/// The files of one pass: its PNG, then its EXR (depth, normal) or instance ids (mask) where asked.
+fn encode_pass(f: &Frame, pass: Pass, e: &Encoding, c2w: &glam::DMat4, instances: bool) -> Vec<Vec<u8>> {
+    let (w, h, c) = (f.width, f.height, e.png);
+    match pass {
+        Pass::Rgba => vec![encode::rgba_png(&f.rgba, w, h, c)],
+        Pass::Depth => {
+            let mut v = vec![encode::depth_mm_png(&f.depth, w, h, c)];
+            if e.depth_exr {
+                v.push(encode::f32_exr(&[("Y", &f.depth)], w, h, c));
+            }
+            v
+        }
+        Pass::Normal => {
+            // Camera space: the inverse rotation of the (orthonormal) camera-to-world.
+            let rot = glam::DMat3::from_mat4(*c2w).transpose().as_mat3();
+            let normals: Vec<Vec3> = match e.normal_space {
+                NormalSpace::Camera => f.normal.iter().map(|n| rot * *n).collect(),
+                NormalSpace::World => f.normal.clone(),
+            };
+            let rgb: Vec<u8> = normals
+                .iter()
+                .flat_map(|n| {
+                    if *n == Vec3::ZERO {
+                        return [0, 0, 0];
+                    }
+                    n.to_array().map(|v| ((v + 1.0) * 0.5 * 255.0).round().clamp(0.0, 255.0) as u8)
+                })
+                .collect();
+            let mut v = vec![encode::rgb_png(&rgb, w, h, c)];
+            if e.normal_exr {
+                let axis = |i: usize| normals.iter().map(|n| n[i]).collect::<Vec<f32>>();
+                let (nx, ny, nz) = (axis(0), axis(1), axis(2));
+                v.push(encode::f32_exr(&[("R", &nx), ("G", &ny), ("B", &nz)], w, h, c));
+            }
+            v
+        }
+        Pass::Mask => {
+            let mut v = vec![encode::gray8_png(&f.coverage, w, h, c)];
+            if instances {
+                let ids: Vec<u16> = f.object.iter().map(|&o| o.min(u16::MAX as u32) as u16).collect();
+                v.push(encode::gray16_png(&ids, w, h, c));
+            }
+            v
+        }
+    }
+}

@@ -1,0 +1,396 @@
+//! The kinds of action a build runs, and the keyed walk of each: exactly the fields that determine an action's
+//! bytes, written once into a [`KeyWriter`] (the hasher for keys, the explainer for `plan --explain`).
+//!
+//! Settings are walked by destructuring, without `..`: a field added to [`RenderSettings`], [`Encoding`],
+//! [`Camera`] or [`PointSettings`] fails to compile here until it is keyed or excluded with a reason.
+
+use serde::Serialize;
+
+use super::key::KeyWriter;
+use super::Plan;
+use crate::cache::Digest;
+use crate::camera::Camera;
+use crate::manifest::output::{ColorAverage, PlyFormat, Reduce, VoxelPosition};
+use crate::manifest::render::Pass;
+use crate::render::encode::Encoding;
+use crate::render::{RenderSettings, SplatShape, SplatSize};
+
+/// Version of the renderer's output: bump when a change moves rendered bytes.
+pub const RENDER_SALT: &str = "render 6";
+/// Version of the point sampler's output.
+pub const SAMPLE_SALT: &str = "sample 2";
+/// Version of the PLY / COLMAP point encodings and of compositing.
+pub const ENCODE_SALT: &str = "encode 1";
+
+/// What an action does; each kind has its own executor and its own keyed walk.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kind {
+    /// Render one pass of one image (PNG, plus EXR or instance ids where asked).
+    RenderPass,
+    /// Composite an RGBA image over an opaque background (COLMAP, DyNeRF).
+    Composite,
+    /// Surface samples over several frames, as an initialization PLY.
+    InitCloud,
+    /// One frame's surface samples as COLMAP's points3D.txt.
+    ColmapPoints,
+    /// The bounds of the posed geometry over several frames.
+    Bounds,
+    /// One frame's unreduced surface samples (the input of a reduction).
+    SampleFrame,
+    /// One frame of a point-cloud sequence, reduced and encoded as PLY.
+    PointFrame,
+    /// An output's dataset directory: place every blob, write the metadata (not cached in the store).
+    WriteOutput,
+}
+
+impl Kind {
+    /// Every kind, in execution order (an action's inputs are of earlier kinds).
+    pub const ALL: [Kind; 8] = [
+        Kind::RenderPass,
+        Kind::Bounds,
+        Kind::SampleFrame,
+        Kind::InitCloud,
+        Kind::ColmapPoints,
+        Kind::Composite,
+        Kind::PointFrame,
+        Kind::WriteOutput,
+    ];
+
+    /// The kebab-case name used in listings and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::RenderPass => "render-pass",
+            Kind::Composite => "composite",
+            Kind::InitCloud => "init-cloud",
+            Kind::ColmapPoints => "colmap-points",
+            Kind::Bounds => "bounds",
+            Kind::SampleFrame => "sample-frame",
+            Kind::PointFrame => "point-frame",
+            Kind::WriteOutput => "write-output",
+        }
+    }
+
+    /// Whether results of this kind live in the cache (all but writing an output).
+    pub fn cached(self) -> bool {
+        self != Kind::WriteOutput
+    }
+}
+
+/// One action: its kind and what it acts on. Inputs that are other actions' results are the node's `deps`
+/// (in the order documented per variant); source content enters through the plan's frame keys.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Action {
+    /// Pass `pass` of plan image `image`. No deps.
+    RenderPass {
+        /// Index into [`Plan::images`].
+        image: usize,
+        /// The pass.
+        pass: Pass,
+    },
+    /// Image `image` over `background` (sRGB bytes). Deps: the image's RGBA pass.
+    Composite {
+        /// Index into [`Plan::images`].
+        image: usize,
+        /// Opaque background, sRGB.
+        background: [u8; 3],
+    },
+    /// `points` samples spread over `frames`. No deps.
+    InitCloud {
+        /// Scene frames, ascending.
+        frames: Vec<usize>,
+        /// Points in all.
+        points: u64,
+    },
+    /// `points` samples of `frame` as points3D.txt. No deps.
+    ColmapPoints {
+        /// Scene frame.
+        frame: usize,
+        /// Points.
+        points: u64,
+    },
+    /// Bounds over `frames`. No deps.
+    Bounds {
+        /// Scene frames, ascending.
+        frames: Vec<usize>,
+    },
+    /// Unreduced samples of `frame` for point output `output`. No deps.
+    SampleFrame {
+        /// The `[output.NAME]`.
+        output: String,
+        /// Scene frame.
+        frame: usize,
+    },
+    /// Frame `frame` of point output `output`. Deps: its [`Action::SampleFrame`] when it reduces, then the
+    /// sequence's [`Action::Bounds`] when it quantizes (`vox`).
+    PointFrame {
+        /// The `[output.NAME]`.
+        output: String,
+        /// Scene frame.
+        frame: usize,
+    },
+    /// Output `output`'s directory. Deps: every action whose result it places.
+    WriteOutput {
+        /// The `[output.NAME]`.
+        output: String,
+    },
+}
+
+impl Action {
+    /// The action's kind.
+    pub fn kind(&self) -> Kind {
+        match self {
+            Action::RenderPass { .. } => Kind::RenderPass,
+            Action::Composite { .. } => Kind::Composite,
+            Action::InitCloud { .. } => Kind::InitCloud,
+            Action::ColmapPoints { .. } => Kind::ColmapPoints,
+            Action::Bounds { .. } => Kind::Bounds,
+            Action::SampleFrame { .. } => Kind::SampleFrame,
+            Action::PointFrame { .. } => Kind::PointFrame,
+            Action::WriteOutput { .. } => Kind::WriteOutput,
+        }
+    }
+}
+
+/// A `ply-sequence` output's settings, resolved against the scene (defaults applied, source found).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointSettings {
+    /// Surface samples per frame.
+    pub points: u64,
+    /// Only this source (index into the scene's sources, and its name), or every source.
+    pub source: Option<(usize, String)>,
+    /// Point i is the same surface point in every frame.
+    pub correspondence: bool,
+    /// Per-point motion to the next frame.
+    pub motion: bool,
+    /// Voxel edge for downsampling, world units.
+    pub voxel: Option<f64>,
+    /// Quantize to a 2^vox integer grid fixed over the sequence.
+    pub vox: Option<u32>,
+    /// Which point a voxel keeps.
+    pub reduce: Reduce,
+    /// Where a voxel's point goes.
+    pub position: VoxelPosition,
+    /// Colour averaging space.
+    pub color_average: ColorAverage,
+    /// Binary or ASCII PLY.
+    pub format: PlyFormat,
+    /// File name pattern with `{name}` substituted.
+    pub pattern: String,
+}
+
+impl PointSettings {
+    /// Whether frames are reduced (so their unreduced samples are an action of their own).
+    pub fn reduces(&self) -> bool {
+        self.voxel.is_some() || self.vox.is_some()
+    }
+}
+
+/// Everything besides the action itself that keys read.
+#[derive(Debug)]
+pub struct Keying<'a> {
+    /// The image plan.
+    pub plan: &'a Plan,
+    /// The content key of every scene frame.
+    pub frame_keys: &'a [Digest],
+    /// The renderer's settings.
+    pub render: RenderSettings,
+    /// How passes are encoded.
+    pub encoding: Encoding,
+    /// `[dataset] seed`.
+    pub seed: u64,
+    /// blake3 of the manifest text (an output's `vvgen.json` records it).
+    pub manifest: Digest,
+    /// Resolved settings of every `ply-sequence` output, by name.
+    pub points: std::collections::BTreeMap<String, PointSettings>,
+}
+
+impl Action {
+    /// Writes every field that determines this action's result; `deps` are the keys of its inputs, in the
+    /// order [`Action`] documents.
+    pub fn walk(&self, cx: &Keying, deps: &[Digest], w: &mut dyn KeyWriter) {
+        match self {
+            Action::RenderPass { image, pass } => {
+                let img = &cx.plan.images[*image];
+                w.str("renderer", RENDER_SALT);
+                w.str("pass", pass_name(*pass));
+                w.digest("frame content", &cx.frame_keys[img.frame]);
+                camera(w, &img.camera);
+                render_settings(w, &cx.render, *pass);
+                encoding(w, &cx.encoding, *pass);
+            }
+            Action::Composite { image: _, background } => {
+                w.str("encoder", ENCODE_SALT);
+                w.digest("rgba", &deps[0]);
+                w.f64s("background", &background.map(f64::from));
+                w.str("png compression", &format!("{:?}", cx.encoding.png).to_lowercase());
+            }
+            Action::InitCloud { frames, points } => {
+                w.str("sampler", SAMPLE_SALT);
+                w.u64("seed", cx.seed);
+                w.u64("points", *points);
+                for &f in frames {
+                    w.u64("frame", f as u64);
+                    w.digest("frame content", &cx.frame_keys[f]);
+                }
+            }
+            Action::ColmapPoints { frame, points } => {
+                w.str("sampler", SAMPLE_SALT);
+                w.str("encoder", ENCODE_SALT);
+                w.u64("seed", cx.seed);
+                w.u64("points", *points);
+                w.u64("frame", *frame as u64);
+                w.digest("frame content", &cx.frame_keys[*frame]);
+            }
+            Action::Bounds { frames } => {
+                // Bounds depend on content only, not on which frame index holds it.
+                for &f in frames {
+                    w.digest("frame content", &cx.frame_keys[f]);
+                }
+            }
+            Action::SampleFrame { output, frame } => samples(w, cx, &cx.points[output], *frame),
+            Action::PointFrame { output, frame } => {
+                let s = &cx.points[output];
+                w.str("encoder", ENCODE_SALT);
+                if s.reduces() {
+                    w.digest("samples", &deps[0]);
+                } else {
+                    samples(w, cx, s, *frame);
+                }
+                reduction(w, s, if s.vox.is_some() { deps.last() } else { None });
+            }
+            Action::WriteOutput { output } => {
+                w.str("tool", env!("CARGO_PKG_VERSION"));
+                w.digest("manifest", &cx.manifest);
+                w.str("output", output);
+                for d in deps {
+                    w.digest("input", d);
+                }
+            }
+        }
+    }
+}
+
+/// The manifest spelling of a pass.
+pub fn pass_name(p: Pass) -> &'static str {
+    match p {
+        Pass::Rgba => "rgba",
+        Pass::Depth => "depth",
+        Pass::Normal => "normal",
+        Pass::Mask => "mask",
+    }
+}
+
+fn camera(w: &mut dyn KeyWriter, c: &Camera) {
+    let Camera { width, height, fx, fy, cx, cy, near, far, c2w } = *c;
+    w.u64("width", width as u64);
+    w.u64("height", height as u64);
+    w.f64("fx", fx);
+    w.f64("fy", fy);
+    w.f64("cx", cx);
+    w.f64("cy", cy);
+    w.f64("near", near);
+    w.f64("far", far);
+    w.f64s("c2w", &c2w.to_cols_array());
+}
+
+/// The render settings that shape `pass`: geometry settings shape every pass, colour settings only RGBA.
+fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
+    let RenderSettings { samples, shading, lights, ambient, background, depth, splat, buffers } = s;
+    // Which auxiliary buffers are filled never changes the bytes of a pass (it only skips unused work).
+    let _ = buffers;
+    w.u64("samples", *samples as u64);
+    let crate::render::SplatSettings { shape, size } = splat;
+    w.str(
+        "splat shape",
+        match shape {
+            SplatShape::Cube => "cube",
+            SplatShape::Square => "square",
+            SplatShape::Disk => "disk",
+        },
+    );
+    match size {
+        SplatSize::World(v) => w.f64("splat size (world)", *v as f64),
+        SplatSize::Pixels(v) => w.f64("splat size (px)", *v as f64),
+    }
+    match pass {
+        Pass::Rgba => {
+            w.str("shading", &format!("{shading:?}").to_lowercase());
+            for (dir, intensity) in lights {
+                w.f64s("light", &[dir.x as f64, dir.y as f64, dir.z as f64, *intensity as f64]);
+            }
+            w.f64("ambient", *ambient as f64);
+            match background {
+                Some(c) => w.f64s("background", &[c.x as f64, c.y as f64, c.z as f64]),
+                None => w.str("background", "transparent"),
+            }
+        }
+        Pass::Depth => w.str("depth kind", &format!("{depth:?}").to_lowercase()),
+        Pass::Normal | Pass::Mask => {}
+    }
+}
+
+fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
+    let Encoding { png, normal_space, depth_exr, normal_exr } = e;
+    w.str("png compression", &format!("{png:?}").to_lowercase());
+    match pass {
+        Pass::Depth => w.bool("exr", *depth_exr),
+        Pass::Normal => {
+            w.str("normal space", &format!("{normal_space:?}").to_lowercase());
+            w.bool("exr", *normal_exr);
+        }
+        Pass::Rgba | Pass::Mask => {}
+    }
+}
+
+/// What shapes one frame's surface samples.
+fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize) {
+    let frames = cx.frame_keys.len();
+    w.str("sampler", SAMPLE_SALT);
+    w.u64("seed", cx.seed);
+    // The random stream is keyed by the frame index, so two frames of equal content still differ.
+    w.u64("frame", f as u64);
+    w.digest("frame content", &cx.frame_keys[f]);
+    w.u64("points", s.points);
+    w.str("source", s.source.as_ref().map_or("*", |(_, n)| n.as_str()));
+    w.bool("correspondence", s.correspondence);
+    if s.correspondence {
+        w.digest("first frame content", &cx.frame_keys[0]);
+    }
+    w.bool("motion", s.motion);
+    if s.motion && f + 1 < frames {
+        w.digest("next frame content", &cx.frame_keys[f + 1]);
+    }
+}
+
+/// What shapes a frame's reduction and encoding (not its samples).
+fn reduction(w: &mut dyn KeyWriter, s: &PointSettings, bounds: Option<&Digest>) {
+    let PointSettings {
+        points: _,      // in the samples
+        source: _,      // in the samples
+        correspondence, // point ids are written only without a reduction
+        motion: _,      // in the samples
+        voxel,
+        vox,
+        reduce,
+        position,
+        color_average,
+        format,
+        pattern: _, // the file's name, not its bytes
+    } = s;
+    w.bool("point ids", *correspondence && !s.reduces());
+    w.opt_f64("voxel", *voxel);
+    match (vox, bounds) {
+        (Some(v), Some(b)) => {
+            w.u64("vox", *v as u64);
+            w.digest("sequence bounds", b);
+        }
+        _ => w.str("vox", "none"),
+    }
+    if s.reduces() {
+        w.str("reduce", &format!("{reduce:?}").to_lowercase());
+        w.str("position", &format!("{position:?}").to_lowercase());
+        w.str("color average", &format!("{color_average:?}").to_lowercase());
+    }
+    w.str("format", &format!("{format:?}").to_lowercase());
+}

@@ -1,0 +1,297 @@
+//! The action graph: every action a build runs, as plain data. Nodes live in one Vec addressed by [`ActionId`];
+//! a node's inputs are earlier nodes, so ids are a topological order. Each node carries its key (from the
+//! keyed walk in [`super::actions`]) and a label that names it across builds (`render train/3/12 depth`), which
+//! is how `plan --explain` finds the last build's version of an action to compare with.
+//!
+//! What each writer needs is decided here, once; `execute` runs the nodes and `export` only looks their results
+//! up, so no cacheable work happens outside the graph.
+
+use std::collections::{BTreeMap, HashMap};
+
+use super::actions::{pass_name, Action, Keying, PointSettings};
+use super::key::{Explaining, Hashing};
+use super::{Error, Plan};
+use crate::cache::Digest;
+use crate::manifest::output::{Output, Writer};
+use crate::manifest::render::Pass;
+use crate::manifest::Manifest;
+use crate::render::encode::Encoding;
+use crate::render::RenderSettings;
+use crate::scene::{Scene, SourceData};
+
+/// Default number of points in an image dataset's initialization cloud.
+pub const DEFAULT_INIT_POINTS: u64 = 100_000;
+
+/// A node's index in [`Graph::nodes`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ActionId(pub u32);
+
+/// One action of the graph.
+#[derive(Debug, Clone)]
+pub struct Node {
+    /// What it does.
+    pub action: Action,
+    /// Its key: blake3 of its keyed walk.
+    pub key: Digest,
+    /// The actions whose results it reads, in the order its kind documents.
+    pub deps: Vec<ActionId>,
+    /// Its name across builds, e.g. `render train/3/12 depth`.
+    pub label: String,
+}
+
+/// Every action of a build.
+#[derive(Debug)]
+pub struct Graph<'a> {
+    /// The nodes, inputs before the actions that read them.
+    pub nodes: Vec<Node>,
+    /// What keys read besides the actions.
+    pub keying: Keying<'a>,
+    index: HashMap<Action, ActionId>,
+    by_key: HashMap<Digest, ActionId>,
+}
+
+impl<'a> Graph<'a> {
+    /// Plans every action of `m`'s outputs over `plan` (the images) and `scene`, keyed by `frame_keys`.
+    pub fn new(m: &Manifest, plan: &'a Plan, scene: &Scene, frame_keys: &'a [Digest]) -> Result<Graph<'a>, Error> {
+        let keying = Keying {
+            plan,
+            frame_keys,
+            render: RenderSettings::from_manifest(&m.render, scene.voxel_size()),
+            encoding: Encoding::from_manifest(&m.render),
+            seed: m.dataset.seed,
+            manifest: Digest::of(m.text.as_bytes()),
+            points: BTreeMap::new(),
+        };
+        let mut g = Graph { nodes: Vec::new(), keying, index: HashMap::new(), by_key: HashMap::new() };
+        for (name, out) in &m.outputs {
+            if let Writer::PlySequence = out.writer.get_ref() {
+                let s = point_settings(m, scene, plan, name, out)?;
+                g.keying.points.insert(name.clone(), s);
+            }
+        }
+        for (name, out) in &m.outputs {
+            let deps = g.plan_output(m, name, out)?;
+            g.add(Action::WriteOutput { output: name.clone() }, format!("write {name}"), deps);
+        }
+        Ok(g)
+    }
+
+    /// Adds `action` reading `deps`, or finds the node already planned with the same action or the same key
+    /// (two outputs asking for the same init cloud share one action).
+    fn add(&mut self, action: Action, label: String, deps: Vec<ActionId>) -> ActionId {
+        if let Some(&id) = self.index.get(&action) {
+            return id;
+        }
+        let dep_keys: Vec<Digest> = deps.iter().map(|d| self.nodes[d.0 as usize].key).collect();
+        let mut h = Hashing::new(action.kind().name());
+        action.walk(&self.keying, &dep_keys, &mut h);
+        let key = h.finish();
+        let id = match self.by_key.get(&key) {
+            Some(&id) => id,
+            None => {
+                let id = ActionId(self.nodes.len() as u32);
+                self.nodes.push(Node { action: action.clone(), key, deps, label });
+                self.by_key.insert(key, id);
+                id
+            }
+        };
+        self.index.insert(action, id);
+        id
+    }
+
+    /// The node planned for `action`.
+    pub fn id(&self, action: &Action) -> Option<ActionId> {
+        self.index.get(action).copied()
+    }
+
+    /// Node `id`.
+    pub fn node(&self, id: ActionId) -> &Node {
+        &self.nodes[id.0 as usize]
+    }
+
+    /// The fields of node `id`'s key, as `(field, value)` pairs: the same walk that made the key.
+    pub fn explain(&self, id: ActionId) -> Vec<(String, String)> {
+        let n = self.node(id);
+        let dep_keys: Vec<Digest> = n.deps.iter().map(|d| self.node(*d).key).collect();
+        let mut e = Explaining::default();
+        n.action.walk(&self.keying, &dep_keys, &mut e);
+        e.0
+    }
+
+    /// Ids of every node, in order.
+    pub fn ids(&self) -> impl Iterator<Item = ActionId> {
+        (0..self.nodes.len() as u32).map(ActionId)
+    }
+
+    /// The images an image output writes: its splits' (all splits by default), split by split in manifest
+    /// order, time-major within each.
+    pub fn images_of(&self, out: &Output) -> Result<Vec<usize>, Error> {
+        images_of(self.keying.plan, out)
+    }
+
+    /// The actions one output needs, planned; returns them as the output's deps.
+    fn plan_output(&mut self, m: &Manifest, name: &str, out: &Output) -> Result<Vec<ActionId>, Error> {
+        let plan = self.keying.plan;
+        let writer = *out.writer.get_ref();
+        let mut deps = Vec::new();
+        if writer == Writer::PlySequence {
+            let s = self.keying.points[name].clone();
+            let bounds = s.vox.map(|_| {
+                let frames: Vec<usize> = (0..plan.frames).collect();
+                self.add(Action::Bounds { frames }, format!("bounds {name}"), vec![])
+            });
+            for f in 0..plan.frames {
+                let mut inputs = Vec::new();
+                if s.reduces() {
+                    let a = Action::SampleFrame { output: name.to_string(), frame: f };
+                    inputs.push(self.add(a, format!("samples {name}/{f}"), vec![]));
+                }
+                inputs.extend(bounds);
+                let a = Action::PointFrame { output: name.to_string(), frame: f };
+                deps.push(self.add(a, format!("points {name}/{f}"), inputs));
+            }
+            deps.extend(bounds);
+            return Ok(deps);
+        }
+        let images = images_of(plan, out)?;
+        if images.is_empty() {
+            return Err(Error::NoImages { output: name.to_string() });
+        }
+        let passes = m.render.passes.get_ref().clone();
+        for &i in &images {
+            for &pass in &passes {
+                deps.push(self.render_pass(i, pass));
+            }
+        }
+        let frames = plan.frames_of(&images);
+        let n = out.init_points.as_ref().map_or(DEFAULT_INIT_POINTS, |p| *p.get_ref());
+        match writer {
+            Writer::Dnerf | Writer::Nerfstudio if n > 0 => {
+                deps.push(self.add(Action::InitCloud { frames, points: n }, format!("init-cloud {name}"), vec![]));
+            }
+            Writer::Dnerf | Writer::Nerfstudio => {}
+            Writer::InstantNgp => deps.push(self.add(Action::Bounds { frames }, format!("bounds {name}"), vec![])),
+            Writer::StaticFrames => {
+                for f in frames.into_iter().filter(|_| n > 0) {
+                    let a = Action::InitCloud { frames: vec![f], points: n };
+                    deps.push(self.add(a, format!("init-cloud {name}/{f}"), vec![]));
+                }
+            }
+            Writer::Colmap | Writer::Dynerf => {
+                if !passes.contains(&Pass::Rgba) {
+                    return Err(Error::NeedsPass { output: name.to_string(), pass: "rgba" });
+                }
+                if writer == Writer::Dynerf {
+                    check_dynerf(plan, &images, &frames)?;
+                }
+                let background = opaque_background(m);
+                for &i in &images {
+                    let rgba = self.render_pass(i, Pass::Rgba);
+                    let label = format!("composite {}", image_label(plan, i));
+                    deps.push(self.add(Action::Composite { image: i, background }, label, vec![rgba]));
+                }
+                if writer == Writer::Colmap {
+                    for &f in &frames {
+                        let a = Action::ColmapPoints { frame: f, points: n };
+                        deps.push(self.add(a, format!("colmap-points {name}/{f}"), vec![]));
+                    }
+                } else {
+                    deps.push(self.add(Action::Bounds { frames: frames.clone() }, format!("bounds {name}"), vec![]));
+                    if n > 0 {
+                        let a = Action::InitCloud { frames, points: n };
+                        deps.push(self.add(a, format!("init-cloud {name}"), vec![]));
+                    }
+                }
+            }
+            Writer::PlySequence => unreachable!("planned above"),
+        }
+        Ok(deps)
+    }
+
+    fn render_pass(&mut self, image: usize, pass: Pass) -> ActionId {
+        let label = format!("render {} {}", image_label(self.keying.plan, image), pass_name(pass));
+        self.add(Action::RenderPass { image, pass }, label, vec![])
+    }
+}
+
+/// `split/view/frame` of a plan image.
+pub fn image_label(plan: &Plan, i: usize) -> String {
+    let img = &plan.images[i];
+    format!("{}/{}/{}", plan.splits[img.split].name, img.view, img.frame)
+}
+
+fn images_of(plan: &Plan, out: &Output) -> Result<Vec<usize>, Error> {
+    let names: Vec<&str> = match &out.splits {
+        Some(list) => list.iter().map(|s| s.get_ref().as_str()).collect(),
+        None => plan.splits.iter().map(|s| s.name.as_str()).collect(),
+    };
+    let mut v = Vec::new();
+    for n in names {
+        let s = plan.splits.iter().find(|s| s.name == n).ok_or_else(|| Error::NoSplit { split: n.to_string() })?;
+        v.extend(&s.images);
+    }
+    Ok(v)
+}
+
+/// The DyNeRF layout is synchronized video: every camera of every split at every frame.
+fn check_dynerf(plan: &Plan, images: &[usize], frames: &[usize]) -> Result<(), Error> {
+    let mut seen = Vec::new();
+    for &i in images {
+        let s = plan.images[i].split;
+        if seen.contains(&s) {
+            continue;
+        }
+        seen.push(s);
+        let sp = &plan.splits[s];
+        if sp.time != crate::manifest::split::TimeMode::All || sp.frames != frames {
+            return Err(Error::NotSynchronized { split: sp.name.clone() });
+        }
+    }
+    Ok(())
+}
+
+/// The background that opaque exports bake in: the manifest's, else white (NeRF-synthetic's convention).
+pub fn opaque_background(m: &Manifest) -> [u8; 3] {
+    use crate::manifest::render::Background;
+    match m.render.background.as_ref().map(|b| b.get_ref()) {
+        Some(Background::Named(n)) if n == "black" => [0, 0, 0],
+        Some(Background::Rgb(c)) => c.map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8),
+        _ => [255, 255, 255],
+    }
+}
+
+/// Resolves a `ply-sequence` output's settings against the scene, refusing combinations that cannot work.
+fn point_settings(m: &Manifest, scene: &Scene, plan: &Plan, name: &str, out: &Output) -> Result<PointSettings, Error> {
+    let source = match &out.source {
+        Some(s) => {
+            let n = s.get_ref();
+            let i =
+                scene.source_index(n).ok_or_else(|| Error::NoSource { output: name.into(), source_name: n.clone() })?;
+            Some((i, n.clone()))
+        }
+        None => None,
+    };
+    // Correspondence needs one topology over time: meshes, not per-frame point clouds.
+    let fixed_topology = scene.sources.iter().all(|s| !matches!(s.data, SourceData::Sequence(_)));
+    let correspondence = out.correspondence.unwrap_or(fixed_topology && plan.frames > 1);
+    let invalid = |why: &str| Error::PointSettings { output: name.into(), why: why.into() };
+    if correspondence && !fixed_topology {
+        return Err(invalid("`correspondence` needs mesh sources (a PLY sequence has no fixed surface)"));
+    }
+    if out.motion && (!correspondence || out.voxel.is_some() || out.vox.is_some()) {
+        return Err(invalid("`motion` needs correspondence and no `voxel`/`vox` (merged points have no track)"));
+    }
+    Ok(PointSettings {
+        points: out.points.as_ref().map_or(0, |p| *p.get_ref()),
+        source,
+        correspondence,
+        motion: out.motion,
+        voxel: out.voxel.as_ref().map(|v| *v.get_ref()),
+        vox: out.vox.as_ref().map(|v| *v.get_ref()),
+        reduce: out.reduce.unwrap_or_default(),
+        position: out.position.unwrap_or_default(),
+        color_average: out.color_average.unwrap_or_default(),
+        format: out.format.unwrap_or_default(),
+        pattern: out.file_pattern(m.dataset.name.get_ref()),
+    })
+}
