@@ -12,20 +12,14 @@ use vvgen::scene::ply;
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 fn cesium_manifest(dir: &Path, output: &str) -> PathBuf {
-    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb");
-    let text = format!(
-        "[dataset]\nname = \"m\"\nout = \"out\"\ncache = \"cache\"\nseed = 3\n\
-         [source.man]\ngltf = \"{}\"\nframes = {{ count = 3, fps = 2 }}\n\
-         [transform]\nup = \"y\"\nfit = {{ height = 1.8 }}\ncenter = \"bbox\"\nover = \"all-frames\"\n{output}",
-        glb.display()
-    );
+    let text = format!("{}{output}", crate::common::cesium_head(3, 2, 1.8, "seed = 3", "over = \"all-frames\""));
     let p = dir.join("m.toml");
     std::fs::write(&p, text).unwrap();
     p
 }
 
 fn build(manifest: &Path, threads: usize) -> vvgen::build::Report {
-    let (m, _) = vvgen::manifest::load(manifest).unwrap_or_else(|r| panic!("{}", r.render(false)));
+    let m = crate::common::load(manifest);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| {
         vvgen::build::build(&m, &vvgen::build::default_cache_dir(&m), Default::default(), &vvgen::build::Silent)
@@ -265,24 +259,17 @@ fn sequence_metadata_records_times_counts_and_the_grid() {
 
 #[test]
 fn a_voxel_size_change_reruns_only_the_reduction() {
+    use vvgen::plan::actions::Kind;
     let dir = tempfile::tempdir().unwrap();
-    let records = |d: &Path| walk(&d.join("cache/actions"));
     let m = cesium_manifest(dir.path(), "[output.p]\nwriter = \"ply-sequence\"\npoints = 5000\nvoxel = 0.02\n");
-    build(&m, 2);
-    let before = records(dir.path());
+    let r = build(&m, 2);
+    assert_eq!((r.ran(Kind::SampleFrame), r.ran(Kind::PointFrame)), (3, 3));
     let m = cesium_manifest(dir.path(), "[output.p]\nwriter = \"ply-sequence\"\npoints = 5000\nvoxel = 0.04\n");
-    build(&m, 2);
-    let after = records(dir.path());
-    // Three frames: three new reduced frames, and no new sampling task (those would be three more records).
-    assert_eq!(after - before, 3);
+    let r = build(&m, 2);
+    // Three frames: three new reductions, and the samples found in the cache.
+    assert_eq!((r.ran(Kind::SampleFrame), r.ran(Kind::PointFrame)), (0, 3));
     let cloud = read_ply(&dir.path().join("out/m_points/m_0000.ply"));
     assert!(cloud.positions.len() < 5000);
-}
-
-fn walk(p: &Path) -> usize {
-    std::fs::read_dir(p)
-        .map(|d| d.flatten().map(|e| if e.path().is_dir() { walk(&e.path()) } else { 1 }).sum())
-        .unwrap_or(0)
 }
 
 #[test]

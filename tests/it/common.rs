@@ -1,7 +1,34 @@
 //! Fixtures the tests make themselves, and helpers to compare what builds write.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// A file under `tests/data`.
+pub fn data(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
+}
+
+/// The CesiumMan asset (skinned, textured, animated).
+pub fn cesium_glb() -> PathBuf {
+    data("gltf/CesiumMan/CesiumMan.glb")
+}
+
+/// The head of a CesiumMan manifest: dataset `m` into `out/` with its cache in `cache/`, `frames` frames at
+/// `fps`, y-up, fitted to `height` and centred. `dataset` and `transform` add lines to those tables; tests add
+/// render settings, rigs, splits and outputs after it.
+pub fn cesium_head(frames: u32, fps: u32, height: f64, dataset: &str, transform: &str) -> String {
+    format!(
+        "[dataset]\nname = \"m\"\nout = \"out\"\ncache = \"cache\"\n{dataset}\n\
+         [source.man]\ngltf = \"{}\"\nframes = {{ count = {frames}, fps = {fps} }}\n\
+         [transform]\nup = \"y\"\nfit = {{ height = {height} }}\ncenter = \"bbox\"\n{transform}\n",
+        cesium_glb().display()
+    )
+}
+
+/// Loads the manifest at `path`, panicking with its rendered diagnostics.
+pub fn load(path: &Path) -> vvgen::manifest::Manifest {
+    vvgen::manifest::load(path).unwrap_or_else(|r| panic!("{}", r.render(false))).0
+}
 
 /// A triangle whose translation is animated by four LINEAR keys at t = 0, 1, 2, 3 s.
 pub fn animated_triangle(last_key_x: f32) -> String {

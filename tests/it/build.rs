@@ -1,30 +1,13 @@
 //! `vvgen build` end to end: identical bytes whatever the thread count, a published camera set re-rendered
 //! from its transforms.json, and point-cloud sequences.
 
-mod common;
-
-use common::tree;
-
 use std::path::{Path, PathBuf};
 
-fn asset() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb")
-}
+use crate::common::{cesium_head, load, tree};
 
 fn write_manifest(dir: &Path, extra: &str) -> PathBuf {
     let text = format!(
-        r#"
-[dataset]
-name  = "m"
-out   = "out"
-cache = "cache"
-[source.man]
-gltf   = "{}"
-frames = {{ count = 2, fps = 4 }}
-[transform]
-up  = "y"
-fit = {{ height = 2.4 }}
-center = "bbox"
+        r#"{}
 [render]
 resolution = [64, 64]
 samples    = 4
@@ -39,7 +22,7 @@ writer = "dnerf"
 init_points = 300
 {extra}
 "#,
-        asset().display()
+        cesium_head(2, 4, 2.4, "", "")
     );
     let p = dir.join("m.toml");
     std::fs::write(&p, text).unwrap();
@@ -47,7 +30,7 @@ init_points = 300
 }
 
 fn build(manifest: &Path, threads: usize) -> vvgen::build::Report {
-    let (m, _) = vvgen::manifest::load(manifest).unwrap_or_else(|r| panic!("{}", r.render(false)));
+    let m = load(manifest);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| {
         vvgen::build::build(&m, &vvgen::build::default_cache_dir(&m), Default::default(), &vvgen::build::Silent)
@@ -149,7 +132,7 @@ fn two_outputs_in_one_directory_are_refused() {
 fn correspondence_tracks_surface_points_and_motion() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    std::fs::write(d.join("tri.gltf"), common::animated_triangle(0.3)).unwrap();
+    std::fs::write(d.join("tri.gltf"), crate::common::animated_triangle(0.3)).unwrap();
     let text = r#"[dataset]
 name = "tri"
 out = "out"

@@ -1,0 +1,287 @@
+//! The action graph (issue 13): every cacheable action is planned, keyed, explained and counted in one place.
+//! A no-op build does nothing of any kind; each setting, changed alone, invalidates exactly the actions that
+//! read it (and the incremental result equals a fresh build byte for byte); `status`, `plan`, `release` and
+//! `gc` read the same graph.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+
+use crate::common::{cesium_head, load, tree};
+use vvgen::build::{self, Error, Silent, State, Status};
+use vvgen::plan::actions::Kind;
+
+/// CesiumMan, 2 frames, 32², every pass; `outputs` appended. 6 images: 2 training views and 1 test view.
+fn manifest(render: &str, outputs: &str) -> String {
+    format!(
+        "{}[render]\nresolution = [32, 32]\nsamples = 4\npasses = [\"rgba\", \"depth\", \"normal\", \"mask\"]\n{render}\n\
+         [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[split.test]\nrig = \"h\"\nviews = 1\n\
+         {outputs}",
+        cesium_head(2, 4, 2.4, "seed = 5", "")
+    )
+}
+
+/// One output of every writer: every action kind is planned.
+const EVERY_WRITER: &str = r#"
+[output.d]
+writer = "dnerf"
+init_points = 100
+[output.ns]
+writer = "nerfstudio"
+init_points = 100
+[output.ngp]
+writer = "instant-ngp"
+[output.sf]
+writer = "static-frames"
+init_points = 50
+[output.col]
+writer = "colmap"
+init_points = 50
+[output.dy]
+writer = "dynerf"
+init_points = 50
+[output.p]
+writer = "ply-sequence"
+points = 2000
+voxel = 0.05
+[output.v]
+writer = "ply-sequence"
+points = 2000
+vox = 8
+dir = "vox"
+"#;
+
+/// Writes `text` as `dir/m.toml` and builds it.
+fn run(dir: &Path, text: &str) -> build::Report {
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+    build::build(&load(&dir.join("m.toml")), &dir.join("cache"), Default::default(), &Silent).unwrap()
+}
+
+/// What a build of `text` in `dir` would do, explained.
+fn status(dir: &Path, text: &str) -> Status {
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+    build::status(&load(&dir.join("m.toml")), &dir.join("cache"), true).unwrap()
+}
+
+/// Actions to run, by kind.
+fn to_run(st: &Status) -> BTreeMap<Kind, usize> {
+    st.kinds.iter().filter(|(_, k)| k.run > 0).map(|(kind, k)| (*kind, k.run)).collect()
+}
+
+/// The reasons of every action of `kind` that would run.
+fn reasons(st: &Status, kind: Kind) -> Vec<Vec<String>> {
+    st.actions.iter().filter(|a| a.kind == kind && a.state == State::Run).map(|a| a.reasons.clone()).collect()
+}
+
+#[test]
+fn every_kind_runs_once_and_a_second_build_has_nothing_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = manifest("", EVERY_WRITER);
+    let first = run(dir.path(), &text);
+    for kind in Kind::ALL {
+        let c = first.actions.get(&kind).copied().unwrap_or_default();
+        assert!(c.planned > 0 && c.ran == c.planned, "{kind:?}: {c:?}");
+    }
+    // Shared work is one action: dnerf and nerfstudio ask for the same init cloud.
+    assert_eq!(first.actions[&Kind::InitCloud].planned, 1 + 2 + 1, "d/ns, two static frames, dynerf");
+    assert_eq!(first.actions[&Kind::Composite].planned, 6, "colmap and dynerf share the composites");
+    let again = run(dir.path(), &text);
+    assert!(again.nothing_to_do(), "{:?}", again.actions);
+    for kind in Kind::ALL {
+        assert_eq!(again.actions[&kind].cached, again.actions[&kind].planned, "{kind:?}");
+    }
+    let st = status(dir.path(), &text);
+    assert!(st.up_to_date() && st.pending() == 0, "{:?}", to_run(&st));
+}
+
+/// Reproduction 1: a changed point count was invisible to `status`, `plan` and `release`.
+#[test]
+fn a_changed_point_count_is_stale_in_status_plan_and_release() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let points = "[output.p]\nwriter = \"ply-sequence\"\npoints = 2000\nvoxel = 0.05\n";
+    run(d, &manifest("", points));
+    let changed = manifest("", &points.replace("2000", "3000"));
+    let st = status(d, &changed);
+    assert_eq!(to_run(&st), BTreeMap::from([(Kind::SampleFrame, 2), (Kind::PointFrame, 2), (Kind::WriteOutput, 1)]));
+    assert!(!st.up_to_date());
+    for r in reasons(&st, Kind::SampleFrame) {
+        assert_eq!(r, ["points: 2000 → 3000"]);
+    }
+    // The reduction reads the new samples: its reason is its input's key.
+    for r in reasons(&st, Kind::PointFrame) {
+        assert!(r.len() == 1 && r[0].starts_with("samples: "), "{r:?}");
+    }
+    let err = vvgen::release::release(&load(&d.join("m.toml")), &d.join("cache")).unwrap_err();
+    assert!(matches!(err, Error::NotBuilt { pending: 4 }), "{err}");
+    assert_eq!(err.exit_code(), 1);
+    let r = run(d, &changed);
+    assert_eq!((r.ran(Kind::SampleFrame), r.ran(Kind::PointFrame), r.ran(Kind::RenderPass)), (2, 2, 0));
+    assert_eq!(vvgen::release::release(&load(&d.join("m.toml")), &d.join("cache")).unwrap().len(), 1);
+}
+
+/// Sets every file under `dir` to have been written `hours` ago.
+fn backdate(dir: &Path, hours: u64) {
+    let then = std::time::SystemTime::now() - std::time::Duration::from_secs(hours * 3600);
+    for (rel, _) in tree(dir) {
+        let f = std::fs::File::options().append(true).open(dir.join(rel)).unwrap();
+        f.set_modified(then).unwrap();
+    }
+}
+
+/// Reproduction 2: `gc --keep` deleted every record `export` wrote, and the next build re-sampled everything.
+#[test]
+fn gc_after_the_grace_period_keeps_everything_the_graph_reaches() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let outputs = "[output.d]\nwriter = \"colmap\"\ninit_points = 50\n\
+                   [output.p]\nwriter = \"ply-sequence\"\npoints = 2000\nvox = 8\n";
+    let text = manifest("", outputs);
+    run(d, &text);
+    backdate(&d.join("cache"), 2);
+    let keep = [load(&d.join("m.toml"))];
+    let c = build::collect_garbage(&keep, &d.join("cache"), None).unwrap();
+    assert_eq!(c.files, 0, "everything is reachable");
+    assert!(run(d, &text).nothing_to_do());
+    // After an edit, what only the old manifest reached goes, and nothing the new one reaches.
+    let edited = text.replace("points = 2000", "points = 2500");
+    run(d, &edited);
+    backdate(&d.join("cache"), 2);
+    let c = build::collect_garbage(&[load(&d.join("m.toml"))], &d.join("cache"), None).unwrap();
+    // 2 sample and 2 point-frame records, their 4 blobs, and both outputs' old vvgen.json (which record the
+    // manifest's digest).
+    assert_eq!(c.files, 2 * 2 * 2 + 2);
+    assert!(run(d, &edited).nothing_to_do());
+    // The cached intermediate samples survived too: a reduction change re-runs only the reduction.
+    let r = run(d, &edited.replace("vox = 8", "vox = 9"));
+    assert_eq!((r.ran(Kind::SampleFrame), r.ran(Kind::PointFrame)), (0, 2));
+}
+
+/// Reproduction 3: asking for EXR was explained as "cached result missing or corrupt".
+#[test]
+fn asking_for_exr_is_explained_by_the_field_that_changed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let outputs = "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n";
+    run(d, &manifest("", outputs));
+    let st = status(d, &manifest("depth = { exr = true }", outputs));
+    assert_eq!(to_run(&st), BTreeMap::from([(Kind::RenderPass, 6), (Kind::WriteOutput, 1)]));
+    let stale: Vec<_> = st.actions.iter().filter(|a| a.kind == Kind::RenderPass && a.state == State::Run).collect();
+    for a in &stale {
+        assert!(a.label.ends_with(" depth"), "{}", a.label);
+        assert_eq!(a.reasons, ["exr: false → true"]);
+    }
+    let r = run(d, &manifest("depth = { exr = true }", outputs));
+    assert_eq!(r.ran(Kind::RenderPass), 6);
+    assert!(d.join("out/m_dnerf/depth/train/r_0000.exr").exists());
+}
+
+/// Each setting, changed alone from the base, runs exactly the actions that read it, and the incremental
+/// result is byte for byte what a fresh build of the edited manifest writes (so no key leaves out a field that
+/// moves bytes).
+#[test]
+fn each_setting_invalidates_exactly_the_actions_that_read_it() {
+    let outputs =
+        "[output.d]\nwriter = \"dnerf\"\ninit_points = 100\n[output.c]\nwriter = \"colmap\"\ninit_points = 40\n\
+                   [output.p]\nwriter = \"ply-sequence\"\npoints = 1500\nvoxel = 0.05\n";
+    let base = manifest("", outputs);
+    use Kind::*;
+    // 6 images × 4 passes; colmap composites each image; every output's vvgen.json records the manifest.
+    /// What changed, the edited manifest, and what must run besides the three outputs.
+    type Case = (&'static str, String, Vec<(Kind, usize)>);
+    let cases: [Case; 8] = [
+        ("background", manifest("background = \"black\"", outputs), vec![(RenderPass, 6), (Composite, 6)]),
+        ("depth kind", manifest("depth = { kind = \"ray\" }", outputs), vec![(RenderPass, 6)]),
+        ("normal space", manifest("normal = { space = \"camera\" }", outputs), vec![(RenderPass, 6)]),
+        ("lights", manifest("shading = \"lambert\"", outputs), vec![(RenderPass, 6), (Composite, 6)]),
+        ("samples", base.replace("samples = 4", "samples = 1"), vec![(RenderPass, 24), (Composite, 6)]),
+        ("png", manifest("png_compression = \"best\"", outputs), vec![(RenderPass, 24), (Composite, 6)]),
+        ("voxel", base.replace("voxel = 0.05", "voxel = 0.08"), vec![(PointFrame, 2)]),
+        ("init points", base.replace("init_points = 100", "init_points = 150"), vec![(InitCloud, 1)]),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run(d, &base);
+    for (what, text, expect) in cases {
+        let mut expect: BTreeMap<Kind, usize> = expect.into_iter().collect();
+        expect.insert(WriteOutput, 3);
+        assert_eq!(to_run(&status(d, &text)), expect, "{what}");
+        run(d, &text);
+        let fresh = tempfile::tempdir().unwrap();
+        run(fresh.path(), &text);
+        let (a, b) = (tree(&d.join("out")), tree(&fresh.path().join("out")));
+        assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>(), "{what}");
+        for (k, v) in &a {
+            assert!(v == &b[k], "{what}: {k} differs from a fresh build");
+        }
+        // Back to the base: everything cached.
+        assert_eq!(run(d, &base).actions.iter().filter(|(k, _)| k.cached()).map(|(_, c)| c.ran).sum::<usize>(), 0);
+    }
+}
+
+#[test]
+fn plan_json_lists_every_action_with_its_kind_key_state_and_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run(d, &manifest("", EVERY_WRITER));
+    std::fs::write(d.join("m.toml"), manifest("", &EVERY_WRITER.replace("vox = 8", "vox = 9"))).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["plan", "--json", "m.toml"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut kinds: Vec<&str> = v["kinds"].as_object().unwrap().keys().map(String::as_str).collect();
+    kinds.sort_unstable();
+    let mut all: Vec<&str> = Kind::ALL.iter().map(|k| k.name()).collect();
+    all.sort_unstable();
+    assert_eq!(kinds, all);
+    for a in v["actions"].as_array().unwrap() {
+        let key = a["key"].as_str().unwrap();
+        assert!(key.len() == 64 && key.bytes().all(|c| c.is_ascii_hexdigit()), "{a}");
+        let reasons = a["reasons"].as_array().unwrap();
+        match a["state"].as_str().unwrap() {
+            "run" => assert!(!reasons.is_empty(), "{a}"),
+            "cached" => assert!(reasons.is_empty(), "{a}"),
+            s => panic!("{s}: {a}"),
+        }
+    }
+    let stale: Vec<&str> = v["actions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|a| a["state"] == "run" && a["kind"] == "point-frame")
+        .map(|a| a["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(stale, ["points v/0", "points v/1"]);
+}
+
+/// A corrupt `.glb` is bad input (exit 2), named by its variant; an unwritable cache is a failure (exit 1).
+#[test]
+fn errors_are_typed_and_map_to_exit_codes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let glb = std::fs::read(crate::common::cesium_glb()).unwrap();
+    std::fs::write(d.join("broken.glb"), &glb[..glb.len() / 3]).unwrap();
+    let text = manifest("", "[output.d]\nwriter = \"dnerf\"\n")
+        .replace(&crate::common::cesium_glb().display().to_string(), "broken.glb");
+    let err = build::Build::from_manifest_str(&text, d).unwrap().cache(d.join("cache")).run(&Silent).unwrap_err();
+    match &err {
+        Error::Scene { source, .. } => match &**source {
+            vvgen::scene::Error::Gltf { path, .. } => assert!(path.ends_with("broken.glb")),
+            e => panic!("{e:?}"),
+        },
+        e => panic!("{e:?}"),
+    }
+    assert_eq!(err.exit_code(), 2);
+    std::fs::write(d.join("m.toml"), &text).unwrap();
+    let cli = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
+    let out = cli(&["-q", "build", "m.toml"]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("broken.glb"));
+    // A cache that cannot be created: an I/O failure, not the input's fault.
+    std::fs::write(d.join("m.toml"), manifest("", "[output.d]\nwriter = \"dnerf\"\n")).unwrap();
+    std::fs::write(d.join("cache"), "a file where the cache directory should be").unwrap();
+    let out = cli(&["-q", "build", "m.toml"]);
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = build::build(&load(&d.join("m.toml")), &d.join("cache"), Default::default(), &Silent).unwrap_err();
+    assert!(matches!(err, Error::Cache { .. }), "{err:?}");
+}

@@ -1,0 +1,16 @@
+//! The integration tests, as one crate (one link instead of a dozen on two cores). Each module is one area;
+//! `common` holds the fixtures they share. (The allocation-counting test is its own crate: it installs a global
+//! allocator.)
+
+mod build;
+mod common;
+mod engine;
+mod graph;
+mod manifest;
+mod ply;
+mod points;
+mod render;
+mod rigs;
+mod scene;
+mod transform;
+mod writers;
