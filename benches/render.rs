@@ -11,7 +11,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
-use vvgen::manifest::render::{PngCompression, Shading};
+use vvgen::render::encode::PngCompression;
+use vvgen::render::Shading;
 use vvgen::render::{encode, render, Buffers, Camera, RenderSettings, SplatSettings, SplatShape, SplatSize};
 use vvgen::scene::material::Material;
 use vvgen::scene::ply::{self, PlyOut};

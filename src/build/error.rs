@@ -103,9 +103,11 @@ impl Error {
     pub fn is_bad_input(&self) -> bool {
         match self {
             Error::Manifest(_) | Error::Scene { .. } | Error::Plan { .. } | Error::SharedDirectory { .. } => true,
-            Error::Execute { source, .. } => {
-                matches!(**source, execute::Error::Scene { .. } | execute::Error::Content { .. })
-            }
+            Error::Execute { source, .. } => match &**source {
+                execute::Error::Scene { .. } | execute::Error::Content { .. } => true,
+                execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),
+                execute::Error::Cache { .. } => false,
+            },
             Error::Export { source, .. } => matches!(**source, export::Error::Pattern(_) | export::Error::EmptyScene),
             Error::After { source, .. } => source.is_bad_input(),
             Error::Cache { .. } | Error::NotBuilt { .. } => false,

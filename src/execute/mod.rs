@@ -40,8 +40,16 @@ pub enum Error {
         #[source]
         source: cache::Error,
     },
-    /// The scene cannot give what the action asks (an empty scene to bound, a topology that changed under
-    /// correspondence).
+    /// Sampling failed: a damaged sample blob, or a topology that changed under correspondence.
+    #[error("{action}: {source}")]
+    Sample {
+        /// The action's label.
+        action: String,
+        /// Why.
+        #[source]
+        source: crate::sample::Error,
+    },
+    /// The scene cannot give what the action asks (an empty scene to bound).
     #[error("{action}: {message}")]
     Content {
         /// The action's label.

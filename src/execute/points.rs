@@ -70,7 +70,7 @@ fn make(
             let s = &g.keying.points[output];
             let (pts, motion) = if s.reduces() {
                 let raw = x.read(g, blobs, n.deps[0], 0)?;
-                let pts = Points::from_bytes(&raw).map_err(|message| Error::Content { action: label(), message })?;
+                let pts = Points::from_bytes(&raw).map_err(|source| Error::Sample { action: label(), source })?;
                 (pts, None)
             } else {
                 samples(g, x, s, *frame, draws.get(output), &n.label)?
@@ -167,7 +167,7 @@ fn samples(
     let seed = g.keying.seed.to_le_bytes();
     let frames = g.keying.plan.frames;
     let scene_err = |source| Error::Scene { action: label.to_string(), source };
-    let content = |message: String| Error::Content { action: label.to_string(), message };
+    let content = |source| Error::Sample { action: label.to_string(), source };
     let mut poser = Poser::default();
     let posed = pose(x, s, f, &mut poser).map_err(scene_err)?.clone();
     let Some(d) = draws.filter(|_| s.correspondence) else {

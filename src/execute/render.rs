@@ -9,10 +9,10 @@ use rayon::prelude::*;
 
 use super::{Error, Inputs, Made};
 use crate::cache::Digest;
-use crate::manifest::render::{NormalSpace, Pass};
+use crate::manifest::render::Pass;
 use crate::plan::actions::Action;
 use crate::plan::graph::{ActionId, Graph};
-use crate::render::encode::{self, Encoding};
+use crate::render::encode::{self, Encoding, NormalSpace};
 use crate::render::{self, Frame};
 use crate::scene::Poser;
 

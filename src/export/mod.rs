@@ -31,7 +31,7 @@ pub enum Error {
     Cache(#[from] cache::Error),
     /// A file name pattern cannot be formatted.
     #[error("file pattern: {0}")]
-    Pattern(String),
+    Pattern(#[from] crate::manifest::sequence::Error),
     /// The geometry has no extent where a writer needs bounds.
     #[error("the scene is empty: there are no bounds to write")]
     EmptyScene,

@@ -20,7 +20,7 @@ pub fn sequence(x: &Export, name: &str, files: &mut Files) -> Result<(), Error> 
     let mut entries = Vec::with_capacity(frames);
     for f in 0..frames {
         let d = x.blob(&Action::PointFrame { output: name.to_string(), frame: f })?;
-        let file = format_frame(&s.pattern, f as i64).map_err(Error::Pattern)?;
+        let file = format_frame(&s.pattern, f as i64)?;
         files.blob(&file, d)?;
         let count = vertex_count(x, &d)?;
         entries.push(json!({ "index": f, "time": time_of(f, frames), "file": file, "points": count }));

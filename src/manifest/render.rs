@@ -3,6 +3,8 @@
 use serde::Deserialize;
 use toml::Spanned;
 
+use crate::render::{self, encode};
+
 use super::diag::Diagnostic;
 
 /// Largest image side accepted.
@@ -240,6 +242,74 @@ pub enum PngCompression {
 }
 
 impl Render {
+    /// The renderer's settings for this `[render]`. `voxel` is the world size of one voxel of a point-cloud
+    /// source, the default splat size; without it, splats default to 1.5 px.
+    pub fn renderer_settings(&self, voxel: Option<f32>) -> render::RenderSettings {
+        use crate::scene::material::srgb_to_linear;
+        use render::{SplatShape as R, SplatSize};
+        let lin = |c: [f64; 3]| {
+            glam::Vec3::new(srgb_to_linear(c[0] as f32), srgb_to_linear(c[1] as f32), srgb_to_linear(c[2] as f32))
+        };
+        let background = match self.background.as_ref().map(|b| b.get_ref()) {
+            Some(Background::Named(n)) if n == "white" => Some(glam::Vec3::ONE),
+            Some(Background::Named(n)) if n == "black" => Some(glam::Vec3::ZERO),
+            Some(Background::Rgb(c)) => Some(lin(*c)),
+            _ => None,
+        };
+        let size = match (self.splat.size, self.splat.size_px, voxel) {
+            (Some(w), _, _) => SplatSize::World(w as f32),
+            (None, Some(px), _) => SplatSize::Pixels(px as f32),
+            (None, None, Some(v)) => SplatSize::World(v),
+            (None, None, None) => SplatSize::Pixels(1.5),
+        };
+        let shape = match self.splat.shape {
+            SplatShape::Cube => R::Cube,
+            SplatShape::Square => R::Square,
+            SplatShape::Disk => R::Disk,
+        };
+        render::RenderSettings {
+            samples: *self.samples.get_ref(),
+            shading: match self.shading {
+                Shading::Unlit => render::Shading::Unlit,
+                Shading::Lambert => render::Shading::Lambert,
+            },
+            lights: self
+                .lights
+                .iter()
+                .map(|l| (glam::DVec3::from(l.direction).as_vec3(), l.intensity as f32))
+                .collect(),
+            ambient: self.ambient.unwrap_or(0.3) as f32,
+            background,
+            depth: match self.depth.kind {
+                DepthKind::Planar => render::DepthKind::Planar,
+                DepthKind::Ray => render::DepthKind::Ray,
+            },
+            splat: render::SplatSettings { shape, size },
+            buffers: render::Buffers {
+                depth: self.has_pass(Pass::Depth),
+                normal: self.has_pass(Pass::Normal),
+                object: self.has_pass(Pass::Mask),
+            },
+        }
+    }
+
+    /// How this `[render]` encodes its passes.
+    pub fn encoding(&self) -> encode::Encoding {
+        encode::Encoding {
+            png: match self.png_compression {
+                PngCompression::Fast => encode::PngCompression::Fast,
+                PngCompression::Default => encode::PngCompression::Default,
+                PngCompression::Best => encode::PngCompression::Best,
+            },
+            normal_space: match self.normal.space {
+                NormalSpace::World => encode::NormalSpace::World,
+                NormalSpace::Camera => encode::NormalSpace::Camera,
+            },
+            depth_exr: self.depth.exr,
+            normal_exr: self.normal.exr,
+        }
+    }
+
     /// `(width, height)`.
     pub fn size(&self) -> (u32, u32) {
         let [w, h] = *self.resolution.get_ref();

@@ -17,11 +17,68 @@ pub struct SequenceFrame {
     pub path: PathBuf,
 }
 
+/// Why a sequence's frames cannot be listed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Error {
+    /// The `{frame}` pattern is malformed.
+    #[error("`{pattern}`: {why}")]
+    Pattern {
+        /// The pattern.
+        pattern: String,
+        /// What is wrong.
+        why: &'static str,
+    },
+    /// The frame range is empty.
+    #[error("empty frame range {start}..={end}")]
+    EmptyRange {
+        /// First frame.
+        start: i64,
+        /// Last frame.
+        end: i64,
+    },
+    /// More frames than a sequence may have.
+    #[error("more than {MAX_FRAMES} frames")]
+    TooMany,
+    /// A frame's file does not exist.
+    #[error("frame {frame} is missing: {}", path.display())]
+    Missing {
+        /// The frame number.
+        frame: i64,
+        /// The file that should hold it.
+        path: PathBuf,
+    },
+    /// The glob is malformed.
+    #[error("bad glob `{spec}`: {why}")]
+    Glob {
+        /// The glob.
+        spec: String,
+        /// What is wrong.
+        why: String,
+    },
+    /// The glob matches no file.
+    #[error("no file matches `{}`", pattern.display())]
+    NoMatch {
+        /// The glob, resolved.
+        pattern: PathBuf,
+    },
+    /// Fewer files match than frames are asked for.
+    #[error("frames up to position {last} requested, but only {found} files match `{spec}`")]
+    TooFew {
+        /// Last position asked for.
+        last: i64,
+        /// Files found.
+        found: usize,
+        /// The glob.
+        spec: String,
+    },
+}
+
 /// Substitutes `n` into a `{frame}` / `{frame:04}` pattern.
-pub fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
-    let start = pattern.find("{frame").ok_or_else(|| format!("`{pattern}` has no {{frame}}"))?;
+pub fn format_frame(pattern: &str, n: i64) -> Result<String, Error> {
+    let bad = |why| Error::Pattern { pattern: pattern.to_string(), why };
+    let start = pattern.find("{frame").ok_or_else(|| bad("has no {frame}"))?;
     let rest = &pattern[start + 6..];
-    let close = rest.find('}').ok_or_else(|| format!("`{pattern}`: unclosed {{frame"))?;
+    let close = rest.find('}').ok_or_else(|| bad("unclosed {frame"))?;
     let spec = &rest[..close];
     let width = if spec.is_empty() {
         0
@@ -29,15 +86,15 @@ pub fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
         let digits = spec
             .strip_prefix(":0")
             .or_else(|| spec.strip_prefix(':'))
-            .ok_or_else(|| format!("`{{frame{spec}}}`: expected {{frame}} or {{frame:04}}"))?;
-        digits.parse::<usize>().map_err(|_| format!("`{{frame{spec}}}`: expected {{frame}} or {{frame:04}}"))?.min(32)
+            .ok_or_else(|| bad("expected {frame} or {frame:04}"))?;
+        digits.parse::<usize>().map_err(|_| bad("expected {frame} or {frame:04}"))?.min(32)
     };
     let num = if n < 0 { format!("-{:0width$}", -n, width = width.saturating_sub(1)) } else { format!("{n:0width$}") };
     Ok(format!("{}{}{}", &pattern[..start], num, &rest[close + 1..]))
 }
 
 /// Lists the frames of a sequence, `dir`-relative, applying `frames`. Errors name the first missing file.
-pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFrame>, String> {
+pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFrame>, Error> {
     let step = frames.step() as i64;
     if is_pattern(spec) {
         let start = frames.start.unwrap_or(0);
@@ -47,17 +104,17 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
             (None, None) => return scan_pattern(dir, spec, start, step),
         };
         if end < start {
-            return Err(format!("empty frame range {start}..={end}"));
+            return Err(Error::EmptyRange { start, end });
         }
         if ((end - start) / step) as u64 >= MAX_FRAMES {
-            return Err(format!("more than {MAX_FRAMES} frames"));
+            return Err(Error::TooMany);
         }
         let mut out = Vec::new();
         let mut n = start;
         while n <= end {
             let path = dir.join(format_frame(spec, n)?);
             if !path.is_file() {
-                return Err(format!("frame {n} is missing: {}", path.display()));
+                return Err(Error::Missing { frame: n, path });
             }
             out.push(SequenceFrame { number: n, path });
             n += step;
@@ -67,13 +124,13 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
         let full = dir.join(spec);
         let pattern = full.to_string_lossy().to_string();
         let mut paths: Vec<PathBuf> = glob::glob(&pattern)
-            .map_err(|e| format!("bad glob `{spec}`: {e}"))?
+            .map_err(|e| Error::Glob { spec: spec.to_string(), why: e.to_string() })?
             .filter_map(Result::ok)
             .filter(|p| p.is_file())
             .collect();
         paths.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
         if paths.is_empty() {
-            return Err(format!("no file matches `{}`", full.display()));
+            return Err(Error::NoMatch { pattern: full });
         }
         let first = frames.start.unwrap_or(0).max(0);
         let last = match (frames.end, frames.count) {
@@ -82,10 +139,7 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
             (None, None) => paths.len() as i64 - 1,
         };
         if last >= paths.len() as i64 {
-            return Err(format!(
-                "frames up to position {last} requested, but only {} files match `{spec}`",
-                paths.len()
-            ));
+            return Err(Error::TooFew { last, found: paths.len(), spec: spec.to_string() });
         }
         Ok((first..=last)
             .step_by(step as usize)
@@ -95,7 +149,7 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
 }
 
 /// With no end or count: consecutive numbers from `start` until the first missing file.
-fn scan_pattern(dir: &Path, spec: &str, start: i64, step: i64) -> Result<Vec<SequenceFrame>, String> {
+fn scan_pattern(dir: &Path, spec: &str, start: i64, step: i64) -> Result<Vec<SequenceFrame>, Error> {
     let mut out = Vec::new();
     let mut n = start;
     loop {
@@ -110,7 +164,7 @@ fn scan_pattern(dir: &Path, spec: &str, start: i64, step: i64) -> Result<Vec<Seq
         n += step;
     }
     if out.is_empty() {
-        return Err(format!("first frame is missing: {}", dir.join(format_frame(spec, start)?).display()));
+        return Err(Error::Missing { frame: start, path: dir.join(format_frame(spec, start)?) });
     }
     Ok(out)
 }

@@ -12,8 +12,8 @@ use crate::cache::Digest;
 use crate::camera::Camera;
 use crate::manifest::output::{ColorAverage, PlyFormat, Reduce, VoxelPosition};
 use crate::manifest::render::Pass;
-use crate::render::encode::Encoding;
-use crate::render::{RenderSettings, SplatShape, SplatSize};
+use crate::render::encode::{Encoding, NormalSpace, PngCompression};
+use crate::render::{DepthKind, RenderSettings, Shading, SplatShape, SplatSize};
 
 /// Version of the renderer's output: bump when a change moves rendered bytes.
 pub const RENDER_SALT: &str = "render 6";
@@ -223,7 +223,7 @@ impl Action {
                 w.str("encoder", ENCODE_SALT);
                 w.digest("rgba", &deps[0]);
                 w.f64s("background", &background.map(f64::from));
-                w.str("png compression", &format!("{:?}", cx.encoding.png).to_lowercase());
+                w.str("png compression", png_name(cx.encoding.png));
             }
             Action::InitCloud { frames, points } => {
                 w.str("sampler", SAMPLE_SALT);
@@ -315,7 +315,13 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
     }
     match pass {
         Pass::Rgba => {
-            w.str("shading", &format!("{shading:?}").to_lowercase());
+            w.str(
+                "shading",
+                match shading {
+                    Shading::Unlit => "unlit",
+                    Shading::Lambert => "lambert",
+                },
+            );
             for (dir, intensity) in lights {
                 w.f64s("light", &[dir.x as f64, dir.y as f64, dir.z as f64, *intensity as f64]);
             }
@@ -325,21 +331,41 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
                 None => w.str("background", "transparent"),
             }
         }
-        Pass::Depth => w.str("depth kind", &format!("{depth:?}").to_lowercase()),
+        Pass::Depth => w.str(
+            "depth kind",
+            match depth {
+                DepthKind::Planar => "planar",
+                DepthKind::Ray => "ray",
+            },
+        ),
         Pass::Normal | Pass::Mask => {}
     }
 }
 
 fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
     let Encoding { png, normal_space, depth_exr, normal_exr } = e;
-    w.str("png compression", &format!("{png:?}").to_lowercase());
+    w.str("png compression", png_name(*png));
     match pass {
         Pass::Depth => w.bool("exr", *depth_exr),
         Pass::Normal => {
-            w.str("normal space", &format!("{normal_space:?}").to_lowercase());
+            w.str(
+                "normal space",
+                match normal_space {
+                    NormalSpace::World => "world",
+                    NormalSpace::Camera => "camera",
+                },
+            );
             w.bool("exr", *normal_exr);
         }
         Pass::Rgba | Pass::Mask => {}
+    }
+}
+
+fn png_name(p: PngCompression) -> &'static str {
+    match p {
+        PngCompression::Fast => "fast",
+        PngCompression::Default => "default",
+        PngCompression::Best => "best",
     }
 }
 
@@ -388,9 +414,34 @@ fn reduction(w: &mut dyn KeyWriter, s: &PointSettings, bounds: Option<&Digest>) 
         _ => w.str("vox", "none"),
     }
     if s.reduces() {
-        w.str("reduce", &format!("{reduce:?}").to_lowercase());
-        w.str("position", &format!("{position:?}").to_lowercase());
-        w.str("color average", &format!("{color_average:?}").to_lowercase());
+        w.str(
+            "reduce",
+            match reduce {
+                Reduce::Mean => "mean",
+                Reduce::Nearest => "nearest",
+                Reduce::First => "first",
+            },
+        );
+        w.str(
+            "position",
+            match position {
+                VoxelPosition::Points => "points",
+                VoxelPosition::Center => "center",
+            },
+        );
+        w.str(
+            "color average",
+            match color_average {
+                ColorAverage::Linear => "linear",
+                ColorAverage::Srgb => "srgb",
+            },
+        );
     }
-    w.str("format", &format!("{format:?}").to_lowercase());
+    w.str(
+        "format",
+        match format {
+            PlyFormat::Binary => "binary",
+            PlyFormat::Ascii => "ascii",
+        },
+    );
 }

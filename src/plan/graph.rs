@@ -15,8 +15,6 @@ use crate::cache::Digest;
 use crate::manifest::output::{Output, Writer};
 use crate::manifest::render::Pass;
 use crate::manifest::Manifest;
-use crate::render::encode::Encoding;
-use crate::render::RenderSettings;
 use crate::scene::{Scene, SourceData};
 
 /// Default number of points in an image dataset's initialization cloud.
@@ -56,8 +54,8 @@ impl<'a> Graph<'a> {
         let keying = Keying {
             plan,
             frame_keys,
-            render: RenderSettings::from_manifest(&m.render, scene.voxel_size()),
-            encoding: Encoding::from_manifest(&m.render),
+            render: m.render.renderer_settings(scene.voxel_size()),
+            encoding: m.render.encoding(),
             seed: m.dataset.seed,
             manifest: Digest::of(m.text.as_bytes()),
             points: BTreeMap::new(),

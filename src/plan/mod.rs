@@ -39,14 +39,15 @@ pub enum Error {
         frames: usize,
     },
     /// A rig cannot place its cameras.
-    #[error("split `{split}`, rig `{rig}`: {message}")]
+    #[error("split `{split}`, rig `{rig}`: {source}")]
     Rig {
         /// The split.
         split: String,
         /// The rig.
         rig: String,
         /// Why.
-        message: String,
+        #[source]
+        source: crate::rig::Error,
     },
     /// A split has no cameras.
     #[error("split `{split}` has no cameras")]
@@ -204,7 +205,7 @@ impl Plan {
             };
             let seed = split_seed(m, name);
             let poses = rig::poses(rig, Identity { rig: rig_name, seed }, views, &m.dir)
-                .map_err(|message| Error::Rig { split: name.clone(), rig: rig_name.clone(), message })?;
+                .map_err(|source| Error::Rig { split: name.clone(), rig: rig_name.clone(), source })?;
             if poses.is_empty() {
                 return Err(Error::NoCameras { split: name.clone() });
             }

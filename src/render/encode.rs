@@ -3,7 +3,25 @@
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
 
-use crate::manifest::render::{NormalSpace, PngCompression};
+/// PNG deflate effort (and the EXR compression that goes with it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PngCompression {
+    /// Fast deflate: PNG encoding otherwise dominates render time (the default).
+    Fast,
+    /// The encoder's default.
+    Default,
+    /// Smallest files, slowest.
+    Best,
+}
+
+/// The space normals are written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum NormalSpace {
+    /// World axes.
+    World,
+    /// Camera axes (OpenGL: +X right, +Y up, +Z back).
+    Camera,
+}
 
 /// How rendered passes become files: the settings of encoding, apart from those of rendering.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -16,18 +34,6 @@ pub struct Encoding {
     pub depth_exr: bool,
     /// Also write normals as float OpenEXR.
     pub normal_exr: bool,
-}
-
-impl Encoding {
-    /// The encoding `[render]` asks for.
-    pub fn from_manifest(r: &crate::manifest::render::Render) -> Encoding {
-        Encoding {
-            png: r.png_compression,
-            normal_space: r.normal.space,
-            depth_exr: r.depth.exr,
-            normal_exr: r.normal.exr,
-        }
-    }
 }
 
 fn encoder(buf: &mut Vec<u8>, c: PngCompression) -> PngEncoder<&mut Vec<u8>> {

@@ -14,7 +14,6 @@ use rayon::prelude::*;
 pub use crate::camera::Camera;
 pub use splat::{Shape as SplatShape, Size as SplatSize, SplatSettings};
 
-use crate::manifest::render::{DepthKind, Shading};
 use crate::scene::material::linear_to_srgb8;
 use crate::scene::PosedScene;
 use raster::{Projection, Shade};
@@ -22,7 +21,26 @@ use raster::{Projection, Shade};
 /// Tile side in pixels.
 const TILE: i64 = 32;
 
-/// What the renderer needs from `[render]`.
+/// Surface shading.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Shading {
+    /// Albedo only: base colour × texture × vertex colour.
+    Unlit,
+    /// Albedo × (ambient + Σ lights · max(0, n·l)).
+    Lambert,
+}
+
+/// What the depth buffer holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DepthKind {
+    /// Distance along the optical axis.
+    Planar,
+    /// Distance from the camera centre.
+    Ray,
+}
+
+/// Everything that shapes a render (the manifest's `[render]` converts into it; the renderer knows no
+/// manifest).
 #[derive(Debug, Clone)]
 pub struct RenderSettings {
     /// Samples per pixel: 1, 4, 9 or 16 (a k×k grid).
@@ -72,49 +90,6 @@ impl Default for RenderSettings {
             depth: DepthKind::Planar,
             splat: SplatSettings::default(),
             buffers: Buffers::default(),
-        }
-    }
-}
-
-impl RenderSettings {
-    /// The settings `[render]` asks for. `voxel` is the world size of one voxel of a point-cloud source, the
-    /// default splat size; without it, splats default to 1.5 px.
-    pub fn from_manifest(r: &crate::manifest::render::Render, voxel: Option<f32>) -> RenderSettings {
-        use crate::manifest::render::{Background, SplatShape as S};
-        use crate::scene::material::srgb_to_linear;
-        let lin = |c: [f64; 3]| {
-            Vec3::new(srgb_to_linear(c[0] as f32), srgb_to_linear(c[1] as f32), srgb_to_linear(c[2] as f32))
-        };
-        let background = match r.background.as_ref().map(|b| b.get_ref()) {
-            Some(Background::Named(n)) if n == "white" => Some(Vec3::ONE),
-            Some(Background::Named(n)) if n == "black" => Some(Vec3::ZERO),
-            Some(Background::Rgb(c)) => Some(lin(*c)),
-            _ => None,
-        };
-        let size = match (r.splat.size, r.splat.size_px, voxel) {
-            (Some(w), _, _) => SplatSize::World(w as f32),
-            (None, Some(px), _) => SplatSize::Pixels(px as f32),
-            (None, None, Some(v)) => SplatSize::World(v),
-            (None, None, None) => SplatSize::Pixels(1.5),
-        };
-        let shape = match r.splat.shape {
-            S::Cube => SplatShape::Cube,
-            S::Square => SplatShape::Square,
-            S::Disk => SplatShape::Disk,
-        };
-        RenderSettings {
-            samples: *r.samples.get_ref(),
-            shading: r.shading,
-            lights: r.lights.iter().map(|l| (glam::DVec3::from(l.direction).as_vec3(), l.intensity as f32)).collect(),
-            ambient: r.ambient.unwrap_or(0.3) as f32,
-            background,
-            depth: r.depth.kind,
-            splat: SplatSettings { shape, size },
-            buffers: Buffers {
-                depth: r.has_pass(crate::manifest::render::Pass::Depth),
-                normal: r.has_pass(crate::manifest::render::Pass::Normal),
-                object: r.has_pass(crate::manifest::render::Pass::Mask),
-            },
         }
     }
 }

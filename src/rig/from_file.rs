@@ -7,6 +7,8 @@ use std::path::Path;
 use glam::DMat4;
 use serde::Deserialize;
 
+use super::Error;
+
 /// Largest transforms.json read (a 100 000-frame file is ~40 MB).
 const MAX_BYTES: u64 = 256 << 20;
 
@@ -21,18 +23,19 @@ struct Frame {
 }
 
 /// The poses of `path`'s frames.
-pub fn read(path: &Path) -> Result<Vec<DMat4>, String> {
-    let name = path.display();
-    let len = std::fs::metadata(path).map_err(|e| format!("{name}: {e}"))?.len();
+pub fn read(path: &Path) -> Result<Vec<DMat4>, Error> {
+    let file = || path.to_path_buf();
+    let len = std::fs::metadata(path).map_err(|e| Error::Read { path: file(), source: e })?.len();
     if len > MAX_BYTES {
-        return Err(format!("{name}: {len} bytes is more than a camera file should be ({MAX_BYTES})"));
+        return Err(Error::TooLarge { path: file(), len, max: MAX_BYTES });
     }
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
-    let file: File = serde_json::from_str(&text).map_err(|e| format!("{name}: not a transforms.json: {e}"))?;
-    if file.frames.is_empty() {
-        return Err(format!("{name}: no frames"));
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Read { path: file(), source: e })?;
+    let parsed: File = serde_json::from_str(&text).map_err(|e| Error::NotTransforms { path: file(), source: e })?;
+    if parsed.frames.is_empty() {
+        return Err(Error::NoFrames { path: file() });
     }
-    file.frames
+    parsed
+        .frames
         .iter()
         .enumerate()
         .map(|(i, f)| {
@@ -40,7 +43,7 @@ pub fn read(path: &Path) -> Result<Vec<DMat4>, String> {
             let rows = m.len();
             if !(rows == 3 || rows == 4) || m.iter().any(|r| r.len() != 4) || m.iter().flatten().any(|v| !v.is_finite())
             {
-                return Err(format!("{name}: frame {i}: transform_matrix is not a finite 3×4 or 4×4 matrix"));
+                return Err(Error::BadMatrix { path: file(), frame: i });
             }
             let mut a = [[0.0, 0.0, 0.0, 1.0]; 4];
             for (r, row) in m.iter().enumerate() {

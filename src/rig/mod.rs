@@ -6,7 +6,7 @@ mod from_file;
 pub mod random;
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DMat4, DVec3};
 
@@ -26,9 +26,62 @@ pub struct Identity<'a> {
     pub seed: u64,
 }
 
+/// Why a rig cannot place its cameras.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// An explicit pose gives neither a matrix nor a position.
+    #[error("an explicit pose needs `c2w` or `position`")]
+    PoseUnderspecified,
+    /// A from-file rig names no file.
+    #[error("a from-file rig needs `file`")]
+    NoFile,
+    /// The camera file cannot be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The camera file is implausibly large.
+    #[error("{}: {len} bytes is more than a camera file should be ({max})", path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        len: u64,
+        /// The largest read.
+        max: u64,
+    },
+    /// The camera file is not a transforms.json.
+    #[error("{}: not a transforms.json: {source}", path.display())]
+    NotTransforms {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The camera file lists no frames.
+    #[error("{}: no frames", path.display())]
+    NoFrames {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A frame's matrix is malformed.
+    #[error("{}: frame {frame}: transform_matrix is not a finite 3×4 or 4×4 matrix", path.display())]
+    BadMatrix {
+        /// The file.
+        path: PathBuf,
+        /// The frame's index.
+        frame: usize,
+    },
+}
+
 /// The poses of `views` cameras of `rig` (`views` is ignored by rigs that count themselves).
 /// `dir` resolves `from-file` paths.
-pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat4>, String> {
+pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat4>, Error> {
     let target = DVec3::from(rig.target.unwrap_or([0.0; 3]));
     let radius = rig.radius.as_ref().map(|r| *r.get_ref()).unwrap_or(NERF_RADIUS);
     let n = views as usize;
@@ -162,12 +215,12 @@ pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat
                     (None, Some(pos)) => {
                         Ok(look_at(DVec3::from(pos), DVec3::from(p.target.or(rig.target).unwrap_or([0.0; 3]))))
                     }
-                    (None, None) => Err("an explicit pose needs `c2w` or `position`".to_string()),
+                    (None, None) => Err(Error::PoseUnderspecified),
                 })
                 .collect::<Result<_, _>>()?
         }
         RigKind::FromFile => {
-            let file = rig.file.as_ref().ok_or("a from-file rig needs `file`")?;
+            let file = rig.file.as_ref().ok_or(Error::NoFile)?;
             from_file::read(&dir.join(file.get_ref()))?
         }
     };

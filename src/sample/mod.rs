@@ -12,6 +12,17 @@ use crate::rig::random::Keyed;
 use crate::scene::material::linear_to_srgb8;
 use crate::scene::{PosedScene, PrimKind};
 
+/// What can go wrong reading or re-evaluating samples.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A cached point blob is not in [`Points::to_bytes`] form.
+    #[error("not a vvgen point blob (the cache entry is damaged)")]
+    Damaged,
+    /// Correspondence draws refer to triangles the frame does not have.
+    #[error("the mesh's topology changed between frames: correspondence needs fixed triangles")]
+    TopologyChanged,
+}
+
 /// Samples drawn per keyed chunk (the unit of parallel work).
 const CHUNK: usize = 1 << 16;
 
@@ -59,13 +70,12 @@ impl Points {
     }
 
     /// Reads [`Points::to_bytes`].
-    pub fn from_bytes(b: &[u8]) -> Result<Points, String> {
-        let bad = || "not a vvgen point blob (the cache entry is damaged)".to_string();
-        let n = b.strip_prefix(RAW_MAGIC).and_then(|r| r.get(..8)).ok_or_else(bad)?;
+    pub fn from_bytes(b: &[u8]) -> Result<Points, Error> {
+        let n = b.strip_prefix(RAW_MAGIC).and_then(|r| r.get(..8)).ok_or(Error::Damaged)?;
         let n = u64::from_le_bytes(n.try_into().unwrap()) as usize;
         let body = &b[16..];
         if Some(body.len()) != n.checked_mul(36) {
-            return Err(bad());
+            return Err(Error::Damaged);
         }
         let arr = |k: usize| -> Vec<[f32; 3]> {
             body[k * 12 * n..(k + 1) * 12 * n]
@@ -142,11 +152,11 @@ pub fn draw(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Vec<Draw> {
 }
 
 /// Evaluates `draws` on `scene` (the frame they were drawn on, or another frame of the same meshes).
-pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, String> {
+pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, Error> {
     let fits =
         |d: &Draw| scene.primitives.get(d.prim as usize).is_some_and(|p| (d.first as usize + 2) < p.indices.len());
     if !draws.par_iter().all(fits) {
-        return Err("the mesh's topology changed between frames: correspondence needs fixed triangles".into());
+        return Err(Error::TopologyChanged);
     }
     let n = draws.len();
     let mut out = Points { positions: vec![[0.0; 3]; n], normals: vec![[0.0; 3]; n], colors: vec![[0.0; 3]; n] };

@@ -60,12 +60,22 @@ pub enum Error {
         message: String,
     },
     /// A `[transform]` cannot be resolved (fitting a source with no extent).
-    #[error("{table}: {message}")]
+    #[error("{table}: {source}")]
     Transform {
         /// `source `NAME`` or `[transform]`.
         table: String,
         /// What is wrong.
-        message: String,
+        #[source]
+        source: transform::Error,
+    },
+    /// A PLY sequence's frames cannot be listed.
+    #[error("source `{name}`: {source}")]
+    Sequence {
+        /// The source.
+        name: String,
+        /// What is wrong.
+        #[source]
+        source: crate::manifest::sequence::Error,
     },
 }
 
@@ -120,7 +130,7 @@ impl Scene {
             }
             let table = || format!("source `{}`", src.name);
             locals.push(
-                transform::resolve(&t, up, &stats).map_err(|message| Error::Transform { table: table(), message })?,
+                transform::resolve(&t, up, &stats).map_err(|source| Error::Transform { table: table(), source })?,
             );
         }
         // The global table's `up` is only the sources' default: the rotation was applied per source.
@@ -133,7 +143,7 @@ impl Scene {
             }
         }
         let global = transform::resolve(&g, UpAxis::Z, &stats)
-            .map_err(|message| Error::Transform { table: "[transform]".into(), message })?;
+            .map_err(|source| Error::Transform { table: "[transform]".into(), source })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
         Ok(Scene { sources, locals, global, frames, warnings })
     }

@@ -80,7 +80,9 @@ impl LoadedSource {
             }
             SourceKind::PlySequence => {
                 let frames = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
-                SourceData::Sequence(sequence::resolve(dir, path.get_ref(), &frames).map_err(invalid)?)
+                let sequence = sequence::resolve(dir, path.get_ref(), &frames)
+                    .map_err(|source| Error::Sequence { name: name.to_string(), source })?;
+                SourceData::Sequence(sequence)
             }
         };
         let default_up = if is_ply || kind == SourceKind::PlySequence { UpAxis::Z } else { UpAxis::Y };

@@ -55,13 +55,27 @@ pub fn pre(t: &Transform, up: UpAxis) -> DMat4 {
     up_m * m
 }
 
+/// Why a transform cannot be resolved.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Error {
+    /// Fitting or centring was asked of a source with no geometry.
+    #[error("cannot fit or centre: the source has no geometry")]
+    NoGeometry,
+    /// The measure a fit scales to is zero.
+    #[error("cannot fit {what}: the geometry's {what} is zero")]
+    ZeroExtent {
+        /// `height`, `radius` or `extent`.
+        what: &'static str,
+    },
+}
+
 /// Whether the transform needs bounds at all.
 pub fn needs_stats(t: &Transform) -> bool {
     t.fit.is_some() || matches!(t.center, Some(Center::Bbox | Center::Centroid))
 }
 
 /// The full matrix, given stats gathered after [`pre`]. Errors when a fit is asked of empty or flat geometry.
-pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, String> {
+pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, Error> {
     let pre = pre(t, up);
     let center = match t.center.unwrap_or(Center::None) {
         Center::None => DVec3::ZERO,
@@ -69,7 +83,7 @@ pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, String>
         Center::Centroid => stats.sum / stats.count.max(1) as f64,
     };
     if needs_stats(t) && stats.is_empty() {
-        return Err("cannot fit or centre: the source has no geometry".into());
+        return Err(Error::NoGeometry);
     }
     let mut s = 1.0;
     if let Some(fit) = &t.fit {
@@ -93,7 +107,7 @@ pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, String>
             (size.max_element(), f.extent.unwrap_or(1.0), "extent")
         };
         if measure.is_nan() || measure <= 1e-12 {
-            return Err(format!("cannot fit {what}: the geometry's {what} is zero"));
+            return Err(Error::ZeroExtent { what });
         }
         s = target / measure;
     }
