@@ -11,11 +11,12 @@ use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub use crate::execute::{Counts, Shard};
 pub use error::Error;
 pub use status::{status, ActionStatus, KindStatus, State, Status};
 
 use crate::cache::{gc, Digest, StatCache, Store};
-use crate::execute::{self, Counts, Inputs, Shard};
+use crate::execute::{self, Inputs};
 use crate::export::{self, Export, Written};
 use crate::manifest::Manifest;
 use crate::plan::actions::Kind;
@@ -197,7 +198,7 @@ impl Report {
 }
 
 /// Everything up to the graph: shared by `build`, `status`, `release` and `gc`.
-pub struct Prepared {
+pub(crate) struct Prepared {
     /// The scene.
     pub scene: Scene,
     /// The image plan.
@@ -218,7 +219,7 @@ impl Prepared {
 }
 
 /// Opens the scene, plans the images and keys every frame.
-pub fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, Error> {
+pub(crate) fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, Error> {
     check_directories(m)?;
     let scene = Scene::open(m).map_err(|source| Error::Scene {
         manifest: m.path.clone(),

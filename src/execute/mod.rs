@@ -92,7 +92,7 @@ pub enum State {
 
 /// The cache's answer for every node of a graph.
 #[derive(Debug)]
-pub struct Lookup {
+pub(crate) struct Lookup {
     /// Per node, its blobs when cached.
     pub blobs: Vec<Option<Vec<Digest>>>,
     /// Per node, its state. Outputs ([`Kind::WriteOutput`]) are always [`State::Run`]: a build always
@@ -103,7 +103,7 @@ pub struct Lookup {
 /// Looks every action of `g` up in the store and decides what must run: every output runs; an action that
 /// runs needs its inputs, which run in turn when they are not cached (n2's "want" walk, over ids in reverse:
 /// inputs come before their readers).
-pub fn lookup(g: &Graph, store: &Store, stat: &StatCache) -> Lookup {
+pub(crate) fn lookup(g: &Graph, store: &Store, stat: &StatCache) -> Lookup {
     let blobs: Vec<Option<Vec<Digest>>> =
         g.nodes.par_iter().map(|n| if n.action.kind().cached() { store.hit(&n.key, stat) } else { None }).collect();
     let mut needed: Vec<bool> = g.nodes.iter().map(|n| n.action.kind() == Kind::WriteOutput).collect();
@@ -136,7 +136,7 @@ pub struct Counts {
 
 /// What [`run`] did.
 #[derive(Debug)]
-pub struct Outcome {
+pub(crate) struct Outcome {
     /// Per node, its blobs (none for outputs, for actions left to other shards and for unneeded ones).
     pub blobs: Vec<Option<Vec<Digest>>>,
     /// Per kind, what happened (outputs excluded: export counts them).
@@ -148,7 +148,7 @@ pub struct Outcome {
 }
 
 /// What the executors read besides the graph.
-pub struct Inputs<'a> {
+pub(crate) struct Inputs<'a> {
     /// The scene.
     pub scene: &'a Scene,
     /// The blob store.
@@ -182,7 +182,7 @@ impl Inputs<'_> {
 /// Runs every action `look` says must run (those of `shard` only, when given, and those whose inputs this
 /// process has). `started(cached, work)` is called once the cache has been consulted, `done(n)` after each
 /// action.
-pub fn run(
+pub(crate) fn run(
     g: &Graph,
     x: &Inputs,
     look: Lookup,

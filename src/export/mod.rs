@@ -41,7 +41,7 @@ pub enum Error {
 }
 
 /// Everything the writers read.
-pub struct Export<'a> {
+pub(crate) struct Export<'a> {
     /// The manifest.
     pub manifest: &'a Manifest,
     /// The loaded scene (names and transforms for vvgen.json).
@@ -193,7 +193,7 @@ impl<'a> Files<'a> {
 }
 
 /// Runs the writer of `[output.name]`: places its actions' blobs and writes its metadata.
-pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Error> {
+pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Error> {
     let root = x.manifest.out_dir().join(dir_name(x.manifest, out));
     std::fs::create_dir_all(&root).map_err(|e| cache::Error::io(&root, e))?;
     atomic::clean_debris(&root);
@@ -218,7 +218,7 @@ pub fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Error> {
 }
 
 /// The output's directory name under `[dataset] out`.
-pub fn dir_name(m: &Manifest, out: &Output) -> String {
+pub(crate) fn dir_name(m: &Manifest, out: &Output) -> String {
     out.dir_name(m.dataset.name.get_ref())
 }
 

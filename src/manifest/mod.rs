@@ -316,6 +316,30 @@ fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut 
     }
 }
 
+/// A `ply-sequence` output's settings that cannot work together (the plan refuses them too, for library
+/// callers that skip `check`).
+fn point_output_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<Diagnostic>) {
+    let sources: Vec<&Source> = match &out.source {
+        Some(s) => m.sources.get(s.get_ref()).into_iter().collect(),
+        None => m.sources.values().collect(),
+    };
+    let sequence = sources.iter().any(|s| s.kind().is_some_and(|(k, _)| k == SourceKind::PlySequence));
+    let span = Some(out.writer.span());
+    if out.correspondence == Some(true) && sequence {
+        diags.push(
+            Diagnostic::error(format!("output `{name}`: `correspondence` needs mesh sources"), span.clone())
+                .with_help("a PLY sequence has no fixed surface to track; sample one source with `source = \"…\"`"),
+        );
+    }
+    let tracked = out.correspondence.unwrap_or(!sequence);
+    if out.motion && (!tracked || out.voxel.is_some() || out.vox.is_some()) {
+        diags.push(
+            Diagnostic::error(format!("output `{name}`: `motion` needs correspondence and no `voxel` or `vox`"), span)
+                .with_help("merged points have no track: drop `voxel`/`vox`, or write motion in a second output"),
+        );
+    }
+}
+
 /// Checks that span tables: references, counts that depend on the rig, writer/render contradictions.
 fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
     for (name, split) in &m.splits {
@@ -401,6 +425,15 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                 Some(s) => s.iter().map(|s| s.get_ref().as_str()).collect(),
                 None => m.splits.keys().map(String::as_str).collect(),
             };
+            for split in selected.iter().filter(|s| s.contains("_r")) {
+                diags.push(
+                    Diagnostic::error(
+                        format!("output `{name}` (dnerf) writes split `{split}`, whose name contains `_r`"),
+                        Some(out.writer.span()),
+                    )
+                    .with_help("K-Planes splits D-NeRF file paths at `_r`: rename the split"),
+                );
+            }
             for needed in ["train", "val", "test"] {
                 if !selected.contains(&needed) {
                     diags.push(
@@ -420,6 +453,9 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                     );
                 }
             }
+        }
+        if writer == Writer::PlySequence {
+            point_output_checks(m, name, out, diags);
         }
         if let Some(d) = &out.dir {
             for (other, o2) in &m.outputs {

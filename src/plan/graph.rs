@@ -155,6 +155,15 @@ impl<'a> Graph<'a> {
         if images.is_empty() {
             return Err(Error::NoImages { output: name.to_string() });
         }
+        if writer == Writer::Dnerf {
+            if let Some(s) = plan
+                .splits
+                .iter()
+                .find(|s| s.name.contains("_r") && s.images.first().is_some_and(|i| images.contains(i)))
+            {
+                return Err(Error::SplitName { split: s.name.clone() });
+            }
+        }
         let passes = m.render.passes.get_ref().clone();
         for &i in &images {
             for &pass in &passes {
@@ -269,8 +278,12 @@ fn point_settings(m: &Manifest, scene: &Scene, plan: &Plan, name: &str, out: &Ou
         }
         None => None,
     };
-    // Correspondence needs one topology over time: meshes, not per-frame point clouds.
-    let fixed_topology = scene.sources.iter().all(|s| !matches!(s.data, SourceData::Sequence(_)));
+    // Correspondence needs one topology over time: meshes, not per-frame point clouds (of the sources sampled).
+    let sampled: Vec<&crate::scene::LoadedSource> = match &source {
+        Some((i, _)) => vec![&scene.sources[*i]],
+        None => scene.sources.iter().collect(),
+    };
+    let fixed_topology = sampled.iter().all(|s| !matches!(s.data, SourceData::Sequence(_)));
     let correspondence = out.correspondence.unwrap_or(fixed_topology && plan.frames > 1);
     let invalid = |why: &str| Error::PointSettings { output: name.into(), why: why.into() };
     if correspondence && !fixed_topology {

@@ -83,6 +83,12 @@ pub enum Error {
         /// The split.
         split: String,
     },
+    /// A D-NeRF split name K-Planes would misread.
+    #[error("split `{split}`: K-Planes misreads D-NeRF file paths containing `_r`; rename the split")]
+    SplitName {
+        /// The split.
+        split: String,
+    },
     /// A point output names a source that does not exist.
     #[error("output `{output}`: no source `{source_name}`")]
     NoSource {

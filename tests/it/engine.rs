@@ -5,8 +5,8 @@ use std::path::Path;
 use std::process::Command;
 
 use crate::common::{animated_triangle, cesium_glb, cesium_head, data, tree};
+use vvgen::build::Shard;
 use vvgen::build::{build, Options, Report, Silent};
-use vvgen::execute::Shard;
 use vvgen::plan::actions::Kind;
 
 /// CesiumMan, 2 frames, 64², with `train_views` training views.

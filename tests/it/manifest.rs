@@ -152,7 +152,7 @@ points = 100000
 voxel = 0.01
 vox = 10
 correspondence = true
-motion = true
+motion = false
 reduce = "nearest"
 color_average = "srgb"
 pattern = "man_vox10_{{frame:04}}.ply"
@@ -320,6 +320,18 @@ fn keys_of_another_kind_are_rejected() {
     let text = full_manifest().replace("schedule = \"nerf-test\"", "schedule = \"nerf-test\"\nrings = 4");
     let l = lines(&errors(&text));
     assert!(l.iter().any(|(_, m, _)| m == "key `rings` does not apply to rig `ring` (kind = \"orbit\")"), "{l:?}");
+}
+
+/// What the plan would refuse, `check` refuses first (before any rendering).
+#[test]
+fn check_refuses_what_the_plan_would() {
+    let l = lines(&errors(&full_manifest().replace("[split.test]", "[split.test_ring]")));
+    assert!(l.iter().any(|(_, m, h)| m.contains("`test_ring`") && h.contains("K-Planes")), "{l:?}");
+    let l = lines(&errors(&full_manifest().replace("motion = false", "motion = true")));
+    assert!(l.iter().any(|(_, m, _)| m.contains("`motion` needs correspondence and no `voxel`")), "{l:?}");
+    let seq = full_manifest().replace("source = \"man\"\n", "source = \"torus\"\n");
+    let l = lines(&errors(&seq));
+    assert!(l.iter().any(|(_, m, _)| m.contains("`correspondence` needs mesh sources")), "{l:?}");
 }
 
 #[test]
