@@ -54,7 +54,7 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
         let files: Vec<PathBuf> = match &src.data {
             SourceData::Gltf { asset, .. } => vec![asset.path.clone()],
             SourceData::Sequence(frames) => frames.iter().map(|f| f.path.clone()).collect(),
-            SourceData::Static(_) => cfg.mesh.iter().chain(&cfg.gltf).map(|f| m.resolve(f.get_ref())).collect(),
+            SourceData::Static(_) => cfg.mesh().into_iter().chain(cfg.gltf()).map(|f| m.resolve(f)).collect(),
         };
         for f in files {
             let d = p.stat.digest(&f).map_err(|e| Error::cache(m, cache::Error::io(&f, e)))?;

@@ -124,8 +124,8 @@ impl Build {
 /// The manifest's cache: `[dataset] cache` (manifest-relative), else `cache/` in the working directory. (The
 /// CLI's `VVGEN_CACHE` overrides both; the library reads no environment.)
 pub fn default_cache_dir(m: &Manifest) -> PathBuf {
-    match &m.dataset.cache {
-        Some(c) => m.resolve(c.get_ref()),
+    match m.dataset.cache() {
+        Some(c) => m.resolve(c),
         None => PathBuf::from("cache"),
     }
 }

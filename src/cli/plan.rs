@@ -39,7 +39,7 @@ pub fn status(manifest: &Path, ui: Ui) -> anyhow::Result<ExitCode> {
     let done: usize = st.kinds.values().map(|k| k.cached).sum();
     println!(
         "{}: {done} of {total} actions built{}",
-        m.dataset.name.get_ref(),
+        m.dataset.name(),
         if st.up_to_date() { " (up to date)" } else { "" }
     );
     for (kind, k) in st.kinds.iter().filter(|(_, k)| k.run > 0) {

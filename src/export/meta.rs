@@ -41,10 +41,10 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
     let mut doc = json!({
         "tool": "vvgen",
         "version": env!("CARGO_PKG_VERSION"),
-        "dataset": m.dataset.name.get_ref(),
+        "dataset": m.dataset.name(),
         "dataset_version": m.dataset.version,
         "output": name,
-        "writer": out.writer.get_ref().name(),
+        "writer": out.writer().name(),
         "manifest_blake3": blake3::hash(m.text.as_bytes()).to_hex().to_string(),
         "seed": m.dataset.seed,
         "frames": x.plan.frames,

@@ -73,7 +73,7 @@ impl Export<'_> {
     /// The rendered files of plan image `image`.
     fn rendered(&self, image: usize) -> Result<Rendered, Error> {
         let mut r = Rendered::default();
-        for &pass in self.manifest.render.passes.get_ref() {
+        for &pass in self.manifest.render.passes() {
             let b = self.blobs_of(&Action::RenderPass { image, pass })?;
             let (first, second) = (b.first().copied(), b.get(1).copied());
             match pass {
@@ -198,7 +198,7 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
     std::fs::create_dir_all(&root).map_err(|e| cache::Error::io(&root, e))?;
     atomic::clean_debris(&root);
     let mut files = Files::new(root, x.store, x.stat);
-    let writer = *out.writer.get_ref();
+    let writer = out.writer();
     let images = if writer.renders_images() {
         x.graph.images_of(out).map_err(|e| Error::Unplanned(e.to_string()))?
     } else {
@@ -219,7 +219,7 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
 
 /// The output's directory name under `[dataset] out`.
 pub(crate) fn dir_name(m: &Manifest, out: &Output) -> String {
-    out.dir_name(m.dataset.name.get_ref())
+    out.dir_name(m.dataset.name())
 }
 
 /// The rows of a 4×4 matrix, as written in transforms.json files.
@@ -240,7 +240,7 @@ fn r_name(img: &Image, pad: usize) -> String {
 
 /// Number of init points an image output asks for.
 fn init_points(out: &Output) -> u64 {
-    out.init_points.as_ref().map_or(crate::plan::graph::DEFAULT_INIT_POINTS, |p| *p.get_ref())
+    out.init_points().unwrap_or(crate::plan::graph::DEFAULT_INIT_POINTS)
 }
 
 /// JSON with two-space indentation where arrays of plain numbers (matrix rows, vectors) stay on one line.

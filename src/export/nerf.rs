@@ -241,7 +241,7 @@ pub fn instant_ngp(x: &Export, out: &Output, images: &[usize], files: &mut Files
             frames.push(Value::Object(f));
         }
         let mut doc = intrinsics(&x.plan.images[list[0]]);
-        doc.insert("aabb_scale".into(), json!(out.aabb_scale.as_ref().map_or(1, |a| *a.get_ref())));
+        doc.insert("aabb_scale".into(), json!(out.aabb_scale().unwrap_or(1)));
         doc.insert("scale".into(), json!(scale));
         doc.insert("offset".into(), json!(offset));
         if depth {

@@ -10,23 +10,23 @@ use super::diag::Diagnostic;
 #[serde(deny_unknown_fields)]
 pub struct Dataset {
     /// Dataset name; used in default output directory names.
-    pub name: Spanned<String>,
+    pub(super) name: Spanned<String>,
     /// Free-form version string, recorded in metadata.
     #[serde(default)]
     pub version: Option<String>,
     /// Output root, relative to the manifest's directory.
-    pub out: Spanned<String>,
+    pub(super) out: Spanned<String>,
     /// Root of every random stream (camera draws, point samples).
     #[serde(default)]
     pub seed: u64,
     /// Cache directory, relative to the manifest (default `cache/` in the working directory; `VVGEN_CACHE`
     /// overrides both).
     #[serde(default)]
-    pub cache: Option<Spanned<String>>,
+    pub(super) cache: Option<Spanned<String>>,
     /// Manifests (manifest-relative) that `vvgen build` builds before this one, e.g. the one writing the
     /// point-cloud sequence a `ply_sequence` source here renders.
     #[serde(default)]
-    pub after: Vec<Spanned<String>>,
+    pub(super) after: Vec<Spanned<String>>,
 }
 
 impl Dataset {
@@ -43,5 +43,28 @@ impl Dataset {
                 Diagnostic::error("`out` is empty", Some(self.out.span())).with_help("e.g. out = \"out/my-dataset\""),
             );
         }
+    }
+}
+
+/// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
+impl Dataset {
+    /// The dataset's name.
+    pub fn name(&self) -> &str {
+        self.name.get_ref()
+    }
+
+    /// The output root, manifest-relative.
+    pub fn out(&self) -> &str {
+        self.out.get_ref()
+    }
+
+    /// The cache directory, manifest-relative, when given.
+    pub fn cache(&self) -> Option<&str> {
+        self.cache.as_ref().map(|c| c.get_ref().as_str())
+    }
+
+    /// The `after` manifests, manifest-relative.
+    pub fn after(&self) -> Vec<&str> {
+        self.after.iter().map(|a| a.get_ref().as_str()).collect()
     }
 }

@@ -290,7 +290,7 @@ fn named<T: serde::de::DeserializeOwned>(
 /// Checks that a source's files exist; a `ply_sequence` that an `after` manifest writes (`produced`) counts as
 /// present, since `vvgen build` writes it first.
 fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut Vec<Diagnostic>) {
-    let Some((kind, p)) = s.kind() else { return };
+    let Some((kind, p)) = s.kind_spanned() else { return };
     match kind {
         SourceKind::Gltf | SourceKind::Mesh => {
             let full = dir.join(p.get_ref());

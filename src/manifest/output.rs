@@ -16,23 +16,23 @@ pub const MAX_POINTS: u64 = 100_000_000;
 #[serde(deny_unknown_fields)]
 pub struct Output {
     /// The writer.
-    pub writer: Spanned<Writer>,
+    pub(super) writer: Spanned<Writer>,
     /// Directory under `[dataset] out` (default depends on the writer, e.g. `<name>_dnerf`).
-    pub dir: Option<Spanned<String>>,
+    pub(super) dir: Option<Spanned<String>>,
     /// Splits to write (default: all).
-    pub splits: Option<Vec<Spanned<String>>>,
+    pub(super) splits: Option<Vec<Spanned<String>>>,
     /// Which source (default: all sources together).
-    pub source: Option<Spanned<String>>,
+    pub(super) source: Option<Spanned<String>>,
     /// Image writers: points in the `points3d.ply` / `fused.ply` initialization cloud (default 100 000; 0 = none).
-    pub init_points: Option<Spanned<u64>>,
+    pub(super) init_points: Option<Spanned<u64>>,
     /// `instant-ngp`: aabb_scale (power of two, 1..=128).
-    pub aabb_scale: Option<Spanned<u32>>,
+    pub(super) aabb_scale: Option<Spanned<u32>>,
     /// `ply-sequence`: surface samples per frame.
-    pub points: Option<Spanned<u64>>,
+    pub(super) points: Option<Spanned<u64>>,
     /// `ply-sequence`: voxel edge for downsampling, world units.
-    pub voxel: Option<Spanned<f64>>,
+    pub(super) voxel: Option<Spanned<f64>>,
     /// `ply-sequence`: quantize to a 2^vox integer grid (8..=16), like 8i's vox10.
-    pub vox: Option<Spanned<u32>>,
+    pub(super) vox: Option<Spanned<u32>>,
     /// `ply-sequence`: keep point identity across frames (default true for animated sources).
     pub correspondence: Option<bool>,
     /// `ply-sequence`: write per-point motion vectors to the next frame.
@@ -45,7 +45,7 @@ pub struct Output {
     /// `ply-sequence`: colour averaging space, `"linear"` (default) or `"srgb"`.
     pub color_average: Option<ColorAverage>,
     /// `ply-sequence`: file name pattern (default `{name}_{frame:04}.ply`).
-    pub pattern: Option<Spanned<String>>,
+    pub(super) pattern: Option<Spanned<String>>,
     /// `ply-sequence`: `"binary"` (default) or `"ascii"`.
     pub format: Option<PlyFormat>,
 }
@@ -273,5 +273,58 @@ pub(crate) fn check_relative(p: &Spanned<String>, key: &str, diags: &mut Vec<Dia
             Diagnostic::error(format!("`{key}` = \"{s}\" escapes the dataset's `out` directory"), Some(p.span()))
                 .with_help("use a relative path without leading `..`; move `[dataset] out` to write elsewhere"),
         );
+    }
+}
+
+/// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
+impl Output {
+    /// The writer.
+    pub fn writer(&self) -> Writer {
+        *self.writer.get_ref()
+    }
+
+    /// Directory under `[dataset] out`, when given.
+    pub fn dir(&self) -> Option<&str> {
+        self.dir.as_ref().map(|d| d.get_ref().as_str())
+    }
+
+    /// The splits to write, when given (default: all).
+    pub fn splits(&self) -> Option<Vec<&str>> {
+        self.splits.as_ref().map(|v| v.iter().map(|s| s.get_ref().as_str()).collect())
+    }
+
+    /// The one source to sample, when given (default: all).
+    pub fn source(&self) -> Option<&str> {
+        self.source.as_ref().map(|s| s.get_ref().as_str())
+    }
+
+    /// Points in the initialization cloud, when given.
+    pub fn init_points(&self) -> Option<u64> {
+        self.init_points.as_ref().map(|p| *p.get_ref())
+    }
+
+    /// instant-ngp's `aabb_scale`, when given.
+    pub fn aabb_scale(&self) -> Option<u32> {
+        self.aabb_scale.as_ref().map(|a| *a.get_ref())
+    }
+
+    /// Surface samples per frame, when given.
+    pub fn points(&self) -> Option<u64> {
+        self.points.as_ref().map(|p| *p.get_ref())
+    }
+
+    /// Voxel edge for downsampling, when given.
+    pub fn voxel(&self) -> Option<f64> {
+        self.voxel.as_ref().map(|v| *v.get_ref())
+    }
+
+    /// The `2^vox` grid, when given.
+    pub fn vox(&self) -> Option<u32> {
+        self.vox.as_ref().map(|v| *v.get_ref())
+    }
+
+    /// The file name pattern, when given.
+    pub fn pattern(&self) -> Option<&str> {
+        self.pattern.as_ref().map(|p| p.get_ref().as_str())
     }
 }

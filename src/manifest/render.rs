@@ -19,15 +19,15 @@ pub const NERF_CAMERA_ANGLE_X: f64 = 0.6911112070083618;
 pub struct Render {
     /// `[width, height]` in pixels.
     #[serde(default = "default_resolution")]
-    pub resolution: Spanned<[u32; 2]>,
+    pub(super) resolution: Spanned<[u32; 2]>,
     /// Horizontal field of view in radians.
-    pub camera_angle_x: Option<Spanned<f64>>,
+    pub(super) camera_angle_x: Option<Spanned<f64>>,
     /// Focal length in mm (with `sensor_mm`, Blender's sensor width, default 36).
-    pub focal_mm: Option<Spanned<f64>>,
+    pub(super) focal_mm: Option<Spanned<f64>>,
     /// Sensor width in mm (default 36, Blender's).
     pub sensor_mm: Option<f64>,
     /// Focal length in pixels, x.
-    pub fx: Option<Spanned<f64>>,
+    pub(super) fx: Option<Spanned<f64>>,
     /// Focal length in pixels, y (default `fx`).
     pub fy: Option<f64>,
     /// Principal point x in pixels (default width / 2).
@@ -40,16 +40,16 @@ pub struct Render {
     pub far: Option<f64>,
     /// Supersampling: 1, 4, 9 or 16 samples per pixel.
     #[serde(default = "one")]
-    pub samples: Spanned<u32>,
+    pub(super) samples: Spanned<u32>,
     /// `"unlit"` (albedo) or `"lambert"`.
     #[serde(default)]
     pub shading: Shading,
     /// `"transparent"` (default), `"white"`, `"black"` or `[r, g, b]` in 0..1 sRGB.
     #[serde(default)]
-    pub background: Option<Spanned<Background>>,
+    pub(super) background: Option<Spanned<Background>>,
     /// Which images to write per view: `rgba`, `depth`, `normal`, `mask`.
     #[serde(default = "default_passes")]
-    pub passes: Spanned<Vec<Pass>>,
+    pub(super) passes: Spanned<Vec<Pass>>,
     /// Depth pass options.
     #[serde(default)]
     pub depth: DepthOptions,
@@ -423,5 +423,43 @@ impl Render {
                 diags.push(Diagnostic::error(format!("splat size {v} must be positive"), None));
             }
         }
+    }
+}
+
+/// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
+impl Render {
+    /// `[width, height]`.
+    pub fn resolution(&self) -> [u32; 2] {
+        *self.resolution.get_ref()
+    }
+
+    /// Horizontal field of view in radians, when given.
+    pub fn camera_angle_x(&self) -> Option<f64> {
+        self.camera_angle_x.as_ref().map(|a| *a.get_ref())
+    }
+
+    /// Focal length in millimetres, when given.
+    pub fn focal_mm(&self) -> Option<f64> {
+        self.focal_mm.as_ref().map(|f| *f.get_ref())
+    }
+
+    /// Focal length in pixels, when given.
+    pub fn fx(&self) -> Option<f64> {
+        self.fx.as_ref().map(|f| *f.get_ref())
+    }
+
+    /// Samples per pixel.
+    pub fn samples(&self) -> u32 {
+        *self.samples.get_ref()
+    }
+
+    /// The background, when given.
+    pub fn background(&self) -> Option<&Background> {
+        self.background.as_ref().map(|b| b.get_ref())
+    }
+
+    /// The passes, in manifest order.
+    pub fn passes(&self) -> &[Pass] {
+        self.passes.get_ref()
     }
 }

@@ -16,15 +16,15 @@ pub const NERF_RADIUS: f64 = 4.031128874149275;
 #[serde(deny_unknown_fields)]
 pub struct Rig {
     /// The recipe.
-    pub kind: Spanned<RigKind>,
+    pub(super) kind: Spanned<RigKind>,
     /// Distance from the target (default 4.0311, NeRF-synthetic's).
-    pub radius: Option<Spanned<f64>>,
+    pub(super) radius: Option<Spanned<f64>>,
     /// Point the cameras look at (default the origin).
     pub target: Option<[f64; 3]>,
     /// `sphere`/`fibonacci`/`dome`: elevation band, `"full"` or `"upper"` (default `"upper"`).
     pub band: Option<Band>,
     /// `sphere`/`fibonacci`/`dome`: elevation limits in degrees, `[min, max]` (overrides `band`).
-    pub elevation_range_deg: Option<Spanned<[f64; 2]>>,
+    pub(super) elevation_range_deg: Option<Spanned<[f64; 2]>>,
     /// `orbit`: elevation in degrees (default 30).
     pub elevation_deg: Option<f64>,
     /// `orbit`: `"fixed"` elevation (default) or the NeRF-synthetic test `"nerf-test"` schedule.
@@ -32,7 +32,7 @@ pub struct Rig {
     /// `orbit`/`dome`: azimuth of the first view in degrees.
     pub start_azimuth_deg: Option<f64>,
     /// `dome`: number of rings (the split's views are shared evenly among them).
-    pub rings: Option<Spanned<u32>>,
+    pub(super) rings: Option<Spanned<u32>>,
     /// `forward-facing`: `"plane"` grid (default) or `"spiral"`.
     pub layout: Option<ForwardLayout>,
     /// `forward-facing`: size of the camera plane `[width, height]` in world units (default [1, 0.75]).
@@ -41,9 +41,9 @@ pub struct Rig {
     /// stream.
     pub numpy_seed: Option<u32>,
     /// `explicit`: the poses.
-    pub poses: Option<Spanned<Vec<Pose>>>,
+    pub(super) poses: Option<Spanned<Vec<Pose>>>,
     /// `from-file`: a transforms.json (NeRF, D-NeRF, nerfstudio) whose cameras to reuse.
-    pub file: Option<Spanned<String>>,
+    pub(super) file: Option<Spanned<String>>,
     /// Random perturbation of each pose.
     pub jitter: Option<Jitter>,
 }
@@ -208,5 +208,38 @@ impl Rig {
             ),
             _ => {}
         }
+    }
+}
+
+/// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
+impl Rig {
+    /// The rig's kind.
+    pub fn kind(&self) -> RigKind {
+        *self.kind.get_ref()
+    }
+
+    /// Camera distance, when given.
+    pub fn radius(&self) -> Option<f64> {
+        self.radius.as_ref().map(|r| *r.get_ref())
+    }
+
+    /// Elevation range in degrees, when given.
+    pub fn elevation_range_deg(&self) -> Option<[f64; 2]> {
+        self.elevation_range_deg.as_ref().map(|e| *e.get_ref())
+    }
+
+    /// Rings of a dome, when given.
+    pub fn rings(&self) -> Option<u32> {
+        self.rings.as_ref().map(|r| *r.get_ref())
+    }
+
+    /// Explicit poses (empty when none).
+    pub fn poses(&self) -> &[Pose] {
+        self.poses.as_ref().map_or(&[], |p| p.get_ref().as_slice())
+    }
+
+    /// The camera file of a from-file rig, when given.
+    pub fn file(&self) -> Option<&str> {
+        self.file.as_ref().map(|f| f.get_ref().as_str())
     }
 }

@@ -12,17 +12,17 @@ use super::transform::Transform;
 #[serde(deny_unknown_fields)]
 pub struct Source {
     /// An animated (or static) glTF 2.0 file, `.gltf` or `.glb`.
-    pub gltf: Option<Spanned<String>>,
+    pub(super) gltf: Option<Spanned<String>>,
     /// A static mesh, glTF or PLY.
-    pub mesh: Option<Spanned<String>>,
+    pub(super) mesh: Option<Spanned<String>>,
     /// A PLY sequence: a pattern with `{frame}` / `{frame:04}`, or a glob (`*`, `?`, `[…]`).
-    pub ply_sequence: Option<Spanned<String>>,
+    pub(super) ply_sequence: Option<Spanned<String>>,
     /// Which glTF animation clips play: an index, a name, a list of them, or `"all"`. Default: the first clip.
-    pub animation: Option<Spanned<AnimationSel>>,
+    pub(super) animation: Option<Spanned<AnimationSel>>,
     /// Which glTF scene (default: the file's default scene, else all scenes).
     pub scene: Option<u32>,
     /// Frame times (glTF) or frame numbers (PLY sequences).
-    pub frames: Option<Spanned<Frames>>,
+    pub(super) frames: Option<Spanned<Frames>>,
     /// A transform applied to this source alone, before the global `[transform]`.
     pub transform: Option<Transform>,
 }
@@ -62,7 +62,7 @@ pub enum ClipRef {
 
 impl Source {
     /// The kind and the path string, if exactly one kind is set.
-    pub fn kind(&self) -> Option<(SourceKind, &Spanned<String>)> {
+    pub(super) fn kind_spanned(&self) -> Option<(SourceKind, &Spanned<String>)> {
         match (&self.gltf, &self.mesh, &self.ply_sequence) {
             (Some(p), None, None) => Some((SourceKind::Gltf, p)),
             (None, Some(p), None) => Some((SourceKind::Mesh, p)),
@@ -140,4 +140,37 @@ impl Source {
 /// Whether a `ply_sequence` string is a `{frame}` pattern (as opposed to a glob).
 pub fn is_pattern(s: &str) -> bool {
     s.contains("{frame")
+}
+
+/// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
+impl Source {
+    /// The glTF file, when given.
+    pub fn gltf(&self) -> Option<&str> {
+        self.gltf.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The mesh file, when given.
+    pub fn mesh(&self) -> Option<&str> {
+        self.mesh.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The PLY sequence pattern or glob, when given.
+    pub fn ply_sequence(&self) -> Option<&str> {
+        self.ply_sequence.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The animation selection, when given.
+    pub fn animation(&self) -> Option<&AnimationSel> {
+        self.animation.as_ref().map(|a| a.get_ref())
+    }
+
+    /// The frame selection, when given.
+    pub fn frames(&self) -> Option<&Frames> {
+        self.frames.as_ref().map(|f| f.get_ref())
+    }
+
+    /// The source's kind and its file (manifest-relative).
+    pub fn kind(&self) -> Option<(SourceKind, &str)> {
+        self.kind_spanned().map(|(k, p)| (k, p.get_ref().as_str()))
+    }
 }

@@ -14,16 +14,16 @@ pub const MAX_VIEWS: u32 = 1_000_000;
 #[serde(deny_unknown_fields)]
 pub struct Split {
     /// The rig whose cameras this split uses.
-    pub rig: Spanned<String>,
+    pub(super) rig: Spanned<String>,
     /// Number of camera poses (not needed for `explicit`/`from-file` rigs).
-    pub views: Option<Spanned<u32>>,
+    pub(super) views: Option<Spanned<u32>>,
     /// How views meet frames (default `"all"`).
     #[serde(default)]
     pub time: TimeMode,
     /// `time = "random"`: how many (view, frame) pairs.
-    pub pairs: Option<Spanned<u32>>,
+    pub(super) pairs: Option<Spanned<u32>>,
     /// Which of the source frames this split uses (default all).
-    pub frames: Option<Spanned<FrameSubset>>,
+    pub(super) frames: Option<Spanned<FrameSubset>>,
     /// Seed of this split's random streams (default: derived from the dataset seed and the split name).
     pub seed: Option<u64>,
     /// Allow this split to share camera poses with another split (default false: a warning).
@@ -74,5 +74,28 @@ impl Split {
         if let Some(f) = &self.frames {
             FrameSubset::validate(f, diags);
         }
+    }
+}
+
+/// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
+impl Split {
+    /// The rig's name.
+    pub fn rig(&self) -> &str {
+        self.rig.get_ref()
+    }
+
+    /// Cameras, when given.
+    pub fn views(&self) -> Option<u32> {
+        self.views.as_ref().map(|v| *v.get_ref())
+    }
+
+    /// Random (frame, view) pairs, when given.
+    pub fn pairs(&self) -> Option<u32> {
+        self.pairs.as_ref().map(|p| *p.get_ref())
+    }
+
+    /// The frame subset, when given.
+    pub fn frames(&self) -> Option<&FrameSubset> {
+        self.frames.as_ref().map(|f| f.get_ref())
     }
 }

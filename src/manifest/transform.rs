@@ -17,7 +17,7 @@ pub struct Transform {
     /// The source's up axis: `"y"` (glTF, most scanners) or `"z"`. Default: `"y"` for glTF, `"z"` otherwise.
     pub up: Option<UpAxis>,
     /// Scale so that one measure of the bounds has this size.
-    pub fit: Option<Spanned<Fit>>,
+    pub(super) fit: Option<Spanned<Fit>>,
     /// Which point moves to the origin (default `"none"`).
     pub center: Option<Center>,
     /// Extra rotation, XYZ Euler angles in degrees (applied about world axes, X first).
@@ -27,7 +27,7 @@ pub struct Transform {
     /// Extra scale: one number or one per axis.
     pub scale: Option<Scale>,
     /// A raw 4×4 matrix (rows), applied first to source coordinates.
-    pub matrix: Option<Spanned<[[f64; 4]; 4]>>,
+    pub(super) matrix: Option<Spanned<[[f64; 4]; 4]>>,
     /// Which frames the bounds for `fit`/`center` come from.
     pub over: Option<Over>,
 }
@@ -117,5 +117,18 @@ impl Transform {
                 );
             }
         }
+    }
+}
+
+/// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
+impl Transform {
+    /// The fit, when given.
+    pub fn fit(&self) -> Option<&Fit> {
+        self.fit.as_ref().map(|f| f.get_ref())
+    }
+
+    /// The explicit matrix (rows), when given.
+    pub fn matrix(&self) -> Option<[[f64; 4]; 4]> {
+        self.matrix.as_ref().map(|m| *m.get_ref())
     }
 }

@@ -62,7 +62,7 @@ impl<'a> Graph<'a> {
         };
         let mut g = Graph { nodes: Vec::new(), keying, index: HashMap::new(), by_key: HashMap::new() };
         for (name, out) in &m.outputs {
-            if let Writer::PlySequence = out.writer.get_ref() {
+            if out.writer() == Writer::PlySequence {
                 let s = point_settings(m, scene, plan, name, out)?;
                 g.keying.points.insert(name.clone(), s);
             }
@@ -130,7 +130,7 @@ impl<'a> Graph<'a> {
     /// The actions one output needs, planned; returns them as the output's deps.
     fn plan_output(&mut self, m: &Manifest, name: &str, out: &Output) -> Result<Vec<ActionId>, Error> {
         let plan = self.keying.plan;
-        let writer = *out.writer.get_ref();
+        let writer = out.writer();
         let mut deps = Vec::new();
         if writer == Writer::PlySequence {
             let s = self.keying.points[name].clone();
@@ -164,14 +164,14 @@ impl<'a> Graph<'a> {
                 return Err(Error::SplitName { split: s.name.clone() });
             }
         }
-        let passes = m.render.passes.get_ref().clone();
+        let passes = m.render.passes().to_vec();
         for &i in &images {
             for &pass in &passes {
                 deps.push(self.render_pass(i, pass));
             }
         }
         let frames = plan.frames_of(&images);
-        let n = out.init_points.as_ref().map_or(DEFAULT_INIT_POINTS, |p| *p.get_ref());
+        let n = out.init_points().unwrap_or(DEFAULT_INIT_POINTS);
         match writer {
             Writer::Dnerf | Writer::Nerfstudio if n > 0 => {
                 deps.push(self.add(Action::InitCloud { frames, points: n }, format!("init-cloud {name}"), vec![]));
@@ -228,8 +228,8 @@ pub fn image_label(plan: &Plan, i: usize) -> String {
 }
 
 fn images_of(plan: &Plan, out: &Output) -> Result<Vec<usize>, Error> {
-    let names: Vec<&str> = match &out.splits {
-        Some(list) => list.iter().map(|s| s.get_ref().as_str()).collect(),
+    let names: Vec<&str> = match out.splits() {
+        Some(list) => list,
         None => plan.splits.iter().map(|s| s.name.as_str()).collect(),
     };
     let mut v = Vec::new();
@@ -260,7 +260,7 @@ fn check_dynerf(plan: &Plan, images: &[usize], frames: &[usize]) -> Result<(), E
 /// The background that opaque exports bake in: the manifest's, else white (NeRF-synthetic's convention).
 pub fn opaque_background(m: &Manifest) -> [u8; 3] {
     use crate::manifest::render::Background;
-    match m.render.background.as_ref().map(|b| b.get_ref()) {
+    match m.render.background() {
         Some(Background::Named(n)) if n == "black" => [0, 0, 0],
         Some(Background::Rgb(c)) => c.map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8),
         _ => [255, 255, 255],
@@ -269,12 +269,12 @@ pub fn opaque_background(m: &Manifest) -> [u8; 3] {
 
 /// Resolves a `ply-sequence` output's settings against the scene, refusing combinations that cannot work.
 fn point_settings(m: &Manifest, scene: &Scene, plan: &Plan, name: &str, out: &Output) -> Result<PointSettings, Error> {
-    let source = match &out.source {
-        Some(s) => {
-            let n = s.get_ref();
-            let i =
-                scene.source_index(n).ok_or_else(|| Error::NoSource { output: name.into(), source_name: n.clone() })?;
-            Some((i, n.clone()))
+    let source = match out.source() {
+        Some(n) => {
+            let i = scene
+                .source_index(n)
+                .ok_or_else(|| Error::NoSource { output: name.into(), source_name: n.to_string() })?;
+            Some((i, n.to_string()))
         }
         None => None,
     };
@@ -289,20 +289,20 @@ fn point_settings(m: &Manifest, scene: &Scene, plan: &Plan, name: &str, out: &Ou
     if correspondence && !fixed_topology {
         return Err(invalid("`correspondence` needs mesh sources (a PLY sequence has no fixed surface)"));
     }
-    if out.motion && (!correspondence || out.voxel.is_some() || out.vox.is_some()) {
+    if out.motion && (!correspondence || out.voxel().is_some() || out.vox().is_some()) {
         return Err(invalid("`motion` needs correspondence and no `voxel`/`vox` (merged points have no track)"));
     }
     Ok(PointSettings {
-        points: out.points.as_ref().map_or(0, |p| *p.get_ref()),
+        points: out.points().unwrap_or(0),
         source,
         correspondence,
         motion: out.motion,
-        voxel: out.voxel.as_ref().map(|v| *v.get_ref()),
-        vox: out.vox.as_ref().map(|v| *v.get_ref()),
+        voxel: out.voxel(),
+        vox: out.vox(),
         reduce: out.reduce.unwrap_or_default(),
         position: out.position.unwrap_or_default(),
         color_average: out.color_average.unwrap_or_default(),
         format: out.format.unwrap_or_default(),
-        pattern: out.file_pattern(m.dataset.name.get_ref()),
+        pattern: out.file_pattern(m.dataset.name()),
     })
 }

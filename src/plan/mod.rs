@@ -190,12 +190,12 @@ impl Plan {
         let (near, far) = (m.render.near.unwrap_or(0.05), m.render.far.unwrap_or(1000.0));
         let mut plan = Plan { splits: Vec::new(), images: Vec::new(), frames, warnings: Vec::new() };
         for (si, (name, split)) in m.splits.iter().enumerate() {
-            let rig_name = split.rig.get_ref();
+            let rig_name = split.rig();
             let rig =
-                m.rigs.get(rig_name).ok_or_else(|| Error::NoRig { split: name.clone(), rig: rig_name.clone() })?;
-            let selected: Vec<usize> = match &split.frames {
+                m.rigs.get(rig_name).ok_or_else(|| Error::NoRig { split: name.clone(), rig: rig_name.to_string() })?;
+            let selected: Vec<usize> = match split.frames() {
                 Some(f) => {
-                    let s: BTreeSet<u64> = f.get_ref().select(frames as u64).into_iter().collect();
+                    let s: BTreeSet<u64> = f.select(frames as u64).into_iter().collect();
                     s.into_iter().map(|f| f as usize).collect()
                 }
                 None => (0..frames).collect(),
@@ -203,15 +203,15 @@ impl Plan {
             if selected.is_empty() {
                 return Err(Error::NoFrames { split: name.clone(), frames });
             }
-            let views = match (split.views.as_ref(), split.time) {
-                (Some(v), _) => *v.get_ref(),
+            let views = match (split.views(), split.time) {
+                (Some(v), _) => v,
                 // Monocular without a count: one camera per frame.
                 (None, TimeMode::Monocular) => selected.len() as u32,
                 (None, _) => 0,
             };
             let seed = split_seed(m, name);
             let poses = rig::poses(rig, Identity { rig: rig_name, seed }, views, &m.dir)
-                .map_err(|source| Error::Rig { split: name.clone(), rig: rig_name.clone(), source })?;
+                .map_err(|source| Error::Rig { split: name.clone(), rig: rig_name.to_string(), source })?;
             if poses.is_empty() {
                 return Err(Error::NoCameras { split: name.clone() });
             }
@@ -221,7 +221,7 @@ impl Plan {
                     selected.iter().enumerate().map(|(i, &f)| (f, (i % poses.len()) as u32)).collect()
                 }
                 TimeMode::Random => {
-                    let want = split.pairs.as_ref().map(|p| *p.get_ref() as usize).unwrap_or(0);
+                    let want = split.pairs().map_or(0, |p| p as usize);
                     random_pairs(seed, want, &selected, poses.len())
                 }
             };

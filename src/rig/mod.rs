@@ -83,10 +83,10 @@ pub enum Error {
 /// `dir` resolves `from-file` paths.
 pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat4>, Error> {
     let target = DVec3::from(rig.target.unwrap_or([0.0; 3]));
-    let radius = rig.radius.as_ref().map(|r| *r.get_ref()).unwrap_or(NERF_RADIUS);
+    let radius = rig.radius().unwrap_or(NERF_RADIUS);
     let n = views as usize;
     let look = |eye: DVec3| look_at(eye, target);
-    let mut out: Vec<DMat4> = match *rig.kind.get_ref() {
+    let mut out: Vec<DMat4> = match rig.kind() {
         RigKind::Hemisphere => {
             let scale = radius / NERF_START.length();
             let draw = |u0: f64, u2: f64| {
@@ -162,7 +162,7 @@ pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat
         }
         RigKind::Dome => {
             let (lo, hi) = band(rig);
-            let rings = rig.rings.as_ref().map(|r| *r.get_ref() as usize).unwrap_or(3).min(n.max(1));
+            let rings = rig.rings().map_or(3, |r| r as usize).min(n.max(1));
             let start = rig.start_azimuth_deg.unwrap_or(0.0).to_radians();
             let mut v = Vec::with_capacity(n);
             for r in 0..rings {
@@ -208,7 +208,7 @@ pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat
             }
         }
         RigKind::Explicit => {
-            let list = rig.poses.as_ref().map(|p| p.get_ref().as_slice()).unwrap_or(&[]);
+            let list = rig.poses();
             list.iter()
                 .map(|p| match (p.c2w, p.position) {
                     (Some(m), _) => Ok(DMat4::from_cols_array_2d(&m).transpose()),
@@ -220,8 +220,8 @@ pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat
                 .collect::<Result<_, _>>()?
         }
         RigKind::FromFile => {
-            let file = rig.file.as_ref().ok_or(Error::NoFile)?;
-            from_file::read(&dir.join(file.get_ref()))?
+            let file = rig.file().ok_or(Error::NoFile)?;
+            from_file::read(&dir.join(file))?
         }
     };
     if let Some(j) = rig.jitter {
@@ -261,8 +261,7 @@ fn dir_from(z: f64, az: f64) -> DVec3 {
 
 /// The elevation band in radians.
 fn band(rig: &Rig) -> (f64, f64) {
-    if let Some(e) = &rig.elevation_range_deg {
-        let [lo, hi] = *e.get_ref();
+    if let Some([lo, hi]) = rig.elevation_range_deg() {
         return (lo.to_radians(), hi.to_radians());
     }
     match rig.band.unwrap_or(Band::Upper) {

@@ -17,7 +17,7 @@ use glam::Mat4;
 pub use posed::{PosedPrimitive, PosedScene, PrimKind};
 pub use source::{LoadedSource, SourceData};
 
-use crate::manifest::transform::{Over, Transform, UpAxis};
+use crate::manifest::transform::{Over, UpAxis};
 use crate::manifest::Manifest;
 use gltf::PoseScratch;
 use transform::Stats;
@@ -134,7 +134,8 @@ impl Scene {
             );
         }
         // The global table's `up` is only the sources' default: the rotation was applied per source.
-        let g = Transform { up: None, ..m.transform.clone() };
+        let mut g = m.transform.clone();
+        g.up = None;
         let g_pre = transform::pre(&g, UpAxis::Z).as_mat4();
         let mut stats = Stats::default();
         if transform::needs_stats(&g) {

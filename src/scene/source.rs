@@ -48,14 +48,14 @@ impl LoadedSource {
     pub fn load(name: &str, s: &Source, dir: &std::path::Path) -> Result<LoadedSource, Error> {
         let invalid = |message: String| Error::Source { name: name.to_string(), message };
         let (kind, path) = s.kind().ok_or_else(|| invalid("names no file".into()))?;
-        let full: PathBuf = dir.join(path.get_ref());
+        let full: PathBuf = dir.join(path);
         let is_ply = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
         let data = match kind {
             SourceKind::Gltf => {
                 let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
-                let clips = select_clips(&asset, s.animation.as_ref().map(|a| a.get_ref())).map_err(invalid)?;
+                let clips = select_clips(&asset, s.animation()).map_err(invalid)?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
-                let f = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
+                let f = s.frames().cloned().unwrap_or_default();
                 let fps = f.fps();
                 let start = f.start.unwrap_or(0);
                 let step = f.step() as i64;
@@ -79,8 +79,8 @@ impl LoadedSource {
                 SourceData::Static(posed)
             }
             SourceKind::PlySequence => {
-                let frames = s.frames.as_ref().map(|f| f.get_ref().clone()).unwrap_or_default();
-                let sequence = sequence::resolve(dir, path.get_ref(), &frames)
+                let frames = s.frames().cloned().unwrap_or_default();
+                let sequence = sequence::resolve(dir, path, &frames)
                     .map_err(|source| Error::Sequence { name: name.to_string(), source })?;
                 SourceData::Sequence(sequence)
             }

@@ -46,7 +46,7 @@ impl Stats {
 
 /// `up · matrix`: the part of the transform that does not depend on bounds.
 pub fn pre(t: &Transform, up: UpAxis) -> DMat4 {
-    let m = t.matrix.as_ref().map_or(DMat4::IDENTITY, |m| DMat4::from_cols_array_2d(m.get_ref()).transpose());
+    let m = t.matrix().map_or(DMat4::IDENTITY, |m| DMat4::from_cols_array_2d(&m).transpose());
     let up_m = match up {
         // +Y up → +Z up: +90° about X maps (x, y, z) to (x, -z, y).
         UpAxis::Y => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
@@ -71,7 +71,7 @@ pub enum Error {
 
 /// Whether the transform needs bounds at all.
 pub fn needs_stats(t: &Transform) -> bool {
-    t.fit.is_some() || matches!(t.center, Some(Center::Bbox | Center::Centroid))
+    t.fit().is_some() || matches!(t.center, Some(Center::Bbox | Center::Centroid))
 }
 
 /// The full matrix, given stats gathered after [`pre`]. Errors when a fit is asked of empty or flat geometry.
@@ -86,8 +86,7 @@ pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, Error> 
         return Err(Error::NoGeometry);
     }
     let mut s = 1.0;
-    if let Some(fit) = &t.fit {
-        let f = fit.get_ref();
+    if let Some(f) = t.fit() {
         let size = stats.hi - stats.lo;
         let (measure, target, what) = if let Some(h) = f.height {
             (size.z, h, "height")
@@ -138,15 +137,11 @@ fn pick(bit: usize, lo: f64, hi: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::manifest::transform::Fit;
 
     #[test]
     fn y_up_becomes_z_up_and_fits() {
-        let t = Transform {
-            fit: Some(toml::Spanned::new(0..0, Fit { height: Some(2.0), ..Default::default() })),
-            center: Some(Center::Bbox),
-            ..Default::default()
-        };
+        // As the manifest reads it (its spans stay inside `manifest`).
+        let t: Transform = toml::from_str("fit = { height = 2.0 }\ncenter = \"bbox\"").unwrap();
         let mut st = Stats::default();
         // A column 4 tall along source Y, from y=1 to y=5: after up it spans z=1..5.
         let p = pre(&t, UpAxis::Y).as_mat4();

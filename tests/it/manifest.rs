@@ -167,7 +167,7 @@ format = "ascii"
 #[test]
 fn every_table_parses_from_a_full_example() {
     let m = check(&full_manifest()).unwrap_or_else(|r| panic!("{}", r.render(false)));
-    assert_eq!(m.dataset.name.get_ref(), "full");
+    assert_eq!(m.dataset.name(), "full");
     assert_eq!(m.dataset.seed, 42);
     assert_eq!(m.sources.len(), 3);
     assert_eq!(m.rigs.len(), 6);
@@ -177,7 +177,7 @@ fn every_table_parses_from_a_full_example() {
     assert_eq!(m.render.intrinsics(), (500.0, 510.0, 320.0, 240.0));
     assert_eq!(m.transform.over, Some(manifest::transform::Over::First));
     assert_eq!(m.splits["test"].time, manifest::TimeMode::Random);
-    assert_eq!(m.outputs["pc"].writer.get_ref(), &manifest::Writer::PlySequence);
+    assert_eq!(m.outputs["pc"].writer(), manifest::Writer::PlySequence);
     // Named tables are kept by name: table order in the file does not matter.
     assert_eq!(m.rigs.keys().collect::<Vec<_>>(), ["dome", "ff", "fib", "fixed", "hemi", "ring"]);
 }
