@@ -11,6 +11,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
 use crate::build::{self, Options, Progress};
 use crate::execute::Shard;
+use crate::plan::actions::Kind;
 
 struct Display {
     bar: Option<ProgressBar>,
@@ -93,23 +94,26 @@ pub fn run(manifest: &Path, jobs: Option<usize>, shard: Option<Shard>, ui: Ui) -
             }
             eprintln!("{name}: {} files in {}", w.files.len(), w.root.display());
         }
-        let rate = if report.run_seconds > 0.0 { report.renders as f64 / report.run_seconds } else { 0.0 };
+        let render = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
+        let rate = if render.seconds > 0.0 { report.renders as f64 / render.seconds } else { 0.0 };
         eprintln!(
-            "{} images: {} cached, {} rendered ({rate:.1} images/s); {:.2} s in all",
-            report.images, report.hits, report.renders, report.total_seconds
+            "{} images: {} cached, {} rendered in {:.2} s ({rate:.1} images/s); {:.2} s in all",
+            report.images, report.hits, report.renders, render.seconds, report.total_seconds
         );
         let kinds: Vec<String> = report
             .actions
             .iter()
+            .filter(|(_, c)| c.ran > 0 || c.elsewhere > 0)
             .map(|(k, c)| {
                 let shards = if c.elsewhere > 0 { format!(", {} to other shards", c.elsewhere) } else { String::new() };
-                format!("{} {}/{} run{shards}", k.name(), c.ran, c.planned)
+                let time = if k.cached() { format!(" in {:.2} s", c.seconds) } else { String::new() };
+                format!("{} {}/{}{time}{shards}", k.name(), c.ran, c.planned)
             })
             .collect();
         if report.nothing_to_do() {
             eprintln!("nothing to do: every action cached, every output up to date");
         } else {
-            eprintln!("actions: {}", kinds.join(", "));
+            eprintln!("ran: {}", kinds.join(", "));
         }
     }
     Ok(ExitCode::SUCCESS)

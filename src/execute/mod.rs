@@ -122,7 +122,7 @@ pub(crate) fn lookup(g: &Graph, store: &Store, stat: &StatCache) -> Lookup {
 }
 
 /// Counts of one action kind in a build.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Counts {
     /// Actions of this kind in the graph.
     pub planned: usize,
@@ -132,6 +132,8 @@ pub struct Counts {
     pub ran: usize,
     /// Left to other shards.
     pub elsewhere: usize,
+    /// Seconds spent running this kind's actions.
+    pub seconds: f64,
 }
 
 /// What [`run`] did.
@@ -229,6 +231,7 @@ pub(crate) fn run(
         if ids.is_empty() {
             continue;
         }
+        let t = std::time::Instant::now();
         let made: Made = match kind {
             Kind::RenderPass => render::passes(g, x, &ids, &tick)?,
             Kind::Composite => render::composites(g, x, &blobs, &ids, &tick)?,
@@ -238,6 +241,7 @@ pub(crate) fn run(
         for (id, b) in made {
             blobs[id.0 as usize] = Some(b);
         }
+        counts.entry(kind).or_default().seconds = t.elapsed().as_secs_f64();
     }
     let cached = state.iter().map(|s| *s == State::Cached).collect();
     Ok(Outcome { blobs, counts, cached, ran: here })
