@@ -133,25 +133,8 @@ fn correspondence_tracks_surface_points_and_motion() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::write(d.join("tri.gltf"), crate::common::animated_triangle(0.3)).unwrap();
-    let text = r#"[dataset]
-name = "tri"
-out = "out"
-cache = "cache"
-[source.tri]
-gltf = "tri.gltf"
-frames = { count = 4, fps = 1 }
-[render]
-resolution = [16, 16]
-[rig.o]
-kind = "orbit"
-[split.train]
-rig = "o"
-views = 1
-[output.p]
-writer = "ply-sequence"
-points = 500
-motion = true
-"#;
+    let outputs = "[output.p]\nwriter = \"ply-sequence\"\npoints = 500\nmotion = true\n";
+    let text = crate::common::triangle_manifest(4, 1, 16, 1, outputs);
     std::fs::write(d.join("m.toml"), text).unwrap();
     build(&d.join("m.toml"), 2);
     let read = |f: usize| {

@@ -62,6 +62,17 @@ pub fn animated_triangle(last_key_x: f32) -> String {
     )
 }
 
+/// A manifest over `tri.gltf` ([`animated_triangle`], written beside it by the test): dataset `tri`, `count`
+/// frames at `fps`, `size`² images, `views` orbit cameras in split `train`, then `outputs`.
+pub fn triangle_manifest(count: u32, fps: u32, size: u32, views: u32, outputs: &str) -> String {
+    format!(
+        "[dataset]\nname = \"tri\"\nout = \"out\"\ncache = \"cache\"\n\
+         [source.tri]\ngltf = \"tri.gltf\"\nframes = {{ count = {count}, fps = {fps} }}\n\
+         [render]\nresolution = [{size}, {size}]\n[rig.o]\nkind = \"orbit\"\n\
+         [split.train]\nrig = \"o\"\nviews = {views}\n{outputs}"
+    )
+}
+
 /// Every file under `root` (root-relative path → bytes).
 pub fn tree(root: &Path) -> BTreeMap<String, Vec<u8>> {
     let mut out = BTreeMap::new();

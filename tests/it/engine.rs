@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::common::{animated_triangle, cesium_glb, cesium_head, data, tree};
+use crate::common::{animated_triangle, cesium_glb, cesium_head, data, tree, triangle_manifest};
 use vvgen::build::Shard;
 use vvgen::build::{build, Options, Report, Silent};
 use vvgen::plan::actions::Kind;
@@ -291,24 +291,7 @@ fn editing_an_animation_key_rerenders_only_the_frames_it_moves() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::write(d.join("tri.gltf"), animated_triangle(0.3)).unwrap();
-    let text = r#"[dataset]
-name = "tri"
-out = "out"
-cache = "cache"
-[source.tri]
-gltf = "tri.gltf"
-frames = { count = 7, fps = 2 }
-[render]
-resolution = [32, 32]
-[rig.o]
-kind = "orbit"
-[split.train]
-rig = "o"
-views = 2
-[output.d]
-writer = "dnerf"
-init_points = 0
-"#;
+    let text = &triangle_manifest(7, 2, 32, 2, "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n");
     assert_eq!(run(d, text).renders, 14);
     // Frames at t = 0, 0.5, …, 3 s: moving the key at t = 3 changes only t ∈ (2, 3], i.e. frames 5 and 6.
     std::fs::write(d.join("tri.gltf"), animated_triangle(0.9)).unwrap();
