@@ -118,6 +118,9 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
         return None;
     }
     let root = root.into_inner();
+    for (_, value) in root.iter() {
+        non_finite(value, diags);
+    }
     let mut tables: BTreeMap<&str, &walk::Raw<'_>> = BTreeMap::new();
     for (key, value) in root.iter() {
         let name: &str = key.get_ref().as_ref();
@@ -313,6 +316,25 @@ fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut 
                 );
             }
         }
+    }
+}
+
+/// Every float of a manifest must be finite: TOML has `nan` and `inf`, and `1e400` overflows to infinity, and
+/// any of them would reach matrices, cameras and images as garbage.
+fn non_finite(v: &walk::Raw<'_>, diags: &mut Vec<Diagnostic>) {
+    match v.get_ref() {
+        DeValue::Float(f) => {
+            let text = f.as_str();
+            if !text.replace('_', "").parse::<f64>().is_ok_and(f64::is_finite) {
+                diags.push(
+                    Diagnostic::error(format!("`{text}` is not a finite number"), Some(v.span()))
+                        .with_help("every number in a manifest must be finite (no nan, no inf, no overflow)"),
+                );
+            }
+        }
+        DeValue::Array(a) => a.iter().for_each(|x| non_finite(x, diags)),
+        DeValue::Table(t) => t.iter().for_each(|(_, x)| non_finite(x, diags)),
+        _ => {}
     }
 }
 

@@ -322,6 +322,22 @@ fn keys_of_another_kind_are_rejected() {
     assert!(l.iter().any(|(_, m, _)| m == "key `rings` does not apply to rig `ring` (kind = \"orbit\")"), "{l:?}");
 }
 
+/// NaN, infinity and overflowing literals are refused wherever a float stands, with their place.
+#[test]
+fn every_float_must_be_finite() {
+    let text = full_manifest()
+        .replace("translate = [1.0, 0.0, 0.0]", "translate = [inf, 0.0, 0.0]")
+        .replace("voxel = 0.01", "voxel = nan")
+        .replace("start_azimuth_deg = 90.0", "start_azimuth_deg = -1e400");
+    let l = lines(&errors(&text));
+    let bad: Vec<&str> =
+        l.iter().filter(|(_, m, _)| m.ends_with("is not a finite number")).map(|(_, m, _)| m.as_str()).collect();
+    assert_eq!(
+        bad,
+        ["`inf` is not a finite number", "`-1e400` is not a finite number", "`nan` is not a finite number"]
+    );
+}
+
 /// What the plan would refuse, `check` refuses first (before any rendering).
 #[test]
 fn check_refuses_what_the_plan_would() {
