@@ -162,6 +162,8 @@ pub struct Report {
     /// Per action kind: planned, cached, run, left to other shards. Outputs count as cached when they were
     /// already up to date.
     pub actions: BTreeMap<Kind, Counts>,
+    /// The same for the `[dataset] after` manifests, summed.
+    pub after_actions: BTreeMap<Kind, Counts>,
     /// Images in the plan that some output renders.
     pub images: usize,
     /// Images whose every pass was cached.
@@ -191,9 +193,10 @@ impl Report {
         self.actions.get(&kind).map_or(0, |c| c.elsewhere)
     }
 
-    /// Whether the build ran nothing: every action was cached and every output up to date.
+    /// Whether the build ran nothing (its `after` manifests included): every action was cached and every output
+    /// up to date.
     pub fn nothing_to_do(&self) -> bool {
-        self.actions.values().all(|c| c.ran == 0)
+        self.actions.values().chain(self.after_actions.values()).all(|c| c.ran == 0)
     }
 }
 
@@ -243,13 +246,40 @@ pub(crate) fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, Error> {
 pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress) -> Result<Report, Error> {
     let t0 = Instant::now();
     let mut before = Vec::new();
+    let mut before_actions: BTreeMap<Kind, Counts> = BTreeMap::new();
     for a in &m.after {
         let file = a.path.file_name().map_or(String::new(), |f| f.to_string_lossy().into_owned());
-        let r = build(a, cache, Options::default(), progress)
+        // A shard runs its part of the prerequisites too, so N shards do their work once, not N times.
+        let r = build(a, cache, opts, progress)
             .map_err(|e| Error::After { manifest: a.path.clone(), source: Box::new(e) })?;
+        for (kind, c) in r.actions.iter().chain(&r.after_actions) {
+            before_actions.entry(*kind).or_default().add(c);
+        }
         before.extend(r.after.into_iter().chain(r.outputs.into_iter().map(|(name, w)| (format!("{file}/{name}"), w))));
     }
-    let p = prepare(m, cache)?;
+    let p = match prepare(m, cache) {
+        Ok(p) => p,
+        // This manifest's sources are its prerequisites' outputs, which only the final unsharded build writes:
+        // this shard's part is the prerequisites' work.
+        Err(Error::Scene { .. }) if opts.shard.is_some() && !m.after.is_empty() => {
+            return Ok(Report {
+                actions: BTreeMap::new(),
+                after_actions: before_actions,
+                images: 0,
+                hits: 0,
+                renders: 0,
+                run_seconds: 0.0,
+                total_seconds: t0.elapsed().as_secs_f64(),
+                outputs: Vec::new(),
+                after: before,
+                warnings: vec![format!(
+                    "{}: waits for its `after` manifests' outputs: the final build runs its actions",
+                    m.path.display()
+                )],
+            });
+        }
+        Err(e) => return Err(e),
+    };
     let g = p.graph(m)?;
     let last = record::read(&p.store, m);
     let look = execute::lookup(&g, &p.store, &p.stat);
@@ -269,6 +299,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     warnings.extend(p.plan.warnings.iter().cloned());
     let mut report = Report {
         actions: outcome.counts.clone(),
+        after_actions: before_actions,
         images,
         hits,
         renders,

@@ -136,6 +136,17 @@ pub struct Counts {
     pub seconds: f64,
 }
 
+impl Counts {
+    /// Adds `other`'s counts to these.
+    pub fn add(&mut self, other: &Counts) {
+        self.planned += other.planned;
+        self.cached += other.cached;
+        self.ran += other.ran;
+        self.elsewhere += other.elsewhere;
+        self.seconds += other.seconds;
+    }
+}
+
 /// What [`run`] did.
 #[derive(Debug)]
 pub(crate) struct Outcome {
@@ -194,15 +205,21 @@ pub(crate) fn run(
 ) -> Result<Outcome, Error> {
     let Lookup { mut blobs, state } = look;
     let owns = |id: ActionId| shard.is_none_or(|s| s.owns(&owner_key(g, id)));
-    // An action runs here when it must run, is ours, and each input is cached or also runs here.
+    // An action runs here when it must run and is ours, or when an action that runs here reads it (a shared
+    // input such as a sequence's bounds: cheap, and the same bytes whichever shard makes it). Readers come after
+    // their inputs, so one walk from the end settles it.
     let mut here = vec![false; g.nodes.len()];
-    for id in g.ids() {
+    for id in g.ids().rev() {
         let i = id.0 as usize;
-        let kind = g.node(id).action.kind();
-        here[i] = kind.cached()
-            && state[i] == State::Run
-            && owns(id)
-            && g.node(id).deps.iter().all(|d| state[d.0 as usize] == State::Cached || here[d.0 as usize]);
+        let n = g.node(id);
+        if n.action.kind().cached() && state[i] == State::Run && (here[i] || owns(id)) {
+            here[i] = true;
+            for d in &n.deps {
+                if state[d.0 as usize] == State::Run {
+                    here[d.0 as usize] = true;
+                }
+            }
+        }
     }
     let mut counts: BTreeMap<Kind, Counts> = BTreeMap::new();
     for id in g.ids() {
@@ -247,16 +264,22 @@ pub(crate) fn run(
     Ok(Outcome { blobs, counts, cached, ran: here })
 }
 
-/// The key that decides which shard runs node `id`: its own, except that the passes of one image go together
-/// (one render serves them all), decided by the image's first planned pass.
+/// The key that decides which shard runs node `id`: its own, except where one action feeds exactly one other,
+/// which then go together: the passes of one image (one render serves them all, decided by the image's first
+/// planned pass) and its composite, and a frame's samples with the point frame that reduces them.
 fn owner_key(g: &Graph, id: ActionId) -> Digest {
-    if let Action::RenderPass { image, .. } = g.node(id).action {
-        use crate::manifest::render::Pass;
-        for pass in [Pass::Rgba, Pass::Depth, Pass::Normal, Pass::Mask] {
-            if let Some(first) = g.id(&Action::RenderPass { image, pass }) {
-                return g.node(first).key;
-            }
+    use crate::manifest::render::Pass;
+    let key_of = |a: &Action| g.id(a).map(|i| g.node(i).key);
+    match &g.node(id).action {
+        Action::RenderPass { image, .. } | Action::Composite { image, .. } => {
+            let first = [Pass::Rgba, Pass::Depth, Pass::Normal, Pass::Mask]
+                .into_iter()
+                .find_map(|pass| key_of(&Action::RenderPass { image: *image, pass }));
+            first.unwrap_or(g.node(id).key)
         }
+        Action::SampleFrame { output, frame } => {
+            key_of(&Action::PointFrame { output: output.clone(), frame: *frame }).unwrap_or(g.node(id).key)
+        }
+        _ => g.node(id).key,
     }
-    g.node(id).key
 }

@@ -117,7 +117,7 @@ impl<'a> Graph<'a> {
     }
 
     /// Ids of every node, in order.
-    pub fn ids(&self) -> impl Iterator<Item = ActionId> {
+    pub fn ids(&self) -> impl DoubleEndedIterator<Item = ActionId> {
         (0..self.nodes.len() as u32).map(ActionId)
     }
 

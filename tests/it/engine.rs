@@ -374,3 +374,35 @@ fn float_exr_files_carry_the_png_passes_at_full_precision() {
         assert_eq!(std::fs::read(other.path().join("out/m_dnerf").join(rel)).unwrap(), read(rel), "{rel}");
     }
 }
+
+/// Shards split the `[dataset] after` manifests' work as well: the two shards' prerequisite actions add up to one
+/// build's, and the final build only writes the prerequisites' outputs and runs the main manifest.
+#[test]
+fn shards_split_the_prerequisites_work_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let points = "[output.v]\nwriter = \"ply-sequence\"\npoints = 4000\nvox = 8\n";
+    std::fs::write(d.join("m.toml"), format!("{}{points}", cesium_head(3, 2, 1.8, "", ""))).unwrap();
+    std::fs::write(
+        d.join("cloud.toml"),
+        "[dataset]\nname = \"c\"\nout = \"out\"\ncache = \"cache\"\nafter = [\"m.toml\"]\n\
+         [source.c]\nply_sequence = \"out/m_points/m_{frame:04}.ply\"\nframes = { start = 0, end = 2, fps = 2 }\n\
+         [render]\nresolution = [32, 32]\n[rig.o]\nkind = \"orbit\"\n[split.train]\nrig = \"o\"\nviews = 2\n\
+         [output.d]\nwriter = \"dnerf\"\ninit_points = 0\n",
+    )
+    .unwrap();
+    let (m, _) = vvgen::manifest::load(&d.join("cloud.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
+    let mut point_frames = 0;
+    for index in 0..2 {
+        let r = build(&m, &d.join("cache"), Options { shard: Some(Shard { index, count: 2 }) }, &Silent).unwrap();
+        let c = r.after_actions[&Kind::PointFrame];
+        assert!(c.planned == 3 && c.ran < 3, "shard {index}: {c:?}");
+        point_frames += c.ran;
+        assert!(r.actions.is_empty() && r.outputs.is_empty(), "the main manifest waits for the final build");
+    }
+    assert_eq!(point_frames, 3, "each prerequisite frame ran in exactly one shard");
+    let r = build(&m, &d.join("cache"), Options::default(), &Silent).unwrap();
+    assert_eq!((r.after_actions[&Kind::PointFrame].ran, r.after_actions[&Kind::SampleFrame].ran), (0, 0));
+    assert_eq!(r.ran(Kind::RenderPass), 6);
+    assert!(build(&m, &d.join("cache"), Options::default(), &Silent).unwrap().nothing_to_do());
+}
