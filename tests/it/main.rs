@@ -12,5 +12,6 @@ mod points;
 mod render;
 mod rigs;
 mod scene;
+mod slurm;
 mod transform;
 mod writers;
