@@ -110,7 +110,7 @@ impl Verification {
 #[derive(Debug, thiserror::Error)]
 pub enum VerifyError {
     /// The lock or the directory cannot be read.
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Io {
         /// The file or directory.
         path: PathBuf,
@@ -119,7 +119,7 @@ pub enum VerifyError {
         source: std::io::Error,
     },
     /// The lock is not a vvgen lock.
-    #[error("{}: not a vvgen lock: {source}", path.display())]
+    #[error("{}: not a vvgen lock", path.display())]
     NotALock {
         /// The lock file.
         path: PathBuf,

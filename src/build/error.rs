@@ -13,7 +13,7 @@ pub enum Error {
     #[error("{} is invalid ({} error(s))", .0.path.display(), .0.error_count())]
     Manifest(Box<Report>),
     /// A source cannot be opened or posed.
-    #[error("{}: {source}{hint}", manifest.display())]
+    #[error("{}{hint}", manifest.display())]
     Scene {
         /// The manifest.
         manifest: PathBuf,
@@ -24,7 +24,7 @@ pub enum Error {
         hint: &'static str,
     },
     /// The build cannot be planned.
-    #[error("{}: {source}", manifest.display())]
+    #[error("{}", manifest.display())]
     Plan {
         /// The manifest.
         manifest: PathBuf,
@@ -45,7 +45,7 @@ pub enum Error {
         dir: String,
     },
     /// An action failed.
-    #[error("{}: {source}", manifest.display())]
+    #[error("{}", manifest.display())]
     Execute {
         /// The manifest.
         manifest: PathBuf,
@@ -54,7 +54,7 @@ pub enum Error {
         source: Box<execute::Error>,
     },
     /// Writing an output failed.
-    #[error("{}: output `{output}`: {source}", manifest.display())]
+    #[error("{}: output `{output}`", manifest.display())]
     Export {
         /// The manifest.
         manifest: PathBuf,
@@ -65,7 +65,7 @@ pub enum Error {
         source: Box<export::Error>,
     },
     /// The cache cannot be read or written.
-    #[error("{}: cache: {source}", manifest.display())]
+    #[error("{}: cache", manifest.display())]
     Cache {
         /// The manifest.
         manifest: PathBuf,
@@ -74,7 +74,7 @@ pub enum Error {
         source: Box<cache::Error>,
     },
     /// A `[dataset] after` manifest failed.
-    #[error("`after` manifest {}: {source}", manifest.display())]
+    #[error("`after` manifest {}", manifest.display())]
     After {
         /// The `after` manifest.
         manifest: PathBuf,

@@ -15,7 +15,7 @@ pub use stat::StatCache;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Reading or writing a cache file (or a dataset file placed from it) failed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Io {
         /// The file.
         path: PathBuf,

@@ -23,7 +23,7 @@ use crate::scene::Scene;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Posing the scene for an action failed (a source file that changed or broke since planning).
-    #[error("{action}: {source}")]
+    #[error("{action}")]
     Scene {
         /// The action's label.
         action: String,
@@ -32,7 +32,7 @@ pub enum Error {
         source: crate::scene::Error,
     },
     /// Reading or writing the cache failed.
-    #[error("{action}: {source}")]
+    #[error("{action}")]
     Cache {
         /// The action's label.
         action: String,
@@ -41,7 +41,7 @@ pub enum Error {
         source: cache::Error,
     },
     /// Sampling failed: a damaged sample blob, or a topology that changed under correspondence.
-    #[error("{action}: {source}")]
+    #[error("{action}")]
     Sample {
         /// The action's label.
         action: String,

@@ -30,7 +30,7 @@ pub enum Error {
     #[error(transparent)]
     Cache(#[from] cache::Error),
     /// A file name pattern cannot be formatted.
-    #[error("file pattern: {0}")]
+    #[error("file pattern")]
     Pattern(#[from] crate::manifest::sequence::Error),
     /// The geometry has no extent where a writer needs bounds.
     #[error("the scene is empty: there are no bounds to write")]

@@ -399,7 +399,8 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                     );
                 }
                 if let (RigKind::Dome, Some(r), Some(v)) = (kind, &rig.rings, &split.views) {
-                    if v.get_ref() % r.get_ref() != 0 {
+                    // rings = 0 is its own error (reported by the rig); no remainder by zero here.
+                    if *r.get_ref() > 0 && v.get_ref() % r.get_ref() != 0 {
                         diags.push(
                             Diagnostic::error(
                                 format!("views = {} does not divide into {} rings", v.get_ref(), r.get_ref()),

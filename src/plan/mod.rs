@@ -39,7 +39,7 @@ pub enum Error {
         frames: usize,
     },
     /// A rig cannot place its cameras.
-    #[error("split `{split}`, rig `{rig}`: {source}")]
+    #[error("split `{split}`, rig `{rig}`")]
     Rig {
         /// The split.
         split: String,
@@ -106,7 +106,7 @@ pub enum Error {
         why: String,
     },
     /// An input file cannot be read while keying it.
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Input {
         /// The file.
         path: PathBuf,

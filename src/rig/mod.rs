@@ -36,7 +36,7 @@ pub enum Error {
     #[error("a from-file rig needs `file`")]
     NoFile,
     /// The camera file cannot be read.
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Read {
         /// The file.
         path: PathBuf,
@@ -55,7 +55,7 @@ pub enum Error {
         max: u64,
     },
     /// The camera file is not a transforms.json.
-    #[error("{}: not a transforms.json: {source}", path.display())]
+    #[error("{}: not a transforms.json", path.display())]
     NotTransforms {
         /// The file.
         path: PathBuf,

@@ -277,15 +277,16 @@ impl Texture {
         let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
         let (x0, y0) = (floor(fx), floor(fy));
         let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
-        if x0 >= 0 && y0 >= 0 && x0 + 1 < self.width as i64 && y0 + 1 < self.height as i64 {
+        // (Compared without adding: a huge or corrupt uv saturates x0 at i64::MAX, where x0 + 1 would overflow.)
+        if x0 >= 0 && y0 >= 0 && x0 < self.width as i64 - 1 && y0 < self.height as i64 - 1 {
             // All four texels inside (almost every lookup): no wrapping.
             let (x, y) = (x0 as u32, y0 as u32);
             let top = self.texel(x, y).lerp(self.texel(x + 1, y), tx);
             let bottom = self.texel(x, y + 1).lerp(self.texel(x + 1, y + 1), tx);
             return top.lerp(bottom, ty);
         }
-        let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0 + 1, self.width)];
-        let ys = [wrap(r.wrap_t, y0, self.height), wrap(r.wrap_t, y0 + 1, self.height)];
+        let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0.saturating_add(1), self.width)];
+        let ys = [wrap(r.wrap_t, y0, self.height), wrap(r.wrap_t, y0.saturating_add(1), self.height)];
         let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), tx);
         let bottom = self.texel(xs[0], ys[1]).lerp(self.texel(xs[1], ys[1]), tx);
         top.lerp(bottom, ty)
@@ -312,7 +313,8 @@ fn log2(x: f32) -> f32 {
 #[inline]
 fn floor(x: f32) -> i64 {
     let t = x as i64;
-    t - i64::from((t as f32) > x)
+    // Saturating: below -2^63, `t` is already i64::MIN and must stay there.
+    t.saturating_sub(i64::from((t as f32) > x))
 }
 
 /// Maps an integer texel coordinate into `0..n` by a wrap mode.

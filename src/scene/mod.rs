@@ -26,7 +26,7 @@ use transform::Stats;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A source file cannot be read.
-    #[error("{}: cannot read: {source}", path.display())]
+    #[error("{}: cannot read", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -43,7 +43,7 @@ pub enum Error {
         message: String,
     },
     /// A PLY file is malformed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Ply {
         /// The file.
         path: PathBuf,
@@ -60,7 +60,7 @@ pub enum Error {
         message: String,
     },
     /// A `[transform]` cannot be resolved (fitting a source with no extent).
-    #[error("{table}: {source}")]
+    #[error("{table}")]
     Transform {
         /// `source `NAME`` or `[transform]`.
         table: String,
@@ -69,7 +69,7 @@ pub enum Error {
         source: transform::Error,
     },
     /// A PLY sequence's frames cannot be listed.
-    #[error("source `{name}`: {source}")]
+    #[error("source `{name}`")]
     Sequence {
         /// The source.
         name: String,

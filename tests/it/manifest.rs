@@ -322,6 +322,13 @@ fn keys_of_another_kind_are_rejected() {
     assert!(l.iter().any(|(_, m, _)| m == "key `rings` does not apply to rig `ring` (kind = \"orbit\")"), "{l:?}");
 }
 
+/// `rings = 0` on a dome is an error, not a remainder by zero in the checker.
+#[test]
+fn a_dome_with_zero_rings_is_an_error() {
+    let l = lines(&errors(&full_manifest().replace("rings = 3", "rings = 0")));
+    assert!(l.iter().any(|(_, m, _)| m == "rings = 0 must be in 1..=1000"), "{l:?}");
+}
+
 /// NaN, infinity and overflowing literals are refused wherever a float stands, with their place.
 #[test]
 fn every_float_must_be_finite() {

@@ -415,3 +415,109 @@ fn unassigned_skeleton_and_box_animated_move() {
     // Past the end, every channel holds its last key.
     assert_eq!(pose(&a, &all, end).digest(), pose(&a, &all, end + 10.0).digest());
 }
+
+/// A small animated, textured triangle as glTF JSON (issue 15's fuzzing seeds), for malformed variants.
+fn seed_gltf() -> serde_json::Value {
+    use base64::Engine as _;
+    let mut bin = Vec::new();
+    for v in [
+        0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+        0.0,
+    ] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}}]}],
+        "buffers": [{"byteLength": bin.len(), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24},
+                        {"buffer": 0, "byteOffset": 60, "byteLength": 8}, {"buffer": 0, "byteOffset": 68, "byteLength": 24}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]},
+            {"bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC3"}],
+        "animations": [{"channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
+                        "samplers": [{"input": 2, "output": 3, "interpolation": "LINEAR"}]}]
+    })
+}
+
+/// Loads `doc` written as a file.
+fn load_json(doc: &serde_json::Value) -> Result<GltfAsset, vvgen::scene::Error> {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("m.gltf");
+    std::fs::write(&p, serde_json::to_vec(doc).unwrap()).unwrap();
+    gltf::load(&p, None)
+}
+
+/// Issue 15's panics on malformed glTF are errors that name the object: dangling references and unknown enums
+/// (which the gltf crate's own validation would index or unwrap), and offsets that overflow.
+#[test]
+fn malformed_references_offsets_and_enums_are_errors_not_panics() {
+    assert!(load_json(&seed_gltf()).is_ok());
+    /// What is broken, how, and what the error must say.
+    type Case = (&'static str, fn(&mut serde_json::Value), &'static str);
+    let cases: [Case; 7] = [
+        (
+            "no accessors",
+            |d| drop(d.as_object_mut().unwrap().remove("accessors")),
+            "attributes.POSITION = 0 does not index `accessors`",
+        ),
+        (
+            "channel node",
+            |d| d["animations"][0]["channels"][0]["target"]["node"] = 7.into(),
+            "target.node = 7 does not index `nodes`",
+        ),
+        (
+            "channel path",
+            |d| d["animations"][0]["channels"][0]["target"]["path"] = "colour".into(),
+            r#"target.path = "colour" is not one of"#,
+        ),
+        ("accessor type", |d| d["accessors"][1]["type"] = "VEC5".into(), r#"accessors[1].type = "VEC5" is not one of"#),
+        (
+            "huge offset",
+            |d| d["accessors"][0]["byteOffset"] = 18446744073709551000u64.into(),
+            "accessor 0 (byteOffset 18446744073709551000",
+        ),
+        (
+            "scalar colours",
+            |d| d["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 2.into(),
+            "has 2 elements, POSITION has 3",
+        ),
+        (
+            "morph target",
+            |d| d["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 9}]),
+            "targets[0].POSITION = 9 does not index `accessors`",
+        ),
+    ];
+    for (what, edit, expect) in cases {
+        let mut doc = seed_gltf();
+        edit(&mut doc);
+        let (_, msg) = gltf_problem(load_json(&doc).unwrap_err());
+        assert!(msg.contains(expect), "{what}: {msg}");
+    }
+}
+
+/// A texture transform offset of 1e38, or a corrupt uv, samples a texel inside the texture (no out-of-range
+/// index), whatever the wrap mode.
+#[test]
+fn huge_and_corrupt_uvs_sample_inside_the_texture() {
+    use vvgen::scene::material::{Texture, TextureRef, Wrap};
+    let tex = Texture::new(2, 2, vec![255; 16], true);
+    for wrap in [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror] {
+        let mut r = TextureRef::new(0);
+        (r.wrap_s, r.wrap_t) = (wrap, wrap);
+        for uv in [
+            glam::Vec2::splat(1e38),
+            glam::Vec2::splat(-1e38),
+            glam::Vec2::new(f32::NAN, 3.4e38),
+            glam::Vec2::splat(f32::INFINITY),
+        ] {
+            let c = tex.sample(&r, uv);
+            assert!(c.x.is_nan() || c.x <= 1.0, "{wrap:?} {uv}: {c}");
+            let _ = tex.sample_footprint(&r, uv, glam::Vec2::splat(1e30), glam::Vec2::ZERO);
+        }
+    }
+}

@@ -39,10 +39,14 @@ fn read_with<T: Copy + Default>(
             let stride = stride.unwrap_or(elem);
             let start = acc.offset();
             if count > 0 {
-                let need = start + stride * (count - 1) + column_padded(acc.dimensions(), ty, elem);
-                if need > data.len() {
+                // Offsets and counts come from the file: overflow is an error, not a wrapped index.
+                let need = stride
+                    .checked_mul(count - 1)
+                    .and_then(|v| v.checked_add(start))
+                    .and_then(|v| v.checked_add(column_padded(acc.dimensions(), ty, elem)));
+                if need.is_none_or(|need| need > data.len()) {
                     return Err(format!(
-                        "accessor {} reads {need} bytes from a {}-byte bufferView",
+                        "accessor {} (byteOffset {start}, {count} × {stride}-byte stride) runs past its {}-byte bufferView",
                         acc.index(),
                         data.len()
                     ));
@@ -77,7 +81,9 @@ fn read_with<T: Copy + Default>(
         let vv = sparse.values().view();
         let (vdata, _) = view_bytes(&vv, buffers)?;
         let voff = sparse.values().offset();
-        if ioff + k * ity.size() > idata.len() || voff + k * n * ty.size() > vdata.len() {
+        let end = |off: usize, bytes: usize| k.checked_mul(bytes).and_then(|v| v.checked_add(off));
+        let (iend, vend) = (end(ioff, ity.size()), end(voff, n * ty.size()));
+        if iend.is_none_or(|e| e > idata.len()) || vend.is_none_or(|e| e > vdata.len()) {
             return Err(format!("accessor {}: sparse data runs past its bufferView", acc.index()));
         }
         for j in 0..k {

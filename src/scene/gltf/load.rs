@@ -343,9 +343,18 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene
 }
 
 /// Parses and validates, except that an accessor without a bufferView is accepted: the spec says it reads as
-/// zeros (then sparse values), but gltf 1.4's validation calls it missing data.
-fn parse(bytes: &[u8]) -> Result<gltf::Gltf, gltf::Error> {
-    match gltf::Gltf::from_slice(bytes) {
+/// zeros (then sparse values), but gltf 1.4's validation calls it missing data. vvgen's own reference check
+/// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
+/// references.
+fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+    let json: std::borrow::Cow<'_, [u8]> = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(bytes).map_err(|e| e.to_string())?.json
+    } else {
+        bytes.into()
+    };
+    let doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
+    super::validate::check(&doc)?;
+    let parsed = match gltf::Gltf::from_slice(bytes) {
         Err(gltf::Error::Validation(errors))
             if errors.iter().all(|(p, e)| {
                 p.as_str().starts_with("accessors[")
@@ -356,7 +365,8 @@ fn parse(bytes: &[u8]) -> Result<gltf::Gltf, gltf::Error> {
             gltf::Gltf::from_slice_without_validation(bytes)
         }
         other => other,
-    }
+    };
+    parsed.map_err(|e| e.to_string())
 }
 
 /// Reads a buffer or image URI: `data:` (base64) or a file relative to the glTF that stays inside its folder.

@@ -7,3 +7,4 @@ pub mod pose;
 
 pub use load::{load, GltfAsset};
 pub use pose::PoseScratch;
+mod validate;

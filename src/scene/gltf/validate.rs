@@ -1,0 +1,227 @@
+//! Checks on the raw JSON of a glTF before the `gltf` crate sees it. Its own validation indexes some arrays
+//! unchecked and unwraps some enums it could not parse (a primitive's accessor when there is no `accessors`
+//! array, an animation channel's target node, an unknown target path), so a malformed file a user downloads
+//! would panic instead of failing with a message. Every index the loader follows is checked here against the
+//! array it points into, and every enum against the values the spec allows.
+
+use serde_json::Value;
+
+/// At most this many problems are listed in one error.
+const MAX_LISTED: usize = 5;
+
+/// The document's problems, or `Ok` when every reference and enum is in range.
+pub(crate) fn check(root: &Value) -> Result<(), String> {
+    let mut c = Checker { root, problems: Vec::new() };
+    c.run();
+    if c.problems.is_empty() {
+        return Ok(());
+    }
+    let more = c.problems.len().saturating_sub(MAX_LISTED);
+    let mut text = c.problems.into_iter().take(MAX_LISTED).collect::<Vec<_>>().join("; ");
+    if more > 0 {
+        text.push_str(&format!("; and {more} more"));
+    }
+    Err(text)
+}
+
+struct Checker<'a> {
+    root: &'a Value,
+    problems: Vec<String>,
+}
+
+/// Whether `x` is an index into an array of `len` entries.
+fn indexes(x: &Value, len: usize) -> bool {
+    x.as_u64().is_some_and(|i| i < len as u64)
+}
+
+/// The entries of array `key` of `v` (none when absent or not an array).
+fn items<'v>(v: &'v Value, key: &str) -> &'v [Value] {
+    v.get(key).and_then(Value::as_array).map_or(&[], Vec::as_slice)
+}
+
+impl Checker<'_> {
+    fn len(&self, array: &str) -> usize {
+        items(self.root, array).len()
+    }
+
+    /// `v[key]`, when present, indexes an array of `len` entries (called `target`).
+    fn index_into(&mut self, v: &Value, key: &str, path: &str, target: &str, len: usize) {
+        let Some(x) = v.get(key) else { return };
+        if !indexes(x, len) {
+            self.problems.push(format!("{path}.{key} = {x} does not index `{target}` ({len} entries)"));
+        }
+    }
+
+    /// `v[key]`, when present, indexes the document's top-level `target` array.
+    fn index(&mut self, v: &Value, key: &str, path: &str, target: &str) {
+        let len = self.len(target);
+        self.index_into(v, key, path, target, len);
+    }
+
+    /// Every entry of array `v[key]` indexes `target`.
+    fn indices(&mut self, v: &Value, key: &str, path: &str, target: &str) {
+        let len = self.len(target);
+        for (i, x) in items(v, key).iter().enumerate() {
+            if !indexes(x, len) {
+                self.problems.push(format!("{path}.{key}[{i}] = {x} does not index `{target}` ({len} entries)"));
+            }
+        }
+    }
+
+    /// Every value of object `map` (attribute name → accessor), when present, indexes `target`.
+    fn map_values(&mut self, map: Option<&Value>, path: &str, target: &str) {
+        let Some(map) = map.and_then(Value::as_object) else { return };
+        let len = self.len(target);
+        for (name, x) in map {
+            if !indexes(x, len) {
+                self.problems.push(format!("{path}.{name} = {x} does not index `{target}` ({len} entries)"));
+            }
+        }
+    }
+
+    /// `v[key]`, when present, is one of `allowed`.
+    fn one_of(&mut self, v: &Value, key: &str, path: &str, allowed: &[Value]) {
+        let Some(x) = v.get(key) else { return };
+        if !allowed.contains(x) {
+            let list: Vec<String> = allowed.iter().map(Value::to_string).collect();
+            self.problems.push(format!("{path}.{key} = {x} is not one of {}", list.join(", ")));
+        }
+    }
+
+    fn run(&mut self) {
+        let root = self.root;
+        let strs = |v: &[&str]| v.iter().map(|s| Value::from(*s)).collect::<Vec<_>>();
+        let nums = |v: &[u64]| v.iter().map(|n| Value::from(*n)).collect::<Vec<_>>();
+        self.index(root, "scene", "", "scenes");
+        for (i, s) in items(root, "scenes").iter().enumerate() {
+            self.indices(s, "nodes", &format!("scenes[{i}]"), "nodes");
+        }
+        for (i, n) in items(root, "nodes").iter().enumerate() {
+            let p = format!("nodes[{i}]");
+            self.indices(n, "children", &p, "nodes");
+            self.index(n, "mesh", &p, "meshes");
+            self.index(n, "skin", &p, "skins");
+            self.index(n, "camera", &p, "cameras");
+        }
+        for (i, m) in items(root, "meshes").iter().enumerate() {
+            for (j, prim) in items(m, "primitives").iter().enumerate() {
+                let p = format!("meshes[{i}].primitives[{j}]");
+                self.map_values(prim.get("attributes"), &format!("{p}.attributes"), "accessors");
+                self.index(prim, "indices", &p, "accessors");
+                self.index(prim, "material", &p, "materials");
+                self.one_of(prim, "mode", &p, &nums(&[0, 1, 2, 3, 4, 5, 6]));
+                for (k, t) in items(prim, "targets").iter().enumerate() {
+                    self.map_values(Some(t), &format!("{p}.targets[{k}]"), "accessors");
+                }
+            }
+        }
+        for (i, s) in items(root, "skins").iter().enumerate() {
+            let p = format!("skins[{i}]");
+            self.indices(s, "joints", &p, "nodes");
+            self.index(s, "skeleton", &p, "nodes");
+            self.index(s, "inverseBindMatrices", &p, "accessors");
+        }
+        for (i, a) in items(root, "accessors").iter().enumerate() {
+            let p = format!("accessors[{i}]");
+            self.index(a, "bufferView", &p, "bufferViews");
+            self.one_of(a, "componentType", &p, &nums(&[5120, 5121, 5122, 5123, 5125, 5126]));
+            self.one_of(a, "type", &p, &strs(&["SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"]));
+            if let Some(sparse) = a.get("sparse") {
+                for part in ["indices", "values"] {
+                    if let Some(v) = sparse.get(part) {
+                        self.index(v, "bufferView", &format!("{p}.sparse.{part}"), "bufferViews");
+                    }
+                }
+                if let Some(ix) = sparse.get("indices") {
+                    self.one_of(ix, "componentType", &format!("{p}.sparse.indices"), &nums(&[5121, 5123, 5125]));
+                }
+            }
+        }
+        for (i, v) in items(root, "bufferViews").iter().enumerate() {
+            let p = format!("bufferViews[{i}]");
+            self.index(v, "buffer", &p, "buffers");
+            self.one_of(v, "target", &p, &nums(&[34962, 34963]));
+        }
+        for (i, im) in items(root, "images").iter().enumerate() {
+            self.index(im, "bufferView", &format!("images[{i}]"), "bufferViews");
+        }
+        for (i, t) in items(root, "textures").iter().enumerate() {
+            let p = format!("textures[{i}]");
+            self.index(t, "source", &p, "images");
+            self.index(t, "sampler", &p, "samplers");
+        }
+        for (i, s) in items(root, "samplers").iter().enumerate() {
+            let p = format!("samplers[{i}]");
+            self.one_of(s, "magFilter", &p, &nums(&[9728, 9729]));
+            self.one_of(s, "minFilter", &p, &nums(&[9728, 9729, 9984, 9985, 9986, 9987]));
+            for wrap in ["wrapS", "wrapT"] {
+                self.one_of(s, wrap, &p, &nums(&[33071, 33648, 10497]));
+            }
+        }
+        for (i, m) in items(root, "materials").iter().enumerate() {
+            let p = format!("materials[{i}]");
+            self.one_of(m, "alphaMode", &p, &strs(&["OPAQUE", "MASK", "BLEND"]));
+            let pbr = m.get("pbrMetallicRoughness");
+            let infos = [
+                (pbr.and_then(|x| x.get("baseColorTexture")), "pbrMetallicRoughness.baseColorTexture"),
+                (pbr.and_then(|x| x.get("metallicRoughnessTexture")), "pbrMetallicRoughness.metallicRoughnessTexture"),
+                (m.get("normalTexture"), "normalTexture"),
+                (m.get("occlusionTexture"), "occlusionTexture"),
+                (m.get("emissiveTexture"), "emissiveTexture"),
+            ];
+            for (info, name) in infos {
+                if let Some(info) = info {
+                    self.index(info, "index", &format!("{p}.{name}"), "textures");
+                }
+            }
+        }
+        for (i, c) in items(root, "cameras").iter().enumerate() {
+            self.one_of(c, "type", &format!("cameras[{i}]"), &strs(&["perspective", "orthographic"]));
+        }
+        for (i, a) in items(root, "animations").iter().enumerate() {
+            let samplers = items(a, "samplers").len();
+            for (j, ch) in items(a, "channels").iter().enumerate() {
+                let p = format!("animations[{i}].channels[{j}]");
+                self.index_into(ch, "sampler", &p, &format!("animations[{i}].samplers"), samplers);
+                if let Some(t) = ch.get("target") {
+                    let p = format!("{p}.target");
+                    self.index(t, "node", &p, "nodes");
+                    self.one_of(t, "path", &p, &strs(&["translation", "rotation", "scale", "weights"]));
+                }
+            }
+            for (j, s) in items(a, "samplers").iter().enumerate() {
+                let p = format!("animations[{i}].samplers[{j}]");
+                self.index(s, "input", &p, "accessors");
+                self.index(s, "output", &p, "accessors");
+                self.one_of(s, "interpolation", &p, &strs(&["LINEAR", "STEP", "CUBICSPLINE"]));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dangling_references_and_unknown_enums_are_named() {
+        let doc: Value = serde_json::from_str(
+            r#"{"asset": {"version": "2.0"}, "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+               "animations": [{"channels": [{"sampler": 1, "target": {"node": 4, "path": "colour"}}], "samplers": []}]}"#,
+        )
+        .unwrap();
+        let e = check(&doc).unwrap_err();
+        assert!(
+            e.contains("meshes[0].primitives[0].attributes.POSITION = 0 does not index `accessors` (0 entries)"),
+            "{e}"
+        );
+        assert!(e.contains("animations[0].channels[0].sampler = 1 does not index `animations[0].samplers`"), "{e}");
+        assert!(e.contains("animations[0].channels[0].target.node = 4 does not index `nodes` (1 entries)"), "{e}");
+        assert!(e.contains(r#"target.path = "colour" is not one of "translation""#), "{e}");
+        let ok: Value = serde_json::from_str(
+            r#"{"asset": {"version": "2.0"}, "nodes": [{}], "scenes": [{"nodes": [0]}], "scene": 0}"#,
+        )
+        .unwrap();
+        assert_eq!(check(&ok), Ok(()));
+    }
+}
