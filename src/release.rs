@@ -66,9 +66,18 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
     for (_, w) in &report.outputs {
         let mut files = BTreeMap::new();
         for (rel, d) in &w.files {
+            // Certify what is on disk, hashed now: the stat cache trusts size, mtime and inode, which bit rot
+            // (and some copy tools) leave unchanged.
             let path = w.root.join(rel);
-            let size = std::fs::metadata(&path).map_err(|e| Error::cache(m, cache::Error::io(&path, e)))?.len();
-            files.insert(rel.clone(), FileEntry { size, blake3: d.hex() });
+            let bytes = std::fs::read(&path).map_err(|e| Error::cache(m, cache::Error::io(&path, e)))?;
+            if Digest::of(&bytes) != *d {
+                // The dataset file is a hard link to its blob: remove both, so the next build runs the action
+                // again instead of placing the same damaged bytes.
+                let _ = std::fs::remove_file(p.store.object_path(d));
+                let _ = std::fs::remove_file(&path);
+                return Err(Error::Damaged { path });
+            }
+            files.insert(rel.clone(), FileEntry { size: bytes.len() as u64, blake3: d.hex() });
         }
         let lock = Lock {
             tool: "vvgen".into(),

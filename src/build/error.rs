@@ -82,6 +82,13 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+    /// A dataset file does not hold what the build placed there (changed on disk with its metadata intact, as
+    /// bit rot does): `release` will not certify it.
+    #[error("{}: does not hold what the build wrote (damaged on disk); it and its cache blob were removed: run `vvgen build`, then `vvgen release` again", path.display())]
+    Damaged {
+        /// The file.
+        path: PathBuf,
+    },
     /// `release` refuses: actions are not built.
     #[error("{pending} action(s) are not built: run `vvgen build` first (`vvgen plan --explain` says why)")]
     NotBuilt {
@@ -110,7 +117,7 @@ impl Error {
             },
             Error::Export { source, .. } => matches!(**source, export::Error::Pattern(_) | export::Error::EmptyScene),
             Error::After { source, .. } => source.is_bad_input(),
-            Error::Cache { .. } | Error::NotBuilt { .. } => false,
+            Error::Cache { .. } | Error::NotBuilt { .. } | Error::Damaged { .. } => false,
         }
     }
 

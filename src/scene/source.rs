@@ -163,7 +163,12 @@ fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usi
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.
 pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, Error> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    let d = ply::read(&bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
+    ply_scene_slice(&bytes, path)
+}
+
+/// [`ply_scene`] from the file's bytes; `path` names it in errors.
+pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScene, Error> {
+    let d = ply::read(bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
     let kind = if d.triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
     let positions: Vec<Vec3> = d.positions.iter().map(|p| Vec3::from(*p)).collect();
     let normals = match (&d.normals, kind) {

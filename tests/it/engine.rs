@@ -406,3 +406,29 @@ fn shards_split_the_prerequisites_work_once() {
     assert_eq!(r.ran(Kind::RenderPass), 6);
     assert!(build(&m, &d.join("cache"), Options::default(), &Silent).unwrap().nothing_to_do());
 }
+
+/// Bit rot: a byte flipped in place with the file's size, inode and mtime unchanged fools the stat cache, but not
+/// `release`, which hashes every file it certifies; it removes the damaged file and its blob, so the next build
+/// renders that image again and the release goes through.
+#[test]
+fn release_hashes_what_it_certifies_and_refuses_bit_rot() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = cesium(2, "", "");
+    run(d, &text);
+    let (m, _) = vvgen::manifest::load(&d.join("m.toml")).unwrap();
+    vvgen::release::release(&m, &d.join("cache")).unwrap();
+    let victim = d.join("out/m_dnerf/train/r_0001.png");
+    let mtime = std::fs::metadata(&victim).unwrap().modified().unwrap();
+    let mut bytes = std::fs::read(&victim).unwrap();
+    bytes[200] ^= 0x10;
+    let f = std::fs::OpenOptions::new().write(true).open(&victim).unwrap();
+    std::os::unix::fs::FileExt::write_all_at(&f, &bytes[200..201], 200).unwrap();
+    f.set_modified(mtime).unwrap();
+    drop(f);
+    let err = vvgen::release::release(&m, &d.join("cache")).unwrap_err();
+    assert!(matches!(&err, vvgen::build::Error::Damaged { path } if path == &victim), "{err:?}");
+    assert_eq!(run(d, &text).renders, 1, "the damaged image is rendered again");
+    let roots = vvgen::release::release(&m, &d.join("cache")).unwrap();
+    assert!(vvgen::release::verify(&roots[0]).unwrap().ok());
+}

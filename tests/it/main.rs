@@ -5,6 +5,7 @@
 mod build;
 mod common;
 mod engine;
+mod fuzz;
 mod graph;
 mod manifest;
 mod ply;

@@ -125,7 +125,12 @@ fn err(path: &Path, msg: impl std::fmt::Display) -> crate::scene::Error {
 /// Loads a `.gltf` or `.glb`. `scene`: which scene (default: the file's default, else all).
 pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene::Error> {
     let bytes = std::fs::read(path).map_err(|e| crate::scene::Error::Io { path: path.to_path_buf(), source: e })?;
-    let gltf = parse(&bytes).map_err(|e| err(path, e))?;
+    load_slice(&bytes, path, scene)
+}
+
+/// [`load`] from the file's bytes; `path` names it in errors and locates its side-car files.
+pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene::Error> {
+    let gltf = parse(bytes).map_err(|e| err(path, e))?;
     let doc = &gltf.document;
     for ext in doc.extensions_required() {
         if !SUPPORTED_REQUIRED.contains(&ext) {

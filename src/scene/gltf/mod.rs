@@ -5,6 +5,6 @@ pub mod anim;
 pub mod load;
 pub mod pose;
 
-pub use load::{load, GltfAsset};
+pub use load::{load, load_slice, GltfAsset};
 pub use pose::PoseScratch;
 mod validate;

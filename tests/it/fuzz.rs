@@ -1,0 +1,178 @@
+//! A mutation fuzzer that runs on stable Rust, under `cargo test` (issue 15). Seeds are the files in `tests/data`
+//! and the shipped manifests; a fixed-seed stream mutates them (bit flips, interesting bytes, chunk deletes and
+//! duplicates, splices between seeds, numbers swapped for extreme ones) and each mutant goes through a target
+//! under `catch_unwind`: PLY reading and rendering, glTF/GLB loading (as `inspect` loads), posing and rendering,
+//! and the manifest checker. Any panic fails the test; the mutants that panicked are kept in
+//! `target/fuzz-crashes/` to reproduce.
+//!
+//! `VVGEN_FUZZ_EXECS` sets the executions per target (the suite runs 4 000 per target); a long run:
+//! `VVGEN_FUZZ_EXECS=400000 cargo test --release --test it fuzz -- --nocapture`.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+
+use vvgen::camera::Camera;
+use vvgen::render::{render, RenderSettings};
+use vvgen::scene::gltf::{self, PoseScratch};
+use vvgen::scene::PosedScene;
+
+/// splitmix64: a small, fixed-seed stream, so a run is reproducible.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+const BYTES: &[u8] = &[0, 0xff, 0x7f, 0x80, b'-', b'9', b'e', b'"', b'{', b'[', b'\n', b' ', b'.'];
+const NUMBERS: &[&str] =
+    &["0", "-1", "255", "65536", "4294967295", "18446744073709551615", "1e308", "-1e38", "nan", "inf", "999999999"];
+
+/// One mutant of `seed` (possibly spliced with `other`).
+fn mutate(rng: &mut Rng, seed: &[u8], other: &[u8]) -> Vec<u8> {
+    let mut b = seed.to_vec();
+    for _ in 0..1 + rng.below(4) {
+        let at = rng.below(b.len());
+        match rng.below(7) {
+            0 if !b.is_empty() => b[at] ^= 1 << rng.below(8),
+            1 if !b.is_empty() => b[at] = BYTES[rng.below(BYTES.len())],
+            2 if !b.is_empty() => {
+                let end = (at + 1 + rng.below(16)).min(b.len());
+                b.drain(at..end);
+            }
+            3 if !b.is_empty() => {
+                let end = (at + 1 + rng.below(16)).min(b.len());
+                let chunk = b[at..end].to_vec();
+                b.splice(at..at, chunk);
+            }
+            4 if !other.is_empty() => {
+                let from = rng.below(other.len());
+                let len = rng.below(64).min(other.len() - from);
+                b.splice(at..(at + len).min(b.len()), other[from..from + len].iter().copied());
+            }
+            5 => {
+                // A run of ASCII digits at or after `at` becomes an extreme number.
+                if let Some(start) = b[at..].iter().position(u8::is_ascii_digit).map(|p| p + at) {
+                    let end = b[start..].iter().position(|c| !c.is_ascii_digit()).map_or(b.len(), |p| p + start);
+                    b.splice(start..end, NUMBERS[rng.below(NUMBERS.len())].bytes());
+                }
+            }
+            _ => b.insert(at.min(b.len()), rng.next() as u8),
+        }
+    }
+    b
+}
+
+fn executions() -> usize {
+    std::env::var("VVGEN_FUZZ_EXECS").ok().and_then(|v| v.parse().ok()).unwrap_or(4000)
+}
+
+/// Runs `target` on `executions()` mutants of `seeds`; returns how many ran, failing on any panic.
+fn fuzz(name: &str, seeds: &[(PathBuf, Vec<u8>)], key: u64, target: impl Fn(&Path, &[u8])) -> usize {
+    assert!(!seeds.is_empty(), "{name}: no seeds");
+    let mut rng = Rng(key);
+    let mut crashes = Vec::new();
+    let n = executions();
+    for i in 0..n {
+        let (path, seed) = &seeds[rng.below(seeds.len())];
+        let other = &seeds[rng.below(seeds.len())].1;
+        let mutant = mutate(&mut rng, seed, other);
+        if catch_unwind(AssertUnwindSafe(|| target(path, &mutant))).is_err() {
+            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/fuzz-crashes");
+            std::fs::create_dir_all(&dir).unwrap();
+            let ext = path.extension().map_or(String::new(), |e| e.to_string_lossy().into_owned());
+            let file = dir.join(format!("{name}-{i}.{ext}"));
+            std::fs::write(&file, &mutant).unwrap();
+            crashes.push(format!("{} (from {})", file.display(), path.display()));
+        }
+    }
+    assert!(crashes.is_empty(), "{name}: {} panics in {n} executions:\n{}", crashes.len(), crashes.join("\n"));
+    eprintln!("fuzz {name}: {n} executions, no panic");
+    n
+}
+
+/// Files under `tests/data/<dir>` with one of `exts`, with their bytes.
+fn seeds(dir: &str, exts: &[&str]) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![crate::common::data(dir)];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| exts.iter().any(|e| x.eq_ignore_ascii_case(e)))
+                && std::fs::metadata(&p).unwrap().len() < 64 << 10
+            {
+                out.push((p.clone(), std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Renders `scene` small from a camera that frames its bounds (when it has any).
+fn render_small(scene: &PosedScene) {
+    let Some((lo, hi)) = scene.bounds() else { return };
+    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length().max(1e-3));
+    if !(c.is_finite() && r.is_finite()) {
+        return;
+    }
+    let c2w = Camera::look_at(c + glam::Vec3::new(0.3, -1.0, 0.6).normalize() * r * 2.0, c, glam::Vec3::Z);
+    let cam = Camera { width: 16, height: 16, fx: 16.0, fy: 16.0, cx: 8.0, cy: 8.0, near: 0.01, far: 1e4, c2w };
+    let _ = render(scene, &cam, &RenderSettings::default());
+}
+
+#[test]
+fn fuzz_ply_reading_and_rendering() {
+    let seeds = [seeds("bad/ply", &["ply"]), seeds("gltf", &["ply"])].concat();
+    fuzz("ply", &seeds, 1, |path, bytes| {
+        if let Ok(scene) = vvgen::scene::source::ply_scene_slice(bytes, path) {
+            render_small(&scene);
+        }
+    });
+}
+
+#[test]
+fn fuzz_gltf_loading_posing_and_rendering() {
+    let seeds = seeds("gltf", &["gltf", "glb"]);
+    fuzz("gltf", &seeds, 2, |path, bytes| {
+        let Ok(asset) = gltf::load_slice(bytes, path, None) else { return };
+        let clips: Vec<usize> = (0..asset.animations.len()).collect();
+        let mut posed = PosedScene {
+            materials: std::sync::Arc::new(asset.materials.clone()),
+            textures: std::sync::Arc::clone(&asset.textures),
+            ..Default::default()
+        };
+        let mut scratch = PoseScratch::default();
+        for t in [0.0, 0.7] {
+            asset.pose(&clips, t, glam::Mat4::IDENTITY, &mut scratch, &mut posed);
+        }
+        render_small(&posed);
+    });
+}
+
+#[test]
+fn fuzz_the_manifest_checker() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("manifests");
+    let mut seeds: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| (p.clone(), std::fs::read(&p).unwrap()))
+        .collect();
+    seeds.sort();
+    fuzz("manifest", &seeds, 3, |path, bytes| {
+        let _ = vvgen::manifest::parse(&String::from_utf8_lossy(bytes), path);
+    });
+}
