@@ -143,7 +143,18 @@ impl Checker<'_> {
             self.one_of(v, "target", &p, &nums(&[34962, 34963]));
         }
         for (i, im) in items(root, "images").iter().enumerate() {
-            self.index(im, "bufferView", &format!("images[{i}]"), "bufferViews");
+            let p = format!("images[{i}]");
+            self.index(im, "bufferView", &p, "bufferViews");
+            // The spec: exactly one of uri and bufferView, and a mimeType with a bufferView.
+            match (im.get("uri").is_some(), im.get("bufferView").is_some()) {
+                (true, true) | (false, false) => {
+                    self.problems.push(format!("{p} needs exactly one of uri and bufferView"))
+                }
+                (false, true) if im.get("mimeType").is_none() => {
+                    self.problems.push(format!("{p} is stored in a bufferView but has no mimeType"))
+                }
+                _ => {}
+            }
         }
         for (i, t) in items(root, "textures").iter().enumerate() {
             let p = format!("textures[{i}]");
@@ -218,6 +229,15 @@ mod tests {
         assert!(e.contains("animations[0].channels[0].sampler = 1 does not index `animations[0].samplers`"), "{e}");
         assert!(e.contains("animations[0].channels[0].target.node = 4 does not index `nodes` (1 entries)"), "{e}");
         assert!(e.contains(r#"target.path = "colour" is not one of "translation""#), "{e}");
+        let images: Value = serde_json::from_str(
+            r#"{"asset": {"version": "2.0"}, "bufferViews": [{"buffer": 0, "byteLength": 1}], "buffers": [{"byteLength": 1}],
+               "images": [{"bufferView": 0}, {}, {"uri": "a.png", "bufferView": 0, "mimeType": "image/png"}]}"#,
+        )
+        .unwrap();
+        let e = check(&images).unwrap_err();
+        assert!(e.contains("images[0] is stored in a bufferView but has no mimeType"), "{e}");
+        assert!(e.contains("images[1] needs exactly one of uri and bufferView"), "{e}");
+        assert!(e.contains("images[2] needs exactly one of uri and bufferView"), "{e}");
         let ok: Value = serde_json::from_str(
             r#"{"asset": {"version": "2.0"}, "nodes": [{}], "scenes": [{"nodes": [0]}], "scene": 0}"#,
         )
