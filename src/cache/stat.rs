@@ -32,11 +32,22 @@ fn meta(p: &Path) -> std::io::Result<Meta> {
     Ok(Meta { size: m.len(), mtime_ns, ino })
 }
 
+/// How close to the clock a file's mtime makes its entry racy: coarse file systems (FAT, some NFS servers)
+/// keep 1–2 s timestamps.
+pub const RACY: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Whether a file with metadata `m` may still change without its metadata showing it.
+fn racy(m: &Meta) -> bool {
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as i128);
+    now - m.mtime_ns < RACY.as_nanos() as i128
+}
+
 /// Remembered digests of files, by path.
 #[derive(Debug)]
 pub struct StatCache {
     path: PathBuf,
-    entries: Mutex<HashMap<PathBuf, (Meta, Digest)>>,
+    /// Path → metadata, digest, and whether the entry is racy (hash again before trusting it).
+    entries: Mutex<HashMap<PathBuf, (Meta, Digest, bool)>>,
     /// Whether anything changed since loading (a no-op build need not rewrite the file).
     dirty: std::sync::atomic::AtomicBool,
 }
@@ -56,7 +67,7 @@ impl StatCache {
                 else {
                     continue;
                 };
-                entries.insert(PathBuf::from(f[4]), (Meta { size, mtime_ns, ino }, d));
+                entries.insert(PathBuf::from(f[4]), (Meta { size, mtime_ns, ino }, d, false));
             }
         }
         StatCache { path: path.to_path_buf(), entries: Mutex::new(entries), dirty: false.into() }
@@ -65,15 +76,15 @@ impl StatCache {
     /// blake3 of the file at `p`, from the cache when its size, mtime and inode are unchanged.
     pub fn digest(&self, p: &Path) -> std::io::Result<Digest> {
         let m = meta(p)?;
-        if let Some((cm, d)) = self.entries.lock().unwrap().get(p) {
-            if *cm == m {
+        if let Some((cm, d, is_racy)) = self.entries.lock().unwrap().get(p) {
+            if *cm == m && !is_racy {
                 return Ok(*d);
             }
         }
         let d = Digest::of(&fs::read(p)?);
         // Metadata read before the content: a write racing the read leaves a stale entry that the next stat
         // rejects, never a wrong one that looks current.
-        self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d));
+        self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d, racy(&m)));
         self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
         Ok(d)
     }
@@ -86,7 +97,7 @@ impl StatCache {
     /// Records that `p` (just written by us) holds `d`.
     pub fn record(&self, p: &Path, d: Digest) {
         if let Ok(m) = meta(p) {
-            self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d));
+            self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d, racy(&m)));
             self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
         }
     }
@@ -99,12 +110,42 @@ impl StatCache {
         let entries = self.entries.lock().unwrap();
         let mut lines: Vec<String> = entries
             .iter()
-            .filter(|(p, _)| p.exists())
-            .map(|(p, (m, d))| format!("{}\t{}\t{}\t{}\t{}", d.hex(), m.size, m.mtime_ns, m.ino, p.display()))
+            // Racy entries are not saved: the next build hashes those files once more (git's "smudging").
+            .filter(|(p, (_, _, is_racy))| !is_racy && p.exists())
+            .map(|(p, (m, d, _))| format!("{}\t{}\t{}\t{}\t{}", d.hex(), m.size, m.mtime_ns, m.ino, p.display()))
             .collect();
         lines.sort();
         let mut text = lines.join("\n");
         text.push('\n');
         atomic::write(&self.path, text.as_bytes())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file rewritten within its timestamp tick (same size, same mtime, same inode) is hashed again, not
+    /// served from the entry recorded before the rewrite.
+    #[test]
+    fn a_racy_entry_is_hashed_again() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("f");
+        std::fs::write(&p, b"aaaa").unwrap();
+        let stat = StatCache::load(&dir.path().join("stat"));
+        assert_eq!(stat.digest(&p).unwrap(), Digest::of(b"aaaa"));
+        let mtime = std::fs::metadata(&p).unwrap().modified().unwrap();
+        let f = std::fs::OpenOptions::new().write(true).open(&p).unwrap();
+        std::os::unix::fs::FileExt::write_all_at(&f, b"b", 0).unwrap();
+        f.set_modified(mtime).unwrap();
+        assert_eq!(stat.digest(&p).unwrap(), Digest::of(b"baaa"));
+        // Racy entries are not saved; an old file's entry is.
+        let old = dir.path().join("old");
+        std::fs::write(&old, b"x").unwrap();
+        std::fs::File::options().append(true).open(&old).unwrap().set_modified(std::time::UNIX_EPOCH).unwrap();
+        stat.digest(&old).unwrap();
+        stat.save().unwrap();
+        let saved = std::fs::read_to_string(dir.path().join("stat")).unwrap();
+        assert!(saved.contains("/old") && !saved.contains("/f\n"), "{saved}");
     }
 }
