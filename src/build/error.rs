@@ -32,18 +32,6 @@ pub enum Error {
         #[source]
         source: Box<plan::Error>,
     },
-    /// Two outputs would write one directory.
-    #[error("{}: outputs `{first}` and `{second}` both write to `{dir}`: give one of them its own `dir`", manifest.display())]
-    SharedDirectory {
-        /// The manifest.
-        manifest: PathBuf,
-        /// The first output.
-        first: String,
-        /// The second output.
-        second: String,
-        /// The directory.
-        dir: String,
-    },
     /// An action failed.
     #[error("{}", manifest.display())]
     Execute {
@@ -109,7 +97,7 @@ impl Error {
     /// Whether the error is the input's fault (the manifest, a source file): the user must change something.
     pub fn is_bad_input(&self) -> bool {
         match self {
-            Error::Manifest(_) | Error::Scene { .. } | Error::Plan { .. } | Error::SharedDirectory { .. } => true,
+            Error::Manifest(_) | Error::Scene { .. } | Error::Plan { .. } => true,
             Error::Execute { source, .. } => match &**source {
                 execute::Error::Scene { .. } | execute::Error::Content { .. } => true,
                 execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),

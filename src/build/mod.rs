@@ -223,7 +223,6 @@ impl Prepared {
 
 /// Opens the scene, plans the images and keys every frame.
 pub(crate) fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, Error> {
-    check_directories(m)?;
     let scene = Scene::open(m).map_err(|source| Error::Scene {
         manifest: m.path.clone(),
         source: Box::new(source),
@@ -426,23 +425,4 @@ pub fn collect_garbage(keep: &[Manifest], cache: &Path, max_bytes: Option<u64>) 
         Some(set)
     };
     Ok(gc::collect(cache, reach.as_ref(), max_bytes))
-}
-
-/// Two outputs writing one directory would overwrite each other's `vvgen.json` (and possibly images).
-fn check_directories(m: &Manifest) -> Result<(), Error> {
-    let mut seen: Vec<(String, &str)> = Vec::new();
-    for (name, out) in &m.outputs {
-        let dir = export::dir_name(m, out);
-        let norm = dir.trim_end_matches('/').to_string();
-        if let Some((_, other)) = seen.iter().find(|(d, _)| *d == norm) {
-            return Err(Error::SharedDirectory {
-                manifest: m.path.clone(),
-                first: other.to_string(),
-                second: name.clone(),
-                dir,
-            });
-        }
-        seen.push((norm, name));
-    }
-    Ok(())
 }

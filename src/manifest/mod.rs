@@ -480,14 +480,19 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         if writer == Writer::PlySequence {
             point_output_checks(m, name, out, diags);
         }
-        if let Some(d) = &out.dir {
-            for (other, o2) in &m.outputs {
-                if other > name && o2.dir.as_ref().map(|x| x.get_ref()) == Some(d.get_ref()) {
-                    diags.push(Diagnostic::error(
-                        format!("outputs `{name}` and `{other}` write to the same directory `{}`", d.get_ref()),
-                        Some(d.span()),
-                    ));
-                }
+        // Default directories too (two `ply-sequence` outputs both default to `<name>_points`).
+        let dataset = m.dataset.name.get_ref();
+        let here = out.dir_name(dataset);
+        for (other, o2) in &m.outputs {
+            if other > name && o2.dir_name(dataset).trim_end_matches('/') == here.trim_end_matches('/') {
+                let span = out.dir.as_ref().map_or(out.writer.span(), |d| d.span());
+                diags.push(
+                    Diagnostic::error(
+                        format!("outputs `{name}` and `{other}` write to the same directory `{here}`"),
+                        Some(span),
+                    )
+                    .with_help("give one of them its own `dir`"),
+                );
             }
         }
     }

@@ -55,6 +55,14 @@ pub enum Error {
         /// The split.
         split: String,
     },
+    /// A camera is not finite (a degenerate rig: a target at the camera, a non-finite setting).
+    #[error("split `{split}`, view {view}: the camera is not finite (is the target at the camera position?)")]
+    NonFinite {
+        /// The split.
+        split: String,
+        /// The view.
+        view: usize,
+    },
     /// An output's splits hold no images.
     #[error("output `{output}` has no images (its splits are empty)")]
     NoImages {
@@ -214,6 +222,13 @@ impl Plan {
                 .map_err(|source| Error::Rig { split: name.clone(), rig: rig_name.to_string(), source })?;
             if poses.is_empty() {
                 return Err(Error::NoCameras { split: name.clone() });
+            }
+            // The last line of defence before anything is written: no NaN or infinity in a camera.
+            if let Some(view) = poses.iter().position(|p| !p.is_finite()) {
+                return Err(Error::NonFinite { split: name.clone(), view });
+            }
+            if ![fx, fy, cx, cy, near, far].iter().all(|v| v.is_finite()) {
+                return Err(Error::NonFinite { split: name.clone(), view: 0 });
             }
             let pairs: Vec<(usize, u32)> = match split.time {
                 TimeMode::All => selected.iter().flat_map(|&f| (0..poses.len() as u32).map(move |v| (f, v))).collect(),

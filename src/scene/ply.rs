@@ -292,6 +292,11 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
             "vertex" if !vertex_seen => {
                 vertex_seen = true;
                 read_vertices(&mut cursor, el, &mut out)?;
+                // NaN or infinity would reach fits, bounds, cameras and images as garbage.
+                if let Some(row) = out.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+                    let msg = format!("position {:?} is not finite", out.positions[row]);
+                    return Err(PlyError::Body { element: "vertex".into(), row, msg });
+                }
             }
             "face" => read_faces(&mut cursor, el, out.positions.len(), &mut out.triangles)?,
             _ => cursor.skip_element(el)?,

@@ -114,17 +114,18 @@ fn ply_sequence_writes_exact_counts_and_one_lattice() {
 #[test]
 fn two_outputs_in_one_directory_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let extra = "[output.e]\nwriter = \"nerfstudio\"\ndir = \"m_dnerf\"\n";
-    let (m, _) = vvgen::manifest::load(&write_manifest(dir.path(), extra)).unwrap();
-    let err =
-        vvgen::build::build(&m, &dir.path().join("cache"), Default::default(), &vvgen::build::Silent).unwrap_err();
-    match &err {
-        vvgen::build::Error::SharedDirectory { first, second, dir, .. } => {
-            assert_eq!((first.as_str(), second.as_str(), dir.as_str()), ("d", "e", "m_dnerf"));
-        }
-        e => panic!("{e}"),
-    }
-    assert_eq!(err.exit_code(), 2);
+    // An explicit `dir` equal to another output's default, and two point outputs with the same default.
+    let extra = "[output.e]\nwriter = \"nerfstudio\"\ndir = \"m_dnerf\"\n\
+                 [output.p]\nwriter = \"ply-sequence\"\npoints = 10\n[output.q]\nwriter = \"ply-sequence\"\npoints = 10\n";
+    let report = vvgen::manifest::load(&write_manifest(dir.path(), extra)).unwrap_err();
+    let errors: Vec<&str> = report.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.message.as_str()).collect();
+    assert_eq!(
+        errors,
+        [
+            "outputs `d` and `e` write to the same directory `m_dnerf`",
+            "outputs `p` and `q` write to the same directory `m_points`"
+        ]
+    );
     assert!(!dir.path().join("out").exists(), "refused before anything was written");
 }
 

@@ -285,3 +285,25 @@ fn errors_are_typed_and_map_to_exit_codes() {
     let err = build::build(&load(&d.join("m.toml")), &d.join("cache"), Default::default(), &Silent).unwrap_err();
     assert!(matches!(err, Error::Cache { .. }), "{err:?}");
 }
+
+/// A degenerate camera (an explicit pose at its own target) is refused by the plan before anything renders or
+/// any writer could emit NaN.
+#[test]
+fn a_non_finite_camera_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = manifest("", "[output.d]\nwriter = \"dnerf\"\n").replace(
+        "[rig.h]\nkind = \"hemisphere\"",
+        "[rig.h]\nkind = \"explicit\"\nposes = [{ position = [0.0, 0.0, 0.0] }]",
+    );
+    std::fs::write(d.join("m.toml"), &text).unwrap();
+    let err = build::build(&load(&d.join("m.toml")), &d.join("cache"), Default::default(), &Silent).unwrap_err();
+    match &err {
+        Error::Plan { source, .. } => {
+            assert!(matches!(**source, vvgen::plan::Error::NonFinite { view: 0, .. }), "{source}")
+        }
+        e => panic!("{e:?}"),
+    }
+    assert_eq!(err.exit_code(), 2);
+    assert!(!d.join("out").exists());
+}

@@ -106,3 +106,20 @@ fn lists_in_custom_elements_are_skipped() {
     let d = load("trimesh_points_ascii_with_lists.ply").unwrap();
     assert_eq!(d.positions.len(), 5);
 }
+
+/// A vertex with a NaN or infinite coordinate is an error naming the element and row, not a garbage dataset.
+#[test]
+fn non_finite_positions_are_an_error_naming_the_row() {
+    for bad in ["nan", "inf", "-inf", "1e39"] {
+        let text = format!(
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n\
+             0 0 0\n1 0 0\n0 {bad} 0\n"
+        );
+        match vvgen::scene::ply::read(text.as_bytes()) {
+            Err(vvgen::scene::ply::PlyError::Body { element, row, .. }) => {
+                assert_eq!((element.as_str(), row), ("vertex", 2))
+            }
+            other => panic!("{bad}: {other:?}"),
+        }
+    }
+}

@@ -459,7 +459,7 @@ fn malformed_references_offsets_and_enums_are_errors_not_panics() {
     assert!(load_json(&seed_gltf()).is_ok());
     /// What is broken, how, and what the error must say.
     type Case = (&'static str, fn(&mut serde_json::Value), &'static str);
-    let cases: [Case; 7] = [
+    let cases: [Case; 8] = [
         (
             "no accessors",
             |d| drop(d.as_object_mut().unwrap().remove("accessors")),
@@ -485,6 +485,20 @@ fn malformed_references_offsets_and_enums_are_errors_not_panics() {
             "scalar colours",
             |d| d["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 2.into(),
             "has 2 elements, POSITION has 3",
+        ),
+        (
+            "nan position",
+            |d| {
+                // The first coordinate of the first vertex becomes NaN (f32 bits 0x7fc00000, little-endian).
+                use base64::Engine as _;
+                let uri = d["buffers"][0]["uri"].as_str().unwrap().to_string();
+                let (head, data) = uri.split_once(',').unwrap();
+                let mut bin = base64::engine::general_purpose::STANDARD.decode(data).unwrap();
+                bin[..4].copy_from_slice(&f32::NAN.to_le_bytes());
+                let data = base64::engine::general_purpose::STANDARD.encode(&bin);
+                d["buffers"][0]["uri"] = format!("{head},{data}").into();
+            },
+            "POSITION 0 (",
         ),
         (
             "morph target",

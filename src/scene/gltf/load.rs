@@ -481,6 +481,9 @@ fn primitive(
     };
     let pos_acc = p.get(&gltf::Semantic::Positions).ok_or("no POSITION attribute")?;
     let positions = vec3s(read_f32(&pos_acc, buffers)?);
+    if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
+        return Err(format!("POSITION {i} ({}) is not finite", positions[i]));
+    }
     let n = positions.len();
     let attr = |sem: gltf::Semantic| -> Result<Option<Vec<f32>>, String> {
         match p.get(&sem) {
