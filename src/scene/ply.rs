@@ -287,15 +287,17 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
     let mut out = PlyData { comments: header.comments.clone(), ..Default::default() };
     let mut cursor = Cursor { body, pos: 0, format: header.format };
     let mut vertex_seen = false;
+    // Some writers call the points `point`; read that element when there is no `vertex`.
+    let points = if header.elements.iter().any(|e| e.name == "vertex") { "vertex" } else { "point" };
     for el in &header.elements {
         match el.name.as_str() {
-            "vertex" if !vertex_seen => {
+            name if name == points && !vertex_seen => {
                 vertex_seen = true;
                 read_vertices(&mut cursor, el, &mut out)?;
                 // NaN or infinity would reach fits, bounds, cameras and images as garbage.
                 if let Some(row) = out.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
                     let msg = format!("position {:?} is not finite", out.positions[row]);
-                    return Err(PlyError::Body { element: "vertex".into(), row, msg });
+                    return Err(PlyError::Body { element: points.into(), row, msg });
                 }
             }
             "face" => read_faces(&mut cursor, el, out.positions.len(), &mut out.triangles)?,
@@ -303,7 +305,7 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
         }
     }
     if !vertex_seen {
-        return Err(PlyError::Unusable("no `vertex` element".into()));
+        return Err(PlyError::Unusable("no `vertex` (or `point`) element".into()));
     }
     Ok(out)
 }

@@ -123,3 +123,13 @@ fn non_finite_positions_are_an_error_naming_the_row() {
         }
     }
 }
+
+/// A cloud whose element is called `point` (valid, and in ply-rs's suite) reads like `vertex`.
+#[test]
+fn a_point_element_reads_as_the_points() {
+    let text =
+        "ply\nformat ascii 1.0\nelement point 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n\
+                1 2 3\n4 5 6\n";
+    let d = vvgen::scene::ply::read(text.as_bytes()).unwrap();
+    assert_eq!(d.positions, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+}

@@ -342,6 +342,16 @@ fn uris_may_not_escape_the_folder() {
     std::fs::write(sub.join("m.gltf"), json).unwrap();
     let (_, msg) = gltf_problem(gltf::load(&sub.join("m.gltf"), None).unwrap_err());
     assert!(msg.contains("../secret.bin") && msg.contains("outside"), "{msg}");
+    // A symlink inside the folder that leads out of it is refused too (containment is judged on resolved paths)…
+    std::os::unix::fs::symlink(dir.path().join("secret.bin"), sub.join("link.bin")).unwrap();
+    std::fs::write(sub.join("m.gltf"), json.replace("../secret.bin", "link.bin")).unwrap();
+    let (_, msg) = gltf_problem(gltf::load(&sub.join("m.gltf"), None).unwrap_err());
+    assert!(msg.contains("link.bin") && msg.contains("outside"), "{msg}");
+    // … while a path through `..` that stays inside is read.
+    std::fs::create_dir(sub.join("a")).unwrap();
+    std::fs::write(sub.join("x.bin"), [0u8; 64]).unwrap();
+    std::fs::write(sub.join("m.gltf"), json.replace("../secret.bin", "a/../x.bin")).unwrap();
+    assert!(gltf::load(&sub.join("m.gltf"), None).is_ok());
 }
 
 #[test]
@@ -450,6 +460,17 @@ fn load_json(doc: &serde_json::Value) -> Result<GltfAsset, vvgen::scene::Error> 
     let p = dir.path().join("m.gltf");
     std::fs::write(&p, serde_json::to_vec(doc).unwrap()).unwrap();
     gltf::load(&p, None)
+}
+
+/// A side-car `.bin` or a cut GLB given as the model says what the file is and what was expected.
+#[test]
+fn a_bin_or_a_truncated_glb_is_named_for_what_it_is() {
+    let bin = crate::common::data("gltf/Cameras/simpleSquare.bin");
+    let (_, msg) = gltf_problem(gltf::load(&bin, None).unwrap_err());
+    assert!(msg.contains("side-car buffer"), "{msg}");
+    let glb = std::fs::read(crate::common::data("gltf/BoxTextured/BoxTextured.glb")).unwrap();
+    let (_, msg) = gltf_problem(gltf::load_slice(&glb[..100], Path::new("cut.glb"), None).unwrap_err());
+    assert!(msg.starts_with("a truncated or malformed GLB"), "{msg}");
 }
 
 /// Issue 15's panics on malformed glTF are errors that name the object: dangling references and unknown enums

@@ -353,7 +353,11 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
 /// references.
 fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     let json: std::borrow::Cow<'_, [u8]> = if bytes.starts_with(b"glTF") {
-        gltf::Glb::from_slice(bytes).map_err(|e| e.to_string())?.json
+        gltf::Glb::from_slice(bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?.json
+    } else if bytes.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
+        return Err("neither a GLB (it does not start with `glTF`) nor glTF JSON (it does not start with `{`); \
+                    a .bin is a glTF's side-car buffer: name the .gltf"
+            .into());
     } else {
         bytes.into()
     };
@@ -387,18 +391,19 @@ fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
     }
     let decoded = percent_decode(uri);
     let rel = Path::new(&decoded);
-    let escapes = rel.is_absolute()
-        || decoded.contains("://")
-        || rel.components().any(|c| {
-            matches!(
-                c,
-                std::path::Component::ParentDir | std::path::Component::RootDir | std::path::Component::Prefix(_)
-            )
-        });
-    if escapes {
+    if rel.is_absolute() || decoded.contains("://") {
         return Err(format!("URI `{uri}` points outside the glTF's folder"));
     }
+    // Containment is judged on the resolved paths: `sub/../x.bin` stays inside, a symlink out of the folder
+    // does not.
     let full = dir.join(rel);
+    let (inside, target) = (std::fs::canonicalize(dir), std::fs::canonicalize(&full));
+    match (inside, target) {
+        (Ok(inside), Ok(target)) if target.starts_with(&inside) => {}
+        (Ok(_), Ok(_)) => return Err(format!("URI `{uri}` points outside the glTF's folder")),
+        (_, Err(e)) => return Err(format!("cannot read `{}`: {e}", full.display())),
+        (Err(e), _) => return Err(format!("cannot read the folder `{}`: {e}", dir.display())),
+    }
     std::fs::read(&full).map_err(|e| format!("cannot read `{}`: {e}", full.display()))
 }
 

@@ -96,6 +96,7 @@ impl Checker<'_> {
         for (i, s) in items(root, "scenes").iter().enumerate() {
             self.indices(s, "nodes", &format!("scenes[{i}]"), "nodes");
         }
+        self.forest();
         for (i, n) in items(root, "nodes").iter().enumerate() {
             let p = format!("nodes[{i}]");
             self.indices(n, "children", &p, "nodes");
@@ -210,6 +211,40 @@ impl Checker<'_> {
     }
 }
 
+impl Checker<'_> {
+    /// The node hierarchy must be a forest (the spec: no node has two parents, no node is its own ancestor);
+    /// a cycle would otherwise pose nothing, or loop.
+    fn forest(&mut self) {
+        let nodes = items(self.root, "nodes");
+        let mut parent: Vec<Option<usize>> = vec![None; nodes.len()];
+        for (i, n) in nodes.iter().enumerate() {
+            for c in items(n, "children").iter().filter_map(Value::as_u64) {
+                let Some(slot) = parent.get_mut(c as usize) else { continue };
+                if let Some(first) = *slot {
+                    self.problems.push(format!("nodes[{c}] has two parents (nodes[{first}] and nodes[{i}])"));
+                    return;
+                }
+                *slot = Some(i);
+            }
+        }
+        // With one parent each, a cycle is a walk up that comes back to where it started.
+        for start in 0..nodes.len() {
+            let mut at = parent[start];
+            for _ in 0..nodes.len() {
+                match at {
+                    Some(p) if p == start => {
+                        self.problems
+                            .push(format!("nodes[{start}] is its own ancestor (the node hierarchy has a cycle)"));
+                        return;
+                    }
+                    Some(p) => at = parent[p],
+                    None => break,
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,6 +273,15 @@ mod tests {
         assert!(e.contains("images[0] is stored in a bufferView but has no mimeType"), "{e}");
         assert!(e.contains("images[1] needs exactly one of uri and bufferView"), "{e}");
         assert!(e.contains("images[2] needs exactly one of uri and bufferView"), "{e}");
+        let cyclic: Value =
+            serde_json::from_str(r#"{"asset": {"version": "2.0"}, "nodes": [{"children": [1]}, {"children": [0]}]}"#)
+                .unwrap();
+        assert!(check(&cyclic).unwrap_err().contains("is its own ancestor"));
+        let two_parents: Value = serde_json::from_str(
+            r#"{"asset": {"version": "2.0"}, "nodes": [{"children": [2]}, {"children": [2]}, {}]}"#,
+        )
+        .unwrap();
+        assert_eq!(check(&two_parents), Err("nodes[2] has two parents (nodes[0] and nodes[1])".into()));
         let ok: Value = serde_json::from_str(
             r#"{"asset": {"version": "2.0"}, "nodes": [{}], "scenes": [{"nodes": [0]}], "scene": 0}"#,
         )
