@@ -48,7 +48,7 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
     }
     // Every action is cached: this build runs none and only (re)places files and rewrites metadata.
     let report = build::build(m, cache, Options::default(), &Silent)?;
-    let p = build::prepare(m, cache)?;
+    let p = build::prepare(m, cache, false)?;
     let mut inputs = BTreeMap::new();
     for (src, (_, cfg)) in p.scene.sources.iter().zip(&m.sources) {
         let files: Vec<PathBuf> = match &src.data {

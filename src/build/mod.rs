@@ -13,7 +13,7 @@ use std::time::Instant;
 
 pub use crate::execute::{Counts, Shard};
 pub use error::Error;
-pub use status::{status, ActionStatus, KindStatus, State, Status};
+pub use status::{status, status_with, ActionStatus, KindStatus, State, Status};
 
 use crate::cache::{gc, Digest, StatCache, Store};
 use crate::execute::{self, Inputs};
@@ -66,12 +66,13 @@ pub struct Build {
     manifest: Manifest,
     cache: Option<PathBuf>,
     shard: Option<Shard>,
+    verify: bool,
 }
 
 impl Build {
     /// A build of `manifest`.
     pub fn new(manifest: Manifest) -> Build {
-        Build { manifest, cache: None, shard: None }
+        Build { manifest, cache: None, shard: None, verify: false }
     }
 
     /// A build of the manifest `text`, whose relative paths resolve against `base_dir`.
@@ -100,6 +101,12 @@ impl Build {
         self
     }
 
+    /// Hashes every cached file again instead of trusting its metadata (`--verify`).
+    pub fn verify(mut self, verify: bool) -> Build {
+        self.verify = verify;
+        self
+    }
+
     /// The manifest.
     pub fn manifest(&self) -> &Manifest {
         &self.manifest
@@ -112,12 +119,12 @@ impl Build {
 
     /// Runs the build.
     pub fn run(&self, progress: &dyn Progress) -> Result<Report, Error> {
-        build(&self.manifest, &self.cache_dir(), Options { shard: self.shard }, progress)
+        build(&self.manifest, &self.cache_dir(), Options { shard: self.shard, verify: self.verify }, progress)
     }
 
     /// What the build would do, and (with `explain`) why.
     pub fn status(&self, explain: bool) -> Result<Status, Error> {
-        status(&self.manifest, &self.cache_dir(), explain)
+        status::status_with(&self.manifest, &self.cache_dir(), explain, self.verify)
     }
 }
 
@@ -154,6 +161,8 @@ impl Progress for Silent {
 pub struct Options {
     /// Run only this shard's part of the actions and write no outputs.
     pub shard: Option<Shard>,
+    /// Hash every cached blob and dataset file again instead of trusting its metadata (finds bit rot).
+    pub verify: bool,
 }
 
 /// What a build did.
@@ -222,7 +231,8 @@ impl Prepared {
 }
 
 /// Opens the scene, plans the images and keys every frame.
-pub(crate) fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, Error> {
+/// With `verify`, every cached file is hashed again instead of trusted by its metadata.
+pub(crate) fn prepare(m: &Manifest, cache: &Path, verify: bool) -> Result<Prepared, Error> {
     let scene = Scene::open(m).map_err(|source| Error::Scene {
         manifest: m.path.clone(),
         source: Box::new(source),
@@ -234,7 +244,7 @@ pub(crate) fn prepare(m: &Manifest, cache: &Path) -> Result<Prepared, Error> {
     })?;
     let plan = Plan::new(m, scene.frames).map_err(|e| Error::plan(m, e))?;
     let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
-    let stat = store.stat_cache(&m.out_dir());
+    let stat = store.stat_cache(&m.out_dir(), verify);
     let frame_keys = keys::frame_keys(&scene, &stat).map_err(|e| Error::plan(m, e))?;
     Ok(Prepared { scene, plan, store, stat, frame_keys })
 }
@@ -256,7 +266,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         }
         before.extend(r.after.into_iter().chain(r.outputs.into_iter().map(|(name, w)| (format!("{file}/{name}"), w))));
     }
-    let p = match prepare(m, cache) {
+    let p = match prepare(m, cache, opts.verify) {
         Ok(p) => p,
         // This manifest's sources are its prerequisites' outputs, which only the final unsharded build writes:
         // this shard's part is the prerequisites' work.
@@ -397,7 +407,7 @@ pub fn reachable(m: &Manifest, cache: &Path, keep: &mut HashSet<Digest>) -> Resu
     for a in &m.after {
         reachable(a, cache, keep)?;
     }
-    let p = prepare(m, cache)?;
+    let p = prepare(m, cache, false)?;
     let g = p.graph(m)?;
     for id in g.ids() {
         let n = g.node(id);

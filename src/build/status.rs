@@ -75,7 +75,12 @@ impl Status {
 /// Plans `m` and classifies every action as cached, to run or not needed; with `explain`, says why each action
 /// that would run does. Outputs are judged by their files on disk and their key.
 pub fn status(m: &Manifest, cache: &Path, explain: bool) -> Result<Status, Error> {
-    let p = prepare(m, cache)?;
+    status_with(m, cache, explain, false)
+}
+
+/// [`status`]; with `verify`, every cached file is hashed again instead of trusted by its metadata.
+pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> Result<Status, Error> {
+    let p = prepare(m, cache, verify)?;
     let g = p.graph(m)?;
     let look = execute::lookup(&g, &p.store, &p.stat);
     let last = record::read(&p.store, m);

@@ -211,9 +211,9 @@ impl Store {
     }
 
     /// The stat cache for builds of the dataset at `out` (one file per dataset directory).
-    pub fn stat_cache(&self, out: &Path) -> StatCache {
+    pub fn stat_cache(&self, out: &Path, verify: bool) -> StatCache {
         let abs = std::path::absolute(out).unwrap_or_else(|_| out.to_path_buf());
         let name = blake3::hash(abs.to_string_lossy().as_bytes()).to_hex();
-        StatCache::load(&self.root.join("stat").join(&name[..32]))
+        StatCache::load_with(&self.root.join("stat").join(&name[..32]), verify)
     }
 }

@@ -55,6 +55,12 @@ pub struct StatCache {
 impl StatCache {
     /// Loads the cache file at `path` (a missing or damaged file is an empty cache).
     pub fn load(path: &Path) -> StatCache {
+        Self::load_with(path, false)
+    }
+
+    /// [`StatCache::load`], trusting no entry when `verify`: every file is hashed again once (`--verify`), which
+    /// finds bit rot that left size, mtime and inode alone.
+    pub fn load_with(path: &Path, verify: bool) -> StatCache {
         let mut entries = HashMap::new();
         if let Ok(text) = fs::read_to_string(path) {
             for line in text.lines() {
@@ -67,7 +73,7 @@ impl StatCache {
                 else {
                     continue;
                 };
-                entries.insert(PathBuf::from(f[4]), (Meta { size, mtime_ns, ino }, d, false));
+                entries.insert(PathBuf::from(f[4]), (Meta { size, mtime_ns, ino }, d, verify));
             }
         }
         StatCache { path: path.to_path_buf(), entries: Mutex::new(entries), dirty: false.into() }

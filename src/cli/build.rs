@@ -66,7 +66,13 @@ pub fn parse_shard(s: &str) -> Result<Shard, String> {
     Ok(Shard { index, count })
 }
 
-pub fn run(manifest: &Path, jobs: Option<usize>, shard: Option<Shard>, ui: Ui) -> anyhow::Result<ExitCode> {
+pub fn run(
+    manifest: &Path,
+    jobs: Option<usize>,
+    shard: Option<Shard>,
+    verify: bool,
+    ui: Ui,
+) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let bar = (!ui.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
@@ -79,7 +85,7 @@ pub fn run(manifest: &Path, jobs: Option<usize>, shard: Option<Shard>, ui: Ui) -
     let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
     let cache = cache_dir(&m);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.unwrap_or(0)).build()?;
-    let result = pool.install(|| build::build(&m, &cache, Options { shard }, &display));
+    let result = pool.install(|| build::build(&m, &cache, Options { shard, verify }, &display));
     if let Some(b) = &display.bar {
         b.finish_and_clear();
     }

@@ -69,6 +69,10 @@ pub enum Command {
         /// a final unsharded build writes them.
         #[arg(long, value_parser = build::parse_shard)]
         shard: Option<crate::execute::Shard>,
+        /// Hash every cached blob and dataset file again instead of trusting size, mtime and inode (finds bit
+        /// rot; a damaged blob is rebuilt).
+        #[arg(long)]
+        verify: bool,
     },
     /// Show what a build would do: images cached, stale (changed since the last build) and new.
     #[command(after_help = "Example:\n  vvgen plan manifests/cesium-man.toml --explain")]
@@ -81,11 +85,17 @@ pub enum Command {
         /// Print JSON.
         #[arg(long)]
         json: bool,
+        /// Hash every cached file again instead of trusting its metadata.
+        #[arg(long)]
+        verify: bool,
     },
     /// What is built, what is stale, and the cache's size.
     Status {
         /// The manifest.
         manifest: PathBuf,
+        /// Hash every cached file again instead of trusting its metadata.
+        #[arg(long)]
+        verify: bool,
     },
     /// Write vvgen.lock (every file's size and blake3) at each dataset root; refuses while anything is stale.
     Release {
@@ -152,9 +162,9 @@ pub fn run() -> ExitCode {
     let ui = Ui { color, quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Check { manifests } => check::run(&manifests, ui),
-        Command::Build { manifest, jobs, shard } => build::run(&manifest, jobs, shard, ui),
-        Command::Plan { manifest, explain, json } => plan::run(&manifest, explain, json, ui),
-        Command::Status { manifest } => plan::status(&manifest, ui),
+        Command::Build { manifest, jobs, shard, verify } => build::run(&manifest, jobs, shard, verify, ui),
+        Command::Plan { manifest, explain, json, verify } => plan::run(&manifest, explain, json, verify, ui),
+        Command::Status { manifest, verify } => plan::status(&manifest, verify, ui),
         Command::Release { manifest } => release::release(&manifest, ui),
         Command::Verify { dir } => release::verify(&dir, ui),
         Command::Gc { keep, max_size, cache } => gc::run(&keep, max_size, cache, ui),

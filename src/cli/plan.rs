@@ -6,10 +6,10 @@ use std::process::ExitCode;
 use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
 use crate::build::{self, State};
 
-pub fn run(manifest: &Path, explain: bool, json: bool, ui: Ui) -> anyhow::Result<ExitCode> {
+pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let t = std::time::Instant::now();
-    let st = build::status(&m, &cache_dir(&m), explain || json)?;
+    let st = build::status_with(&m, &cache_dir(&m), explain || json, verify)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&st)?);
         return Ok(ExitCode::SUCCESS);
@@ -31,10 +31,10 @@ pub fn run(manifest: &Path, explain: bool, json: bool, ui: Ui) -> anyhow::Result
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn status(manifest: &Path, ui: Ui) -> anyhow::Result<ExitCode> {
+pub fn status(manifest: &Path, verify: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let cache = cache_dir(&m);
-    let st = build::status(&m, &cache, false)?;
+    let st = build::status_with(&m, &cache, false, verify)?;
     let total: usize = st.kinds.values().map(|k| k.planned).sum();
     let done: usize = st.kinds.values().map(|k| k.cached).sum();
     println!(

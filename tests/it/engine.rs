@@ -163,7 +163,7 @@ fn locks_match_across_jobs_and_shards_and_verify_catches_damage() {
     let c = tempfile::tempdir().unwrap();
     let mut rendered = 0;
     for index in 0..3 {
-        let r = run_with(c.path(), &text, Options { shard: Some(Shard { index, count: 3 }) });
+        let r = run_with(c.path(), &text, Options { shard: Some(Shard { index, count: 3 }), ..Default::default() });
         assert!(r.outputs.is_empty(), "a shard writes no dataset");
         rendered += r.renders;
     }
@@ -394,7 +394,13 @@ fn shards_split_the_prerequisites_work_once() {
     let (m, _) = vvgen::manifest::load(&d.join("cloud.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
     let mut point_frames = 0;
     for index in 0..2 {
-        let r = build(&m, &d.join("cache"), Options { shard: Some(Shard { index, count: 2 }) }, &Silent).unwrap();
+        let r = build(
+            &m,
+            &d.join("cache"),
+            Options { shard: Some(Shard { index, count: 2 }), ..Default::default() },
+            &Silent,
+        )
+        .unwrap();
         let c = r.after_actions[&Kind::PointFrame];
         assert!(c.planned == 3 && c.ran < 3, "shard {index}: {c:?}");
         point_frames += c.ran;
@@ -418,25 +424,42 @@ fn release_hashes_what_it_certifies_and_refuses_bit_rot() {
     run(d, &text);
     // Files an hour old, re-recorded by a no-op build: entries the stat cache trusts (fresh ones are racy and
     // hashed again anyway).
-    let hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
-    for (rel, _) in tree(&d.join("out")) {
-        let f = std::fs::File::options().append(true).open(d.join("out").join(rel)).unwrap();
-        f.set_modified(hour_ago).unwrap();
-    }
+    backdate(&d.join("out"));
     assert_eq!(run(d, &text).renders, 0);
     let (m, _) = vvgen::manifest::load(&d.join("m.toml")).unwrap();
     vvgen::release::release(&m, &d.join("cache")).unwrap();
     let victim = d.join("out/m_dnerf/train/r_0001.png");
-    let mtime = std::fs::metadata(&victim).unwrap().modified().unwrap();
-    let mut bytes = std::fs::read(&victim).unwrap();
-    bytes[200] ^= 0x10;
-    let f = std::fs::OpenOptions::new().write(true).open(&victim).unwrap();
-    std::os::unix::fs::FileExt::write_all_at(&f, &bytes[200..201], 200).unwrap();
-    f.set_modified(mtime).unwrap();
-    drop(f);
+    // Flips one byte in place, keeping size, inode and mtime.
+    let rot = || {
+        let mtime = std::fs::metadata(&victim).unwrap().modified().unwrap();
+        let byte = std::fs::read(&victim).unwrap()[200] ^ 0x10;
+        let f = std::fs::OpenOptions::new().write(true).open(&victim).unwrap();
+        std::os::unix::fs::FileExt::write_all_at(&f, &[byte], 200).unwrap();
+        f.set_modified(mtime).unwrap();
+    };
+    rot();
+    // The stat cache is fooled; release, which hashes what it certifies, is not.
+    assert!(vvgen::build::status(&m, &d.join("cache"), false).unwrap().up_to_date());
     let err = vvgen::release::release(&m, &d.join("cache")).unwrap_err();
     assert!(matches!(&err, vvgen::build::Error::Damaged { path } if path == &victim), "{err:?}");
     assert_eq!(run(d, &text).renders, 1, "the damaged image is rendered again");
     let roots = vvgen::release::release(&m, &d.join("cache")).unwrap();
     assert!(vvgen::release::verify(&roots[0]).unwrap().ok());
+    // `--verify` hashes everything again: the damaged blob is found (and dropped) and its image rebuilt.
+    backdate(&d.join("out"));
+    assert_eq!(run(d, &text).renders, 0);
+    rot();
+    let verified = vvgen::build::status_with(&m, &d.join("cache"), false, true).unwrap();
+    assert_eq!(verified.to_run(Kind::RenderPass), 1, "{:?}", verified.kinds);
+    let opts = Options { verify: true, ..Default::default() };
+    assert_eq!(run_with(d, &text, opts).renders, 1);
+    assert!(vvgen::release::verify(&vvgen::release::release(&m, &d.join("cache")).unwrap()[0]).unwrap().ok());
+}
+
+/// Sets every file under `dir` to have been written an hour ago.
+fn backdate(dir: &Path) {
+    let hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+    for (rel, _) in tree(dir) {
+        std::fs::File::options().append(true).open(dir.join(rel)).unwrap().set_modified(hour_ago).unwrap();
+    }
 }
