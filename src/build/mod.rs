@@ -145,6 +145,10 @@ pub trait Progress: Sync {
     fn ran(&self, done: usize);
     /// Output `name` is being written.
     fn writing(&self, name: &str);
+    /// Another build of the same dataset (manifest `what`) holds its lock: this one waits for it.
+    fn waiting(&self, what: &str) {
+        let _ = what;
+    }
 }
 
 /// A progress sink that ignores everything.
@@ -290,6 +294,8 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         Err(e) => return Err(e),
     };
     let g = p.graph(m)?;
+    let _lock = record::lock(&p.store, m, opts.shard, || progress.waiting(&m.path.display().to_string()))
+        .map_err(|e| Error::cache(m, e))?;
     let last = record::read(&p.store, m);
     let look = execute::lookup(&g, &p.store, &p.stat);
     // Outputs already up to date count as cached; judged before this build rewrites anything.

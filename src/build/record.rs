@@ -72,3 +72,39 @@ pub fn write(store: &Store, m: &Manifest, now: &LastBuild, before: &LastBuild) -
     let p = path(store, m);
     crate::atomic::write(&p, text.as_bytes()).map_err(|e| cache::Error::io(&p, e))
 }
+
+/// Holds the lock of one build of `m`'s dataset (of one shard, for a shard build) until dropped, so a second
+/// `vvgen build` of the same dataset waits and then finds the first one's work in the cache instead of doing it
+/// again. Shards lock apart: they are meant to run together. `waiting` is called when another build holds the
+/// lock. Where the file system has no locks (some network file systems), the build goes on unlocked.
+pub(crate) fn lock(
+    store: &Store,
+    m: &Manifest,
+    shard: Option<crate::execute::Shard>,
+    waiting: impl FnOnce(),
+) -> Result<std::fs::File, cache::Error> {
+    let mut p = path(store, m);
+    p.set_extension(match shard {
+        Some(s) => format!("shard-{}-of-{}.lock", s.index, s.count),
+        None => "lock".into(),
+    });
+    if let Some(dir) = p.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| cache::Error::io(dir, e))?;
+    }
+    let f = std::fs::File::options()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&p)
+        .map_err(|e| cache::Error::io(&p, e))?;
+    match f.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            waiting();
+            // An error here (no lock support) leaves the build unlocked, as below.
+            let _ = f.lock();
+        }
+        Err(std::fs::TryLockError::Error(_)) => {}
+    }
+    Ok(f)
+}

@@ -44,6 +44,12 @@ impl Progress for Display {
         }
     }
 
+    fn waiting(&self, what: &str) {
+        if !self.quiet {
+            eprintln!("waiting for another build of {what} to finish (its work will be reused)");
+        }
+    }
+
     fn writing(&self, name: &str) {
         match &self.bar {
             Some(b) => b.set_message(format!("writing {name}")),

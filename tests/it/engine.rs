@@ -463,3 +463,20 @@ fn backdate(dir: &Path) {
         std::fs::File::options().append(true).open(dir.join(rel)).unwrap().set_modified(hour_ago).unwrap();
     }
 }
+
+/// Two builds of one dataset at once: the second waits for the first's lock and then finds its work cached,
+/// instead of rendering everything a second time.
+#[test]
+fn concurrent_builds_of_one_dataset_do_the_work_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("m.toml"), cesium(3, "", "")).unwrap();
+    let (m, _) = vvgen::manifest::load(&d.join("m.toml")).unwrap();
+    let reports: Vec<Report> = std::thread::scope(|s| {
+        let a = s.spawn(|| build(&m, &d.join("cache"), Options::default(), &Silent).unwrap());
+        let b = s.spawn(|| build(&m, &d.join("cache"), Options::default(), &Silent).unwrap());
+        vec![a.join().unwrap(), b.join().unwrap()]
+    });
+    assert_eq!(reports[0].images, 8);
+    assert_eq!(reports[0].renders + reports[1].renders, 8, "the images were rendered once between the two");
+}
