@@ -449,7 +449,7 @@ fn minified_textures_are_filtered_through_mip_levels() {
     }
     // The level follows texels per pixel: one texel per pixel (pixel centres on texel centres) reads level 0
     // exactly; three per pixel is past level 1, uniform grey again. A derivative off by 2× either way fails one.
-    let checker = |i: u32, j: u32| [if (i + j) % 2 == 0 { 255 } else { 0 }; 3];
+    let checker = |i: u32, j: u32| [if (i + j).is_multiple_of(2) { 255 } else { 0 }; 3];
     let f = textured_square(50, checker, false, 100.0);
     for (x, y) in [(7, 7), (8, 7), (30, 41), (31, 41)] {
         let expect = if (x + y) % 2 == 0 { 255 } else { 0 };
