@@ -13,11 +13,49 @@ pub const TMP_PREFIX: &str = ".vvgen-tmp-";
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// A temporary name beside `dest`, unique within and across processes.
+/// This host's name as it goes into temporary names (`-` and `.` become `_`, so the name parses back).
+fn host() -> &'static str {
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        let h = fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_else(|_| "host".into());
+        h.trim().chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect()
+    })
+}
+
+/// A temporary name beside `dest`, unique within and across processes and hosts (a shared cache sees several):
+/// `.vvgen-tmp-<pid>@<host>-<n>-<name>`.
 pub fn temp_path(dest: &Path) -> PathBuf {
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     let name = dest.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    dest.with_file_name(format!("{TMP_PREFIX}{}-{n}-{name}", std::process::id()))
+    dest.with_file_name(format!("{TMP_PREFIX}{}@{}-{n}-{name}", std::process::id(), host()))
+}
+
+/// Whether the temporary file named `name` was left by a process of this host that is gone (Linux: no
+/// `/proc/<pid>`). Temporaries of other hosts, of live processes, and names that do not parse are kept.
+fn dead_debris(name: &str) -> bool {
+    let Some((pid, rest)) = name.strip_prefix(TMP_PREFIX).and_then(|r| r.split_once('@')) else { return false };
+    let Some((h, _)) = rest.split_once('-') else { return false };
+    let alive = Path::new("/proc").join(pid);
+    cfg!(target_os = "linux") && h == host() && pid.parse::<u32>().is_ok() && !alive.exists()
+}
+
+/// Removes temporaries left by killed processes of this host in `dir` and its immediate subdirectories (the
+/// cache's `builds/` and `stat/`, or the fans of `objects/` and `actions/`), so a killed build's debris does not
+/// wait for `gc`.
+pub fn clean_dead_debris(dir: &Path) {
+    let Ok(entries) = fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let path = e.path();
+        if path.is_dir() {
+            for f in fs::read_dir(&path).into_iter().flatten().flatten() {
+                if dead_debris(&f.file_name().to_string_lossy()) {
+                    let _ = fs::remove_file(f.path());
+                }
+            }
+        } else if dead_debris(&e.file_name().to_string_lossy()) {
+            let _ = fs::remove_file(path);
+        }
+    }
 }
 
 /// Writes `bytes` to `dest` atomically, creating parent directories.
@@ -87,6 +125,32 @@ pub fn clean_debris(dir: &Path) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn debris_of_dead_processes_of_this_host_is_removed_and_no_other() {
+        let dir = tempfile::tempdir().unwrap();
+        let fan = dir.path().join("ab");
+        fs::create_dir(&fan).unwrap();
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let names = [
+            format!("{TMP_PREFIX}{dead}@{}-0-cdef", host()),
+            format!("{TMP_PREFIX}{}@{}-0-cdef", std::process::id(), host()),
+            format!("{TMP_PREFIX}{dead}@another_host-0-cdef"),
+            "cdef".to_string(),
+        ];
+        for n in &names {
+            fs::write(fan.join(n), b"x").unwrap();
+        }
+        clean_dead_debris(dir.path());
+        let mut left: Vec<String> =
+            fs::read_dir(&fan).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        left.sort();
+        let mut expect = names[1..].to_vec();
+        expect.sort();
+        assert_eq!(left, expect);
+    }
 
     #[test]
     fn writes_replace_and_leave_no_temporaries() {

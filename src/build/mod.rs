@@ -296,6 +296,11 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     let g = p.graph(m)?;
     let _lock = record::lock(&p.store, m, opts.shard, || progress.waiting(&m.path.display().to_string()))
         .map_err(|e| Error::cache(m, e))?;
+    // Debris of killed builds on this host goes now, not an hour later through `gc`.
+    let root = p.store.root();
+    for dir in [root.to_path_buf(), root.join("objects"), root.join("actions")] {
+        crate::atomic::clean_dead_debris(&dir);
+    }
     let last = record::read(&p.store, m);
     let look = execute::lookup(&g, &p.store, &p.stat);
     // Outputs already up to date count as cached; judged before this build rewrites anything.

@@ -284,6 +284,9 @@ fn killed_builds_resume_to_identical_output() {
     let got = tree(&d.path().join("out"));
     assert_eq!(got.keys().collect::<Vec<_>>(), expect.keys().collect::<Vec<_>>());
     assert!(got == expect, "resumed build differs from an uninterrupted one");
+    // The killed builds' temporaries are gone from the cache too (their processes are dead).
+    let debris: Vec<String> = tree(&d.path().join("cache")).into_keys().filter(|k| k.contains(".vvgen-tmp-")).collect();
+    assert!(debris.is_empty(), "{debris:?}");
 }
 
 #[test]
