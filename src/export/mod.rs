@@ -194,7 +194,15 @@ impl<'a> Files<'a> {
 
 /// Runs the writer of `[output.name]`: places its actions' blobs and writes its metadata.
 pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Error> {
-    let root = x.manifest.out_dir().join(dir_name(x.manifest, out));
+    // `dir = "."` (the dataset at `out` itself) and `a/./b` name plain directories: drop the `.` components,
+    // which directory creation would trip over.
+    let root: PathBuf = x
+        .manifest
+        .out_dir()
+        .join(dir_name(x.manifest, out))
+        .components()
+        .filter(|c| *c != std::path::Component::CurDir)
+        .collect();
     std::fs::create_dir_all(&root).map_err(|e| cache::Error::io(&root, e))?;
     atomic::clean_debris(&root);
     let mut files = Files::new(root, x.store, x.stat);

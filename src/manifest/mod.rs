@@ -319,6 +319,41 @@ fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut 
     }
 }
 
+/// The DyNeRF layout is synchronized video: every split it writes has every camera at every frame, over the
+/// same frames (the plan refuses it too; here it is refused before anything renders).
+fn dynerf_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<Diagnostic>) {
+    let selected: Vec<&str> = match &out.splits {
+        Some(s) => s.iter().map(|s| s.get_ref().as_str()).collect(),
+        None => m.splits.keys().map(String::as_str).collect(),
+    };
+    let mut frames: Option<(&str, Option<&frames::FrameSubset>)> = None;
+    for split_name in selected {
+        let Some(split) = m.splits.get(split_name) else { continue };
+        let help = "the dynerf layout is synchronized video: every camera at every frame";
+        if split.time != TimeMode::All {
+            diags.push(
+                Diagnostic::error(
+                    format!("output `{name}` (dynerf) writes split `{split_name}`, whose time is not \"all\""),
+                    Some(out.writer.span()),
+                )
+                .with_help(help),
+            );
+        }
+        let these = split.frames.as_ref().map(|f| f.get_ref());
+        match frames {
+            Some((first, f)) if f != these => diags.push(
+                Diagnostic::error(
+                    format!("output `{name}` (dynerf): splits `{first}` and `{split_name}` select different frames"),
+                    Some(out.writer.span()),
+                )
+                .with_help(help),
+            ),
+            Some(_) => {}
+            None => frames = Some((split_name, these)),
+        }
+    }
+}
+
 /// Every float of a manifest must be finite: TOML has `nan` and `inf`, and `1e400` overflows to infinity, and
 /// any of them would reach matrices, cameras and images as garbage.
 fn non_finite(v: &walk::Raw<'_>, diags: &mut Vec<Diagnostic>) {
@@ -479,6 +514,9 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         }
         if writer == Writer::PlySequence {
             point_output_checks(m, name, out, diags);
+        }
+        if writer == Writer::Dynerf {
+            dynerf_checks(m, name, out, diags);
         }
         // Default directories too (two `ply-sequence` outputs both default to `<name>_points`).
         let dataset = m.dataset.name.get_ref();

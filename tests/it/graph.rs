@@ -307,3 +307,16 @@ fn a_non_finite_camera_is_refused_before_anything_is_written() {
     assert_eq!(err.exit_code(), 2);
     assert!(!d.join("out").exists());
 }
+
+/// `dir = "."` puts the dataset at `out` itself (it used to pass `check` and then fail to create `out/.`).
+#[test]
+fn an_output_may_be_the_out_directory_itself() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run(d, &manifest("", "[output.n]\nwriter = \"nerfstudio\"\ndir = \".\"\ninit_points = 0\n"));
+    let t: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("out/transforms.json")).unwrap()).unwrap();
+    assert_eq!(t["frames"].as_array().unwrap().len(), 6);
+    assert!(
+        run(d, &manifest("", "[output.n]\nwriter = \"nerfstudio\"\ndir = \".\"\ninit_points = 0\n")).nothing_to_do()
+    );
+}

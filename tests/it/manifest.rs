@@ -329,6 +329,26 @@ fn a_dome_with_zero_rings_is_an_error() {
     assert!(l.iter().any(|(_, m, _)| m == "rings = 0 must be in 1..=1000"), "{l:?}");
 }
 
+/// A dynerf output over splits that are not synchronized video is refused by check, before anything renders.
+#[test]
+fn dynerf_needs_every_camera_at_every_frame() {
+    let text = full_manifest().replace(
+        "[output.ngp]",
+        "[output.dy]\nwriter = \"dynerf\"\nsplits = [\"train\", \"val\", \"test\"]\n[output.ngp]",
+    );
+    let l = lines(&errors(&text));
+    let dy: Vec<&str> = l.iter().filter(|(_, m, _)| m.contains("(dynerf)")).map(|(_, m, _)| m.as_str()).collect();
+    assert_eq!(
+        dy,
+        [
+            "output `dy` (dynerf) writes split `val`, whose time is not \"all\"",
+            "output `dy` (dynerf): splits `train` and `val` select different frames",
+            "output `dy` (dynerf) writes split `test`, whose time is not \"all\"",
+            "output `dy` (dynerf): splits `train` and `test` select different frames",
+        ]
+    );
+}
+
 /// NaN, infinity and overflowing literals are refused wherever a float stands, with their place.
 #[test]
 fn every_float_must_be_finite() {
