@@ -70,6 +70,16 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+    /// The build would render more images than allowed (`--yes` to go ahead).
+    #[error("{}: this build would render {images} images, more than {max}: check the view and frame counts (`vvgen plan` lists them), then run again with --yes", manifest.display())]
+    TooMuchWork {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Images it would render.
+        images: usize,
+        /// The limit.
+        max: usize,
+    },
     /// A dataset file does not hold what the build placed there (changed on disk with its metadata intact, as
     /// bit rot does): `release` will not certify it.
     #[error("{}: does not hold what the build wrote (damaged on disk); it and its cache blob were removed: run `vvgen build`, then `vvgen release` again", path.display())]
@@ -97,7 +107,7 @@ impl Error {
     /// Whether the error is the input's fault (the manifest, a source file): the user must change something.
     pub fn is_bad_input(&self) -> bool {
         match self {
-            Error::Manifest(_) | Error::Scene { .. } | Error::Plan { .. } => true,
+            Error::Manifest(_) | Error::Scene { .. } | Error::Plan { .. } | Error::TooMuchWork { .. } => true,
             Error::Execute { source, .. } => match &**source {
                 execute::Error::Scene { .. } | execute::Error::Content { .. } => true,
                 execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),

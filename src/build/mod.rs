@@ -119,7 +119,8 @@ impl Build {
 
     /// Runs the build.
     pub fn run(&self, progress: &dyn Progress) -> Result<Report, Error> {
-        build(&self.manifest, &self.cache_dir(), Options { shard: self.shard, verify: self.verify }, progress)
+        let opts = Options { shard: self.shard, verify: self.verify, max_images: None };
+        build(&self.manifest, &self.cache_dir(), opts, progress)
     }
 
     /// What the build would do, and (with `explain`) why.
@@ -167,6 +168,9 @@ pub struct Options {
     pub shard: Option<Shard>,
     /// Hash every cached blob and dataset file again instead of trusting its metadata (finds bit rot).
     pub verify: bool,
+    /// Refuse to start when this process would render more images than this (the CLI's guard against a
+    /// mistyped view count; `--yes` lifts it).
+    pub max_images: Option<usize>,
 }
 
 /// What a build did.
@@ -303,6 +307,12 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     }
     let last = record::read(&p.store, m);
     let look = execute::lookup(&g, &p.store, &p.stat);
+    if let Some(max) = opts.max_images {
+        let images = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, opts.shard));
+        if images > max {
+            return Err(Error::TooMuchWork { manifest: m.path.clone(), images, max });
+        }
+    }
     // Outputs already up to date count as cached; judged before this build rewrites anything.
     let outputs_fresh: Vec<bool> = g
         .ids()

@@ -53,6 +53,10 @@ pub struct Status {
     pub kinds: BTreeMap<Kind, KindStatus>,
     /// Every action, in graph order (inputs first).
     pub actions: Vec<ActionStatus>,
+    /// Images a build would render.
+    pub images_to_render: usize,
+    /// An upper bound of the bytes those images' passes take uncompressed (PNG files are smaller).
+    pub bytes_upper_bound: u64,
 }
 
 impl Status {
@@ -84,7 +88,21 @@ pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> R
     let g = p.graph(m)?;
     let look = execute::lookup(&g, &p.store, &p.stat);
     let last = record::read(&p.store, m);
-    let mut st = Status::default();
+    let images_to_render = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, None));
+    let [w, h] = m.render.resolution();
+    let per_pixel: u64 = m
+        .render
+        .passes()
+        .iter()
+        .map(|p| match p {
+            crate::manifest::render::Pass::Rgba => 4,
+            crate::manifest::render::Pass::Depth => 2 + if m.render.depth.exr { 4 } else { 0 },
+            crate::manifest::render::Pass::Normal => 3 + if m.render.normal.exr { 12 } else { 0 },
+            crate::manifest::render::Pass::Mask => 1 + 2,
+        })
+        .sum();
+    let bytes_upper_bound = images_to_render as u64 * w as u64 * h as u64 * per_pixel;
+    let mut st = Status { images_to_render, bytes_upper_bound, ..Default::default() };
     for id in g.ids() {
         let n = g.node(id);
         let kind = n.action.kind();

@@ -59,6 +59,10 @@ impl Progress for Display {
     }
 }
 
+/// Above this many images to render in one process, `vvgen build` asks for `--yes` (a mistyped view count
+/// should not start a week of rendering silently).
+pub const MAX_IMAGES_WITHOUT_YES: usize = 100_000;
+
 /// Parses `K/N` (0 ≤ K < N), as Slurm array jobs number their tasks.
 pub fn parse_shard(s: &str) -> Result<Shard, String> {
     let (k, n) = s.split_once('/').ok_or_else(|| format!("`{s}`: expected K/N, e.g. 0/4"))?;
@@ -72,13 +76,7 @@ pub fn parse_shard(s: &str) -> Result<Shard, String> {
     Ok(Shard { index, count })
 }
 
-pub fn run(
-    manifest: &Path,
-    jobs: Option<usize>,
-    shard: Option<Shard>,
-    verify: bool,
-    ui: Ui,
-) -> anyhow::Result<ExitCode> {
+pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let bar = (!ui.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
@@ -91,7 +89,7 @@ pub fn run(
     let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
     let cache = cache_dir(&m);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.unwrap_or(0)).build()?;
-    let result = pool.install(|| build::build(&m, &cache, Options { shard, verify }, &display));
+    let result = pool.install(|| build::build(&m, &cache, opts, &display));
     if let Some(b) = &display.bar {
         b.finish_and_clear();
     }

@@ -73,6 +73,9 @@ pub enum Command {
         /// rot; a damaged blob is rebuilt).
         #[arg(long)]
         verify: bool,
+        /// Go ahead even when this process would render more than 100 000 images.
+        #[arg(long)]
+        yes: bool,
     },
     /// Show what a build would do: images cached, stale (changed since the last build) and new.
     #[command(after_help = "Example:\n  vvgen plan manifests/cesium-man.toml --explain")]
@@ -162,7 +165,10 @@ pub fn run() -> ExitCode {
     let ui = Ui { color, quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Check { manifests } => check::run(&manifests, ui),
-        Command::Build { manifest, jobs, shard, verify } => build::run(&manifest, jobs, shard, verify, ui),
+        Command::Build { manifest, jobs, shard, verify, yes } => {
+            let max_images = (!yes).then_some(build::MAX_IMAGES_WITHOUT_YES);
+            build::run(&manifest, jobs, crate::build::Options { shard, verify, max_images }, ui)
+        }
         Command::Plan { manifest, explain, json, verify } => plan::run(&manifest, explain, json, verify, ui),
         Command::Status { manifest, verify } => plan::status(&manifest, verify, ui),
         Command::Release { manifest } => release::release(&manifest, ui),

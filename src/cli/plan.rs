@@ -23,6 +23,13 @@ pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> 
         if st.up_to_date() { "nothing to do" } else { "work to do" },
         t.elapsed().as_secs_f64() * 1000.0
     );
+    if st.images_to_render > 0 {
+        println!(
+            "{} images to render, at most {:.1} MB uncompressed",
+            st.images_to_render,
+            st.bytes_upper_bound as f64 / 1e6
+        );
+    }
     if explain {
         for a in st.actions.iter().filter(|a| a.state == State::Run) {
             println!("  {}: {}", a.label, a.reasons.join("; "));

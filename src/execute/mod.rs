@@ -192,22 +192,11 @@ impl Inputs<'_> {
     }
 }
 
-/// Runs every action `look` says must run (those of `shard` only, when given, and those whose inputs this
-/// process has). `started(cached, work)` is called once the cache has been consulted, `done(n)` after each
-/// action.
-pub(crate) fn run(
-    g: &Graph,
-    x: &Inputs,
-    look: Lookup,
-    shard: Option<Shard>,
-    started: &dyn Fn(usize, usize),
-    done: &(dyn Fn(usize) + Sync),
-) -> Result<Outcome, Error> {
-    let Lookup { mut blobs, state } = look;
+/// Which actions this process runs, of those `state` says must run: those of `shard` (all, without one), and
+/// the inputs they read that must run too (a shared input such as a sequence's bounds: cheap, and the same bytes
+/// whichever shard makes it). Readers come after their inputs, so one walk from the end settles it.
+pub(crate) fn runs_here(g: &Graph, state: &[State], shard: Option<Shard>) -> Vec<bool> {
     let owns = |id: ActionId| shard.is_none_or(|s| s.owns(&owner_key(g, id)));
-    // An action runs here when it must run and is ours, or when an action that runs here reads it (a shared
-    // input such as a sequence's bounds: cheap, and the same bytes whichever shard makes it). Readers come after
-    // their inputs, so one walk from the end settles it.
     let mut here = vec![false; g.nodes.len()];
     for id in g.ids().rev() {
         let i = id.0 as usize;
@@ -221,6 +210,37 @@ pub(crate) fn run(
             }
         }
     }
+    here
+}
+
+/// Images (plan indices) with a render pass among `here`.
+pub(crate) fn images_to_render(g: &Graph, here: &[bool]) -> usize {
+    let mut images: Vec<usize> = g
+        .ids()
+        .filter(|id| here[id.0 as usize])
+        .filter_map(|id| match g.node(id).action {
+            Action::RenderPass { image, .. } => Some(image),
+            _ => None,
+        })
+        .collect();
+    images.sort_unstable();
+    images.dedup();
+    images.len()
+}
+
+/// Runs every action `look` says must run (those of `shard` only, when given, and those whose inputs this
+/// process has). `started(cached, work)` is called once the cache has been consulted, `done(n)` after each
+/// action.
+pub(crate) fn run(
+    g: &Graph,
+    x: &Inputs,
+    look: Lookup,
+    shard: Option<Shard>,
+    started: &dyn Fn(usize, usize),
+    done: &(dyn Fn(usize) + Sync),
+) -> Result<Outcome, Error> {
+    let Lookup { mut blobs, state } = look;
+    let here = runs_here(g, &state, shard);
     let mut counts: BTreeMap<Kind, Counts> = BTreeMap::new();
     for id in g.ids() {
         let i = id.0 as usize;

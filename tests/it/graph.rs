@@ -320,3 +320,35 @@ fn an_output_may_be_the_out_directory_itself() {
         run(d, &manifest("", "[output.n]\nwriter = \"nerfstudio\"\ndir = \".\"\ninit_points = 0\n")).nothing_to_do()
     );
 }
+
+/// `plan` says how many images a build would render and bounds their size; past a limit, `build` refuses to
+/// start without `--yes` (the CLI's limit is 100 000 images per process).
+#[test]
+fn a_huge_build_asks_for_yes_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = manifest("", "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n");
+    let st = status(d, &text);
+    assert_eq!((st.images_to_render, st.bytes_upper_bound), (6, 6 * 32 * 32 * (4 + 2 + 3 + 3)));
+    let m = load(&d.join("m.toml"));
+    let limited = |max| build::Options { max_images: Some(max), ..Default::default() };
+    let err = build::build(&m, &d.join("cache"), limited(5), &Silent).unwrap_err();
+    assert!(matches!(err, Error::TooMuchWork { images: 6, max: 5, .. }), "{err:?}");
+    assert_eq!(err.exit_code(), 2);
+    assert_eq!(build::build(&m, &d.join("cache"), limited(6), &Silent).unwrap().renders, 6);
+    assert_eq!(status(d, &text).images_to_render, 0);
+    // The CLI's own limit, on a mistyped view count: refused before anything renders.
+    std::fs::write(d.join("tri.gltf"), crate::common::animated_triangle(0.3)).unwrap();
+    let huge = crate::common::triangle_manifest(1, 1, 8, 100_001, "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n")
+        .replace("kind = \"orbit\"", "kind = \"fibonacci\"");
+    std::fs::write(d.join("huge.toml"), huge).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["-q", "build", "huge.toml"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("would render 100001 images"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!d.join("out/tri_dnerf").exists());
+}
