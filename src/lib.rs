@@ -1,9 +1,11 @@
 //! vvgen builds datasets of dynamic 6-DoF content (multi-view images with exact cameras, and point-cloud
 //! sequences) from declarative TOML manifests.
 //!
-//! The pipeline, one module per stage: [`manifest`] (TOML → checked tables) → scene (sources, animation,
-//! transforms) → rig/splits → plan (tasks and keys) → execute (render, sample) → cache → export (writers).
-//! [`cli`] is the command-line front end.
+//! The pipeline, one module per stage: [`manifest`] (TOML → checked tables) → [`scene`] (sources, animation,
+//! transforms) → [`rig`] (camera poses) → [`plan`] (the images, and the graph of every action with its key) →
+//! [`execute`] (run what the cache lacks: [`render`], [`sample`]) → [`cache`] (blobs and action records) →
+//! [`export`] (place blobs, write metadata). [`build`] runs the chain and is the entry point for Rust callers
+//! ([`build::Build`]); [`camera`] is the one camera model; [`cli`] is the command-line front end.
 
 #![deny(missing_docs)]
 
