@@ -1,6 +1,6 @@
 //! Execution: run the graph's actions the cache lacks, and record each result (blobs plus the fields it was
 //! keyed by) in the action cache. Kinds run in [`Kind::ALL`] order, so an action's inputs exist before it
-//! runs; within a kind, actions run in parallel on the worker threads. [`lookup`] is the side table every
+//! runs; within a kind, actions run in parallel on the worker threads. `lookup` is the side table every
 //! reader of the graph shares: which actions are cached, which must run, which are not needed.
 
 mod points;

@@ -1,7 +1,7 @@
 //! Resolving a manifest `[transform]` to one 4×4 matrix from the bounds of the frames it covers.
 //!
 //! `world = translate · rotate · scale · fit · center · up · matrix`. The caller gathers [`Stats`] of the
-//! geometry after `up · matrix` ([`Transform::pre`]) over the frames `over` selects, once per sequence.
+//! geometry after `up · matrix` ([`pre`]) over the frames `over` selects, once per sequence.
 
 use glam::{DMat4, DVec3, Mat4, Vec3};
 

@@ -1,4 +1,4 @@
-//! glTF 2.0 sources: loading ([`load`]), accessor decoding, animation sampling and posing.
+//! glTF 2.0 sources: loading ([`load()`]), accessor decoding, animation sampling and posing.
 
 pub mod accessor;
 pub mod anim;
