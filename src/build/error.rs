@@ -113,7 +113,9 @@ impl Error {
                 execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),
                 execute::Error::Cache { .. } => false,
             },
-            Error::Export { source, .. } => matches!(**source, export::Error::Pattern(_) | export::Error::EmptyScene),
+            Error::Export { source, .. } => {
+                matches!(**source, export::Error::Pattern(_) | export::Error::EmptyScene | export::Error::NonFinite(_))
+            }
             Error::After { source, .. } => source.is_bad_input(),
             Error::Cache { .. } | Error::NotBuilt { .. } | Error::Damaged { .. } => false,
         }

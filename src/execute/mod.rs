@@ -59,6 +59,17 @@ pub enum Error {
     },
 }
 
+/// Refuses a posed frame with a NaN or infinite vertex (transforms that overflow, degenerate skins): it would
+/// render empty images and sample no points without a word.
+fn check_posed(posed: &crate::scene::PosedScene, action: &str) -> Result<(), Error> {
+    let bad = posed.primitives.iter().any(|p| p.positions.iter().any(|v| !v.is_finite()));
+    if bad {
+        let message = "the posed geometry is not finite (a transform or skin overflows)".into();
+        return Err(Error::Content { action: action.into(), message });
+    }
+    Ok(())
+}
+
 /// What an executor made: each action it ran, with its blobs.
 type Made = Vec<(ActionId, Vec<Digest>)>;
 

@@ -54,6 +54,7 @@ fn make(
             let mut b: Option<(Vec3, Vec3)> = None;
             for &f in frames {
                 let posed = x.scene.pose(f, &mut poser).map_err(|source| Error::Scene { action: label(), source })?;
+                super::check_posed(posed, &n.label)?;
                 if let Some((lo, hi)) = posed.bounds() {
                     b = Some(b.map_or((lo, hi), |(a, c)| (a.min(lo), c.max(hi))));
                 }
@@ -80,14 +81,18 @@ fn make(
                     let bounds = x.read(g, blobs, *n.deps.last().expect("vox reads the bounds"), 0)?;
                     let (lo, hi) = decode_bounds(&bounds)
                         .ok_or_else(|| Error::Content { action: label(), message: "the scene is empty".into() })?;
+                    if !(lo.is_finite() && hi.is_finite()) {
+                        let message = "the bounds of the posed geometry are not finite".into();
+                        return Err(Error::Content { action: label(), message });
+                    }
                     Some(Grid::new(lo, hi, vox))
                 }
                 None => None,
             };
-            Ok(encode(pts, motion, s, grid, *frame))
+            Ok(encode(finite(pts, &n.label)?, motion, s, grid, *frame))
         }
         Action::InitCloud { frames, points } => {
-            let cloud = init_cloud(g, x, frames, *points as usize, &n.label)?;
+            let cloud = finite(init_cloud(g, x, frames, *points as usize, &n.label)?, &n.label)?;
             let colors = cloud.srgb8();
             Ok(ply::write(&PlyOut {
                 positions: &cloud.positions,
@@ -104,7 +109,7 @@ fn make(
             let mut txt = String::from(
                 "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[]\n",
             );
-            let cloud = init_cloud(g, x, &[*frame], *points as usize, &n.label)?;
+            let cloud = finite(init_cloud(g, x, &[*frame], *points as usize, &n.label)?, &n.label)?;
             for (k, (p, c)) in cloud.positions.iter().zip(cloud.srgb8()).enumerate() {
                 let _ = writeln!(txt, "{} {} {} {} {} {} {} 0", k + 1, p[0], p[1], p[2], c[0], c[1], c[2]);
             }
@@ -170,6 +175,7 @@ fn samples(
     let content = |source| Error::Sample { action: label.to_string(), source };
     let mut poser = Poser::default();
     let posed = pose(x, s, f, &mut poser).map_err(scene_err)?.clone();
+    super::check_posed(&posed, label)?;
     let Some(d) = draws.filter(|_| s.correspondence) else {
         return Ok((sample::sample(&posed, s.points as usize, &[b"sequence", &seed, &(f as u64).to_le_bytes()]), None));
     };
@@ -200,9 +206,19 @@ fn init_cloud(g: &Graph, x: &Inputs, frames: &[usize], n: usize, label: &str) ->
         // An even share per frame; the first frames take the remainder.
         let share = n / frames.len() + usize::from(i < n % frames.len());
         let posed = x.scene.pose(f, &mut poser).map_err(|source| Error::Scene { action: label.into(), source })?;
+        super::check_posed(posed, label)?;
         out.extend(&sample::sample(posed, share, &[b"init", &seed, &(f as u64).to_le_bytes()]));
     }
     Ok(out)
+}
+
+/// `pts`, refused when any coordinate is NaN or infinite (overflowing transforms or degenerate geometry): no
+/// writer emits a non-finite number.
+fn finite(pts: Points, label: &str) -> Result<Points, Error> {
+    match pts.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        None => Ok(pts),
+        Some(i) => Err(Error::Content { action: label.into(), message: format!("point {i} is not finite") }),
+    }
 }
 
 /// Reads a bounds blob: `None` for an empty scene.

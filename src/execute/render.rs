@@ -31,7 +31,8 @@ pub(super) fn passes(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() +
     for (frame, images) in by_frame {
         let first = images.values().next().and_then(|v| v.first()).map(|(id, _)| *id);
         let label = first.map_or_else(String::new, |id| g.node(id).label.clone());
-        let posed = x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: label, source })?;
+        let posed = x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: label.clone(), source })?;
+        super::check_posed(posed, &label)?;
         let instances = posed.primitives.iter().map(|p| p.object).max().map_or(0, |m| m + 1) > 1;
         let images: Vec<(usize, Vec<(ActionId, Pass)>)> = images.into_iter().collect();
         let made: Vec<Result<Made, Error>> = images

@@ -35,6 +35,9 @@ pub enum Error {
     /// The geometry has no extent where a writer needs bounds.
     #[error("the scene is empty: there are no bounds to write")]
     EmptyScene,
+    /// A number a writer would emit is NaN or infinite (the last line of defence: no writer emits one).
+    #[error("{0} is not finite (degenerate or overflowing input geometry or transforms)")]
+    NonFinite(String),
     /// A writer asked for an action the graph did not plan (a bug: all work is planned).
     #[error("BUG: the plan has no {0}")]
     Unplanned(String),
@@ -89,7 +92,31 @@ impl Export<'_> {
     /// Bounds of the geometry over `frames`, from their bounds action.
     fn bounds(&self, frames: &[usize]) -> Result<Option<(Vec3, Vec3)>, Error> {
         let d = self.blob(&Action::Bounds { frames: frames.to_vec() })?;
-        Ok(crate::execute::decode_bounds(&self.store.get(&d)?))
+        let b = crate::execute::decode_bounds(&self.store.get(&d)?);
+        if b.is_some_and(|(lo, hi)| !(lo.is_finite() && hi.is_finite())) {
+            return Err(Error::NonFinite("the bounds of the posed geometry".into()));
+        }
+        Ok(b)
+    }
+
+    /// Every number the writers take from the plan and the scene (cameras, times, source matrices) is finite.
+    fn check_finite(&self, images: &[usize]) -> Result<(), Error> {
+        for &i in images {
+            let (img, c) = (&self.plan.images[i], &self.plan.images[i].camera);
+            let numbers = [c.fx, c.fy, c.cx, c.cy, c.near, c.far, img.time];
+            if !(c.c2w.is_finite() && numbers.iter().all(|v| v.is_finite())) {
+                return Err(Error::NonFinite(format!(
+                    "the camera of {}",
+                    crate::plan::graph::image_label(self.plan, i)
+                )));
+            }
+        }
+        for (i, src) in self.scene.sources.iter().enumerate() {
+            if !self.scene.world_from_source(i).is_finite() {
+                return Err(Error::NonFinite(format!("source `{}`'s world matrix", src.name)));
+            }
+        }
+        Ok(())
     }
 
     /// The initialization cloud of `frames` with `n` points.
@@ -212,6 +239,7 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
     } else {
         Vec::new()
     };
+    x.check_finite(&images)?;
     match writer {
         Writer::Dnerf => nerf::dnerf(x, out, &images, &mut files)?,
         Writer::Nerfstudio => nerf::nerfstudio(x, out, &images, &mut files)?,

@@ -352,3 +352,40 @@ fn a_huge_build_asks_for_yes_first() {
     );
     assert!(!d.join("out/tri_dnerf").exists());
 }
+
+/// Geometry that overflows to infinity once posed (a node scaled by 1e30 twice) yields an error naming what is
+/// not finite, never a dataset with `null` in its JSON or NaN in its PLYs.
+#[test]
+fn overflowing_geometry_never_reaches_a_dataset() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut doc: serde_json::Value = serde_json::from_str(&crate::common::animated_triangle(0.3)).unwrap();
+    doc["nodes"] =
+        serde_json::json!([{"children": [1], "scale": [1e30, 1e30, 1e30]}, {"mesh": 0, "scale": [1e30, 1e30, 1e30]}]);
+    doc["scenes"][0]["nodes"] = serde_json::json!([0]);
+    doc["animations"][0]["channels"][0]["target"]["node"] = 1.into();
+    std::fs::write(d.join("tri.gltf"), doc.to_string()).unwrap();
+    let outputs = [
+        "[output.n]\nwriter = \"instant-ngp\"\n",
+        "[output.p]\nwriter = \"ply-sequence\"\npoints = 100\n",
+        "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n",
+    ];
+    for output in outputs {
+        std::fs::write(d.join("m.toml"), crate::common::triangle_manifest(2, 1, 8, 1, output)).unwrap();
+        let err = build::build(&load(&d.join("m.toml")), &d.join("cache"), Default::default(), &Silent).unwrap_err();
+        assert!(format!("{:#}", anyhow_chain(&err)).contains("not finite"), "{output}: {}", anyhow_chain(&err));
+        assert_eq!(err.exit_code(), 2, "{output}");
+    }
+    assert!(!d.join("out/tri_ngp/transforms_train.json").exists());
+}
+
+/// The error and its causes, as the CLI prints them.
+fn anyhow_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut cur = e.source();
+    while let Some(c) = cur {
+        s.push_str(&format!(": {c}"));
+        cur = c.source();
+    }
+    s
+}
