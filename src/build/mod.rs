@@ -385,6 +385,12 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     }
     prune(&last, &record);
     record.actions = g.ids().map(|id| (g.node(id).label.clone(), g.node(id).key.hex())).collect();
+    let rendered = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
+    record.render_rate = if report.renders > 0 && rendered.seconds > 0.0 {
+        Some(report.renders as f64 * pixel_samples(m) / rendered.seconds)
+    } else {
+        last.render_rate
+    };
     record::write(&p.store, m, &record, &last).map_err(|e| Error::cache(m, e))?;
     p.stat.save().map_err(|e| Error::cache(m, crate::cache::Error::io(p.store.root(), e)))?;
     report.total_seconds = t0.elapsed().as_secs_f64();
@@ -406,6 +412,12 @@ fn image_counts(g: &Graph, outcome: &execute::Outcome) -> (usize, usize, usize) 
     let hits = images.values().filter(|v| v.0).count();
     let renders = images.values().filter(|v| v.1).count();
     (images.len(), hits, renders)
+}
+
+/// Pixel-samples of one image of `m`: what rendering time scales with.
+pub(crate) fn pixel_samples(m: &Manifest) -> f64 {
+    let [w, h] = m.render.resolution();
+    w as f64 * h as f64 * m.render.samples() as f64
 }
 
 /// Removes files the previous build produced and this one did not (a split that shrank, a renamed output).

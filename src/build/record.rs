@@ -23,6 +23,10 @@ pub struct LastBuild {
     pub outputs: BTreeMap<String, OutputRecord>,
     /// Action label → key (hex).
     pub actions: BTreeMap<String, String>,
+    /// Pixel-samples rendered per second by the last build that rendered here (what `plan` estimates time
+    /// from).
+    #[serde(default)]
+    pub render_rate: Option<f64>,
 }
 
 impl LastBuild {

@@ -57,6 +57,9 @@ pub struct Status {
     pub images_to_render: usize,
     /// An upper bound of the bytes those images' passes take uncompressed (PNG files are smaller).
     pub bytes_upper_bound: u64,
+    /// Seconds rendering them would take at the rate the last build here measured (none before one has
+    /// rendered).
+    pub seconds_estimate: Option<f64>,
 }
 
 impl Status {
@@ -87,7 +90,6 @@ pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> R
     let p = prepare(m, cache, verify)?;
     let g = p.graph(m)?;
     let look = execute::lookup(&g, &p.store, &p.stat);
-    let last = record::read(&p.store, m);
     let images_to_render = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, None));
     let [w, h] = m.render.resolution();
     let per_pixel: u64 = m
@@ -102,7 +104,9 @@ pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> R
         })
         .sum();
     let bytes_upper_bound = images_to_render as u64 * w as u64 * h as u64 * per_pixel;
-    let mut st = Status { images_to_render, bytes_upper_bound, ..Default::default() };
+    let last = record::read(&p.store, m);
+    let seconds_estimate = last.render_rate.map(|rate| images_to_render as f64 * super::pixel_samples(m) / rate);
+    let mut st = Status { images_to_render, bytes_upper_bound, seconds_estimate, ..Default::default() };
     for id in g.ids() {
         let n = g.node(id);
         let kind = n.action.kind();

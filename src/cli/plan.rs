@@ -24,8 +24,12 @@ pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> 
         t.elapsed().as_secs_f64() * 1000.0
     );
     if st.images_to_render > 0 {
+        let time = match st.seconds_estimate {
+            Some(s) => format!(", about {s:.0} s at the rate the last build here rendered"),
+            None => String::new(),
+        };
         println!(
-            "{} images to render, at most {:.1} MB uncompressed",
+            "{} images to render, at most {:.1} MB uncompressed{time}",
             st.images_to_render,
             st.bytes_upper_bound as f64 / 1e6
         );

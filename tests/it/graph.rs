@@ -335,8 +335,13 @@ fn a_huge_build_asks_for_yes_first() {
     let err = build::build(&m, &d.join("cache"), limited(5), &Silent).unwrap_err();
     assert!(matches!(err, Error::TooMuchWork { images: 6, max: 5, .. }), "{err:?}");
     assert_eq!(err.exit_code(), 2);
+    assert_eq!(st.seconds_estimate, None, "no estimate before anything rendered here");
     assert_eq!(build::build(&m, &d.join("cache"), limited(6), &Silent).unwrap().renders, 6);
     assert_eq!(status(d, &text).images_to_render, 0);
+    // A third training view: two new images, timed at the rate the build just measured.
+    let more = status(d, &text.replacen("views = 2", "views = 3", 1));
+    assert_eq!(more.images_to_render, 2);
+    assert!(more.seconds_estimate.is_some_and(|s| s > 0.0 && s.is_finite()), "{:?}", more.seconds_estimate);
     // The CLI's own limit, on a mistyped view count: refused before anything renders.
     std::fs::write(d.join("tri.gltf"), crate::common::animated_triangle(0.3)).unwrap();
     let huge = crate::common::triangle_manifest(1, 1, 8, 100_001, "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n")
