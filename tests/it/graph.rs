@@ -394,3 +394,22 @@ fn anyhow_chain(e: &dyn std::error::Error) -> String {
     }
     s
 }
+
+/// `correspondence` is judged on the source a point output samples: a glTF source tracks its surface even
+/// when another source of the manifest is a PLY sequence (it used to be refused).
+#[test]
+fn correspondence_looks_only_at_the_sampled_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let seq = crate::common::data("seq/torus_vox10_{frame:04}.ply");
+    let text = format!(
+        "{}[source.torus]\nply_sequence = \"{}\"\nframes = {{ start = 1000, end = 1001 }}\n\
+         [output.p]\nwriter = \"ply-sequence\"\nsource = \"man\"\ncorrespondence = true\npoints = 300\n",
+        cesium_head(2, 4, 2.4, "", ""),
+        seq.display()
+    );
+    let r = run(d, &text);
+    assert_eq!(r.ran(Kind::PointFrame), 2);
+    let ply = std::fs::read(d.join("out/m_points/m_0001.ply")).unwrap();
+    assert!(String::from_utf8_lossy(&ply[..400]).contains("point_id"), "tracked points carry their id");
+}
