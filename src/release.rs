@@ -8,9 +8,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::build::{self, Error, Options, Silent};
-use crate::cache::{self, Digest};
-use crate::manifest::Manifest;
-use crate::scene::SourceData;
+use crate::cache::{self, Digest, Store};
+use crate::manifest::{sequence, Manifest, SourceKind};
 
 /// Name of the lock file at a dataset root.
 pub const LOCK: &str = "vvgen.lock";
@@ -41,27 +40,17 @@ pub struct FileEntry {
 
 /// Writes `vvgen.lock` into every output root of `m`; refuses while any action of its graph is not built.
 pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
-    let st = build::status(m, cache, false)?;
-    let pending = st.pending();
-    if pending > 0 {
-        return Err(Error::NotBuilt { pending });
-    }
-    // Every action is cached: this build runs none and only (re)places files and rewrites metadata.
-    let report = build::build(m, cache, Options::default(), &Silent)?;
-    let p = build::prepare(m, cache, false)?;
+    // Every action must be cached: this build runs none and only (re)places files and rewrites metadata.
+    let report = build::build(m, cache, Options { require_built: true, ..Options::default() }, &Silent)?;
+    let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
+    let stat = store.stat_cache(&m.out_dir(), false);
     let mut inputs = BTreeMap::new();
-    for (src, (_, cfg)) in p.scene.sources.iter().zip(&m.sources) {
-        let files: Vec<PathBuf> = match &src.data {
-            SourceData::Gltf { asset, .. } => vec![asset.path.clone()],
-            SourceData::Sequence(frames) => frames.iter().map(|f| f.path.clone()).collect(),
-            SourceData::Static(_) => cfg.mesh().into_iter().chain(cfg.gltf()).map(|f| m.resolve(f)).collect(),
-        };
-        for f in files {
-            let d = p.stat.digest(&f).map_err(|e| Error::cache(m, cache::Error::io(&f, e)))?;
-            let name = f.strip_prefix(&m.dir).unwrap_or(&f).to_string_lossy().replace('\\', "/");
-            inputs.insert(name, d.hex());
-        }
+    for f in input_files(m)? {
+        let d = stat.digest(&f).map_err(|e| Error::cache(m, cache::Error::io(&f, e)))?;
+        let name = f.strip_prefix(&m.dir).unwrap_or(&f).to_string_lossy().replace('\\', "/");
+        inputs.insert(name, d.hex());
     }
+    let manifest_blake3 = Digest::of(m.text.as_bytes()).hex();
     let mut roots = Vec::new();
     for (_, w) in &report.outputs {
         let mut files = BTreeMap::new();
@@ -73,7 +62,7 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
             if Digest::of(&bytes) != *d {
                 // The dataset file is a hard link to its blob: remove both, so the next build runs the action
                 // again instead of placing the same damaged bytes.
-                let _ = std::fs::remove_file(p.store.object_path(d));
+                let _ = std::fs::remove_file(store.object_path(d));
                 let _ = std::fs::remove_file(&path);
                 return Err(Error::Damaged { path });
             }
@@ -82,7 +71,7 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
         let lock = Lock {
             tool: "vvgen".into(),
             version: env!("CARGO_PKG_VERSION").into(),
-            manifest_blake3: blake3::hash(m.text.as_bytes()).to_hex().to_string(),
+            manifest_blake3: manifest_blake3.clone(),
             inputs: inputs.clone(),
             files,
         };
@@ -93,6 +82,28 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
         roots.push(w.root.clone());
     }
     Ok(roots)
+}
+
+/// The files `m`'s sources are read from: the glTF or mesh file, or every frame of a sequence (listed from the
+/// manifest, as `check` lists them; nothing is loaded or posed).
+fn input_files(m: &Manifest) -> Result<Vec<PathBuf>, Error> {
+    let mut out = Vec::new();
+    for (name, s) in &m.sources {
+        match s.kind() {
+            Some((SourceKind::PlySequence, spec)) => {
+                let frames = s.frames().cloned().unwrap_or_default();
+                let seq = sequence::resolve(&m.dir, spec, &frames).map_err(|source| Error::Scene {
+                    manifest: m.path.clone(),
+                    source: Box::new(crate::scene::Error::Sequence { name: name.clone(), source }),
+                    hint: "",
+                })?;
+                out.extend(seq.into_iter().map(|f| f.path));
+            }
+            Some((_, path)) => out.push(m.resolve(path)),
+            None => {}
+        }
+    }
+    Ok(out)
 }
 
 /// Differences between a dataset directory and its lock.

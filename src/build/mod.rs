@@ -20,7 +20,7 @@ use crate::execute::{self, Inputs};
 use crate::export::{self, Export, Written};
 use crate::manifest::Manifest;
 use crate::plan::actions::Kind;
-use crate::plan::graph::Graph;
+use crate::plan::graph::{ActionId, Graph};
 use crate::plan::{keys, Plan};
 use crate::scene::Scene;
 use record::{LastBuild, OutputRecord};
@@ -119,7 +119,7 @@ impl Build {
 
     /// Runs the build.
     pub fn run(&self, progress: &dyn Progress) -> Result<Report, Error> {
-        let opts = Options { shard: self.shard, verify: self.verify, max_images: None };
+        let opts = Options { shard: self.shard, verify: self.verify, ..Options::default() };
         build(&self.manifest, &self.cache_dir(), opts, progress)
     }
 
@@ -171,10 +171,13 @@ pub struct Options {
     /// Refuse to start when this process would render more images than this (the CLI's guard against a
     /// mistyped view count; `--yes` lifts it).
     pub max_images: Option<usize>,
+    /// Refuse ([`Error::NotBuilt`]) when any cacheable action would run: what `release` certifies must be
+    /// built already, decided by the same lookup the build makes.
+    pub require_built: bool,
 }
 
 /// What a build did.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct Report {
     /// Per action kind: planned, cached, run, left to other shards. Outputs count as cached when they were
     /// already up to date.
@@ -187,8 +190,6 @@ pub struct Report {
     pub hits: usize,
     /// Images rendered (some pass ran) by this build.
     pub renders: usize,
-    /// Seconds spent running actions.
-    pub run_seconds: f64,
     /// Seconds in all.
     pub total_seconds: f64,
     /// Each output's dataset (none for a shard build).
@@ -280,19 +281,14 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         // this shard's part is the prerequisites' work.
         Err(Error::Scene { .. }) if opts.shard.is_some() && !m.after.is_empty() => {
             return Ok(Report {
-                actions: BTreeMap::new(),
                 after_actions: before_actions,
-                images: 0,
-                hits: 0,
-                renders: 0,
-                run_seconds: 0.0,
                 total_seconds: t0.elapsed().as_secs_f64(),
-                outputs: Vec::new(),
                 after: before,
                 warnings: vec![format!(
                     "{}: waits for its `after` manifests' outputs: the final build runs its actions",
                     m.path.display()
                 )],
+                ..Report::default()
             });
         }
         Err(e) => return Err(e),
@@ -307,23 +303,22 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     }
     let last = record::read(&p.store, m);
     let look = execute::lookup(&g, &p.store, &p.stat);
+    if opts.require_built {
+        let cacheable = |id: &ActionId| g.node(*id).action.kind().cached();
+        let pending = g.ids().filter(cacheable).filter(|id| look.state[id.0 as usize] == State::Run).count();
+        if pending > 0 {
+            return Err(Error::NotBuilt { pending });
+        }
+    }
     if let Some(max) = opts.max_images {
         let images = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, opts.shard));
         if images > max {
             return Err(Error::TooMuchWork { manifest: m.path.clone(), images, max });
         }
     }
-    // Outputs already up to date count as cached; judged before this build rewrites anything.
-    let outputs_fresh: Vec<bool> = g
-        .ids()
-        .filter(|id| g.node(*id).action.kind() == Kind::WriteOutput)
-        .map(|id| status::output_reasons(&g, id, &last, &p.stat).is_empty())
-        .collect();
-    let t1 = Instant::now();
     let inputs = Inputs { scene: &p.scene, store: &p.store, stat: &p.stat };
     let outcome = execute::run(&g, &inputs, look, opts.shard, &|c, w| progress.started(c, w), &|n| progress.ran(n))
         .map_err(|source| Error::Execute { manifest: m.path.clone(), source: Box::new(source) })?;
-    let run_seconds = t1.elapsed().as_secs_f64();
     let (images, hits, renders) = image_counts(&g, &outcome);
     let mut warnings = p.scene.warnings.clone();
     warnings.extend(p.plan.warnings.iter().cloned());
@@ -333,7 +328,6 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         images,
         hits,
         renders,
-        run_seconds,
         total_seconds: 0.0,
         outputs: Vec::new(),
         after: before,
@@ -356,15 +350,6 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     };
     let mut record = LastBuild::new();
     let write_ids: Vec<_> = g.ids().filter(|id| g.node(*id).action.kind() == Kind::WriteOutput).collect();
-    let written = report.actions.entry(Kind::WriteOutput).or_default();
-    for fresh in &outputs_fresh {
-        written.planned += 1;
-        if *fresh {
-            written.cached += 1;
-        } else {
-            written.ran += 1;
-        }
-    }
     for ((name, out), id) in m.outputs.iter().zip(&write_ids) {
         progress.writing(name);
         let w = export::write(&x, name, out).map_err(|source| Error::Export {
@@ -372,15 +357,22 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
             output: name.clone(),
             source: Box::new(source),
         })?;
-        record.outputs.insert(
-            name.clone(),
-            OutputRecord {
-                root: w.root.clone(),
-                key: g.node(*id).key.hex(),
-                manifest: g.keying.manifest.hex(),
-                files: w.files.iter().map(|(f, d)| (f.clone(), d.hex())).collect(),
-            },
-        );
+        let written = OutputRecord {
+            root: w.root.clone(),
+            key: g.node(*id).key.hex(),
+            manifest: g.keying.manifest.hex(),
+            files: w.files.iter().map(|(f, d)| (f.clone(), d.hex())).collect(),
+        };
+        // Up to date: the same files as the last build wrote, for the same key, and none had to be placed.
+        let fresh = w.changed == 0 && last.outputs.get(name) == Some(&written);
+        let c = report.actions.entry(Kind::WriteOutput).or_default();
+        c.planned += 1;
+        if fresh {
+            c.cached += 1;
+        } else {
+            c.ran += 1;
+        }
+        record.outputs.insert(name.clone(), written);
         report.outputs.push((name.clone(), w));
     }
     prune(&last, &record);

@@ -154,7 +154,7 @@ fn action_reasons(g: &Graph, id: ActionId, last: &LastBuild, store: &Store) -> V
 
 /// Why an output must be written again (empty when it is up to date): new, the manifest or an input changed, or
 /// files the last build wrote are missing or modified on disk.
-pub(super) fn output_reasons(g: &Graph, id: ActionId, last: &LastBuild, stat: &StatCache) -> Vec<String> {
+fn output_reasons(g: &Graph, id: ActionId, last: &LastBuild, stat: &StatCache) -> Vec<String> {
     let n = g.node(id);
     let Action::WriteOutput { output } = &n.action else { return Vec::new() };
     let Some(rec) = last.outputs.get(output) else { return vec!["new: the last build did not write it".into()] };

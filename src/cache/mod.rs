@@ -133,14 +133,14 @@ impl Store {
     }
 
     /// Places blob `d` at `dest` (hard link, else copy), atomically; a `dest` already holding `d` (by the stat
-    /// cache) is left alone.
-    pub fn materialize(&self, d: &Digest, dest: &Path, stat: &StatCache) -> Result<(), Error> {
+    /// cache) is left alone. Returns whether it placed the file.
+    pub fn materialize(&self, d: &Digest, dest: &Path, stat: &StatCache) -> Result<bool, Error> {
         if stat.holds(dest, d) {
-            return Ok(());
+            return Ok(false);
         }
         atomic::link_or_copy(&self.object_path(d), dest).map_err(|e| Error::io(dest, e))?;
         stat.record(dest, *d);
-        Ok(())
+        Ok(true)
     }
 
     /// Whether blob `d` is present and intact (hashing it only when its metadata changed since last checked).
@@ -197,11 +197,6 @@ impl Store {
         }
         let p = self.action_path(key);
         atomic::write(&p, text.as_bytes()).map_err(|e| Error::io(&p, e))
-    }
-
-    /// Whether an action record exists for `key` (whatever its blobs' state).
-    pub fn has_action(&self, key: &Digest) -> bool {
-        self.action_path(key).exists()
     }
 
     /// The blobs of task `key` when it ran before and they are all intact.

@@ -167,7 +167,8 @@ pub fn run() -> ExitCode {
         Command::Check { manifests } => check::run(&manifests, ui),
         Command::Build { manifest, jobs, shard, verify, yes } => {
             let max_images = (!yes).then_some(build::MAX_IMAGES_WITHOUT_YES);
-            build::run(&manifest, jobs, crate::build::Options { shard, verify, max_images }, ui)
+            let opts = crate::build::Options { shard, verify, max_images, ..Default::default() };
+            build::run(&manifest, jobs, opts, ui)
         }
         Command::Plan { manifest, explain, json, verify } => plan::run(&manifest, explain, json, verify, ui),
         Command::Status { manifest, verify } => plan::status(&manifest, verify, ui),

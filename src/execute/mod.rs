@@ -192,6 +192,23 @@ impl Inputs<'_> {
         Ok(blobs)
     }
 
+    /// Makes the one blob of each action of `ids` with `make`, in parallel, and stores and records it.
+    fn each(
+        &self,
+        g: &Graph,
+        ids: &[ActionId],
+        done: &(dyn Fn() + Sync),
+        make: impl Fn(ActionId) -> Result<Vec<u8>, Error> + Sync,
+    ) -> Result<Made, Error> {
+        ids.par_iter()
+            .map(|&id| {
+                let blobs = self.store(g, id, &[make(id)?])?;
+                done();
+                Ok((id, blobs))
+            })
+            .collect()
+    }
+
     /// The bytes of node `id`'s `k`-th blob, found in `blobs`.
     fn read(&self, g: &Graph, blobs: &[Option<Vec<Digest>>], id: ActionId, k: usize) -> Result<Vec<u8>, Error> {
         let n = g.node(id);
@@ -239,8 +256,8 @@ pub(crate) fn images_to_render(g: &Graph, here: &[bool]) -> usize {
     images.len()
 }
 
-/// Runs every action `look` says must run (those of `shard` only, when given, and those whose inputs this
-/// process has). `started(cached, work)` is called once the cache has been consulted, `done(n)` after each
+/// Runs every action `look` says must run ([`runs_here`]: those of `shard` only, when given, with the inputs
+/// they read). `started(cached, work)` is called once the cache has been consulted, `done(n)` after each
 /// action.
 pub(crate) fn run(
     g: &Graph,

@@ -6,7 +6,6 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use super::{Error, Inputs, Made};
 use crate::cache::Digest;
@@ -28,14 +27,7 @@ pub(super) fn run(
     done: &(dyn Fn() + Sync),
 ) -> Result<Made, Error> {
     let draws = correspondence_draws(g, x, ids)?;
-    ids.par_iter()
-        .map(|&id| {
-            let bytes = make(g, x, blobs, &draws, id)?;
-            let b = x.store(g, id, &[bytes])?;
-            done();
-            Ok((id, b))
-        })
-        .collect()
+    x.each(g, ids, done, |id| make(g, x, blobs, &draws, id))
 }
 
 /// The bytes of one point action.

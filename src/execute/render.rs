@@ -65,26 +65,22 @@ pub(super) fn composites(
     ids: &[ActionId],
     done: &(dyn Fn() + Sync),
 ) -> Result<Made, Error> {
-    ids.par_iter()
-        .map(|&id| {
-            let n = g.node(id);
-            let Action::Composite { background: bg, .. } = n.action else { unreachable!("a composite") };
-            let png = x.read(g, blobs, n.deps[0], 0)?;
-            let damaged = |e: image::ImageError| Error::Content { action: n.label.clone(), message: e.to_string() };
-            let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png).map_err(damaged)?.into_rgba8();
-            let (w, h) = img.dimensions();
-            let rgb: Vec<u8> = img
-                .pixels()
-                .flat_map(|p| {
-                    let a = p[3] as u32;
-                    [0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8)
-                })
-                .collect();
-            let blobs = x.store(g, id, &[encode::rgb_png(&rgb, w, h, g.keying.encoding.png)])?;
-            done();
-            Ok((id, blobs))
-        })
-        .collect()
+    x.each(g, ids, done, |id| {
+        let n = g.node(id);
+        let Action::Composite { background: bg, .. } = n.action else { unreachable!("a composite") };
+        let png = x.read(g, blobs, n.deps[0], 0)?;
+        let damaged = |e: image::ImageError| Error::Content { action: n.label.clone(), message: e.to_string() };
+        let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png).map_err(damaged)?.into_rgba8();
+        let (w, h) = img.dimensions();
+        let rgb: Vec<u8> = img
+            .pixels()
+            .flat_map(|p| {
+                let a = p[3] as u32;
+                [0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8)
+            })
+            .collect();
+        Ok(encode::rgb_png(&rgb, w, h, g.keying.encoding.png))
+    })
 }
 
 /// The files of one pass: its PNG, then its EXR (depth, normal) or instance ids (mask) where asked.

@@ -45,7 +45,7 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
         "dataset_version": m.dataset.version,
         "output": name,
         "writer": out.writer().name(),
-        "manifest_blake3": blake3::hash(m.text.as_bytes()).to_hex().to_string(),
+        "manifest_blake3": x.graph.keying.manifest.hex(),
         "seed": m.dataset.seed,
         "frames": x.plan.frames,
         "sources": sources,

@@ -152,6 +152,8 @@ pub struct Written {
     pub files: Vec<(String, Digest)>,
     /// Things a user should know (e.g. a consumer quirk the dataset trips).
     pub warnings: Vec<String>,
+    /// Files this write placed or replaced (0 when the directory already held every file).
+    pub changed: usize,
 }
 
 /// A dataset directory being filled.
@@ -165,6 +167,8 @@ pub(crate) struct Files<'a> {
     placed: BTreeMap<usize, BTreeMap<&'static str, String>>,
     /// Writer-specific sections of vvgen.json (e.g. a point-cloud sequence's grid and counts).
     meta: serde_json::Map<String, serde_json::Value>,
+    /// Files placed or replaced so far.
+    changed: usize,
 }
 
 impl<'a> Files<'a> {
@@ -177,6 +181,7 @@ impl<'a> Files<'a> {
             warnings: Vec::new(),
             placed: BTreeMap::new(),
             meta: Default::default(),
+            changed: 0,
         }
     }
 
@@ -189,7 +194,7 @@ impl<'a> Files<'a> {
     /// Places stored blob `d` at `rel`.
     fn blob(&mut self, rel: &str, d: Digest) -> Result<(), Error> {
         let dest = self.root.join(rel);
-        self.store.materialize(&d, &dest, self.stat)?;
+        self.changed += usize::from(self.store.materialize(&d, &dest, self.stat)?);
         self.files.push((rel.to_string(), d));
         Ok(())
     }
@@ -215,7 +220,7 @@ impl<'a> Files<'a> {
     }
 
     fn finish(self) -> Written {
-        Written { root: self.root, files: self.files, warnings: self.warnings }
+        Written { root: self.root, files: self.files, warnings: self.warnings, changed: self.changed }
     }
 }
 
@@ -235,7 +240,7 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
     let mut files = Files::new(root, x.store, x.stat);
     let writer = out.writer();
     let images = if writer.renders_images() {
-        x.graph.images_of(out).map_err(|e| Error::Unplanned(e.to_string()))?
+        x.plan.images_of(out).map_err(|e| Error::Unplanned(e.to_string()))?
     } else {
         Vec::new()
     };

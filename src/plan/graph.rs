@@ -121,12 +121,6 @@ impl<'a> Graph<'a> {
         (0..self.nodes.len() as u32).map(ActionId)
     }
 
-    /// The images an image output writes: its splits' (all splits by default), split by split in manifest
-    /// order, time-major within each.
-    pub fn images_of(&self, out: &Output) -> Result<Vec<usize>, Error> {
-        images_of(self.keying.plan, out)
-    }
-
     /// The actions one output needs, planned; returns them as the output's deps.
     fn plan_output(&mut self, m: &Manifest, name: &str, out: &Output) -> Result<Vec<ActionId>, Error> {
         let plan = self.keying.plan;
@@ -151,7 +145,7 @@ impl<'a> Graph<'a> {
             deps.extend(bounds);
             return Ok(deps);
         }
-        let images = images_of(plan, out)?;
+        let images = plan.images_of(out)?;
         if images.is_empty() {
             return Err(Error::NoImages { output: name.to_string() });
         }
@@ -225,19 +219,6 @@ impl<'a> Graph<'a> {
 pub fn image_label(plan: &Plan, i: usize) -> String {
     let img = &plan.images[i];
     format!("{}/{}/{}", plan.splits[img.split].name, img.view, img.frame)
-}
-
-fn images_of(plan: &Plan, out: &Output) -> Result<Vec<usize>, Error> {
-    let names: Vec<&str> = match out.splits() {
-        Some(list) => list,
-        None => plan.splits.iter().map(|s| s.name.as_str()).collect(),
-    };
-    let mut v = Vec::new();
-    for n in names {
-        let s = plan.splits.iter().find(|s| s.name == n).ok_or_else(|| Error::NoSplit { split: n.to_string() })?;
-        v.extend(&s.images);
-    }
-    Ok(v)
 }
 
 /// The DyNeRF layout is synchronized video: every camera of every split at every frame.

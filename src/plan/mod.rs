@@ -279,6 +279,21 @@ impl Plan {
         }
     }
 
+    /// The images an image output writes: its splits' (all splits by default), split by split in manifest
+    /// order, time-major within each.
+    pub fn images_of(&self, out: &crate::manifest::Output) -> Result<Vec<usize>, Error> {
+        let names: Vec<&str> = match out.splits() {
+            Some(list) => list,
+            None => self.splits.iter().map(|s| s.name.as_str()).collect(),
+        };
+        let mut v = Vec::new();
+        for n in names {
+            let s = self.splits.iter().find(|s| s.name == n).ok_or_else(|| Error::NoSplit { split: n.to_string() })?;
+            v.extend(&s.images);
+        }
+        Ok(v)
+    }
+
     /// Distinct frames of `images` (indices into [`Plan::images`]), ascending.
     pub fn frames_of(&self, images: &[usize]) -> Vec<usize> {
         let mut f: Vec<usize> = images.iter().map(|&i| self.images[i].frame).collect();

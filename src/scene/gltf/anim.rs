@@ -42,8 +42,8 @@ pub struct Sampler {
 }
 
 impl Sampler {
-    /// Checks the key layout.
-    pub fn new(
+    /// Checks the key layout (its message is wrapped into [`crate::scene::Error::Gltf`] by the loader).
+    pub(crate) fn new(
         times: Vec<f32>,
         mut values: Vec<f32>,
         width: usize,

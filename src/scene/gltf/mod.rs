@@ -1,6 +1,6 @@
 //! glTF 2.0 sources: loading ([`load()`]), accessor decoding, animation sampling and posing.
 
-pub mod accessor;
+mod accessor;
 pub mod anim;
 pub mod load;
 pub mod pose;
