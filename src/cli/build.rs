@@ -64,7 +64,7 @@ impl Progress for Display {
 pub const MAX_IMAGES_WITHOUT_YES: usize = 100_000;
 
 /// Parses `K/N` (0 ≤ K < N), as Slurm array jobs number their tasks.
-pub fn parse_shard(s: &str) -> Result<Shard, String> {
+pub(super) fn parse_shard(s: &str) -> Result<Shard, String> {
     let (k, n) = s.split_once('/').ok_or_else(|| format!("`{s}`: expected K/N, e.g. 0/4"))?;
     let (index, count): (u64, u64) = (
         k.trim().parse().map_err(|_| format!("`{k}` is not a shard index"))?,

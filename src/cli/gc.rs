@@ -7,7 +7,7 @@ use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
 use crate::build;
 
 /// Parses a size like `500M`, `20G` or `1048576`.
-pub fn parse_size(s: &str) -> Result<u64, String> {
+pub(super) fn parse_size(s: &str) -> Result<u64, String> {
     let s = s.trim();
     let (num, mult) = match s.chars().last() {
         Some('K' | 'k') => (&s[..s.len() - 1], 1u64 << 10),

@@ -5,13 +5,13 @@
 use gltf::accessor::{DataType, Dimensions};
 
 /// Reads an accessor as `f32` components (`count × components`), applying normalization as the spec says.
-pub fn read_f32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<f32>, String> {
+pub(crate) fn read_f32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<f32>, String> {
     let norm = acc.normalized();
     read_with(acc, buffers, |d, at, ty| component(d, at, ty, norm))
 }
 
 /// Reads an integer accessor (indices, joints) as `u32`, exactly.
-pub fn read_u32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
+pub(crate) fn read_u32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
     if matches!(acc.data_type(), DataType::F32) || acc.normalized() {
         return Err(format!("accessor {} must hold unnormalized integers", acc.index()));
     }
