@@ -17,7 +17,7 @@ pub const NERF_RADIUS: f64 = 4.031128874149275;
 pub struct Rig {
     /// The recipe.
     pub(super) kind: Spanned<RigKind>,
-    /// Distance from the target (default 4.0311, NeRF-synthetic's).
+    /// Distance from the target (default `hypot(4, 0.5)` = 4.031128874149275, NeRF-synthetic's `(0, 4, 0.5)`).
     pub(super) radius: Option<Spanned<f64>>,
     /// Point the cameras look at (default the origin).
     pub target: Option<[f64; 3]>,
@@ -37,8 +37,8 @@ pub struct Rig {
     pub layout: Option<ForwardLayout>,
     /// `forward-facing`: size of the camera plane `[width, height]` in world units (default [1, 0.75]).
     pub extent: Option<[f64; 2]>,
-    /// `hemisphere`: reproduce the 6-DoF toolkit's `np.random.seed(s)` stream (MT19937) instead of vvgen's keyed
-    /// stream.
+    /// `hemisphere`: reproduce the 6-DoF toolkit's cameras, `np.random.seed(s)` (MT19937) with two draws per
+    /// view of which the first places the camera, instead of vvgen's keyed stream.
     pub numpy_seed: Option<u32>,
     /// `explicit`: the poses.
     pub(super) poses: Option<Spanned<Vec<Pose>>>,

@@ -99,8 +99,13 @@ pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat
                     let mut mt = Mt19937::new(s);
                     (0..n)
                         .map(|_| {
-                            // np.random.uniform(0, 1, 3) per view; the middle draw is multiplied by 0.
+                            // The toolkit draws `np.random.uniform(0, 1, 3)` before each render (the middle draw
+                            // is multiplied by 0), and once more after it, a draw the next view's overwrites: so
+                            // view i uses draw 2i, and each view consumes six uniforms.
                             let (u0, _, u2) = (mt.uniform(), mt.uniform(), mt.uniform());
+                            for _ in 0..3 {
+                                mt.uniform();
+                            }
                             draw(u0, u2)
                         })
                         .collect()
