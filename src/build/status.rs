@@ -160,7 +160,7 @@ fn output_reasons(g: &Graph, id: ActionId, last: &LastBuild, stat: &StatCache) -
     let Some(rec) = last.outputs.get(output) else { return vec!["new: the last build did not write it".into()] };
     let mut r = Vec::new();
     if rec.manifest != g.keying.manifest.hex() {
-        r.push("the manifest changed (vvgen.json records its digest)".to_string());
+        r.push("the manifest changed (vvgen/dataset.json records its digest)".to_string());
     } else if rec.key != n.key.hex() {
         r.push("its inputs changed (a source, a setting, or a result it places)".to_string());
     }

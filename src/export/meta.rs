@@ -1,12 +1,22 @@
-//! `vvgen.json` at every dataset root: what made the dataset (tool, manifest digest, normalization), the camera
-//! model and depth convention, and the split / view / frame / time of every image, so a dataset describes
+//! `vvgen/dataset.json` in every dataset: what made the dataset (tool, manifest digest, normalization), the
+//! camera model and depth convention, and the split / view / frame / time of every image, so a dataset describes
 //! itself without the manifest.
+//!
+//! It sits in a `vvgen/` folder, not at the root, because consumers scan dataset roots: instant-ngp's directory
+//! mode loads every `*.json` there and advances its image index by `json["frames"].size()` for any `frames` key,
+//! so a metadata file with a scalar `frames` shifts every later image. No consumer looks into `vvgen/`.
 
 use serde_json::{json, Value};
 
 use super::{Error, Export, Files};
 use crate::manifest::output::Output;
 use crate::manifest::render::{DepthKind, NormalSpace};
+
+/// Where a dataset's metadata lives, root-relative.
+pub const META: &str = "vvgen/dataset.json";
+
+/// Where older vvgen versions wrote it: at the root, where instant-ngp's directory mode misreads it.
+pub(super) const OLD_META: &str = "vvgen.json";
 
 pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     let m = x.manifest;
@@ -72,5 +82,5 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
     for (k, v) in &files.meta {
         doc[k] = v.clone();
     }
-    files.json("vvgen.json", &doc)
+    files.json(META, &doc)
 }

@@ -1,12 +1,15 @@
 //! Export: the rendered blobs and the plan's cameras → dataset directories in the layouts trainers load
 //! unchanged (../shared/specs/consumer-formats.md is the contract). Every writer works from the same camera list;
-//! each file lands atomically, and every dataset root gets a `vvgen.json` describing what is in it.
+//! each file lands atomically, and every dataset gets a `vvgen/dataset.json` describing what is in it
+//! ([`META`]; out of the root, where consumers scan).
 
 mod colmap;
 mod dynerf;
 mod meta;
 mod nerf;
 mod points;
+
+pub use meta::META;
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -47,7 +50,7 @@ pub enum Error {
 pub(crate) struct Export<'a> {
     /// The manifest.
     pub manifest: &'a Manifest,
-    /// The loaded scene (names and transforms for vvgen.json).
+    /// The loaded scene (names and transforms for the metadata).
     pub scene: &'a Scene,
     /// The image plan.
     pub plan: &'a Plan,
@@ -163,9 +166,9 @@ pub(crate) struct Files<'a> {
     stat: &'a StatCache,
     files: Vec<(String, Digest)>,
     warnings: Vec<String>,
-    /// Per image: pass name → root-relative path, for vvgen.json.
+    /// Per image: pass name → root-relative path, for the metadata.
     placed: BTreeMap<usize, BTreeMap<&'static str, String>>,
-    /// Writer-specific sections of vvgen.json (e.g. a point-cloud sequence's grid and counts).
+    /// Writer-specific sections of the metadata (e.g. a point-cloud sequence's grid and counts).
     meta: serde_json::Map<String, serde_json::Value>,
     /// Files placed or replaced so far.
     changed: usize,
@@ -210,7 +213,7 @@ impl<'a> Files<'a> {
         self.bytes(rel, json_text(v).as_bytes())
     }
 
-    /// Adds section `key` to the dataset's vvgen.json.
+    /// Adds section `key` to the dataset's metadata.
     fn meta(&mut self, key: &str, v: serde_json::Value) {
         self.meta.insert(key.to_string(), v);
     }
@@ -237,6 +240,7 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
         .collect();
     std::fs::create_dir_all(&root).map_err(|e| cache::Error::io(&root, e))?;
     atomic::clean_debris(&root);
+    remove_old_meta(&root);
     let mut files = Files::new(root, x.store, x.stat);
     let writer = out.writer();
     let images = if writer.renders_images() {
@@ -256,6 +260,19 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
     }
     meta::write(x, name, out, &images, &mut files)?;
     Ok(files.finish())
+}
+
+/// Removes the root `vvgen.json` an older vvgen wrote (only if it is vvgen's: `"tool": "vvgen"`), which
+/// instant-ngp's directory mode would misread.
+fn remove_old_meta(root: &std::path::Path) {
+    let path = root.join(meta::OLD_META);
+    let ours = std::fs::read(&path)
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .is_some_and(|v| v.get("tool").and_then(|t| t.as_str()) == Some("vvgen"));
+    if ours {
+        let _ = std::fs::remove_file(&path);
+    }
 }
 
 /// The output's directory name under `[dataset] out`.

@@ -1,6 +1,6 @@
 //! `ply-sequence`: places one PLY per frame (the graph's point-frame actions made them: surface samples of
 //! the posed scene, optionally voxel-downsampled or quantized into an 8i-style `2^vox` grid) and describes the
-//! sequence in `vvgen.json`: per-frame times and counts, and the grid that maps integer coordinates back to
+//! sequence in `vvgen/dataset.json`: per-frame times and counts, and the grid that maps integer coordinates back to
 //! the world.
 
 use serde_json::json;
@@ -13,7 +13,7 @@ use crate::plan::actions::Action;
 use crate::plan::time_of;
 use crate::scene::ply;
 
-/// Places the frames of point output `name` and adds the `sequence` section of its vvgen.json.
+/// Places the frames of point output `name` and adds the `sequence` section of its metadata.
 pub fn sequence(x: &Export, name: &str, files: &mut Files) -> Result<(), Error> {
     let s = &x.graph.keying.points[name];
     let frames = x.plan.frames;

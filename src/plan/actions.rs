@@ -199,7 +199,7 @@ pub struct Keying<'a> {
     pub encoding: Encoding,
     /// `[dataset] seed`.
     pub seed: u64,
-    /// blake3 of the manifest text (an output's `vvgen.json` records it).
+    /// blake3 of the manifest text (an output's `vvgen/dataset.json` records it).
     pub manifest: Digest,
     /// Resolved settings of every `ply-sequence` output, by name.
     pub points: std::collections::BTreeMap<String, PointSettings>,

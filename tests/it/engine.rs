@@ -367,8 +367,8 @@ fn float_exr_files_carry_the_png_passes_at_full_precision() {
         }
     }
     assert!(covered > 300, "the subject covers {covered} pixels");
-    let meta = std::fs::read_to_string(root.join("vvgen.json")).unwrap();
-    assert!(meta.contains("\"depth_exr\": \"depth/test/r_0001.exr\""), "vvgen.json lists the float files");
+    let meta = std::fs::read_to_string(root.join(vvgen::export::META)).unwrap();
+    assert!(meta.contains("\"depth_exr\": \"depth/test/r_0001.exr\""), "the metadata lists the float files");
     // Reproducible bytes on one thread too (a fresh cache renders everything again).
     let other = tempfile::tempdir().unwrap();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();

@@ -148,7 +148,7 @@ fn gc_after_the_grace_period_keeps_everything_the_graph_reaches() {
     run(d, &edited);
     backdate(&d.join("cache"), 2);
     let c = build::collect_garbage(&[load(&d.join("m.toml"))], &d.join("cache"), None).unwrap();
-    // 2 sample and 2 point-frame records, their 4 blobs, and both outputs' old vvgen.json (which record the
+    // 2 sample and 2 point-frame records, their 4 blobs, and both outputs' old metadata (which record the
     // manifest's digest).
     assert_eq!(c.files, 2 * 2 * 2 + 2);
     assert!(run(d, &edited).nothing_to_do());
@@ -186,7 +186,7 @@ fn each_setting_invalidates_exactly_the_actions_that_read_it() {
                    [output.p]\nwriter = \"ply-sequence\"\npoints = 1500\nvoxel = 0.05\n";
     let base = manifest("", outputs);
     use Kind::*;
-    // 6 images × 4 passes; colmap composites each image; every output's vvgen.json records the manifest.
+    // 6 images × 4 passes; colmap composites each image; every output's metadata records the manifest.
     /// What changed, the edited manifest, and what must run besides the three outputs.
     type Case = (&'static str, String, Vec<(Kind, usize)>);
     let cases: [Case; 8] = [

@@ -108,6 +108,10 @@ writer = "instant-ngp"
 [output.static]
 writer = "static-frames"
 init_points = 0
+
+[output.points]
+writer = "ply-sequence"
+points = 2000
 "#;
 
 const OPAQUE_OUTPUTS: &str = r#"
@@ -468,16 +472,18 @@ fn static_frames_are_nerf_synthetic_sets() {
     }
 }
 
-/// Every dataset root describes itself; no temporary file is left anywhere.
+/// Every dataset describes itself (in `vvgen/`, out of the root); no temporary file is left anywhere.
 #[test]
-fn every_root_has_vvgen_json_and_no_debris() {
-    let roots = ["man_dnerf", "man_nerfstudio", "man_ngp", "man_static"].map(|d| built().out.join(d));
+fn every_dataset_has_metadata_and_no_debris() {
+    let roots = ["man_dnerf", "man_nerfstudio", "man_ngp", "man_static", "man_points"].map(|d| built().out.join(d));
     let opaque = ["man_colmap", "man_dynerf"].map(|d| built_opaque().out.join(d));
     for d in roots.iter().chain(&opaque) {
-        let meta = read_json(&d.join("vvgen.json"));
+        let meta = read_json(&d.join(vvgen::export::META));
         assert_eq!(meta["tool"], "vvgen");
-        assert!(meta["images"].as_array().is_some_and(|a| !a.is_empty()));
-        assert_eq!(meta["camera"]["model"], "pinhole");
+        if !d.ends_with("man_points") {
+            assert!(meta["images"].as_array().is_some_and(|a| !a.is_empty()));
+            assert_eq!(meta["camera"]["model"], "pinhole");
+        }
     }
     let mut stack = vec![built().out.clone(), built_opaque().out.clone()];
     while let Some(d) = stack.pop() {
@@ -489,4 +495,94 @@ fn every_root_has_vvgen_json_and_no_debris() {
             }
         }
     }
+}
+
+/// instant-ngp's directory mode, as `Testbed::load_nerf` and `load_nerf` (nerf_loader.cu) do it: every `*.json`
+/// file directly in `dir` (extension case-insensitive) is loaded; buffers are sized by the `frames` that are
+/// arrays, but the image index advances by `json["frames"].size()` for any `frames` key (nlohmann: null 0, other
+/// scalars 1, objects their key count). Returns the image files it would load, or how it would misread `dir`.
+fn ngp_directory_load(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let mut jsons: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")))
+        .collect();
+    jsons.sort();
+    let (mut sized, mut advanced) = (0usize, 0usize);
+    let mut images = Vec::new();
+    for j in &jsons {
+        let v: Value = serde_json::from_slice(&std::fs::read(j).unwrap()).map_err(|e| format!("{j:?}: {e}"))?;
+        let Some(frames) = v.get("frames") else { continue };
+        advanced += match frames {
+            Value::Null => 0,
+            Value::Array(a) => a.len(),
+            Value::Object(o) => o.len(),
+            _ => 1,
+        };
+        let Some(frames) = frames.as_array() else { continue };
+        sized += frames.len();
+        for f in frames {
+            // resolve_path: relative to the JSON's folder; without an extension, the first image format that exists.
+            let rel = f["file_path"].as_str().ok_or(format!("{j:?}: a frame without file_path"))?.replace('\\', "/");
+            let mut p = j.parent().unwrap().join(&rel);
+            if p.extension().is_none() && !p.exists() {
+                if let Some(q) = ["png", "jpg", "jpeg", "exr"].iter().map(|e| p.with_extension(e)).find(|q| q.exists()) {
+                    p = q;
+                }
+            }
+            if !p.is_file() {
+                return Err(format!("{j:?}: {rel} does not resolve to a file"));
+            }
+            if let Some(d) = f.get("depth_path").and_then(|d| d.as_str()) {
+                if !j.parent().unwrap().join(d).is_file() {
+                    return Err(format!("{j:?}: depth_path {d} does not resolve to a file"));
+                }
+            }
+            images.push(p);
+        }
+    }
+    if sized != advanced {
+        return Err(format!("{} image slots but the index advances {advanced} times: images shift", sized));
+    }
+    Ok(images)
+}
+
+/// No writer's folder holds a JSON file that instant-ngp's directory mode (`./instant-ngp DIR`) misreads.
+#[test]
+fn instant_ngp_directory_mode_reads_every_writers_folder_as_written() {
+    let mut dirs: Vec<PathBuf> = ["man_dnerf", "man_nerfstudio", "man_ngp", "man_static", "man_points"]
+        .iter()
+        .map(|d| built().out.join(d))
+        .chain(["man_colmap", "man_dynerf"].iter().map(|d| built_opaque().out.join(d)))
+        .collect();
+    // static-frames: each time step is a dataset of its own.
+    let steps: Vec<PathBuf> = std::fs::read_dir(built().out.join("man_static"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir() && p.file_name().unwrap().to_string_lossy().starts_with("t_"))
+        .collect();
+    assert!(!steps.is_empty());
+    dirs.extend(steps);
+    for d in &dirs {
+        let images = ngp_directory_load(d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
+        // Every file a transforms JSON names is an image NGP loads, once.
+        let unique: std::collections::BTreeSet<_> = images.iter().collect();
+        assert_eq!(unique.len(), images.len(), "{}", d.display());
+    }
+    // The instant-ngp writer's own folder loads every image it rendered.
+    let ngp = ngp_directory_load(&built().out.join("man_ngp")).unwrap();
+    let meta = read_json(&built().out.join("man_ngp").join(vvgen::export::META));
+    assert_eq!(ngp.len(), meta["images"].as_array().unwrap().len());
+    // The rule catches what it is for: a metadata file with a scalar `frames` beside the transforms files.
+    let tmp = tempfile::tempdir().unwrap();
+    for e in std::fs::read_dir(built().out.join("man_ngp")).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, tmp.path().join(p.file_name().unwrap())).unwrap();
+        } else {
+            std::os::unix::fs::symlink(&p, tmp.path().join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    std::fs::write(tmp.path().join("vvgen.json"), r#"{"tool": "vvgen", "frames": 4}"#).unwrap();
+    assert!(ngp_directory_load(tmp.path()).unwrap_err().contains("shift"));
 }
