@@ -320,7 +320,7 @@ fn owner_key(g: &Graph, id: ActionId) -> Digest {
     let key_of = |a: &Action| g.id(a).map(|i| g.node(i).key);
     match &g.node(id).action {
         Action::RenderPass { image, .. } | Action::Composite { image, .. } => {
-            let first = [Pass::Rgba, Pass::Depth, Pass::Normal, Pass::Mask]
+            let first = [Pass::Rgba, Pass::Depth, Pass::Normal, Pass::Mask, Pass::Instance]
                 .into_iter()
                 .find_map(|pass| key_of(&Action::RenderPass { image: *image, pass }));
             first.unwrap_or(g.node(id).key)

@@ -33,7 +33,6 @@ pub(super) fn passes(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() +
         let label = first.map_or_else(String::new, |id| g.node(id).label.clone());
         let posed = x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: label.clone(), source })?;
         super::check_posed(posed, &label)?;
-        let instances = posed.primitives.iter().map(|p| p.object).max().map_or(0, |m| m + 1) > 1;
         let images: Vec<(usize, Vec<(ActionId, Pass)>)> = images.into_iter().collect();
         let made: Vec<Result<Made, Error>> = images
             .par_iter()
@@ -42,7 +41,7 @@ pub(super) fn passes(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() +
                 let f = render::render(posed, camera, &g.keying.render);
                 let mut v = Vec::with_capacity(todo.len());
                 for &(id, pass) in todo {
-                    let bytes = encode_pass(&f, pass, &g.keying.encoding, &camera.c2w, instances);
+                    let bytes = encode_pass(&f, pass, &g.keying.encoding, &camera.c2w);
                     v.push((id, x.store(g, id, &bytes)?));
                     done();
                 }
@@ -83,8 +82,8 @@ pub(super) fn composites(
     })
 }
 
-/// The files of one pass: its PNG, then its EXR (depth, normal) or instance ids (mask) where asked.
-fn encode_pass(f: &Frame, pass: Pass, e: &Encoding, c2w: &glam::DMat4, instances: bool) -> Vec<Vec<u8>> {
+/// The files of one pass: its PNG, then its EXR (depth, normal) where asked.
+fn encode_pass(f: &Frame, pass: Pass, e: &Encoding, c2w: &glam::DMat4) -> Vec<Vec<u8>> {
     let (w, h, c) = (f.width, f.height, e.png);
     match pass {
         Pass::Rgba => vec![encode::rgba_png(&f.rgba, w, h, c)],
@@ -119,13 +118,10 @@ fn encode_pass(f: &Frame, pass: Pass, e: &Encoding, c2w: &glam::DMat4, instances
             }
             v
         }
-        Pass::Mask => {
-            let mut v = vec![encode::gray8_png(&f.coverage, w, h, c)];
-            if instances {
-                let ids: Vec<u16> = f.object.iter().map(|&o| o.min(u16::MAX as u32) as u16).collect();
-                v.push(encode::gray16_png(&ids, w, h, c));
-            }
-            v
+        Pass::Mask => vec![encode::gray8_png(&f.coverage, w, h, c)],
+        Pass::Instance => {
+            let ids: Vec<u16> = f.object.iter().map(|&o| o.min(u16::MAX as u32) as u16).collect();
+            vec![encode::gray16_png(&ids, w, h, c)]
         }
     }
 }

@@ -86,7 +86,8 @@ impl Export<'_> {
                 Pass::Rgba => r.rgba = first,
                 Pass::Depth => (r.depth, r.depth_exr) = (first, second),
                 Pass::Normal => (r.normal, r.normal_exr) = (first, second),
-                Pass::Mask => (r.mask, r.instance) = (first, second),
+                Pass::Mask => r.mask = first,
+                Pass::Instance => r.instance = first,
             }
         }
         Ok(r)

@@ -139,6 +139,8 @@ pub enum Pass {
     Normal,
     /// 8-bit coverage mask.
     Mask,
+    /// 16-bit object ids (0 = background, 1 + the source's mesh instance otherwise).
+    Instance,
 }
 
 /// `[render.depth]`.
@@ -288,7 +290,7 @@ impl Render {
             buffers: render::Buffers {
                 depth: self.has_pass(Pass::Depth),
                 normal: self.has_pass(Pass::Normal),
-                object: self.has_pass(Pass::Mask),
+                object: self.has_pass(Pass::Instance),
             },
         }
     }

@@ -278,6 +278,7 @@ pub fn pass_name(p: Pass) -> &'static str {
         Pass::Depth => "depth",
         Pass::Normal => "normal",
         Pass::Mask => "mask",
+        Pass::Instance => "instance",
     }
 }
 
@@ -338,7 +339,7 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
                 DepthKind::Ray => "ray",
             },
         ),
-        Pass::Normal | Pass::Mask => {}
+        Pass::Normal | Pass::Mask | Pass::Instance => {}
     }
 }
 
@@ -357,7 +358,7 @@ fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
             );
             w.bool("exr", *normal_exr);
         }
-        Pass::Rgba | Pass::Mask => {}
+        Pass::Rgba | Pass::Mask | Pass::Instance => {}
     }
 }
 

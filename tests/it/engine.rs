@@ -483,3 +483,28 @@ fn concurrent_builds_of_one_dataset_do_the_work_once() {
     assert_eq!(reports[0].images, 8);
     assert_eq!(reports[0].renders + reports[1].renders, 8, "the images were rendered once between the two");
 }
+
+/// Only the passes asked for are written: a mask is not followed by an `instance/` tree, and asking for
+/// `instance` gives 16-bit object ids that are 0 wherever the mask is.
+#[test]
+fn only_the_passes_asked_for_are_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    run(tmp.path(), &cesium(1, "passes = [\"rgba\", \"mask\"]", ""));
+    let root = tmp.path().join("out/m_dnerf");
+    assert!(root.join("mask/train/r_0000.png").is_file());
+    assert!(!root.join("instance").exists(), "instance ids written though not asked for");
+    run(tmp.path(), &cesium(1, "passes = [\"rgba\", \"mask\", \"instance\"]", ""));
+    let mask = image::open(root.join("mask/train/r_0000.png")).unwrap().to_luma8();
+    let ids = match image::open(root.join("instance/train/r_0000.png")).unwrap() {
+        image::DynamicImage::ImageLuma16(i) => i,
+        other => panic!("instance ids are 16-bit grey, not {:?}", other.color()),
+    };
+    let mut covered = 0;
+    for (m, id) in mask.pixels().zip(ids.pixels()) {
+        if id[0] != 0 {
+            covered += 1;
+            assert!(m[0] > 0, "an object id where the mask is empty");
+        }
+    }
+    assert!(covered > 20, "{covered} pixels carry an id");
+}
