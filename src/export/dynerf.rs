@@ -9,13 +9,6 @@ use super::{init_points, Error, Export, Files};
 use crate::manifest::output::Output;
 
 pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
-    let root = files.root.to_string_lossy().to_string();
-    if root.contains("dnerf") || root.contains("lego") {
-        files.warn(format!("{root}: K-Planes reads a path containing `dnerf` or `lego` as D-NeRF data"));
-    }
-    if root.contains('.') {
-        files.warn(format!("{root}: 4DGaussians treats the first `.` of the path as the extension"));
-    }
     let frames = x.plan.frames_of(images);
     // Cameras: split by split, `test` first; the plan checked each split sees every frame (synchronized video).
     let mut splits: Vec<usize> = Vec::new();
@@ -32,16 +25,6 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
         cams.extend((0..sp.poses.len() as u32).map(|v| (s, v)));
     }
     let c0 = &x.plan.images[images[0]].camera;
-    if (c0.fx - c0.fy).abs() > 1e-9 {
-        files.warn("fx ≠ fy: poses_bounds.npy holds one focal length".to_string());
-    }
-    if (c0.width, c0.height) != (2704, 2028) {
-        files.warn(format!(
-            "{}×{}: 4DGaussians hard-codes DyNeRF's 2704×2028 (resized to 1352×1014); K-Planes reads any size",
-            c0.width, c0.height
-        ));
-    }
-    files.warn("no cam*.mp4 videos are written: K-Planes and 4DGaussians need them encoded from frames/".to_string());
     let bounds = x.bounds(&frames)?;
     let mut rows: Vec<f64> = Vec::new();
     for (ci, &(s, v)) in cams.iter().enumerate() {

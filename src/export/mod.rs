@@ -250,6 +250,11 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
         Vec::new()
     };
     x.check_finite(&images)?;
+    // What depends on the frame count (the rest of the consumers' caveats came with the manifest's diagnostics).
+    let frames = if writer.renders_images() { x.plan.frames_of(&images).len() } else { x.plan.frames };
+    if let Some(d) = crate::manifest::consumers::frame_diagnostic(name, out, frames) {
+        files.warn(d.message + &d.help.map(|h| format!(": {h}")).unwrap_or_default());
+    }
     match writer {
         Writer::Dnerf => nerf::dnerf(x, out, &images, &mut files)?,
         Writer::Nerfstudio => nerf::nerfstudio(x, out, &images, &mut files)?,

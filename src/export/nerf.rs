@@ -96,27 +96,9 @@ fn pad(x: &Export, images: &[usize]) -> usize {
     pad_for(images.iter().map(|&i| x.plan.images[i].index + 1).max().unwrap_or(1))
 }
 
-fn warn_common(x: &Export, images: &[usize], files: &mut Files) {
-    let c = &x.plan.images[images[0]].camera;
-    if c.width != c.height {
-        files.warn(format!(
-            "{}×{} is not square: K-Planes transposes, Deformable-3DGS swaps FoVs and 4DGaussians resizes to 800×800",
-            c.width, c.height
-        ));
-    }
-    if (c.cx - c.width as f64 / 2.0).abs() > 1e-9 || (c.cy - c.height as f64 / 2.0).abs() > 1e-9 {
-        files.warn("the principal point is off-centre: NeRF-synthetic-path loaders assume the centre".to_string());
-    }
-}
-
 /// `dnerf`: transforms_{split}.json with `camera_angle_x` and fl_x…, time-major `./<split>/r_<i>` paths, times
 /// in [0, 1]; points3d.ply and an identical fused.ply.
 pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
-    warn_common(x, images, files);
-    let root = files.root.to_string_lossy().to_string();
-    if !root.contains("dnerf") && !root.contains("lego") {
-        files.warn(format!("{root}: K-Planes picks its D-NeRF loader only when the path contains `dnerf`"));
-    }
     let pad = pad(x, images);
     let groups = by_split(x, images);
     for (split, list) in &groups {
@@ -145,11 +127,6 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
         doc.insert("frames".into(), Value::Array(frames));
         files.json(&format!("transforms_{split}.json"), &Value::Object(doc))?;
     }
-    for needed in ["train", "val", "test"] {
-        if !groups.iter().any(|(s, _)| s == needed) {
-            files.warn(format!("no `{needed}` split: D-NeRF opens transforms_{needed}.json unconditionally"));
-        }
-    }
     let n = init_points(out);
     if n > 0 {
         let ply = x.init_cloud(&x.plan.frames_of(images), n)?;
@@ -162,7 +139,6 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
 /// `nerfstudio`: one transforms.json with fl_x…, `camera_model`, paths with extension, the three
 /// `*_filenames` lists, optional depth/mask paths, `ply_file_path`, identity `applied_transform`, `time`.
 pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
-    warn_common(x, images, files);
     let pad = pad(x, images);
     let r = &x.manifest.render;
     let (depth, mask) = (r.has_pass(Pass::Depth), r.has_pass(Pass::Mask));
@@ -201,9 +177,6 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
     let train = get("train").unwrap_or_else(|| lists[0].1.clone());
     let val = get("val").or_else(|| get("test")).unwrap_or_default();
     let test = get("test").or_else(|| get("val")).unwrap_or_default();
-    if val.is_empty() {
-        files.warn("no `val` or `test` split: nerfstudio's eval list will be empty".to_string());
-    }
     doc.insert("train_filenames".into(), json!(train));
     doc.insert("val_filenames".into(), json!(val));
     doc.insert("test_filenames".into(), json!(test));
@@ -226,9 +199,6 @@ pub fn instant_ngp(x: &Export, out: &Output, images: &[usize], files: &mut Files
     let scale = 0.5 / (half as f64 * 1.1);
     let offset = [0.5 - c.x as f64 * scale, 0.5 - c.y as f64 * scale, 0.5 - c.z as f64 * scale];
     let depth = x.manifest.render.has_pass(Pass::Depth);
-    if x.plan.frames > 1 {
-        files.warn("instant-ngp has no time: each split file mixes every frame of the motion".to_string());
-    }
     for (split, list) in by_split(x, images) {
         let mut frames = Vec::new();
         for &i in &list {
@@ -257,7 +227,6 @@ pub fn instant_ngp(x: &Export, out: &Output, images: &[usize], files: &mut Files
 /// `static-frames`: one NeRF-synthetic dataset per time step, `t_<frame>/transforms_{split}.json` with
 /// `<split>/r_<view>` images and its own points3d.ply (what the 6-DoF toolkit does for 8i sequences).
 pub fn static_frames(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
-    warn_common(x, images, files);
     let frames = x.plan.frames_of(images);
     let views = images.iter().map(|&i| x.plan.images[i].view as usize + 1).max().unwrap_or(1);
     let vpad = pad_for(views);

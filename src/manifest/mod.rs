@@ -6,6 +6,7 @@
 //! `docs/manifest.md`.
 
 mod after;
+pub mod consumers;
 pub mod dataset;
 pub mod diag;
 pub mod frames;
@@ -75,6 +76,16 @@ impl Manifest {
     /// The dataset output root.
     pub fn out_dir(&self) -> PathBuf {
         self.resolve(self.dataset.out.get_ref())
+    }
+
+    /// Whether a source reads a sequence one of the `after` manifests writes: its inputs exist only once
+    /// `build` has run those, so `check` cannot open them yet.
+    pub fn reads_produced_inputs(&self) -> bool {
+        let produced = after::produced_sequences(&self.after);
+        self.sources.values().any(|s| {
+            matches!(s.kind_spanned(), Some((SourceKind::PlySequence, p))
+                if produced.contains(&after::lexical(&self.dir.join(p.get_ref()))))
+        })
     }
 }
 
@@ -448,7 +459,6 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
             }
         }
     }
-    let (w, h) = m.render.size();
     for (name, out) in &m.outputs {
         let writer = *out.writer.get_ref();
         for s in out.splits.iter().flatten() {
@@ -472,46 +482,6 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                 .with_help("add e.g. [split.train] rig = \"…\" views = 100"),
             );
         }
-        if matches!(writer, Writer::Dnerf | Writer::StaticFrames) && w != h {
-            diags.push(
-                Diagnostic::warning(format!("output `{name}` ({}) with non-square {w}×{h} images", writer.name()), Some(m.render.resolution.span()))
-                    .with_help("K-Planes swaps W/H when resizing, Deformable-3DGS swaps FovX/FovY, 4DGaussians resizes to 800×800 and D-NeRF's half_res resizes wrongly: use square images"),
-            );
-        }
-        if writer == Writer::Dnerf {
-            let selected: Vec<&str> = match &out.splits {
-                Some(s) => s.iter().map(|s| s.get_ref().as_str()).collect(),
-                None => m.splits.keys().map(String::as_str).collect(),
-            };
-            for split in selected.iter().filter(|s| s.contains("_r")) {
-                diags.push(
-                    Diagnostic::error(
-                        format!("output `{name}` (dnerf) writes split `{split}`, whose name contains `_r`"),
-                        Some(out.writer.span()),
-                    )
-                    .with_help("K-Planes splits D-NeRF file paths at `_r`: rename the split"),
-                );
-            }
-            for needed in ["train", "val", "test"] {
-                if !selected.contains(&needed) {
-                    diags.push(
-                        Diagnostic::warning(format!("output `{name}` (dnerf) has no `{needed}` split"), Some(out.writer.span()))
-                            .with_help("D-NeRF opens transforms_train/val/test.json unconditionally and nerfstudio's dnerf-data needs val while training"),
-                    );
-                }
-            }
-            if let Some(d) = &out.dir {
-                if !d.get_ref().contains("dnerf") && !d.get_ref().contains("lego") {
-                    diags.push(
-                        Diagnostic::warning(
-                            format!("dnerf output directory `{}` does not contain \"dnerf\"", d.get_ref()),
-                            Some(d.span()),
-                        )
-                        .with_help("K-Planes picks its D-NeRF loader by that substring in the path"),
-                    );
-                }
-            }
-        }
         if writer == Writer::PlySequence {
             point_output_checks(m, name, out, diags);
         }
@@ -534,6 +504,7 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
             }
         }
     }
+    consumers::diagnose(m, diags);
     if m.outputs.is_empty() {
         diags.push(
             Diagnostic::warning("no `[output.NAME]` table: a build would write nothing", None)

@@ -102,6 +102,16 @@ pub struct Poser {
     out: PosedScene,
 }
 
+/// The number of frames a build of `m` has (the longest source's), from loading each source without posing it:
+/// what `vvgen check` needs to judge the consumers' frame-count limits before anything renders.
+pub fn frame_count(m: &Manifest) -> Result<usize, Error> {
+    let mut frames = 0;
+    for (name, s) in &m.sources {
+        frames = frames.max(LoadedSource::load(name, s, &m.dir)?.frame_count());
+    }
+    Ok(frames)
+}
+
 impl Scene {
     /// Loads every source and resolves the transforms (reading every frame once when a transform needs the
     /// bounds of all frames).

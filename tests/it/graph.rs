@@ -329,7 +329,7 @@ fn a_huge_build_asks_for_yes_first() {
     let d = dir.path();
     let text = manifest("", "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n");
     let st = status(d, &text);
-    assert_eq!((st.images_to_render, st.bytes_upper_bound), (6, 6 * 32 * 32 * (4 + 2 + 3 + 3)));
+    assert_eq!((st.images_to_render, st.bytes_upper_bound), (6, 6 * 32 * 32 * (4 + 2 + 3 + 1)));
     let m = load(&d.join("m.toml"));
     let limited = |max| build::Options { max_images: Some(max), ..Default::default() };
     let err = build::build(&m, &d.join("cache"), limited(5), &Silent).unwrap_err();

@@ -4,6 +4,7 @@
 
 mod build;
 mod common;
+mod consumers;
 mod engine;
 mod fuzz;
 mod graph;

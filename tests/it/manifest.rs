@@ -80,7 +80,7 @@ samples = 9
 shading = "lambert"
 background = [1.0, 1.0, 1.0]
 passes = ["rgba", "depth", "normal", "mask"]
-depth = {{ kind = "ray" }}
+depth = {{ kind = "planar", exr = true }}
 normal = {{ space = "camera" }}
 splat = {{ shape = "disk", size_px = 2.0 }}
 lights = [{{ direction = [0.0, 0.0, -1.0], intensity = 0.8 }}]

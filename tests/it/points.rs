@@ -232,7 +232,8 @@ fn sequence_metadata_records_times_counts_and_the_grid() {
         "[output.v]\nwriter = \"ply-sequence\"\npoints = 30000\nvox = 9\npattern = \"{name}_vox9_{frame:04}.ply\"\n";
     build(&cesium_manifest(dir.path(), output), 2);
     let root = dir.path().join("out/m_points");
-    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(root.join(vvgen::export::META)).unwrap()).unwrap();
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root.join(vvgen::export::META)).unwrap()).unwrap();
     let seq = &meta["sequence"];
     let frames = seq["frames"].as_array().unwrap();
     assert_eq!(frames.len(), 3);

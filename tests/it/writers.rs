@@ -526,7 +526,8 @@ fn ngp_directory_load(dir: &Path) -> Result<Vec<PathBuf>, String> {
             let rel = f["file_path"].as_str().ok_or(format!("{j:?}: a frame without file_path"))?.replace('\\', "/");
             let mut p = j.parent().unwrap().join(&rel);
             if p.extension().is_none() && !p.exists() {
-                if let Some(q) = ["png", "jpg", "jpeg", "exr"].iter().map(|e| p.with_extension(e)).find(|q| q.exists()) {
+                if let Some(q) = ["png", "jpg", "jpeg", "exr"].iter().map(|e| p.with_extension(e)).find(|q| q.exists())
+                {
                     p = q;
                 }
             }

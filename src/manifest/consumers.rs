@@ -1,0 +1,285 @@
+//! What each writer's consumers cannot read, decided before anything renders: per writer, about that writer's
+//! own consumers only (../shared/specs/consumer-formats.md §10 lists what was seen in their loaders' code).
+//!
+//! [`diagnose`] needs the manifest alone and runs inside [`super::parse`], so `vvgen check` and `build` raise
+//! the same errors and warnings. [`frame_diagnostics`] needs the scene's frame count (a glTF clip's length or a
+//! PLY sequence's file count), which `check` reads from the inputs and `build` from the scene it loads.
+
+use super::diag::Diagnostic;
+use super::output::{Output, Writer};
+use super::render::{DepthKind, Pass};
+use super::Manifest;
+
+/// The loaders that take one focal length from `camera_angle_x` for both axes and assume a centred principal
+/// point: what reads a NeRF-synthetic transforms file.
+const DNERF_ONE_FOCAL: &str =
+    "D-NeRF (load_blender.py), 3DGS, 4DGaussians and Deformable-3DGS (Blender path) and nerfstudio's blender-data / dnerf-data";
+const STATIC_ONE_FOCAL: &str = "NeRF's load_blender.py, 3DGS (Blender path) and nerfstudio's blender-data";
+const DYNERF_LOADERS: &str = "K-Planes (Video360Dataset), 4DGaussians (Neural3D) and Deformable-3DGS (plenoptic)";
+
+/// The splits output `out` writes: its `splits`, or every split of the manifest.
+pub(crate) fn selected_splits<'a>(m: &'a Manifest, out: &'a Output) -> Vec<&'a str> {
+    match &out.splits {
+        Some(s) => s.iter().map(|s| s.get_ref().as_str()).collect(),
+        None => m.splits.keys().map(String::as_str).collect(),
+    }
+}
+
+/// Every consumer problem of every output that the manifest alone decides.
+pub(crate) fn diagnose(m: &Manifest, diags: &mut Vec<Diagnostic>) {
+    for (name, out) in &m.outputs {
+        let mut d = Writing { m, name, out, diags };
+        match *out.writer.get_ref() {
+            Writer::Dnerf => d.dnerf(),
+            Writer::StaticFrames => d.static_frames(),
+            Writer::Nerfstudio => d.nerfstudio(),
+            Writer::InstantNgp => d.instant_ngp(),
+            Writer::Colmap => d.colmap(),
+            Writer::Dynerf => d.dynerf(),
+            Writer::PlySequence => {}
+        }
+    }
+}
+
+/// The consumer problems that depend on the number of frames the scene has.
+pub fn frame_diagnostics(m: &Manifest, frames: usize) -> Vec<Diagnostic> {
+    m.outputs.iter().filter_map(|(name, out)| frame_diagnostic(name, out, frames)).collect()
+}
+
+/// The consumer problem of output `name` that depends on the scene's frame count, if any.
+pub fn frame_diagnostic(name: &str, out: &Output, frames: usize) -> Option<Diagnostic> {
+    let at = Some(out.writer.span());
+    match *out.writer.get_ref() {
+        // No count suits both 4DGaussians (300) and Deformable-3DGS (24).
+        Writer::Dynerf => {
+            let mut said = Vec::new();
+            if frames != 300 {
+                said.push(
+                    "4DGaussians maps frame i to time i/300 and K-Planes to i/299 (both read at most 300 frames)",
+                );
+            }
+            if frames != 24 {
+                said.push("Deformable-3DGS reads the first 24 frames and maps frame i to i/23");
+            }
+            Some(
+                Diagnostic::warning(format!("output `{name}` (dynerf) has {frames} frames"), at)
+                    .with_help(format!("{}: their times will be off", said.join("; "))),
+            )
+        }
+        Writer::InstantNgp if frames > 1 => {
+            Some(Diagnostic::warning(format!("output `{name}` (instant-ngp) has {frames} frames"), at).with_help(
+                "instant-ngp has no time: each transforms file mixes every frame of the motion (use \
+                 `static-frames` for one static set per time step)",
+            ))
+        }
+        _ => None,
+    }
+}
+
+/// The checks of one output.
+struct Writing<'a, 'd> {
+    m: &'a Manifest,
+    name: &'a str,
+    out: &'a Output,
+    diags: &'d mut Vec<Diagnostic>,
+}
+
+impl Writing<'_, '_> {
+    fn warn(&mut self, message: String, help: String) {
+        let d = Diagnostic::warning(message, Some(self.out.writer.span())).with_help(help);
+        self.diags.push(d);
+    }
+
+    fn error(&mut self, message: String, help: String) {
+        let d = Diagnostic::error(message, Some(self.out.writer.span())).with_help(help);
+        self.diags.push(d);
+    }
+
+    fn label(&self) -> String {
+        format!("output `{}` ({})", self.name, self.out.writer.get_ref().name())
+    }
+
+    /// The dataset root as the consumers see it (absolute when the manifest's folder is).
+    fn root(&self) -> String {
+        let dir = self.out.dir_name(self.m.dataset.name.get_ref());
+        self.m.out_dir().join(dir).to_string_lossy().into_owned()
+    }
+
+    fn non_square_pixels(&self) -> bool {
+        let (fx, fy, _, _) = self.m.render.intrinsics();
+        (fx - fy).abs() > 1e-9 * fx.abs().max(1.0)
+    }
+
+    fn off_centre(&self) -> Option<(f64, f64)> {
+        let (_, _, cx, cy) = self.m.render.intrinsics();
+        let (w, h) = self.m.render.size();
+        let centred = (cx - w as f64 / 2.0).abs() <= 1e-9 && (cy - h as f64 / 2.0).abs() <= 1e-9;
+        (!centred).then_some((cx, cy))
+    }
+
+    /// fx ≠ fy and an off-centre principal point, for writers whose consumers read one focal and the centre.
+    fn one_focal_and_centre(&mut self, loaders: &str) {
+        let (fx, fy, _, _) = self.m.render.intrinsics();
+        if self.non_square_pixels() {
+            let l = self.label();
+            self.warn(
+                format!("{l} with fx = {fx} ≠ fy = {fy} (non-square pixels)"),
+                format!("{loaders} take one focal length for both axes and ignore fl_y: set `fy` equal to fx"),
+            );
+        }
+        if let Some((cx, cy)) = self.off_centre() {
+            let (w, h) = self.m.render.size();
+            let l = self.label();
+            self.warn(
+                format!("{l} with an off-centre principal point ({cx}, {cy}) in a {w}×{h} image"),
+                format!("{loaders} project about the image centre and ignore cx, cy: leave `cx`, `cy` unset"),
+            );
+        }
+    }
+
+    fn dnerf(&mut self) {
+        let (w, h) = self.m.render.size();
+        if w != h {
+            let l = self.label();
+            self.warn(
+                format!("{l} with non-square {w}×{h} images"),
+                "K-Planes swaps W and H when resizing, Deformable-3DGS swaps FovX and FovY, 4DGaussians resizes to \
+                 800×800 and D-NeRF's half_res resizes wrongly: use square images"
+                    .into(),
+            );
+        }
+        self.one_focal_and_centre(DNERF_ONE_FOCAL);
+        let selected = selected_splits(self.m, self.out);
+        for split in selected.iter().filter(|s| s.contains("_r")) {
+            let l = self.label();
+            self.error(
+                format!("{l} writes split `{split}`, whose name contains `_r`"),
+                "K-Planes splits D-NeRF file paths at `_r` (fetch_360vid_info): rename the split".into(),
+            );
+        }
+        for needed in ["train", "val", "test"] {
+            if !selected.contains(&needed) {
+                let l = self.label();
+                self.warn(
+                    format!("{l} has no `{needed}` split"),
+                    "D-NeRF opens transforms_train/val/test.json unconditionally and nerfstudio's dnerf-data needs \
+                     val while training"
+                        .into(),
+                );
+            }
+        }
+        let root = self.root();
+        let dir = self.out.dir_name(self.m.dataset.name.get_ref());
+        if !dir.contains("dnerf") && !dir.contains("lego") {
+            let l = self.label();
+            self.warn(
+                format!("{l}: directory `{dir}` does not contain \"dnerf\""),
+                format!("K-Planes picks its D-NeRF loader by that substring in the path ({root})"),
+            );
+        }
+    }
+
+    fn static_frames(&mut self) {
+        let (w, h) = self.m.render.size();
+        if w != h {
+            let l = self.label();
+            self.warn(
+                format!("{l} with non-square {w}×{h} images"),
+                "NeRF's load_blender.py with half_res resizes non-square images wrongly".into(),
+            );
+        }
+        self.one_focal_and_centre(STATIC_ONE_FOCAL);
+    }
+
+    fn nerfstudio(&mut self) {
+        // nerfstudio-data reads fl_x, fl_y, cx, cy, w, h exactly: no intrinsics caveat.
+        if self.m.render.has_pass(Pass::Depth) && self.m.render.depth.kind == DepthKind::Ray {
+            let l = self.label();
+            self.warn(
+                format!("{l} writes ray-distance depth"),
+                "nerfstudio's depth-nerfacto reads planar z-depth unless run with \
+                 `--pipeline.model.is-euclidean-depth True`; transforms.json has no key to say so (vvgen/dataset.json \
+                 records the kind): pass that flag, or use depth = { kind = \"planar\" }"
+                    .into(),
+            );
+        }
+        let selected = selected_splits(self.m, self.out);
+        if !selected.iter().any(|s| *s == "val" || *s == "test") {
+            let l = self.label();
+            self.warn(format!("{l} has no `val` or `test` split"), "nerfstudio's eval lists will be empty".into());
+        }
+    }
+
+    fn instant_ngp(&mut self) {
+        if self.m.render.has_pass(Pass::Depth) && self.m.render.depth.kind == DepthKind::Ray {
+            let l = self.label();
+            self.error(
+                format!("{l} with ray-distance depth"),
+                "instant-ngp supervises with planar z-depth (target = |ray.d| · depth, camera z = 1) and its \
+                 format has no key for another kind: use depth = { kind = \"planar\" }, or a separate output for \
+                 the ray depth"
+                    .into(),
+            );
+        }
+    }
+
+    fn colmap(&mut self) {
+        // fx ≠ fy is fine: 3DGS turns fx and fy into two FoVs; nerfstudio's colmap parser reads all four.
+        if let Some((cx, cy)) = self.off_centre() {
+            let l = self.label();
+            self.warn(
+                format!("{l} with an off-centre principal point ({cx}, {cy})"),
+                "3DGS's COLMAP reader (and 4DGaussians' and Deformable-3DGS' copies) use only the focal lengths and \
+                 project about the image centre; nerfstudio's colmap parser reads cx, cy: leave `cx`, `cy` unset \
+                 for 3DGS"
+                    .into(),
+            );
+        }
+    }
+
+    fn dynerf(&mut self) {
+        let (fx, fy, _, _) = self.m.render.intrinsics();
+        if self.non_square_pixels() {
+            let l = self.label();
+            self.warn(
+                format!("{l} with fx = {fx} ≠ fy = {fy} (non-square pixels)"),
+                format!("poses_bounds.npy holds one focal length (fx): {DYNERF_LOADERS} use it for both axes"),
+            );
+        }
+        if let Some((cx, cy)) = self.off_centre() {
+            let l = self.label();
+            self.warn(
+                format!("{l} with an off-centre principal point ({cx}, {cy})"),
+                format!("poses_bounds.npy has no principal point: {DYNERF_LOADERS} assume the image centre"),
+            );
+        }
+        let (w, h) = self.m.render.size();
+        if (w, h) != (2704, 2028) {
+            let l = self.label();
+            self.warn(
+                format!("{l} with {w}×{h} images"),
+                "4DGaussians hard-codes DyNeRF's 2704×2028 (resized to 1352×1014, focal halved): its cameras are \
+                 right only at a 4:3 aspect with the focal given for 2704 px; K-Planes and Deformable-3DGS read any \
+                 size"
+                    .into(),
+            );
+        }
+        let root = self.root();
+        if root.contains("dnerf") || root.contains("lego") {
+            let l = self.label();
+            self.warn(
+                format!("{l}: the path {root} contains `dnerf` or `lego`"),
+                "K-Planes reads a path containing `dnerf` or `lego` as D-NeRF data: choose another `dir`".into(),
+            );
+        }
+        if root.contains('.') {
+            let l = self.label();
+            self.warn(
+                format!("{l}: the path {root} contains a `.`"),
+                "4DGaussians takes everything before the first `.` of a video's path as its frame folder: keep dots \
+                 out of the path it is given"
+                    .into(),
+            );
+        }
+    }
+}

@@ -1,0 +1,168 @@
+//! What each writer's consumers cannot read is said by `vvgen check`, before anything renders, per writer and
+//! about that writer's consumers only; what `build` refuses, `check` refuses first.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use crate::common::animated_triangle;
+
+/// A 4-frame triangle dataset with `render` lines, train/val/test splits (or `splits`) and one output.
+fn manifest(render: &str, splits: &str, output: &str) -> String {
+    format!(
+        "[dataset]\nname = \"tri\"\nout = \"out\"\ncache = \"cache\"\n\
+         [source.tri]\ngltf = \"tri.gltf\"\nframes = {{ count = 4, fps = 1 }}\n\
+         [render]\nresolution = [32, 32]\n{render}\n\
+         [rig.o]\nkind = \"orbit\"\n{splits}\n[output.o]\n{output}\n"
+    )
+}
+
+const SPLITS: &str = "[split.train]\nrig = \"o\"\nviews = 2\n[split.val]\nrig = \"o\"\nviews = 1\n\
+                      [split.test]\nrig = \"o\"\nviews = 1\n";
+
+fn vvgen(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(dir).args(args).output().unwrap()
+}
+
+/// `vvgen check` of `text` in a fresh folder: exit code and standard error.
+fn check(text: &str) -> (Option<i32>, String, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("tri.gltf"), animated_triangle(0.3)).unwrap();
+    std::fs::write(dir.path().join("m.toml"), text).unwrap();
+    let out = vvgen(dir.path(), &["check", "--color", "never", "m.toml"]);
+    (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned(), dir)
+}
+
+/// One case: writer, render lines, splits, refused (exit 2), what check must say, and what it must not say.
+type Row<'a> = (&'a str, &'a str, &'a str, bool, &'a [&'a str], &'a [&'a str]);
+
+/// Each row: writer, render lines, splits, what check must say (errors exit 2), and what it must not say.
+#[test]
+fn check_says_each_writers_consumer_limits_and_only_its_own() {
+    let square_off_centre = "fx = 40.0\nfy = 42.0\ncx = 14.0\ncy = 17.0";
+    let rows: &[Row] = &[
+        // D-NeRF-path loaders take one focal from camera_angle_x and the image centre.
+        (
+            "dnerf",
+            "fx = 40.0\nfy = 42.0",
+            SPLITS,
+            false,
+            &["fy = 42 (non-square pixels)", "D-NeRF (load_blender.py), 3DGS"],
+            &["off-centre"],
+        ),
+        (
+            "dnerf",
+            "cx = 14.0",
+            SPLITS,
+            false,
+            &["off-centre principal point (14, 16)", "project about the image centre"],
+            &["non-square"],
+        ),
+        (
+            "dnerf",
+            "",
+            &SPLITS.replace("[split.test]", "[split.test_ring]"),
+            true,
+            &["`test_ring`, whose name contains `_r`", "K-Planes"],
+            &[],
+        ),
+        // static-frames: the static NeRF-synthetic loaders, not the dynamic ones.
+        (
+            "static-frames",
+            square_off_centre,
+            SPLITS,
+            false,
+            &["NeRF's load_blender.py, 3DGS (Blender path)"],
+            &["K-Planes", "Deformable", "4DGaussians"],
+        ),
+        // nerfstudio-data reads fx, fy, cx, cy, w, h exactly: nothing to say about them.
+        ("nerfstudio", square_off_centre, SPLITS, false, &[], &["warning"]),
+        (
+            "nerfstudio",
+            "passes = [\"rgba\", \"depth\"]\ndepth = { kind = \"ray\" }",
+            SPLITS,
+            false,
+            &["ray-distance depth", "--pipeline.model.is-euclidean-depth True"],
+            &["error"],
+        ),
+        // instant-ngp: no place for another depth kind, and no time.
+        (
+            "instant-ngp",
+            "passes = [\"rgba\", \"depth\"]\ndepth = { kind = \"ray\" }",
+            SPLITS,
+            true,
+            &["ray-distance depth", "planar z-depth"],
+            &[],
+        ),
+        (
+            "instant-ngp",
+            square_off_centre,
+            SPLITS,
+            false,
+            &["has 4 frames", "instant-ngp has no time"],
+            &["non-square", "off-centre"],
+        ),
+        // 3DGS's COLMAP reader: two focals are fine, the principal point is not read.
+        ("colmap", "fx = 40.0\nfy = 42.0", SPLITS, false, &[], &["warning"]),
+        ("colmap", "cx = 14.0", SPLITS, false, &["off-centre", "3DGS's COLMAP reader"], &["non-square"]),
+        // DyNeRF: one focal, the centre, 4DGaussians' 2704×2028 and 300 frames, Deformable-3DGS' 24.
+        (
+            "dynerf",
+            square_off_centre,
+            "[split.train]\nrig = \"o\"\nviews = 2\n[split.test]\nrig = \"o\"\nviews = 1\n",
+            false,
+            &[
+                "poses_bounds.npy holds one focal length",
+                "assume the image centre",
+                "hard-codes DyNeRF's 2704×2028",
+                "has 4 frames",
+                "i/300",
+                "i/23",
+            ],
+            &[],
+        ),
+        (
+            "dynerf",
+            "",
+            "[split.train]\nrig = \"o\"\nviews = 2\ntime = \"monocular\"\n",
+            true,
+            &["time is not \"all\""],
+            &[],
+        ),
+    ];
+    for (writer, render, splits, refused, says, not) in rows {
+        let text = manifest(render, splits, &format!("writer = \"{writer}\"\ninit_points = 0"));
+        let (code, err, dir) = check(&text);
+        let ctx = format!("{writer} with {render:?}:\n{err}");
+        assert_eq!(code, Some(if *refused { 2 } else { 0 }), "{ctx}");
+        for s in *says {
+            assert!(err.contains(s), "missing {s:?} in {ctx}");
+        }
+        for s in *not {
+            assert!(!err.contains(s), "{s:?} does not apply: {ctx}");
+        }
+        if *refused {
+            // What check refuses, build refuses the same way, before any work.
+            let out = vvgen(dir.path(), &["-q", "build", "m.toml"]);
+            assert_eq!(out.status.code(), Some(2), "{ctx}");
+            assert!(!dir.path().join("out").exists(), "build wrote output before refusing: {ctx}");
+            assert!(!dir.path().join("cache/objects").exists(), "build rendered before refusing: {ctx}");
+        }
+    }
+}
+
+/// Errors the planner raises from the manifest and its inputs reach `check` too (it plans without rendering).
+#[test]
+fn check_plans_and_opens_the_inputs() {
+    // A split selecting frames the 4-frame scene does not have: only the planner, with the frame count, knows.
+    let text = manifest("", "[split.train]\nrig = \"o\"\nviews = 1\nframes = [7]\n", "writer = \"dnerf\"");
+    let (code, err, _dir) = check(&text);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("selects no frames"), "{err}");
+    // A malformed glTF is an error at check time, not mid-build.
+    let (code, err, dir) = check(&manifest("", SPLITS, "writer = \"dnerf\""));
+    assert_eq!(code, Some(0), "{err}");
+    std::fs::write(dir.path().join("tri.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 3}]}")
+        .unwrap();
+    let out = vvgen(dir.path(), &["check", "m.toml"]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+}
