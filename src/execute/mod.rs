@@ -5,6 +5,7 @@
 
 mod points;
 mod render;
+pub mod video;
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -224,7 +225,12 @@ impl Inputs<'_> {
 /// the inputs they read that must run too (a shared input such as a sequence's bounds: cheap, and the same bytes
 /// whichever shard makes it). Readers come after their inputs, so one walk from the end settles it.
 pub(crate) fn runs_here(g: &Graph, state: &[State], shard: Option<Shard>) -> Vec<bool> {
-    let owns = |id: ActionId| shard.is_none_or(|s| s.owns(&owner_key(g, id)));
+    // A video reads every frame of its camera: in a shard it would pull renders other shards own, so videos are
+    // left to the unsharded build that writes the outputs (by then their composites are cached).
+    let owns = |id: ActionId| match shard {
+        None => true,
+        Some(s) => g.node(id).action.kind() != Kind::Video && s.owns(&owner_key(g, id)),
+    };
     let mut here = vec![false; g.nodes.len()];
     for id in g.ids().rev() {
         let i = id.0 as usize;
@@ -300,6 +306,7 @@ pub(crate) fn run(
         let made: Made = match kind {
             Kind::RenderPass => render::passes(g, x, &ids, &tick)?,
             Kind::Composite => render::composites(g, x, &blobs, &ids, &tick)?,
+            Kind::Video => video::videos(g, x, &blobs, &ids, &tick)?,
             Kind::WriteOutput => unreachable!("outputs are not cached actions"),
             _ => points::run(g, x, &blobs, &ids, &tick)?,
         };

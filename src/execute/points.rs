@@ -107,7 +107,7 @@ fn make(
             }
             Ok(txt.into_bytes())
         }
-        Action::RenderPass { .. } | Action::Composite { .. } | Action::WriteOutput { .. } => {
+        Action::RenderPass { .. } | Action::Composite { .. } | Action::Video { .. } | Action::WriteOutput { .. } => {
             unreachable!("not a point action")
         }
     }

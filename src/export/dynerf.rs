@@ -1,12 +1,14 @@
 //! `dynerf`: the DyNeRF / LLFF layout K-Planes, 4DGaussians and Deformable-3DGS read: `poses_bounds.npy`
 //! (one row of 17 per camera: the 3×5 matrix [down, right, back, centre, (H, W, focal)] then near, far),
-//! `frames/camNN/NNNN.png` (RGB, background baked in) and `points3D_downsample2.ply`. Camera 00 is the one the
-//! loaders hold out for testing: a split named `test` goes first.
+//! `camNN.mp4` (H.264, [`crate::execute::video`]), the same frames as PNG in `frames/camNN/NNNN.png` and
+//! `camNN/images/NNNN.png` (RGB, background baked in), and the init cloud as `points3D_downsample2.ply` and
+//! `points3D.ply`. Camera 00 is the one the loaders hold out for testing: a split named `test` goes first.
 
 use glam::{DMat4, DVec3, Vec3};
 
 use super::{init_points, Error, Export, Files};
 use crate::manifest::output::Output;
+use crate::plan::actions::Action;
 
 pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     let frames = x.plan.frames_of(images);
@@ -32,6 +34,7 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
         let (near, far) = depth_range(&c2w, bounds, c0.near);
         rows.extend(llff_row(&c2w, c0.height, c0.width, c0.fx));
         rows.extend([near, far]);
+        let mut list = Vec::new();
         for (fi, &f) in frames.iter().enumerate() {
             let img = x.plan.splits[s]
                 .images
@@ -39,13 +42,25 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
                 .copied()
                 .find(|&i| x.plan.images[i].frame == f && x.plan.images[i].view == v)
                 .ok_or_else(|| Error::Unplanned(format!("image of camera {v} at frame {f}")))?;
-            files.image_blob(img, "rgb", &format!("frames/cam{ci:02}/{fi:04}.png"), x.opaque_rgb(img)?)?;
+            // The same frame where each loader looks: Deformable-3DGS lists frames/<cam>/, 4DGaussians reads
+            // camNN/images/ (and extracts them from the video only when that folder is missing).
+            let rgb = x.opaque_rgb(img)?;
+            files.image_blob(img, "rgb", &format!("frames/cam{ci:02}/{fi:04}.png"), rgb)?;
+            files.blob(&format!("cam{ci:02}/images/{fi:04}.png"), rgb)?;
+            list.push(img);
         }
+        // K-Planes decodes camNN.mp4 (sorted, cam00 is its test camera); 4DGaussians asserts they exist.
+        let fps_milli = (crate::plan::graph::video_fps(x.manifest) * 1000.0).round() as u64;
+        files.blob(&format!("cam{ci:02}.mp4"), x.blob(&Action::Video { images: list, fps_milli })?)?;
     }
     files.bytes("poses_bounds.npy", &npy_f64(&rows, cams.len(), 17))?;
     let n = init_points(out);
     if n > 0 {
-        files.blob("points3D_downsample2.ply", x.init_cloud(&frames, n)?)?;
+        // 4DGaussians reads points3D_downsample2.ply, Deformable-3DGS points3D.ply (else it invents 100k
+        // random points and writes them into the dataset).
+        let cloud = x.init_cloud(&frames, n)?;
+        files.blob("points3D_downsample2.ply", cloud)?;
+        files.blob("points3D.ply", cloud)?;
     }
     Ok(())
 }

@@ -264,6 +264,18 @@ impl Writing<'_, '_> {
                     .into(),
             );
         }
+        if w % 2 == 1 || h % 2 == 1 {
+            let l = self.label();
+            self.warn(
+                format!("{l} with odd-sized {w}×{h} images"),
+                format!(
+                    "H.264 4:2:0 has only even sizes: camNN.mp4 is {}×{} (the last column or row repeated); the PNG \
+                     frames keep {w}×{h}",
+                    w.next_multiple_of(2),
+                    h.next_multiple_of(2)
+                ),
+            );
+        }
         let root = self.root();
         if root.contains("dnerf") || root.contains("lego") {
             let l = self.label();

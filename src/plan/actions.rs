@@ -21,6 +21,9 @@ pub const RENDER_SALT: &str = "render 6";
 pub const SAMPLE_SALT: &str = "sample 2";
 /// Version of the PLY / COLMAP point encodings and of compositing.
 pub const ENCODE_SALT: &str = "encode 1";
+/// Version of the video encoding (codec, its settings, colour conversion and container): see
+/// [`crate::execute::video`].
+pub const VIDEO_SALT: &str = "video 1: openh264 0.9, qp 12, bt601 limited 4:2:0, mp4";
 
 /// What an action does; each kind has its own executor and its own keyed walk.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
@@ -30,6 +33,8 @@ pub enum Kind {
     RenderPass,
     /// Composite an RGBA image over an opaque background (COLMAP, DyNeRF).
     Composite,
+    /// Encode one camera's composites, frame by frame, as an H.264 MP4 (DyNeRF's `camNN.mp4`).
+    Video,
     /// Surface samples over several frames, as an initialization PLY.
     InitCloud,
     /// One frame's surface samples as COLMAP's points3D.txt.
@@ -46,13 +51,14 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in execution order (an action's inputs are of earlier kinds).
-    pub const ALL: [Kind; 8] = [
+    pub const ALL: [Kind; 9] = [
         Kind::RenderPass,
         Kind::Bounds,
         Kind::SampleFrame,
         Kind::InitCloud,
         Kind::ColmapPoints,
         Kind::Composite,
+        Kind::Video,
         Kind::PointFrame,
         Kind::WriteOutput,
     ];
@@ -62,6 +68,7 @@ impl Kind {
         match self {
             Kind::RenderPass => "render-pass",
             Kind::Composite => "composite",
+            Kind::Video => "video",
             Kind::InitCloud => "init-cloud",
             Kind::ColmapPoints => "colmap-points",
             Kind::Bounds => "bounds",
@@ -94,6 +101,14 @@ pub enum Action {
         image: usize,
         /// Opaque background, sRGB.
         background: [u8; 3],
+    },
+    /// One camera's video: plan images `images`, one per frame in frame order, at `fps`. Deps: their
+    /// [`Action::Composite`]s, in the same order.
+    Video {
+        /// Indices into [`Plan::images`].
+        images: Vec<usize>,
+        /// Frames per second, in thousandths (an integer, so the action hashes and compares exactly).
+        fps_milli: u64,
     },
     /// `points` samples spread over `frames`. No deps.
     InitCloud {
@@ -142,6 +157,7 @@ impl Action {
         match self {
             Action::RenderPass { .. } => Kind::RenderPass,
             Action::Composite { .. } => Kind::Composite,
+            Action::Video { .. } => Kind::Video,
             Action::InitCloud { .. } => Kind::InitCloud,
             Action::ColmapPoints { .. } => Kind::ColmapPoints,
             Action::Bounds { .. } => Kind::Bounds,
@@ -224,6 +240,14 @@ impl Action {
                 w.digest("rgba", &deps[0]);
                 w.f64s("background", &background.map(f64::from));
                 w.str("png compression", png_name(cx.encoding.png));
+            }
+            Action::Video { images: _, fps_milli } => {
+                // The frames enter through their composites' keys; which images they are does not matter.
+                w.str("encoder", VIDEO_SALT);
+                w.u64("fps (thousandths)", *fps_milli);
+                for d in deps {
+                    w.digest("frame", d);
+                }
             }
             Action::InitCloud { frames, points } => {
                 w.str("sampler", SAMPLE_SALT);

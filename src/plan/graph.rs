@@ -186,10 +186,27 @@ impl<'a> Graph<'a> {
                     check_dynerf(plan, &images, &frames)?;
                 }
                 let background = opaque_background(m);
+                let mut composites = std::collections::BTreeMap::new();
                 for &i in &images {
                     let rgba = self.render_pass(i, Pass::Rgba);
                     let label = format!("composite {}", image_label(plan, i));
-                    deps.push(self.add(Action::Composite { image: i, background }, label, vec![rgba]));
+                    let id = self.add(Action::Composite { image: i, background }, label, vec![rgba]);
+                    composites.insert(i, id);
+                    deps.push(id);
+                }
+                if writer == Writer::Dynerf {
+                    // One video per camera (split, view), its frames in order.
+                    let mut cameras: std::collections::BTreeMap<(usize, u32), Vec<usize>> = Default::default();
+                    for &i in &images {
+                        cameras.entry((plan.images[i].split, plan.images[i].view)).or_default().push(i);
+                    }
+                    let fps_milli = (video_fps(m) * 1000.0).round() as u64;
+                    for ((split, view), mut list) in cameras {
+                        list.sort_by_key(|&i| plan.images[i].frame);
+                        let inputs = list.iter().map(|i| composites[i]).collect();
+                        let label = format!("video {}/{view}", plan.splits[split].name);
+                        deps.push(self.add(Action::Video { images: list, fps_milli }, label, inputs));
+                    }
                 }
                 if writer == Writer::Colmap {
                     for &f in &frames {
@@ -219,6 +236,12 @@ impl<'a> Graph<'a> {
 pub fn image_label(plan: &Plan, i: usize) -> String {
     let img = &plan.images[i];
     format!("{}/{}/{}", plan.splits[img.split].name, img.view, img.frame)
+}
+
+/// The frame rate of a dataset's videos: its first source's `fps` (every source of a scene shares the time
+/// axis), 30 without one.
+pub fn video_fps(m: &Manifest) -> f64 {
+    m.sources.values().find_map(|s| s.frames().map(|f| f.fps())).unwrap_or(30.0)
 }
 
 /// The DyNeRF layout is synchronized video: every camera of every split at every frame.

@@ -16,4 +16,5 @@ mod rigs;
 mod scene;
 mod slurm;
 mod transform;
+mod video;
 mod writers;
