@@ -132,6 +132,31 @@ fn dynerf_videos_decode_to_the_png_frames() {
                 let (rgb, luma) = psnr(f, &png_rgb(&root.join(format!("frames/cam{c:02}/{i:04}.png"))));
                 worst = (worst.0.min(rgb), worst.1.min(luma));
             }
+            // The measure a user runs: ffmpeg's psnr filter, video against the PNG frames (compared in the
+            // video's YUV 4:2:0, the codec's own loss).
+            let out = Command::new("ffmpeg")
+                .args(["-v", "info", "-i"])
+                .arg(root.join(name))
+                .args(["-framerate", "24", "-i"])
+                .arg(root.join(format!("frames/cam{c:02}/%04d.png")))
+                .args([
+                    "-lavfi",
+                    "[0:v]settb=1/24,setpts=N[a];[1:v]settb=1/24,setpts=N[b];[a][b]psnr",
+                    "-f",
+                    "null",
+                    "-",
+                ])
+                .output()
+                .unwrap();
+            let log = String::from_utf8_lossy(&out.stderr);
+            let min: f64 = log
+                .split("min:")
+                .nth(1)
+                .and_then(|t| t.split_whitespace().next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or_else(|| panic!("no psnr in ffmpeg's log: {log}"));
+            eprintln!("{name}: ffmpeg's psnr filter (YUV 4:2:0), worst frame {min:.2} dB");
+            assert!(min >= 45.0, "{name}: ffmpeg's psnr filter, worst frame {min} dB");
         }
     }
     eprintln!("worst frame: RGB PSNR {:.2} dB, luma PSNR {:.2} dB", worst.0, worst.1);
