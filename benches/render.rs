@@ -201,7 +201,7 @@ fn main() {
             ("cubes, edge 1 cm", SplatShape::Cube, SplatSize::World(0.01)),
             ("squares, 1 px", SplatShape::Square, SplatSize::Pixels(1.0)),
         ] {
-            let s = RenderSettings { splat: SplatSettings { shape, size }, ..Default::default() };
+            let s = RenderSettings { splat: SplatSettings { shape, size, min_px: 1.0 }, ..Default::default() };
             line(label, per_image(&pts, &cams, &s, 3));
         }
     }

@@ -200,6 +200,8 @@ pub struct SplatOptions {
     pub size: Option<f64>,
     /// Size in pixels instead.
     pub size_px: Option<f64>,
+    /// Smallest footprint on screen in pixels (default 1: points never fall between samples; 0 = true size).
+    pub min_px: Option<f64>,
 }
 
 /// Splat shape.
@@ -286,7 +288,7 @@ impl Render {
                 DepthKind::Planar => render::DepthKind::Planar,
                 DepthKind::Ray => render::DepthKind::Ray,
             },
-            splat: render::SplatSettings { shape, size },
+            splat: render::SplatSettings { shape, size, min_px: self.splat.min_px.unwrap_or(1.0) as f32 },
             buffers: render::Buffers {
                 depth: self.has_pass(Pass::Depth),
                 normal: self.has_pass(Pass::Normal),
@@ -423,6 +425,14 @@ impl Render {
         for v in [self.splat.size, self.splat.size_px].into_iter().flatten() {
             if !(v.is_finite() && v > 0.0) {
                 diags.push(Diagnostic::error(format!("splat size {v} must be positive"), None));
+            }
+        }
+        if let Some(v) = self.splat.min_px {
+            if !(0.0..=64.0).contains(&v) {
+                diags.push(
+                    Diagnostic::error(format!("splat min_px {v} is outside 0..64"), None)
+                        .with_help("min_px = 1 keeps every point at least a pixel wide; 0 draws true sizes"),
+                );
             }
         }
     }

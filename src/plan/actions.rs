@@ -325,7 +325,12 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
     // Which auxiliary buffers are filled never changes the bytes of a pass (it only skips unused work).
     let _ = buffers;
     w.u64("samples", *samples as u64);
-    let crate::render::SplatSettings { shape, size } = splat;
+    let crate::render::SplatSettings { shape, size, min_px } = splat;
+    // Zero where the scene draws no points (graph::Graph::new), and then not keyed: scenes without points keep
+    // their keys, and a footprint of 0 is what drawing did before the minimum existed.
+    if *min_px > 0.0 {
+        w.f64("splat min px", *min_px as f64);
+    }
     w.str(
         "splat shape",
         match shape {

@@ -54,7 +54,14 @@ impl<'a> Graph<'a> {
         let keying = Keying {
             plan,
             frame_keys,
-            render: m.render.renderer_settings(scene.voxel_size()),
+            render: {
+                let mut r = m.render.renderer_settings(scene.voxel_size());
+                if !scene.has_points() {
+                    // Splat settings shape nothing without points: no minimum footprint to key.
+                    r.splat.min_px = 0.0;
+                }
+                r
+            },
             encoding: m.render.encoding(),
             seed: m.dataset.seed,
             manifest: Digest::of(m.text.as_bytes()),

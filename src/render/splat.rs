@@ -46,11 +46,16 @@ pub struct SplatSettings {
     pub shape: Shape,
     /// Size.
     pub size: Size,
+    /// The smallest footprint on screen, in pixels (edge or diameter): a splat that would be smaller is drawn
+    /// as a screen-aligned square (disk) of this size, so that points cannot fall between sample positions and
+    /// leave holes. A sub-pixel cube is such a square at its near depth, showing the face turned most towards
+    /// the camera. 0 draws every splat at its true size.
+    pub min_px: f32,
 }
 
 impl Default for SplatSettings {
     fn default() -> Self {
-        SplatSettings { shape: Shape::Square, size: Size::Pixels(1.0) }
+        SplatSettings { shape: Shape::Square, size: Size::Pixels(1.0), min_px: 1.0 }
     }
 }
 
@@ -69,7 +74,15 @@ pub struct Splat {
     /// For cubes, the centre relative to the eye: carried here, since reading it back from the positions
     /// misses the cache once per splat when a cloud's order is not spatial.
     centre: Vec3,
+    /// [`WHOLE`] for a splat drawn at its own size; [`CLAMPED`] for a square or disk drawn as a square of the
+    /// minimum footprint; for a cube below it, drawn as a square, the face it shows (an index into [`FACES`]).
+    small: u8,
 }
+
+/// [`Splat::small`] of a splat drawn at its own size.
+const WHOLE: u8 = u8::MAX;
+/// [`Splat::small`] of a square or disk drawn as a square of the minimum footprint.
+const CLAMPED: u8 = u8::MAX - 1;
 
 /// One point primitive, as splats read it.
 #[derive(Debug)]
@@ -103,6 +116,8 @@ struct Footprint {
     cube: Option<f32>,
     extent: Vec3,
     size: Size,
+    /// Half the minimum footprint, in samples.
+    min_half: f32,
     k: f32,
     /// The eye in world space (cube centres are taken relative to it).
     eye: Vec3,
@@ -131,7 +146,7 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     let extent = [rot.x_axis, rot.y_axis, rot.z_axis].map(|row| row.abs().element_sum());
     let extent = Vec3::from(extent) * out.cube.unwrap_or(0.0) * (1.0 + 1e-4);
     let eye = p.w2c.inverse().w_axis.truncate();
-    let foot = Footprint { cube: out.cube, extent, size: s.size, k, eye };
+    let foot = Footprint { cube: out.cube, extent, size: s.size, min_half: 0.5 * s.min_px.max(0.0) * k, k, eye };
     let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
     let mut first = 0u32;
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
@@ -190,19 +205,38 @@ fn project(pos: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Splat
             let (y0, y1) = ratio(v.y - e.y, v.y + e.y);
             let (sx0, sx1) = (cx + fx * x0, cx + fx * x1);
             let (sy0, sy1) = (cy - fy * y1, cy - fy * y0);
-            // One fixed-point unit more on each side, for the rounding of centre and half size.
-            let (rx, ry) = (fixed((sx1 - sx0) / 2.0) + 1, fixed((sy1 - sy0) / 2.0) + 1);
             let (x, y) = (fixed((sx0 + sx1) / 2.0), fixed((sy0 + sy1) / 2.0));
-            Splat { x, y, rx, ry, z: near_z, point, centre: pos - s.eye }
+            let centre = pos - s.eye;
+            let (wx, wy) = ((sx1 - sx0) / 2.0, (sy1 - sy0) / 2.0);
+            // The silhouette holds the inscribed sphere's disk, of radius h·f/z samples; no point is farther
+            // than √2/2 samples from a sample centre of its own pixel. A cube whose disk is smaller than that
+            // (or than the minimum footprint) can let its pixel's samples miss it.
+            if s.min_half > 0.0 && h * fx * iz < s.min_half.max(std::f32::consts::FRAC_1_SQRT_2) {
+                // A square of its screen box (at least the minimum) at the cube's near depth, showing the face
+                // turned most towards the eye (against `centre`, which points from the eye).
+                let axis = centre.abs().max_position();
+                let face = 2 * axis as u8 + (centre[axis] < 0.0) as u8;
+                // One fixed-point unit more, so that a centre on a pixel border still covers its own pixel.
+                let r = fixed(s.min_half.max(wx.min(wy))) + 1;
+                let sp = Splat { x, y, rx: r, ry: r, z: near_z, point, centre, small: face };
+                let b = sp.bbox(p.size);
+                return (sp.rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp);
+            }
+            // One fixed-point unit more on each side, for the rounding of centre and half size.
+            let (rx, ry) = (fixed(wx) + 1, fixed(wy) + 1);
+            Splat { x, y, rx, ry, z: near_z, point, centre, small: WHOLE }
         }
         (None, size) => {
             let half = match size {
                 Size::World(w) => 0.5 * w * fx * iz,
                 Size::Pixels(px) => 0.5 * px * s.k,
             };
-            let r = fixed(half.min(lim));
+            // At the minimum: a square (a disk that small can miss its own pixel's only sample), one fixed-point
+            // unit wider, as for small cubes.
+            let clamped = half < s.min_half;
+            let r = if clamped { fixed(s.min_half) + 1 } else { fixed(half.min(lim)) };
             let (x, y) = (fixed(cx + fx * v.x * iz), fixed(cy - fy * v.y * iz));
-            Splat { x, y, rx: r, ry: r, z, point, centre: Vec3::ZERO }
+            Splat { x, y, rx: r, ry: r, z, point, centre: Vec3::ZERO, small: if clamped { CLAMPED } else { WHOLE } }
         }
     };
     let b = sp.bbox(p.size);
@@ -261,9 +295,9 @@ impl<'a> Splats<'a> {
     /// Whether the sample centre (fixed point) is covered by a square or disk splat. Squares are half-open so
     /// that splats one size apart tile without double hits.
     #[inline]
-    fn covers(&self, sp: &Splat, px: i64, py: i64) -> bool {
+    fn covers(&self, sp: &Splat, px: i64, py: i64, square: bool) -> bool {
         let (dx, dy, r) = (px - sp.x as i64, py - sp.y as i64, sp.rx as i64);
-        if self.disk {
+        if self.disk && !square {
             dx * dx + dy * dy < r * r
         } else {
             dx >= -r && dx < r && dy >= -r && dy < r
@@ -284,7 +318,7 @@ impl<'a> Splats<'a> {
         for sp in self.band(band) {
             let b = sp.bbox(p.size);
             let (by0, by1) = (b[1].max(y0), b[3].min(y0 + h - 1));
-            if let Some((rays, half)) = &rays {
+            if let (Some((rays, half)), WHOLE) = (&rays, sp.small) {
                 for sy in by0..=by1 {
                     for sx in b[0]..=b[2] {
                         let i = ((sy - y0) * w + sx) as usize;
@@ -303,13 +337,14 @@ impl<'a> Splats<'a> {
                 }
                 continue;
             }
+            // Squares and disks, and splats below the minimum footprint (squares; cubes showing one face).
+            let square = sp.small != WHOLE;
             for sy in by0..=by1 {
                 for sx in b[0]..=b[2] {
                     let i = ((sy - y0) * w + sx) as usize;
-                    if sp.z < layer.depth[i]
-                        && self.covers(sp, sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2)
-                    {
-                        (layer.depth[i], layer.point[i]) = (sp.z, sp.point);
+                    let (cx, cy) = (sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2);
+                    if sp.z < layer.depth[i] && self.covers(sp, cx, cy, square) {
+                        (layer.depth[i], layer.point[i], layer.face[i]) = (sp.z, sp.point, sp.small);
                         any = true;
                     }
                 }

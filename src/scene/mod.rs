@@ -171,6 +171,15 @@ impl Scene {
         Some(self.world_from_source(i).x_axis.truncate().length())
     }
 
+    /// Whether any source draws points: a PLY sequence, a PLY cloud, or glTF points (judged on frame 0).
+    pub fn has_points(&self) -> bool {
+        let mut poser = Poser::default();
+        (0..self.sources.len()).any(|i| match &self.sources[i].data {
+            SourceData::Sequence(_) => true,
+            _ => self.pose_source(i, 0, &mut poser).is_ok_and(|p| p.point_count() > 0),
+        })
+    }
+
     /// Poses frame `frame` of source `i` alone, in world space.
     pub fn pose_source<'a>(&self, i: usize, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, Error> {
         poser.scratch.resize_with(self.sources.len(), PoseScratch::default);

@@ -277,8 +277,10 @@ fn a_voxel_size_change_reruns_only_the_reduction() {
 fn round_trip_the_vox_sequence_renders_back_as_cubes_where_the_mesh_was() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let view = "[render]\nresolution = [64, 64]\nsamples = 4\nsplat = { shape = \"cube\" }\n\
+    let view = "[render]\nresolution = [64, 64]\nsamples = 4\nsplat = { shape = \"cube\", min_px = 0 }\n\
                 [rig.o]\nkind = \"orbit\"\nradius = 4.0\nelevation_deg = 20.0\n[split.test]\nrig = \"o\"\nviews = 2\n";
+    // True cube sizes (min_px = 0): at 64² the default one-pixel minimum would widen this 10-pixel-wide
+    // silhouette by half a pixel on each side, and the comparison is of geometry.
     // Step 1: the mesh, rendered, and as a vox9 sequence; step 2 (its own manifest, same `out`, step 1 as its
     // `after`): the sequence as a source, rendered from the same cameras. One build call does both, and the
     // second manifest checks before the sequence exists.

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use glam::{DMat4, Mat4, Vec2, Vec3, Vec4};
-use vvgen::render::{render, Camera, RenderSettings};
+use vvgen::render::{render, Camera, RenderSettings, SplatSettings};
 use vvgen::scene::material::{Material, Texture, TextureRef};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
@@ -256,14 +256,14 @@ fn points(positions: Vec<Vec3>, color: Vec4) -> PosedScene {
 
 mod splats {
     use super::*;
-    use vvgen::render::{SplatSettings, SplatShape, SplatSize};
+    use vvgen::render::{SplatShape, SplatSize};
 
     fn coverage(f: &vvgen::render::Frame) -> f64 {
         f.rgba.chunks(4).map(|p| p[3] as f64 / 255.0).sum()
     }
 
     fn settings(shape: SplatShape, size: SplatSize, samples: u32) -> RenderSettings {
-        RenderSettings { samples, splat: SplatSettings { shape, size }, ..Default::default() }
+        RenderSettings { samples, splat: SplatSettings { shape, size, min_px: 0.0 }, ..Default::default() }
     }
 
     #[test]
@@ -464,4 +464,64 @@ fn minified_textures_are_filtered_through_mip_levels() {
     let f = textured_square(4, |i, j| [if (i + j) % 2 == 0 { 255 } else { 0 }; 3], false, 100.0);
     let at = |x: u32, y: u32| f.rgba[((y * 64 + x) * 4) as usize];
     assert!(at(13, 13) > 240 && at(25, 13) < 70, "{} {}: blurred", at(13, 13), at(25, 13));
+}
+
+/// Points cannot fall between samples: an 8i-style vox10 sequence drawn as one-voxel cubes (and disks) from the
+/// NeRF hemisphere covers the pixel of every projected point with the default minimum footprint (1 px), where
+/// true sizes leave sub-pixel splats between sample positions.
+#[test]
+fn vox10_cubes_leave_no_holes_with_the_default_footprint() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = format!(
+        "[dataset]\nname = \"t\"\nout = \"out\"\n\
+         [source.torus]\nply_sequence = \"{}\"\nframes = {{ start = 1000, end = 1000 }}\ntransform = {{ up = \"y\" }}\n\
+         [transform]\nfit = {{ height = 0.6 }}\ncenter = \"bbox\"\n\
+         [render]\nresolution = [400, 400]\nsplat = {{ shape = \"cube\" }}\n\
+         [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 6\n",
+        crate::common::data("seq/torus_vox10_{frame:04}.ply").display()
+    );
+    let path = tmp.path().join("m.toml");
+    std::fs::write(&path, text).unwrap();
+    let m = crate::common::load(&path);
+    let scene = vvgen::scene::Scene::open(&m).unwrap();
+    let mut poser = vvgen::scene::Poser::default();
+    let posed = scene.pose(0, &mut poser).unwrap().clone();
+    let pts: Vec<Vec3> = posed.primitives.iter().flat_map(|p| p.positions.iter().copied()).collect();
+    let base = std::fs::read_to_string(&path).unwrap();
+    for (size, shape, samples) in [(400u32, "cube", 1), (800, "cube", 1), (400, "disk", 1), (400, "cube", 4)] {
+        let m = crate::common::load(&{
+            let t = base
+                .replace("[400, 400]", &format!("[{size}, {size}]\nsamples = {samples}"))
+                .replace("shape = \"cube\"", &format!("shape = \"{shape}\""));
+            std::fs::write(&path, t).unwrap();
+            path.clone()
+        });
+        let plan = vvgen::plan::Plan::new(&m, 1).unwrap();
+        let defaults = m.render.renderer_settings(scene.voxel_size());
+        assert_eq!(defaults.splat.min_px, 1.0);
+        let true_size = RenderSettings { splat: SplatSettings { min_px: 0.0, ..defaults.splat }, ..defaults.clone() };
+        let (mut covered, mut holes_true, mut seen) = (0usize, 0usize, 0usize);
+        for img in &plan.images {
+            let cam = img.camera;
+            let with = render(&posed, &cam, &defaults);
+            let without = render(&posed, &cam, &true_size);
+            let w2c = cam.c2w.inverse();
+            for p in &pts {
+                let v = w2c.transform_point3(p.as_dvec3());
+                let (x, y) = (cam.cx + cam.fx * v.x / -v.z, cam.cy - cam.fy * v.y / -v.z);
+                if v.z >= 0.0 || x < 0.0 || y < 0.0 || x >= size as f64 || y >= size as f64 {
+                    continue;
+                }
+                let i = ((y as usize) * size as usize + x as usize) * 4 + 3;
+                seen += 1;
+                covered += usize::from(with.rgba[i] > 0);
+                holes_true += usize::from(without.rgba[i] == 0);
+            }
+        }
+        let frac = covered as f64 / seen as f64;
+        let what = format!("{shape}s at {size}², {samples} samples");
+        eprintln!("{what}: {frac:.4} of {seen} projected points on covered pixels ({holes_true} holes at true size)");
+        assert!(frac >= 0.999, "{what}: {frac}");
+        assert!(holes_true > seen / 100, "{what}: the fixture has sub-pixel splats ({holes_true} holes)");
+    }
 }
