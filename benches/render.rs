@@ -196,12 +196,13 @@ fn main() {
         let n_pts = p.len();
         let pts = mesh(p, vec![Vec3::ZERO; n_pts], c, Vec::new(), PrimKind::Points);
         println!("{n} points (the same file pyrender draws):");
-        for (label, shape, size) in [
-            ("cubes, edge 4 mm (~1.1 px at 4 m)", SplatShape::Cube, SplatSize::World(0.004)),
-            ("cubes, edge 1 cm", SplatShape::Cube, SplatSize::World(0.01)),
-            ("squares, 1 px", SplatShape::Square, SplatSize::Pixels(1.0)),
+        for (label, shape, size, min_px) in [
+            ("cubes, edge 4 mm (~1.1 px at 4 m)", SplatShape::Cube, SplatSize::World(0.004), 1.0),
+            ("cubes, edge 4 mm, true size (min_px 0)", SplatShape::Cube, SplatSize::World(0.004), 0.0),
+            ("cubes, edge 1 cm", SplatShape::Cube, SplatSize::World(0.01), 1.0),
+            ("squares, 1 px", SplatShape::Square, SplatSize::Pixels(1.0), 1.0),
         ] {
-            let s = RenderSettings { splat: SplatSettings { shape, size, min_px: 1.0 }, ..Default::default() };
+            let s = RenderSettings { splat: SplatSettings { shape, size, min_px }, ..Default::default() };
             line(label, per_image(&pts, &cams, &s, 3));
         }
     }
