@@ -90,14 +90,25 @@ fn input_files(m: &Manifest) -> Result<Vec<PathBuf>, Error> {
     let mut out = Vec::new();
     for (name, s) in &m.sources {
         match s.kind() {
-            Some((SourceKind::PlySequence, spec)) => {
+            Some((kind, spec)) if kind.is_sequence() => {
                 let frames = s.frames().cloned().unwrap_or_default();
                 let seq = sequence::resolve(&m.dir, spec, &frames).map_err(|source| Error::Scene {
                     manifest: m.path.clone(),
                     source: Box::new(crate::scene::Error::Sequence { name: name.clone(), source }),
                     hint: "",
                 })?;
-                out.extend(seq.into_iter().map(|f| f.path));
+                for f in seq {
+                    // A mesh frame's MTL files and textures are inputs too.
+                    if kind == SourceKind::MeshSequence {
+                        let deps = crate::scene::source::mesh_frame_deps(&f.path).map_err(|e| Error::Scene {
+                            manifest: m.path.clone(),
+                            source: Box::new(e),
+                            hint: "",
+                        })?;
+                        out.extend(deps);
+                    }
+                    out.push(f.path);
+                }
             }
             Some((_, path)) => out.push(m.resolve(path)),
             None => {}

@@ -67,7 +67,7 @@ pub fn run(
             SourceData::Static(_) => {
                 let _ = writeln!(out, "  static mesh");
             }
-            SourceData::Sequence(frames) => {
+            SourceData::Sequence(frames) | SourceData::MeshSequence(frames) => {
                 let _ = writeln!(
                     out,
                     "  files: {} … {}",

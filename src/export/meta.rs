@@ -26,10 +26,16 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            json!({
+            let mut v = json!({
                 "name": s.name,
                 "world_from_source": super::rows(&x.scene.world_from_source(i).as_dmat4()),
-            })
+            });
+            if matches!(s.data, crate::scene::SourceData::MeshSequence(_)) {
+                // Nothing relates a vertex of one frame to a vertex of the next.
+                v["topology"] =
+                    json!("per frame: a mesh sequence may change topology every frame; no temporal correspondence");
+            }
+            v
         })
         .collect();
     // Image entries: every file of each image, keyed by pass, as placed by the writer.

@@ -315,7 +315,7 @@ fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut 
                 );
             }
         }
-        SourceKind::PlySequence => {
+        SourceKind::PlySequence | SourceKind::MeshSequence => {
             if produced.contains(&after::lexical(&dir.join(p.get_ref()))) {
                 return;
             }
@@ -391,12 +391,14 @@ fn point_output_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<D
         Some(s) => m.sources.get(s.get_ref()).into_iter().collect(),
         None => m.sources.values().collect(),
     };
-    let sequence = sources.iter().any(|s| s.kind().is_some_and(|(k, _)| k == SourceKind::PlySequence));
+    let sequence = sources.iter().any(|s| s.kind().is_some_and(|(k, _)| k.is_sequence()));
     let span = Some(out.writer.span());
     if out.correspondence == Some(true) && sequence {
         diags.push(
-            Diagnostic::error(format!("output `{name}`: `correspondence` needs mesh sources"), span.clone())
-                .with_help("a PLY sequence has no fixed surface to track; sample one source with `source = \"…\"`"),
+            Diagnostic::error(format!("output `{name}`: `correspondence` needs mesh sources"), span.clone()).with_help(
+                "a PLY or mesh sequence has no fixed surface to track (its points or topology change every \
+                     frame); sample one mesh source with `source = \"…\"`",
+            ),
         );
     }
     let tracked = out.correspondence.unwrap_or(!sequence);

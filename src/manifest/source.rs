@@ -1,4 +1,5 @@
-//! `[source.NAME]`: where geometry comes from (animated glTF, static mesh, PLY point-cloud sequence).
+//! `[source.NAME]`: where geometry comes from (animated glTF, static mesh, PLY point-cloud sequence, mesh
+//! sequence).
 
 use serde::Deserialize;
 use toml::Spanned;
@@ -7,7 +8,7 @@ use super::diag::Diagnostic;
 use super::frames::Frames;
 use super::transform::Transform;
 
-/// One `[source.NAME]` table. Exactly one of `gltf`, `mesh`, `ply_sequence` is set.
+/// One `[source.NAME]` table. Exactly one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence` is set.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Source {
@@ -17,6 +18,9 @@ pub struct Source {
     pub(super) mesh: Option<Spanned<String>>,
     /// A PLY sequence: a pattern with `{frame}` / `{frame:04}`, or a glob (`*`, `?`, `[…]`).
     pub(super) ply_sequence: Option<Spanned<String>>,
+    /// A mesh sequence, one file per frame (OBJ with MTL and textures, textured PLY, or glTF), with the same
+    /// patterns and globs as `ply_sequence`; the topology may change every frame.
+    pub(super) mesh_sequence: Option<Spanned<String>>,
     /// Which glTF animation clips play: an index, a name, a list of them, or `"all"`. Default: the first clip.
     pub(super) animation: Option<Spanned<AnimationSel>>,
     /// Which glTF scene (default: the file's default scene, else all scenes).
@@ -36,6 +40,15 @@ pub enum SourceKind {
     Mesh,
     /// `ply_sequence = …`
     PlySequence,
+    /// `mesh_sequence = …`
+    MeshSequence,
+}
+
+impl SourceKind {
+    /// Whether the source is one file per frame.
+    pub fn is_sequence(self) -> bool {
+        matches!(self, SourceKind::PlySequence | SourceKind::MeshSequence)
+    }
 }
 
 /// Clip selection: `animation = 0`, `"Walk"`, `[0, "Wave"]` or `"all"`.
@@ -63,25 +76,28 @@ pub enum ClipRef {
 impl Source {
     /// The kind and the path string, if exactly one kind is set.
     pub(super) fn kind_spanned(&self) -> Option<(SourceKind, &Spanned<String>)> {
-        match (&self.gltf, &self.mesh, &self.ply_sequence) {
-            (Some(p), None, None) => Some((SourceKind::Gltf, p)),
-            (None, Some(p), None) => Some((SourceKind::Mesh, p)),
-            (None, None, Some(p)) => Some((SourceKind::PlySequence, p)),
+        match (&self.gltf, &self.mesh, &self.ply_sequence, &self.mesh_sequence) {
+            (Some(p), None, None, None) => Some((SourceKind::Gltf, p)),
+            (None, Some(p), None, None) => Some((SourceKind::Mesh, p)),
+            (None, None, Some(p), None) => Some((SourceKind::PlySequence, p)),
+            (None, None, None, Some(p)) => Some((SourceKind::MeshSequence, p)),
             _ => None,
         }
     }
 
     pub(crate) fn validate(&self, name: &str, table_span: std::ops::Range<usize>, diags: &mut Vec<Diagnostic>) {
-        let set: Vec<&Spanned<String>> = [&self.gltf, &self.mesh, &self.ply_sequence].into_iter().flatten().collect();
+        let set: Vec<&Spanned<String>> =
+            [&self.gltf, &self.mesh, &self.ply_sequence, &self.mesh_sequence].into_iter().flatten().collect();
         match set.len() {
             0 => diags.push(
-                Diagnostic::error(format!("source `{name}` names no file"), Some(table_span.clone()))
-                    .with_help("add one of `gltf = \"…\"`, `mesh = \"…\"` or `ply_sequence = \"…\"`"),
+                Diagnostic::error(format!("source `{name}` names no file"), Some(table_span.clone())).with_help(
+                    "add one of `gltf = \"…\"`, `mesh = \"…\"`, `ply_sequence = \"…\"` or `mesh_sequence = \"…\"`",
+                ),
             ),
             1 => {}
             _ => diags.push(
                 Diagnostic::error(
-                    format!("source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`"),
+                    format!("source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence`"),
                     Some(set[1].span()),
                 )
                 .with_help("one source is one file or sequence; declare another `[source.…]` for the second"),
@@ -104,11 +120,11 @@ impl Source {
                     );
                 }
             }
-            if kind == SourceKind::PlySequence {
+            if kind.is_sequence() {
                 if let Some(f) = &self.frames {
                     if f.get_ref().count.is_some()
                         && f.get_ref().start.is_none()
-                        && is_pattern(self.ply_sequence.as_ref().unwrap().get_ref())
+                        && self.kind().is_some_and(|(_, p)| is_pattern(p))
                     {
                         diags.push(
                             Diagnostic::error("a `{frame}` pattern needs `start` with `count`", Some(f.span()))
@@ -157,6 +173,11 @@ impl Source {
     /// The PLY sequence pattern or glob, when given.
     pub fn ply_sequence(&self) -> Option<&str> {
         self.ply_sequence.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The mesh sequence pattern or glob, when given.
+    pub fn mesh_sequence(&self) -> Option<&str> {
+        self.mesh_sequence.as_ref().map(|f| f.get_ref().as_str())
     }
 
     /// The animation selection, when given.

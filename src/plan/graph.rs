@@ -294,7 +294,8 @@ fn point_settings(m: &Manifest, scene: &Scene, plan: &Plan, name: &str, out: &Ou
         Some((i, _)) => vec![&scene.sources[*i]],
         None => scene.sources.iter().collect(),
     };
-    let fixed_topology = sampled.iter().all(|s| !matches!(s.data, SourceData::Sequence(_)));
+    let fixed_topology =
+        sampled.iter().all(|s| !matches!(s.data, SourceData::Sequence(_) | SourceData::MeshSequence(_)));
     let correspondence = out.correspondence.unwrap_or(fixed_topology && plan.frames > 1);
     let invalid = |why: &str| Error::PointSettings { output: name.into(), why: why.into() };
     if correspondence && !fixed_topology {

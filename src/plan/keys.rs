@@ -22,6 +22,20 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache) -> Result<Vec<Digest>, Error>
                     Ok(key("frame ply", &[world, &d.0]))
                 })
                 .collect::<Result<Vec<_>, Error>>()?,
+            SourceData::MeshSequence(files) => files
+                .iter()
+                .map(|f| {
+                    // The frame's file and what it reads besides (MTL files, textures), each by content.
+                    let mut parts: Vec<Digest> = Vec::new();
+                    let deps = crate::scene::source::mesh_frame_deps(&f.path)?;
+                    for p in std::iter::once(&f.path).chain(&deps) {
+                        parts.push(stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e })?);
+                    }
+                    let mut bytes: Vec<&[u8]> = vec![world];
+                    bytes.extend(parts.iter().map(|d| &d.0[..]));
+                    Ok(key("frame mesh", &bytes))
+                })
+                .collect::<Result<Vec<_>, Error>>()?,
             SourceData::Gltf { .. } | SourceData::Static(_) => {
                 let n = src.frame_count();
                 let mut keys = Vec::with_capacity(n);

@@ -4,6 +4,7 @@
 
 pub mod gltf;
 pub mod material;
+pub mod obj;
 pub mod ply;
 pub mod posed;
 pub mod source;
@@ -50,6 +51,16 @@ pub enum Error {
         /// What is wrong.
         #[source]
         source: ply::PlyError,
+    },
+    /// A mesh frame (OBJ, its MTL, a texture, a textured PLY) is malformed or refers to a file that is missing.
+    #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Mesh {
+        /// The file.
+        path: PathBuf,
+        /// The 1-based line, when the problem has one.
+        line: Option<usize>,
+        /// What is wrong.
+        message: String,
     },
     /// A source's settings do not fit its file (an animation it lacks, a sequence with no frames).
     #[error("source `{name}`: {message}")]
@@ -104,10 +115,19 @@ pub struct Poser {
 
 /// The number of frames a build of `m` has (the longest source's), from loading each source without posing it:
 /// what `vvgen check` needs to judge the consumers' frame-count limits before anything renders.
+///
+/// A mesh sequence's frames are scanned too (an OBJ's face indices, its MTL files and textures; a PLY's
+/// texture), as the build's keying will, so their errors name file and line before anything renders.
 pub fn frame_count(m: &Manifest) -> Result<usize, Error> {
     let mut frames = 0;
     for (name, s) in &m.sources {
-        frames = frames.max(LoadedSource::load(name, s, &m.dir)?.frame_count());
+        let src = LoadedSource::load(name, s, &m.dir)?;
+        if let SourceData::MeshSequence(files) = &src.data {
+            for f in files {
+                source::mesh_frame_deps(&f.path)?;
+            }
+        }
+        frames = frames.max(src.frame_count());
     }
     Ok(frames)
 }

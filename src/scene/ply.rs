@@ -252,6 +252,8 @@ pub struct PlyData {
     pub normals: Option<Vec<[f32; 3]>>,
     /// Vertex colours as sRGB bytes (float colours in 0..1 are converted), when the file has them.
     pub colors: Option<Vec<[u8; 4]>>,
+    /// Per-vertex texture coordinates (`texture_u`/`texture_v`, `s`/`t` or `u`/`v`; v up), when the file has them.
+    pub uvs: Option<Vec<[f32; 2]>>,
     /// Triangles (polygons fan-triangulated), indices into `positions`.
     pub triangles: Vec<u32>,
     /// Header comments.
@@ -262,6 +264,7 @@ const SLOT_X: usize = 0;
 const SLOT_NX: usize = 3;
 const SLOT_R: usize = 6;
 const SLOT_A: usize = 9;
+const SLOT_U: usize = 10;
 const NO_SLOT: usize = usize::MAX;
 
 fn slot(name: &str) -> usize {
@@ -276,6 +279,8 @@ fn slot(name: &str) -> usize {
         "green" | "g" | "diffuse_green" => 7,
         "blue" | "b" | "diffuse_blue" => 8,
         "alpha" | "a" | "diffuse_alpha" => 9,
+        "texture_u" | "s" | "u" => 10,
+        "texture_v" | "t" | "v" => 11,
         _ => NO_SLOT,
     }
 }
@@ -444,6 +449,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
     }
     let has_n = has(SLOT_NX) && has(SLOT_NX + 1) && has(SLOT_NX + 2);
     let has_c = has(SLOT_R) && has(SLOT_R + 1) && has(SLOT_R + 2);
+    let has_uv = has(SLOT_U) && has(SLOT_U + 1);
     // Float colours are 0..1; integer colours scale by their type's maximum.
     let color_scale = el
         .props
@@ -460,6 +466,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
     out.positions = Vec::with_capacity(n);
     let mut normals = Vec::with_capacity(if has_n { n } else { 0 });
     let mut colors = Vec::with_capacity(if has_c { n } else { 0 });
+    let mut uvs = Vec::with_capacity(if has_uv { n } else { 0 });
     let fixed: Option<Vec<usize>> =
         (c.format != Format::Ascii && el.props.iter().all(|p| p.list.is_none())).then(|| {
             let mut off = 0;
@@ -472,7 +479,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
                 })
                 .collect()
         });
-    let mut v = [0f64; 10];
+    let mut v = [0f64; 12];
     v[SLOT_A] = 255.0;
     if let Some(offsets) = fixed {
         // Fixed-size rows: one bounds check for the whole element, then straight reads.
@@ -510,7 +517,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         let xyz = group(SLOT_X, Scalar::F32);
         let nxyz = if has_n { group(SLOT_NX, Scalar::F32) } else { None };
         let rgb = if has_c && !slots.contains(&SLOT_A) { group(SLOT_R, Scalar::U8) } else { None };
-        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some())) {
+        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv) {
             out.positions = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
             if let Some(o) = nxyz {
                 normals = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
@@ -529,6 +536,9 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
                 }
                 if has_c {
                     colors.push(to_rgba8(&v, color_scale));
+                }
+                if has_uv {
+                    uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
                 }
             }
         }
@@ -558,15 +568,19 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
             if has_c {
                 colors.push(to_rgba8(&v, color_scale));
             }
+            if has_uv {
+                uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
+            }
         }
     }
     out.normals = has_n.then_some(normals);
+    out.uvs = has_uv.then_some(uvs);
     out.colors = has_c.then_some(colors);
     Ok(())
 }
 
 #[inline]
-fn to_rgba8(v: &[f64; 10], scale: f64) -> [u8; 4] {
+fn to_rgba8(v: &[f64; 12], scale: f64) -> [u8; 4] {
     let q = |x: f64| (x * scale).round().clamp(0.0, 255.0) as u8;
     [q(v[6]), q(v[7]), q(v[8]), q(v[9])]
 }

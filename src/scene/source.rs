@@ -30,6 +30,9 @@ pub enum SourceData {
     Static(PosedScene),
     /// A PLY sequence, read frame by frame.
     Sequence(Vec<SequenceFrame>),
+    /// A mesh sequence (OBJ + MTL, textured PLY, or glTF per frame), read frame by frame; the topology may change
+    /// every frame.
+    MeshSequence(Vec<SequenceFrame>),
 }
 
 /// A source with its name.
@@ -78,13 +81,18 @@ impl LoadedSource {
                 asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
                 SourceData::Static(posed)
             }
-            SourceKind::PlySequence => {
+            SourceKind::PlySequence | SourceKind::MeshSequence => {
                 let frames = s.frames().cloned().unwrap_or_default();
                 let sequence = sequence::resolve(dir, path, &frames)
                     .map_err(|source| Error::Sequence { name: name.to_string(), source })?;
-                SourceData::Sequence(sequence)
+                if kind == SourceKind::PlySequence {
+                    SourceData::Sequence(sequence)
+                } else {
+                    SourceData::MeshSequence(sequence)
+                }
             }
         };
+        // PLY is a scanner's format (Z up); OBJ and glTF are Y up.
         let default_up = if is_ply || kind == SourceKind::PlySequence { UpAxis::Z } else { UpAxis::Y };
         Ok(LoadedSource { name: name.to_string(), data, default_up })
     }
@@ -93,7 +101,9 @@ impl LoadedSource {
     /// (whose per-frame content is the posed geometry, hashed by [`PosedScene::digest`]).
     pub fn content_digest(&self, frame: usize, file: &std::path::Path) -> Result<blake3::Hash, Error> {
         let path = match &self.data {
-            SourceData::Sequence(frames) => frames[frame.min(frames.len() - 1)].path.as_path(),
+            SourceData::Sequence(frames) | SourceData::MeshSequence(frames) => {
+                frames[frame.min(frames.len() - 1)].path.as_path()
+            }
             _ => file,
         };
         let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
@@ -105,7 +115,7 @@ impl LoadedSource {
         match &self.data {
             SourceData::Gltf { times, .. } => times.len(),
             SourceData::Static(_) => 1,
-            SourceData::Sequence(f) => f.len(),
+            SourceData::Sequence(f) | SourceData::MeshSequence(f) => f.len(),
         }
     }
 
@@ -125,6 +135,10 @@ impl LoadedSource {
             SourceData::Sequence(frames) => {
                 let f = &frames[frame.min(frames.len() - 1)];
                 let rest = ply_scene(&f.path)?;
+                transform_into(&rest, post, out);
+            }
+            SourceData::MeshSequence(frames) => {
+                let rest = mesh_frame(&frames[frame.min(frames.len() - 1)].path)?;
                 transform_into(&rest, post, out);
             }
         }
@@ -160,6 +174,57 @@ fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usi
     }
 }
 
+/// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has
+/// `texture_u/v` or `s/t` and a `comment TextureFile`), or glTF posed at rest.
+pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    match ext.as_str() {
+        "obj" => super::obj::scene(path),
+        "ply" => ply_scene(path),
+        _ => {
+            let asset = super::gltf::load(path, None)?;
+            let mut posed = PosedScene {
+                materials: Arc::new(asset.materials.clone()),
+                textures: Arc::clone(&asset.textures),
+                ..Default::default()
+            };
+            asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
+            Ok(posed)
+        }
+    }
+}
+
+/// The files one mesh-sequence frame is read from besides itself (an OBJ's MTL files and textures, a PLY's
+/// `TextureFile`): they key the frame with it.
+pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    match ext.as_str() {
+        "obj" => super::obj::scan(path),
+        "ply" => {
+            let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+            let header = ply::parse_header(&bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
+            Ok(texture_file(&header.comments, path)?.into_iter().collect())
+        }
+        _ => Ok(Vec::new()),
+    }
+}
+
+/// The texture a PLY's `comment TextureFile NAME` names, beside the PLY, checked to exist.
+fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<PathBuf>, Error> {
+    let Some(name) = comments.iter().find_map(|c| c.trim().strip_prefix("TextureFile").map(str::trim)) else {
+        return Ok(None);
+    };
+    let tex = path.parent().unwrap_or(std::path::Path::new(".")).join(name);
+    if !tex.is_file() {
+        return Err(Error::Mesh {
+            path: path.to_path_buf(),
+            line: None,
+            message: format!("`comment TextureFile {name}`: not found ({})", tex.display()),
+        });
+    }
+    Ok(Some(tex))
+}
+
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.
 pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, Error> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
@@ -193,8 +258,21 @@ pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScen
         })
         .unwrap_or_default();
     // Scans rarely have consistent winding: draw both sides.
-    let material = Material { double_sided: true, ..Material::default() };
-    Ok(PosedScene::single(kind, positions, normals, colors, d.triangles, material))
+    let mut material = Material { double_sided: true, ..Material::default() };
+    // A textured mesh (MeshLab's convention: per-vertex texture_u/v or s/t, `comment TextureFile`).
+    let texture = match (&d.uvs, kind) {
+        (Some(_), PrimKind::Triangles) => texture_file(&d.comments, path)?,
+        _ => None,
+    };
+    let mut scene = PosedScene::single(kind, positions, normals, colors, d.triangles, material.clone());
+    if let (Some(tex), Some(uvs)) = (texture, &d.uvs) {
+        material.base_color_texture = Some(super::material::TextureRef::new(0));
+        scene.materials = Arc::new(vec![material]);
+        scene.textures = Arc::new(vec![super::obj::texture(&tex)?]);
+        // v runs up from the bottom row; textures are stored top row first.
+        scene.primitives[0].uvs = Arc::new(uvs.iter().map(|t| glam::Vec2::new(t[0], 1.0 - t[1])).collect());
+    }
+    Ok(scene)
 }
 
 /// Copies `rest` into `out` with `m` applied, reusing `out`'s buffers.

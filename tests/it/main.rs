@@ -9,6 +9,7 @@ mod engine;
 mod fuzz;
 mod graph;
 mod manifest;
+mod meshseq;
 mod ply;
 mod points;
 mod render;

@@ -1,0 +1,187 @@
+//! Wavefront OBJ frames (with MTL materials and `map_Kd` textures, vertex colours where present), as captured
+//! volumetric video is distributed: one textured mesh per frame, the topology changing every frame.
+//!
+//! Parsing is `tobj`'s. Before it runs, one pass over the lines ([`scan`]) checks what tobj would report without
+//! a place (a face index out of range, an `mtllib` or texture that does not exist) and names the file and line;
+//! the same pass lists the files a frame depends on (its MTL files and textures), which key the frame.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::material::{srgb_to_linear, Material, Texture, TextureRef};
+use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use super::Error;
+
+/// Largest texture side accepted (a corrupt header should not allocate gigabytes).
+const MAX_TEXTURE_SIDE: u32 = 16_384;
+
+fn at(path: &Path, line: usize, message: String) -> Error {
+    Error::Mesh { path: path.to_path_buf(), line: Some(line), message }
+}
+
+/// Checks an OBJ's face indices, `mtllib` files and their `map_Kd` textures, naming file and line of the first
+/// problem; returns the files the OBJ depends on (MTL files, then textures), in the order named.
+pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
+    let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let text = String::from_utf8_lossy(&text);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
+    let mut deps = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => v += 1,
+            Some("vt") => vt += 1,
+            Some("vn") => vn += 1,
+            Some("f") => {
+                for corner in words {
+                    for (k, part) in corner.split('/').enumerate() {
+                        if part.is_empty() {
+                            continue;
+                        }
+                        let (what, n) = match k {
+                            0 => ("vertex", v),
+                            1 => ("texture coordinate", vt),
+                            _ => ("normal", vn),
+                        };
+                        let idx: i64 = part.parse().map_err(|_| {
+                            at(path, line_no, format!("face corner `{corner}`: `{part}` is not an index"))
+                        })?;
+                        // 1-based, or negative: relative to the last one defined.
+                        let resolved = if idx < 0 { n + idx + 1 } else { idx };
+                        if idx == 0 || resolved < 1 || resolved > n {
+                            return Err(at(
+                                path,
+                                line_no,
+                                format!(
+                                    "face corner `{corner}` refers to {what} {idx}, but only {n} are defined above"
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+            Some("mtllib") => {
+                let name = line.trim_start()["mtllib".len()..].trim();
+                let mtl = dir.join(name);
+                if !mtl.is_file() {
+                    return Err(at(path, line_no, format!("material library `{name}` not found ({})", mtl.display())));
+                }
+                deps.push(mtl.clone());
+                deps.extend(scan_mtl(&mtl)?);
+            }
+            _ => {}
+        }
+    }
+    Ok(deps)
+}
+
+/// The `map_Kd` textures of an MTL file, each checked to exist.
+fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
+    let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let text = String::from_utf8_lossy(&text);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if words.next() == Some("map_Kd") {
+            // Options (`-s 1 1 1`, …) come first; the file name is the last word.
+            let Some(name) = words.next_back() else {
+                return Err(at(path, i + 1, "`map_Kd` names no file".into()));
+            };
+            let tex = dir.join(name);
+            if !tex.is_file() {
+                return Err(at(path, i + 1, format!("texture `{name}` not found ({})", tex.display())));
+            }
+            out.push(tex);
+        }
+    }
+    Ok(out)
+}
+
+/// An OBJ frame as a posed scene in source space: one primitive per object, one material per MTL material (base
+/// colour `Kd`, texture `map_Kd`), drawn double-sided (captures rarely wind consistently).
+pub fn scene(path: &Path) -> Result<PosedScene, Error> {
+    scan(path)?;
+    let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
+    let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
+    let (models, materials) = tobj::load_obj(path, &options).map_err(|e| fail(e.to_string()))?;
+    let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut textures: Vec<Texture> = Vec::new();
+    let mut mats: Vec<Material> = Vec::new();
+    for m in &materials {
+        let kd = m.diffuse.unwrap_or([1.0, 1.0, 1.0]);
+        let mut mat = Material {
+            base_color: Vec4::new(kd[0], kd[1], kd[2], m.dissolve.unwrap_or(1.0)),
+            double_sided: true,
+            ..Material::default()
+        };
+        if let Some(name) = &m.diffuse_texture {
+            let name = name.split_whitespace().next_back().unwrap_or(name);
+            textures.push(texture(&dir.join(name))?);
+            mat.base_color_texture = Some(TextureRef::new(textures.len() as u32 - 1));
+        }
+        mats.push(mat);
+    }
+    // Faces without a material.
+    let plain = mats.len() as u32;
+    mats.push(Material { double_sided: true, ..Material::default() });
+    let mut primitives = Vec::new();
+    for (object, model) in models.iter().enumerate() {
+        let m = &model.mesh;
+        let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(fail(format!("object `{}` has a vertex that is not finite", model.name)));
+        }
+        let indices = m.indices.clone();
+        let normals = if m.normals.len() == m.positions.len() {
+            m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or_zero()).collect()
+        } else {
+            super::gltf::load::smooth_normals(&positions, &indices)
+        };
+        // OBJ's v runs up from the bottom row; textures here are stored top row first.
+        let uvs: Vec<Vec2> = if m.texcoords.len() / 2 == positions.len() {
+            m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], 1.0 - t[1])).collect()
+        } else {
+            Vec::new()
+        };
+        let colors: Vec<Vec4> = if m.vertex_color.len() == m.positions.len() {
+            m.vertex_color
+                .chunks_exact(3)
+                .map(|c| Vec4::new(srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]), 1.0))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        primitives.push(PosedPrimitive {
+            kind: if indices.is_empty() { PrimKind::Points } else { PrimKind::Triangles },
+            positions,
+            normals,
+            uvs: Arc::new(uvs),
+            colors: Arc::new(colors),
+            indices: Arc::new(indices),
+            material: m.material_id.map_or(plain, |i| i as u32),
+            object: object as u32,
+        });
+    }
+    Ok(PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures) })
+}
+
+/// An image file as an sRGB base-colour texture.
+pub fn texture(path: &Path) -> Result<Texture, Error> {
+    let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?
+        .with_guessed_format()
+        .map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_TEXTURE_SIDE);
+    limits.max_image_height = Some(MAX_TEXTURE_SIDE);
+    reader.limits(limits);
+    let img = reader.decode().map_err(|e| fail(format!("cannot decode the texture: {e}")))?.into_rgba8();
+    Ok(Texture::new(img.width(), img.height(), img.into_raw(), true))
+}

@@ -1,0 +1,203 @@
+//! Mesh-sequence sources: one textured mesh per frame (OBJ + MTL + texture, textured PLY), the topology changing
+//! every frame; keyed per frame by the frame's files; bad input named by file and line.
+
+use std::path::Path;
+use std::process::Command;
+
+use vvgen::build::{build, Options, Silent};
+use vvgen::plan::actions::Kind;
+
+/// A 2×2 texture: red, green (top row), blue, white (bottom row).
+fn texture_png(path: &Path) {
+    let img = image::RgbaImage::from_raw(
+        2,
+        2,
+        [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 255, 255]].concat(),
+    )
+    .unwrap();
+    img.save(path).unwrap();
+}
+
+/// Frame `f`: a unit quad in the XY plane facing +Z (y up), shifted by `0.1·f` along x, textured over the whole
+/// texture; odd frames add a triangle (the topology changes).
+fn obj(f: usize) -> String {
+    let x = 0.1 * f as f64;
+    let mut s = String::from("# frame\nmtllib skin.mtl\n");
+    for (px, py) in [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)] {
+        s.push_str(&format!("v {} {py} 0\n", px + x));
+    }
+    s.push_str("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl skin\nf 1/1 2/2 3/3 4/4\n");
+    if f % 2 == 1 {
+        s.push_str("v 0.6 0.6 0\nv 0.9 0.6 0\nv 0.75 0.9 0\nf 5/1 6/2 7/3\n");
+    }
+    s
+}
+
+fn write_sequence(d: &Path) {
+    std::fs::create_dir_all(d.join("seq")).unwrap();
+    texture_png(&d.join("seq/tex.png"));
+    std::fs::write(d.join("seq/skin.mtl"), "newmtl skin\nKd 1 1 1\nmap_Kd tex.png\n").unwrap();
+    for f in 0..3 {
+        std::fs::write(d.join(format!("seq/f_{f:03}.obj")), obj(f)).unwrap();
+    }
+}
+
+fn manifest(source: &str) -> String {
+    format!(
+        "[dataset]\nname = \"ms\"\nout = \"out\"\ncache = \"cache\"\n\
+         [source.cap]\n{source}\nframes = {{ start = 0, end = 2, fps = 10 }}\n\
+         [render]\nresolution = [48, 48]\nsamples = 4\n\
+         [rig.front]\nkind = \"explicit\"\nposes = [{{ position = [0.1, -3.0, 0.0] }}]\n\
+         [split.train]\nrig = \"front\"\n\
+         [output.d]\nwriter = \"dnerf\"\ninit_points = 0\n\
+         [output.p]\nwriter = \"ply-sequence\"\npoints = 400\n"
+    )
+}
+
+fn run(d: &Path) -> vvgen::build::Report {
+    let m = crate::common::load(&d.join("m.toml"));
+    build(&m, &d.join("cache"), Options::default(), &Silent).unwrap()
+}
+
+fn pixel(d: &Path, rel: &str, x: u32, y: u32) -> [u8; 4] {
+    image::open(d.join(rel)).unwrap().to_rgba8().get_pixel(x, y).0
+}
+
+#[test]
+fn an_obj_sequence_renders_its_textures_and_rebuilds_per_frame() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    write_sequence(d);
+    std::fs::write(d.join("m.toml"), manifest("mesh_sequence = \"seq/f_{frame:03}.obj\"")).unwrap();
+    let r = run(d);
+    assert_eq!(r.ran(Kind::RenderPass), 3);
+    // OBJ is y up; the world is z up: the quad stands facing the camera at -y. Its top half is the texture's top
+    // row (red left, green right), its bottom half the bottom row (blue, white).
+    let root = "out/ms_dnerf/train";
+    let quarter = |f: usize, x: u32, y: u32| pixel(d, &format!("{root}/r_{f:04}.png"), x, y);
+    let (tl, tr, bl, br) = (quarter(0, 18, 18), quarter(0, 29, 18), quarter(0, 18, 29), quarter(0, 29, 29));
+    assert!(tl[0] > 200 && tl[1] < 60 && tl[2] < 60 && tl[3] == 255, "top left is red: {tl:?}");
+    assert!(tr[1] > 200 && tr[0] < 60, "top right is green: {tr:?}");
+    assert!(bl[2] > 200 && bl[0] < 60, "bottom left is blue: {bl:?}");
+    assert!(br.iter().all(|&c| c > 200), "bottom right is white: {br:?}");
+    // The topology changes every frame: frame 1 has a triangle more; the point samples follow each frame.
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("out/ms_points").join(vvgen::export::META)).unwrap()).unwrap();
+    assert!(meta["sources"][0]["topology"].as_str().unwrap().contains("no temporal correspondence"));
+    assert!(d.join("out/ms_points/ms_0002.ply").is_file());
+    // Keys are the frame's files: editing frame 2 re-renders frame 2 alone; editing the shared texture, every frame.
+    std::fs::write(d.join("seq/f_002.obj"), obj(2).replace("usemtl skin\n", "usemtl skin\ns off\n") + "v 9 9 9\n")
+        .unwrap();
+    let r = run(d);
+    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::PointFrame)), (1, 1));
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([10, 20, 30, 255])).save(d.join("seq/tex.png")).unwrap();
+    assert_eq!(run(d).ran(Kind::RenderPass), 3);
+    // Correspondence cannot hold across topology changes: refused.
+    let with = manifest("mesh_sequence = \"seq/f_{frame:03}.obj\"")
+        .replace("points = 400\n", "points = 400\ncorrespondence = true\n");
+    let errors = vvgen::manifest::parse(&with, &d.join("m.toml")).unwrap_err();
+    assert!(errors.render(false).contains("`correspondence` needs mesh sources"), "{}", errors.render(false));
+}
+
+#[test]
+fn a_textured_ply_sequence_reads_texture_coordinates_and_its_texture_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::create_dir_all(d.join("seq")).unwrap();
+    texture_png(&d.join("seq/tex.png"));
+    for f in 0..3 {
+        // MeshLab's convention: per-vertex texture_u/texture_v (v up), `comment TextureFile`. Z up.
+        let mut s = String::from("ply\nformat ascii 1.0\ncomment TextureFile tex.png\nelement vertex 4\n");
+        s.push_str("property float x\nproperty float y\nproperty float z\nproperty float texture_u\nproperty float texture_v\n");
+        s.push_str("element face 1\nproperty list uchar int vertex_indices\nend_header\n");
+        for (x, z, u, v) in [(-0.5, -0.5, 0, 0), (0.5, -0.5, 1, 0), (0.5, 0.5, 1, 1), (-0.5, 0.5, 0, 1)] {
+            s.push_str(&format!("{} 0 {z} {u} {v}\n", x + 0.1 * f as f64));
+        }
+        s.push_str("4 0 1 2 3\n");
+        std::fs::write(d.join(format!("seq/f_{f:03}.ply")), s).unwrap();
+    }
+    std::fs::write(d.join("m.toml"), manifest("mesh_sequence = \"seq/f_{frame:03}.ply\"")).unwrap();
+    run(d);
+    let tl = pixel(d, "out/ms_dnerf/train/r_0000.png", 18, 18);
+    let br = pixel(d, "out/ms_dnerf/train/r_0000.png", 29, 29);
+    assert!(tl[0] > 200 && tl[1] < 60 && tl[2] < 60, "top left is red: {tl:?}");
+    assert!(br.iter().all(|&c| c > 200), "bottom right is white: {br:?}");
+}
+
+/// A bad-input case: what, how the fixture is damaged, what the error says.
+type Case = (&'static str, fn(&Path), &'static str);
+
+/// Bad mesh frames: `check` names the file and line (and `build` refuses the same way, before rendering).
+#[test]
+fn bad_mesh_frames_are_named_by_file_and_line() {
+    let cases: [Case; 4] = [
+        (
+            "a missing MTL",
+            |d| std::fs::remove_file(d.join("seq/skin.mtl")).unwrap(),
+            "f_000.obj:2: material library `skin.mtl` not found",
+        ),
+        (
+            "a missing texture",
+            |d| std::fs::remove_file(d.join("seq/tex.png")).unwrap(),
+            "skin.mtl:3: texture `tex.png` not found",
+        ),
+        (
+            "a face index out of range",
+            |d| std::fs::write(d.join("seq/f_001.obj"), obj(1).replace("f 5/1 6/2 7/3", "f 5/1 6/2 17/3")).unwrap(),
+            "f_001.obj:16: face corner `17/3` refers to vertex 17, but only 7 are defined above",
+        ),
+        (
+            "an unreadable texture",
+            |d| std::fs::write(d.join("seq/tex.png"), b"not a png").unwrap(),
+            "tex.png: cannot decode the texture",
+        ),
+    ];
+    for (what, damage, says) in cases {
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        write_sequence(d);
+        std::fs::write(d.join("m.toml"), manifest("mesh_sequence = \"seq/f_{frame:03}.obj\"")).unwrap();
+        damage(d);
+        let check =
+            Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["check", "m.toml"]).output().unwrap();
+        let err = String::from_utf8_lossy(&check.stderr);
+        if what != "an unreadable texture" {
+            // Decoding is the renderer's: the header scan cannot tell a broken PNG.
+            assert_eq!(check.status.code(), Some(2), "{what}: {err}");
+            assert!(err.contains(says), "{what}: {err}");
+        }
+        let out =
+            Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["-q", "build", "m.toml"]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{what}: {err}");
+        assert!(err.contains(says), "{what}: {err}");
+        assert!(!d.join("out/ms_dnerf/train").exists(), "{what}: nothing is rendered");
+    }
+}
+
+#[test]
+fn a_gltf_per_frame_sequence_builds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::create_dir_all(d.join("seq")).unwrap();
+    for f in 0..3 {
+        // The triangle at rest (a mesh frame is posed at t = 0), a different size each frame.
+        let gltf = crate::common::animated_triangle(0.3).replace(
+            "\"nodes\": [{\"mesh\": 0}]",
+            &format!("\"nodes\": [{{\"mesh\": 0, \"scale\": [{s}, {s}, {s}]}}]", s = 1.0 + f as f64),
+        );
+        std::fs::write(d.join(format!("seq/f_{f:03}.gltf")), gltf).unwrap();
+    }
+    std::fs::write(
+        d.join("m.toml"),
+        manifest("mesh_sequence = \"seq/f_*.gltf\"").replace("frames = { start = 0, end = 2, fps = 10 }\n", ""),
+    )
+    .unwrap();
+    let r = run(d);
+    assert_eq!(r.ran(Kind::RenderPass), 3);
+    let covered = |f: usize| {
+        let img = image::open(d.join(format!("out/ms_dnerf/train/r_{f:04}.png"))).unwrap().to_rgba8();
+        img.pixels().filter(|p| p[3] > 0).count()
+    };
+    assert!(covered(0) > 20 && covered(2) > 3 * covered(0), "{} {}", covered(0), covered(2));
+}
