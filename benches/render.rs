@@ -200,6 +200,7 @@ fn main() {
             ("cubes, edge 4 mm (~1.1 px at 4 m)", SplatShape::Cube, SplatSize::World(0.004), 1.0),
             ("cubes, edge 4 mm, true size (min_px 0)", SplatShape::Cube, SplatSize::World(0.004), 0.0),
             ("cubes, edge 1 cm", SplatShape::Cube, SplatSize::World(0.01), 1.0),
+            ("surfels, diameter 4 mm", SplatShape::Surfel, SplatSize::World(0.004), 1.0),
             ("squares, 1 px", SplatShape::Square, SplatSize::Pixels(1.0), 1.0),
         ] {
             let s = RenderSettings { splat: SplatSettings { shape, size, min_px }, ..Default::default() };

@@ -215,6 +215,8 @@ pub enum SplatShape {
     Square,
     /// A screen-aligned disk.
     Disk,
+    /// A disk of diameter `size` in the plane of the point's normal (facing the camera without one).
+    Surfel,
 }
 
 /// A directional light.
@@ -270,6 +272,7 @@ impl Render {
             SplatShape::Cube => R::Cube,
             SplatShape::Square => R::Square,
             SplatShape::Disk => R::Disk,
+            SplatShape::Surfel => R::Surfel,
         };
         render::RenderSettings {
             samples: *self.samples.get_ref(),

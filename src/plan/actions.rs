@@ -337,6 +337,7 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
             SplatShape::Cube => "cube",
             SplatShape::Square => "square",
             SplatShape::Disk => "disk",
+            SplatShape::Surfel => "surfel",
         },
     );
     match size {

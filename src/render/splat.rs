@@ -1,6 +1,6 @@
-//! Point splats: screen-aligned squares and disks (one depth per splat), and true 3D cubes, drawn by
-//! intersecting each covered sample's ray with the box (exact silhouette, depth and face per sample, no
-//! triangles).
+//! Point splats: screen-aligned squares and disks (one depth per splat), true 3D cubes, drawn by intersecting
+//! each covered sample's ray with the box (exact silhouette, depth and face per sample, no triangles), and
+//! surfels: disks in the plane of the point's normal, drawn the same way (exact ellipse and depth).
 //!
 //! An 800k-point frame is dominated by per-point overhead and cache misses, so:
 //! - a splat is a small record carrying what drawing needs; colour, normal and object are read from its
@@ -28,6 +28,8 @@ pub enum Shape {
     Square,
     /// A screen-aligned disk.
     Disk,
+    /// A disk in the plane perpendicular to the point's normal (facing the camera where the cloud has none).
+    Surfel,
 }
 
 /// Splat size.
@@ -100,8 +102,10 @@ pub struct Splats<'a> {
     sources: Vec<Source<'a>>,
     /// Each setup chunk's splats, binned by band.
     bins: Vec<Binned<Splat>>,
-    /// Half the edge of a cube splat (`None`: squares or disks).
+    /// Half the edge of a cube splat, or the radius of a surfel (`None`: squares or disks).
     cube: Option<f32>,
+    /// The solid splats are surfels, not cubes.
+    surfel: bool,
     disk: bool,
     /// Sample rows per band.
     band_rows: i64,
@@ -114,6 +118,7 @@ const SETUP_CHUNK: usize = 16384;
 /// bounding box, the size, samples per pixel side, the eye.
 struct Footprint {
     cube: Option<f32>,
+    surfel: bool,
     extent: Vec3,
     size: Size,
     /// Half the minimum footprint, in samples.
@@ -136,7 +141,8 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     let mut out = Splats {
         sources: Vec::new(),
         bins: Vec::new(),
-        cube: (s.shape == Shape::Cube).then(|| half(s.size)),
+        cube: matches!(s.shape, Shape::Cube | Shape::Surfel).then(|| half(s.size)),
+        surfel: s.shape == Shape::Surfel,
         disk: s.shape == Shape::Disk,
         band_rows,
     };
@@ -144,9 +150,19 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     // much tighter than the circumscribed sphere; widened by a hair so that rounding never trims a sample.
     let rot = glam::Mat3::from_mat4(p.w2c).transpose();
     let extent = [rot.x_axis, rot.y_axis, rot.z_axis].map(|row| row.abs().element_sum());
-    let extent = Vec3::from(extent) * out.cube.unwrap_or(0.0) * (1.0 + 1e-4);
+    // A surfel of radius r lies in its bounding sphere: r along every view axis.
+    let extent = if out.surfel { Vec3::ONE } else { Vec3::from(extent) };
+    let extent = extent * out.cube.unwrap_or(0.0) * (1.0 + 1e-4);
     let eye = p.w2c.inverse().w_axis.truncate();
-    let foot = Footprint { cube: out.cube, extent, size: s.size, min_half: 0.5 * s.min_px.max(0.0) * k, k, eye };
+    let foot = Footprint {
+        cube: out.cube,
+        surfel: out.surfel,
+        extent,
+        size: s.size,
+        min_half: 0.5 * s.min_px.max(0.0) * k,
+        k,
+        eye,
+    };
     let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
     let mut first = 0u32;
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
@@ -160,8 +176,10 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
                 // Each splat with its first and last band, computed once for the count and the scatter.
                 scratch.clear();
                 let offset = first + (c * SETUP_CHUNK) as u32;
+                let normals = prim.normals.get(c * SETUP_CHUNK..).unwrap_or_default();
                 for (j, pos) in chunk.iter().enumerate() {
-                    if let Some(sp) = project(*pos, p, &foot, offset + j as u32) {
+                    let normal = normals.get(j).copied().unwrap_or(Vec3::ZERO);
+                    if let Some(sp) = project(*pos, normal, p, &foot, offset + j as u32) {
                         let (y0, y1) = sp.rows(p.size);
                         scratch.push((sp, (y0 / band_rows) as u16, (y1 / band_rows) as u16));
                     }
@@ -178,7 +196,7 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
 
 /// The splat of point `point` at world `pos`, or `None` when it is clipped or falls outside the image.
 #[inline]
-fn project(pos: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Splat> {
+fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Splat> {
     let [fx, fy, cx, cy] = p.f;
     let lim = (p.size.0.max(p.size.1) + 2) as f32;
     let v = p.w2c.transform_point3(pos);
@@ -211,13 +229,21 @@ fn project(pos: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Splat
             // The silhouette holds the inscribed sphere's disk, of radius h·f/z samples; no point is farther
             // than √2/2 samples from a sample centre of its own pixel. A cube whose disk is smaller than that
             // (or than the minimum footprint) can let its pixel's samples miss it.
-            if s.min_half > 0.0 && h * fx * iz < s.min_half.max(std::f32::consts::FRAC_1_SQRT_2) {
+            // A surfel's narrowest screen extent shrinks with the cosine of its tilt from the view ray.
+            let tilt = if s.surfel && normal != Vec3::ZERO {
+                normal.normalize().dot(centre.normalize_or_zero()).abs()
+            } else {
+                1.0
+            };
+            if s.min_half > 0.0 && h * fx * iz * tilt < s.min_half.max(std::f32::consts::FRAC_1_SQRT_2) {
                 // A square of its screen box (at least the minimum) at the cube's near depth, showing the face
                 // turned most towards the eye (against `centre`, which points from the eye).
                 let axis = centre.abs().max_position();
-                let face = 2 * axis as u8 + (centre[axis] < 0.0) as u8;
+                let face = if s.surfel { CLAMPED } else { 2 * axis as u8 + (centre[axis] < 0.0) as u8 };
                 // One fixed-point unit more, so that a centre on a pixel border still covers its own pixel.
-                let r = fixed(s.min_half.max(wx.min(wy))) + 1;
+                // (A surfel's square is as wide as its ellipse's minor axis; a cube's as its screen box.)
+                let width = if s.surfel { h * fx * iz * tilt } else { wx.min(wy) };
+                let r = fixed(s.min_half.max(width)) + 1;
                 let sp = Splat { x, y, rx: r, ry: r, z: near_z, point, centre, small: face };
                 let b = sp.bbox(p.size);
                 return (sp.rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp);
@@ -285,11 +311,18 @@ impl<'a> Splats<'a> {
     pub fn attributes(&self, layer: &Layer, j: usize) -> (Vec4, Vec3, u32) {
         let (s, i) = self.source(layer.point[j]);
         let color = s.base * s.prim.colors.get(i).copied().unwrap_or(Vec4::ONE);
-        let normal = match self.cube {
-            Some(_) => FACES[layer.face[j] as usize],
-            None => s.prim.normals.get(i).copied().unwrap_or(Vec3::ZERO),
+        let normal = match FACES.get(layer.face[j] as usize) {
+            Some(face) if self.cube.is_some() && !self.surfel => *face,
+            _ => s.prim.normals.get(i).copied().unwrap_or(Vec3::ZERO),
         };
         (color, normal, s.prim.object)
+    }
+
+    /// The unit normal of point `i`, when it has one.
+    #[inline]
+    fn normal_of(&self, i: u32) -> Option<Vec3> {
+        let (s, i) = self.source(i);
+        s.prim.normals.get(i).and_then(|n| n.try_normalize())
     }
 
     /// Whether the sample centre (fixed point) is covered by a square or disk splat. Squares are half-open so
@@ -319,6 +352,8 @@ impl<'a> Splats<'a> {
             let b = sp.bbox(p.size);
             let (by0, by1) = (b[1].max(y0), b[3].min(y0 + h - 1));
             if let (Some((rays, half)), WHOLE) = (&rays, sp.small) {
+                // A surfel's plane; without a normal, it faces the eye.
+                let n = if self.surfel { self.normal_of(sp.point).unwrap_or(sp.centre) } else { Vec3::ZERO };
                 for sy in by0..=by1 {
                     for sx in b[0]..=b[2] {
                         let i = ((sy - y0) * w + sx) as usize;
@@ -327,7 +362,12 @@ impl<'a> Splats<'a> {
                         if sp.z >= layer.depth[i] {
                             continue;
                         }
-                        if let Some((z, face)) = rays.hit(i, sp.centre, *half) {
+                        let hit = if self.surfel {
+                            rays.disk_hit(i, sp.centre, n, *half).map(|z| (z, CLAMPED))
+                        } else {
+                            rays.hit(i, sp.centre, *half)
+                        };
+                        if let Some((z, face)) = hit {
                             if z < layer.depth[i] && z >= p.near && z <= p.far {
                                 (layer.depth[i], layer.point[i], layer.face[i]) = (z, sp.point, face);
                                 any = true;
@@ -412,6 +452,19 @@ impl Rays {
             }
         }
         Rays { inv }
+    }
+
+    /// Where sample `i`'s ray meets the disk of radius `r` centred at `c` (relative to the eye) perpendicular to
+    /// `n`: its planar depth, `None` on a miss or a ray parallel to the disk.
+    #[inline]
+    fn disk_hit(&self, i: usize, c: Vec3, n: Vec3, r: f32) -> Option<f32> {
+        let d = self.inv[i].recip();
+        let nd = n.dot(d);
+        if nd.abs() < 1e-12 {
+            return None;
+        }
+        let t = n.dot(c) / nd;
+        ((d * t - c).length_squared() <= r * r && t > 0.0).then_some(t)
     }
 
     /// Where sample `i`'s ray enters the cube (centre `c` relative to the eye, half edge `h`): planar depth and

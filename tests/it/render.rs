@@ -293,6 +293,36 @@ mod splats {
     }
 
     #[test]
+    fn surfels_are_disks_in_the_plane_of_their_normal() {
+        // Diameter 0.5 at 4 units with f = 100: a disk of radius 6.25 px facing the camera.
+        let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y));
+        let surfel = |normal: Vec3| {
+            let mut p = points(vec![Vec3::ZERO], Vec4::ONE);
+            p.primitives[0].normals = vec![normal];
+            render(&p, &c, &settings(SplatShape::Surfel, SplatSize::World(0.5), 16))
+        };
+        let facing = std::f64::consts::PI * 6.25f64.powi(2);
+        let f = surfel(Vec3::Z);
+        assert!((coverage(&f) / facing - 1.0).abs() < 0.03, "{} vs {facing}", coverage(&f));
+        assert!((f.depth[32 * 64 + 32] - 4.0).abs() < 1e-4, "{}", f.depth[32 * 64 + 32]);
+        // Tilted 60° about x: an ellipse of half the area, its depth varying along y.
+        let tilted = surfel(Vec3::new(0.0, 60f32.to_radians().sin(), 60f32.to_radians().cos()));
+        assert!((coverage(&tilted) / (facing * 0.5) - 1.0).abs() < 0.05, "{}", coverage(&tilted));
+        // Back-facing normals draw the same disk; a point without a normal faces the camera.
+        assert_eq!(surfel(-Vec3::Z).rgba, f.rgba);
+        assert_eq!(surfel(Vec3::ZERO).rgba, f.rgba);
+        // Edge-on, the default minimum footprint keeps a one-pixel square.
+        let mut p = points(vec![Vec3::ZERO], Vec4::ONE);
+        p.primitives[0].normals = vec![Vec3::X];
+        let s = RenderSettings {
+            samples: 16,
+            splat: SplatSettings { shape: SplatShape::Surfel, size: SplatSize::World(0.5), min_px: 1.0 },
+            ..Default::default()
+        };
+        assert!((coverage(&render(&p, &c, &s)) - 1.0).abs() < 0.5, "{}", coverage(&render(&p, &c, &s)));
+    }
+
+    #[test]
     fn cubes_are_true_3d_cubes() {
         // Edge 0.5 seen face-on from 4 units: the front face is 3.75 away and 0.5·100/3.75 pixels wide.
         let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y));
@@ -488,7 +518,9 @@ fn vox10_cubes_leave_no_holes_with_the_default_footprint() {
     let posed = scene.pose(0, &mut poser).unwrap().clone();
     let pts: Vec<Vec3> = posed.primitives.iter().flat_map(|p| p.positions.iter().copied()).collect();
     let base = std::fs::read_to_string(&path).unwrap();
-    for (size, shape, samples) in [(400u32, "cube", 1), (800, "cube", 1), (400, "disk", 1), (400, "cube", 4)] {
+    for (size, shape, samples) in
+        [(400u32, "cube", 1), (800, "cube", 1), (400, "disk", 1), (400, "surfel", 1), (400, "cube", 4)]
+    {
         let m = crate::common::load(&{
             let t = base
                 .replace("[400, 400]", &format!("[{size}, {size}]\nsamples = {samples}"))
