@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::{Error, Inputs, Made};
 use crate::cache::Digest;
@@ -192,14 +193,23 @@ fn init_cloud(g: &Graph, x: &Inputs, frames: &[usize], n: usize, label: &str) ->
     if n == 0 || frames.is_empty() {
         return Ok(out);
     }
-    let mut poser = Poser::default();
     let seed = g.keying.seed.to_le_bytes();
-    for (i, &f) in frames.iter().enumerate() {
-        // An even share per frame; the first frames take the remainder.
-        let share = n / frames.len() + usize::from(i < n % frames.len());
-        let posed = x.scene.pose(f, &mut poser).map_err(|source| Error::Scene { action: label.into(), source })?;
-        super::check_posed(posed, label)?;
-        out.extend(&sample::sample(posed, share, &[b"init", &seed, &(f as u64).to_le_bytes()]));
+    // Frames in parallel (each task holds one posed frame), joined in frame order.
+    let per_frame: Vec<Result<Points, Error>> = frames
+        .par_iter()
+        .enumerate()
+        .map_init(Poser::default, |poser, (i, &f)| {
+            // An even share per frame; the first frames take the remainder.
+            let share = n / frames.len() + usize::from(i < n % frames.len());
+            let posed = x.scene.pose(f, poser).map_err(|source| Error::Scene { action: label.into(), source })?;
+            super::check_posed(posed, label)?;
+            // At most `share` of a point cloud's own points too: the cloud's size is what was asked for,
+            // whatever the input's.
+            Ok(sample::sample_at_most(posed, share, &[b"init", &seed, &(f as u64).to_le_bytes()]))
+        })
+        .collect();
+    for p in per_frame {
+        out.extend(&p?);
     }
     Ok(out)
 }

@@ -19,6 +19,8 @@ use crate::render::{DepthKind, RenderSettings, Shading, SplatShape, SplatSize};
 pub const RENDER_SALT: &str = "render 6";
 /// Version of the point sampler's output.
 pub const SAMPLE_SALT: &str = "sample 2";
+/// How a cloud of a given size picks among a point cloud's own points (at most its share, keyed).
+const SELECTION: &str = "at most n points 1";
 /// Version of the PLY / COLMAP point encodings and of compositing.
 pub const ENCODE_SALT: &str = "encode 1";
 /// Version of the video encoding (codec, its settings, colour conversion and container): see
@@ -251,6 +253,7 @@ impl Action {
             }
             Action::InitCloud { frames, points } => {
                 w.str("sampler", SAMPLE_SALT);
+                w.str("selection", SELECTION);
                 w.u64("seed", cx.seed);
                 w.u64("points", *points);
                 for &f in frames {
@@ -260,6 +263,7 @@ impl Action {
             }
             Action::ColmapPoints { frame, points } => {
                 w.str("sampler", SAMPLE_SALT);
+                w.str("selection", SELECTION);
                 w.str("encoder", ENCODE_SALT);
                 w.u64("seed", cx.seed);
                 w.u64("points", *points);

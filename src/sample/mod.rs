@@ -196,6 +196,47 @@ pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
     out
 }
 
+/// At most `n` surface samples and at most `n` of the scene's points: [`sample`] for a cloud of a given size
+/// (an initialization cloud, COLMAP's points3D), which must not grow with the input's point count. Points are
+/// chosen uniformly without replacement by a stream keyed by `key`, kept in scene order.
+pub fn sample_at_most(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
+    let mut out = evaluate(scene, &draw(scene, n, key)).expect("BUG: draws index the scene they were drawn on");
+    let total = scene.point_count();
+    if total <= n {
+        out.extend(&points(scene));
+        return out;
+    }
+    // Floyd's algorithm: n distinct indices in 0..total, each subset equally likely.
+    let mut parts: Vec<&[u8]> = vec![b"points"];
+    parts.extend_from_slice(key);
+    let mut k = Keyed::new("subsample", &parts);
+    let mut chosen = std::collections::BTreeSet::new();
+    for j in (total - n)..total {
+        let t = k.below(j as u64 + 1) as usize;
+        if !chosen.insert(t) {
+            chosen.insert(j);
+        }
+    }
+    let mut index = 0usize;
+    let mut next = chosen.iter().copied().peekable();
+    for p in scene.primitives.iter().filter(|p| p.kind == PrimKind::Points) {
+        let m = &scene.materials[p.material as usize];
+        while let Some(&c) = next.peek() {
+            let i = c - index;
+            if i >= p.positions.len() {
+                break;
+            }
+            next.next();
+            out.positions.push(p.positions[i].to_array());
+            out.normals.push(p.normals.get(i).copied().unwrap_or(Vec3::ZERO).to_array());
+            let col = m.albedo(&scene.textures, p.uvs.get(i).copied(), p.colors.get(i).copied());
+            out.colors.push(col.truncate().to_array());
+        }
+        index += p.positions.len();
+    }
+    out
+}
+
 /// Position, unit normal and linear colour of the surface point `d`.
 #[inline]
 fn surface_point(scene: &PosedScene, d: &Draw) -> ([f32; 3], [f32; 3], [f32; 3]) {

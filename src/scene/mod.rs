@@ -241,6 +241,28 @@ fn gather(
     let frames = if over == Over::First { 1 } else { src.frame_count() };
     // Fresh buffers per source (another source's materials must not carry over), reused across its frames.
     *posed = PosedScene::default();
+    if matches!(src.data, SourceData::Sequence(_) | SourceData::MeshSequence(_)) {
+        // One file per frame: reading them is the cost, so read a few at once (as many as there are threads,
+        // which bounds the memory), and add their points in frame order, as the sequential loop would.
+        use rayon::prelude::*;
+        let window = rayon::current_num_threads().max(1);
+        for start in (0..frames).step_by(window) {
+            let read: Vec<Result<PosedScene, Error>> = (start..(start + window).min(frames))
+                .into_par_iter()
+                .map(|f| {
+                    let mut out = PosedScene::default();
+                    src.pose(f, post, &mut PoseScratch::default(), &mut out)?;
+                    Ok(out)
+                })
+                .collect();
+            for frame in read {
+                for p in &frame?.primitives {
+                    stats.add(&p.positions);
+                }
+            }
+        }
+        return Ok(());
+    }
     for f in 0..frames {
         src.pose(f, post, scratch, posed)?;
         for p in &posed.primitives {

@@ -326,3 +326,33 @@ fn round_trip_the_vox_sequence_renders_back_as_cubes_where_the_mesh_was() {
         assert!(union > 100.0 && inter / union > 0.9, "frame {f}: IoU {}", inter / union);
     }
 }
+
+/// An initialization cloud has the size asked for, whatever the input's: a point-cloud source's own points are
+/// subsampled (keyed, without replacement), not all copied in (40 frames of 800k points made a 32M-point cloud and
+/// held it in memory).
+#[test]
+fn init_clouds_of_point_sources_have_the_size_asked_for() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let text = format!(
+        "[dataset]\nname = \"t\"\nout = \"out\"\ncache = \"cache\"\n\
+         [source.torus]\nply_sequence = \"{}\"\nframes = {{ start = 1000, end = 1002 }}\ntransform = {{ up = \"y\" }}\n\
+         [transform]\nfit = {{ height = 0.6 }}\ncenter = \"bbox\"\n\
+         [render]\nresolution = [32, 32]\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 1\n\
+         [output.d]\nwriter = \"dnerf\"\ninit_points = 300\n\
+         [output.c]\nwriter = \"colmap\"\ninit_points = 100\n",
+        crate::common::data("seq/torus_vox10_{frame:04}.ply").display()
+    );
+    std::fs::write(d.join("m.toml"), text).unwrap();
+    let m = crate::common::load(&d.join("m.toml"));
+    vvgen::build::build(&m, &d.join("cache"), Default::default(), &vvgen::build::Silent).unwrap();
+    let cloud = read_ply(&d.join("out/t_dnerf/points3d.ply"));
+    assert_eq!(cloud.positions.len(), 300, "3 frames × 100 of their 3996 points");
+    // Distinct points: sampled without replacement.
+    let mut seen: Vec<[u32; 3]> = cloud.positions.iter().map(|p| p.map(f32::to_bits)).collect();
+    seen.sort();
+    seen.dedup();
+    assert!(seen.len() > 290, "{} distinct", seen.len());
+    let txt = std::fs::read_to_string(d.join("out/t_colmap/frame_0000/sparse/0/points3D.txt")).unwrap();
+    assert_eq!(txt.lines().filter(|l| !l.starts_with('#')).count(), 100);
+}
