@@ -300,7 +300,14 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
                 vertex_seen = true;
                 read_vertices(&mut cursor, el, &mut out)?;
                 // NaN or infinity would reach fits, bounds, cameras and images as garbage.
-                if let Some(row) = out.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+                // (A branch-free pass first: the search below runs only when something is not finite.)
+                let finite = out
+                    .positions
+                    .iter()
+                    .fold(true, |ok, p| ok & p[0].is_finite() & p[1].is_finite() & p[2].is_finite());
+                if let Some(row) =
+                    (!finite).then(|| out.positions.iter().position(|p| !p.iter().all(|c| c.is_finite()))).flatten()
+                {
                     let msg = format!("position {:?} is not finite", out.positions[row]);
                     return Err(PlyError::Body { element: points.into(), row, msg });
                 }
@@ -517,7 +524,26 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         let xyz = group(SLOT_X, Scalar::F32);
         let nxyz = if has_n { group(SLOT_NX, Scalar::F32) } else { None };
         let rgb = if has_c && !slots.contains(&SLOT_A) { group(SLOT_R, Scalar::U8) } else { None };
-        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv) {
+        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv && !be) {
+            // Little-endian (what every writer of large clouds emits): each column group read as a fixed-size
+            // array (no per-byte bounds checks, no per-value endianness branch), into exactly sized vectors.
+            let xyz3 = |r: &[u8], o: usize| {
+                let b: &[u8; 12] = r[o..o + 12].try_into().expect("BUG: the row holds the group");
+                let w = |k: usize| f32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
+                [w(0), w(4), w(8)]
+            };
+            out.positions = rows().map(|r| xyz3(r, o)).collect();
+            if let Some(o) = nxyz {
+                normals = rows().map(|r| xyz3(r, o)).collect();
+            }
+            if let Some(o) = rgb {
+                let rgb3 = |r: &[u8]| -> [u8; 4] {
+                    let c: &[u8; 3] = r[o..o + 3].try_into().expect("BUG: the row holds the group");
+                    [c[0], c[1], c[2], 255]
+                };
+                colors = rows().map(rgb3).collect();
+            }
+        } else if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv) {
             out.positions = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
             if let Some(o) = nxyz {
                 normals = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
