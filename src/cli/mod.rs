@@ -5,6 +5,7 @@ mod build;
 mod check;
 mod gc;
 mod inspect;
+mod new;
 mod plan;
 mod release;
 
@@ -124,6 +125,21 @@ pub enum Command {
         #[arg(long)]
         cache: Option<PathBuf>,
     },
+    /// Write a commented manifest to start from, for a glTF, PLY or OBJ file or a folder of PLY or OBJ frames:
+    /// clips, frame count and up axis read off the asset, the NeRF-synthetic recipe for the rest.
+    #[command(
+        after_help = "Examples:\n  vvgen new CesiumMan.glb\n  vvgen new frames/ --writer nerfstudio -o scan.toml"
+    )]
+    New {
+        /// The asset: a .gltf/.glb, .ply or .obj file, or a folder of .ply or .obj frames.
+        asset: PathBuf,
+        /// The output's writer.
+        #[arg(long, default_value = "dnerf", value_parser = clap::builder::PossibleValuesParser::new(new::WRITERS))]
+        writer: String,
+        /// Where to write the manifest (default: `<asset name>.toml` here; never overwritten).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
     /// Show a manifest's scene: sources, clips, frames, bounds, resolved transforms, posed-geometry hashes.
     #[command(
         after_help = "Examples:\n  vvgen inspect manifests/cesium-man.toml\n  vvgen inspect manifests/cesium-man.toml --frame 12 --ply posed.ply"
@@ -175,6 +191,7 @@ pub fn run() -> ExitCode {
         Command::Release { manifest } => release::release(&manifest, ui),
         Command::Verify { dir } => release::verify(&dir, ui),
         Command::Gc { keep, max_size, cache } => gc::run(&keep, max_size, cache, ui),
+        Command::New { asset, writer, out } => new::run(&asset, &writer, out.as_deref(), ui),
         Command::Inspect { manifest, source, frame, ply } => {
             inspect::run(&manifest, source.as_deref(), frame, ply.as_ref(), ui)
         }

@@ -10,6 +10,7 @@ mod fuzz;
 mod graph;
 mod manifest;
 mod meshseq;
+mod new;
 mod ply;
 mod points;
 mod render;

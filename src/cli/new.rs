@@ -1,0 +1,257 @@
+//! `vvgen new ASSET`: a commented manifest to start from, for a glTF file, a PLY or OBJ file, or a folder of PLY
+//! or OBJ frames. What it can read off the asset (clips, frame count, the up axis) it writes in and says; the rest
+//! is the NeRF-synthetic recipe (a ±1.3 box, the hemisphere cameras, D-NeRF's splits).
+
+use std::fmt::Write as _;
+use std::path::{Component, Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context};
+
+use super::Ui;
+use crate::scene;
+
+/// The writers `--writer` accepts.
+pub const WRITERS: [&str; 7] =
+    ["dnerf", "nerfstudio", "instant-ngp", "colmap", "dynerf", "static-frames", "ply-sequence"];
+
+/// What the asset is.
+enum Asset {
+    /// A glTF file and its clips (name, seconds).
+    Gltf { clips: Vec<(String, f32)> },
+    /// One static mesh (glTF without clips, PLY).
+    Mesh,
+    /// One file per frame: `ply_sequence` or `mesh_sequence`, with the glob and the frame count.
+    Sequence { key: &'static str, glob: String, frames: usize },
+}
+
+/// Writes the manifest for `asset` to `out` (default `<asset name>.toml` here).
+pub fn run(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Result<ExitCode> {
+    if !WRITERS.contains(&writer) {
+        bail!("unknown writer `{writer}`: one of {}", WRITERS.join(", "));
+    }
+    let name: String = asset
+        .file_stem()
+        .map(|s| s.to_string_lossy().chars().map(|c| if c.is_alphanumeric() || c == '-' { c } else { '-' }).collect())
+        .filter(|s: &String| !s.is_empty())
+        .unwrap_or_else(|| "dataset".into());
+    let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
+    if out.exists() {
+        bail!("{} exists: choose another with -o", out.display());
+    }
+    let (kind, up, note) = describe(asset)?;
+    let manifest_dir = absolute(out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")))?;
+    let rel = |p: &Path| -> anyhow::Result<String> { Ok(relative(&manifest_dir, &absolute(p)?)) };
+    let text = manifest(&name, asset, &kind, up, &note, writer, &rel)?;
+    std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
+    if !ui.quiet {
+        eprintln!("wrote {}: {note}", out.display());
+        eprintln!("next: vvgen check {0} && vvgen build {0}", out.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The asset's kind, its up axis and a line saying how that was decided.
+fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
+    let ext = |p: &Path| p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if asset.is_dir() {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(asset)
+            .with_context(|| format!("reading {}", asset.display()))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file())
+            .collect();
+        files.sort();
+        let count = |e: &str| files.iter().filter(|p| ext(p) == e).count();
+        let (key, e) = match (count("ply"), count("obj")) {
+            (0, 0) => bail!("{}: no .ply or .obj frames in this folder", asset.display()),
+            (p, o) if p >= o => ("ply_sequence", "ply"),
+            _ => ("mesh_sequence", "obj"),
+        };
+        let first = files.iter().find(|p| ext(p) == e).expect("counted above");
+        let frame = if e == "obj" { scene::obj::scene(first)? } else { scene::source::ply_scene(first)? };
+        let (up, why) = tallest(&frame, first);
+        let n = count(e);
+        let seq = Asset::Sequence { key, glob: format!("*.{e}"), frames: n };
+        return Ok((seq, up, format!("{n} {e} frames; {why}")));
+    }
+    match ext(asset).as_str() {
+        "gltf" | "glb" => {
+            let a = scene::gltf::load(asset, None)?;
+            let clips: Vec<(String, f32)> = a
+                .animations
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (c.name.clone().unwrap_or_else(|| format!("#{i}")), c.duration()))
+                .collect();
+            let what = match clips.first() {
+                Some((n, d)) => format!("{} clip(s), the first (`{n}`, {d:.2} s) selected", clips.len()),
+                None => "no animation: a static mesh".into(),
+            };
+            let kind = if clips.is_empty() { Asset::Mesh } else { Asset::Gltf { clips } };
+            Ok((kind, "y", format!("{what}; up \"y\": glTF is +Y up by its specification")))
+        }
+        "ply" => {
+            let (up, why) = tallest(&scene::source::ply_scene(asset)?, asset);
+            Ok((Asset::Mesh, up, why))
+        }
+        "obj" => {
+            let (up, why) = tallest(&scene::obj::scene(asset)?, asset);
+            let glob = asset.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+            Ok((Asset::Sequence { key: "mesh_sequence", glob, frames: 1 }, up, why))
+        }
+        _ => bail!("{}: not a glTF, PLY or OBJ file, nor a folder of frames", asset.display()),
+    }
+}
+
+/// The up axis of a scan: its tallest extent (a standing subject), said with the extents.
+fn tallest(s: &scene::PosedScene, path: &Path) -> (&'static str, String) {
+    let (mut lo, mut hi) = (glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY));
+    for p in &s.primitives {
+        for v in p.positions.iter() {
+            (lo, hi) = (lo.min(*v), hi.max(*v));
+        }
+    }
+    let e = hi - lo;
+    let up = if e.y >= e.z && e.y >= e.x { "y" } else { "z" };
+    let name = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+    (up, format!("up \"{up}\" guessed: the taller of y and z in {name} (extent {:.3} × {:.3} × {:.3})", e.x, e.y, e.z))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn manifest(
+    name: &str,
+    asset: &Path,
+    kind: &Asset,
+    up: &str,
+    note: &str,
+    writer: &str,
+    rel: &dyn Fn(&Path) -> anyhow::Result<String>,
+) -> anyhow::Result<String> {
+    let mut t = String::new();
+    let w = &mut t;
+    let _ = writeln!(w, "# Written by `vvgen new {}`: {note}.", asset.display());
+    let _ =
+        writeln!(w, "# Check it with `vvgen check`, build it with `vvgen build`; docs/manifest.md lists every key.\n");
+    let _ = writeln!(w, "[dataset]\nname = \"{name}\"\nversion = \"1\"\nout  = \"out/{name}\"\nseed = 0\n");
+    let _ = writeln!(w, "[source.{}]", key_name(name));
+    let frames = match kind {
+        Asset::Gltf { clips } => {
+            let _ = writeln!(w, "gltf   = \"{}\"", rel(asset)?);
+            let _ = writeln!(w, "# clips in the file (pick with `animation = N`, a name, a list, or \"all\"):");
+            for (i, (n, d)) in clips.iter().enumerate() {
+                let _ = writeln!(w, "#   {i}: `{n}`, {d:.3} s");
+            }
+            let n = (clips[0].1 as f64 * 30.0 + 1e-4).floor() as usize + 1;
+            let _ = writeln!(
+                w,
+                "animation = 0\nframes = {{ count = {n}, fps = 30 }}   # the first clip's length at 30 fps"
+            );
+            n
+        }
+        Asset::Mesh => {
+            let _ = writeln!(w, "mesh   = \"{}\"", rel(asset)?);
+            1
+        }
+        Asset::Sequence { key, glob, frames } => {
+            let dir =
+                if asset.is_dir() { asset.to_path_buf() } else { asset.parent().unwrap_or(Path::new(".")).into() };
+            let pattern = format!("{}/{glob}", rel(&dir)?.trim_end_matches('/'));
+            let _ = writeln!(w, "{key} = \"{pattern}\"   # {frames} file(s), natural order");
+            let _ = writeln!(w, "frames = {{ fps = 30 }}   # recorded in the metadata; set your capture's rate");
+            *frames
+        }
+    };
+    let _ = writeln!(w, "\n[transform]\nup     = \"{up}\"    # {}", up_note(note));
+    let _ =
+        writeln!(w, "fit    = {{ height = 2.4 }}   # NeRF-synthetic's ±1.3 box: near 2 / far 6 hold for every loader");
+    let _ =
+        writeln!(w, "center = \"bbox\"\nover   = \"all-frames\"        # one normalization for the whole sequence\n");
+    let _ = writeln!(
+        w,
+        "[render]\nresolution     = [400, 400]   # D-NeRF's half_res; 800 is NeRF-synthetic's full size\n\
+         camera_angle_x = 0.6911112070083618   # Blender's 50 mm lens on a 36 mm sensor\n\
+         samples        = 4\npasses         = [\"rgba\", \"depth\"]\n"
+    );
+    let dynamic = frames > 1;
+    match writer {
+        "dynerf" => {
+            let _ = writeln!(
+                w,
+                "[rig.front]\nkind = \"forward-facing\"   # DyNeRF's loaders use NDC: cameras on a plane facing the subject\n\n\
+                 [split.test]\nrig   = \"front\"\nviews = 1     # camera 00, the one DyNeRF's loaders hold out\n\n\
+                 [split.train]\nrig   = \"front\"\nviews = 6\n"
+            );
+        }
+        "ply-sequence" => {}
+        "static-frames" => {
+            let _ = writeln!(
+                w,
+                "[rig.hemi]\nkind = \"hemisphere\"        # the NeRF-synthetic recipe\n\n\
+                 [rig.ring]\nkind     = \"orbit\"\nschedule = \"nerf-test\"\n\n\
+                 [split.train]\nrig   = \"hemi\"\nviews = 24    # every camera at every frame\n\n\
+                 [split.test]\nrig   = \"ring\"\nviews = 8\n"
+            );
+        }
+        _ => {
+            let time = if dynamic {
+                "time  = \"monocular\"   # D-NeRF style: one camera per frame, times 0 … 1"
+            } else {
+                "views = 100"
+            };
+            let test = if dynamic { "time     = \"monocular\"" } else { "views    = 20" };
+            let val = if dynamic { "time  = \"monocular\"" } else { "views = 10" };
+            let _ = writeln!(
+                w,
+                "[rig.hemi]\nkind = \"hemisphere\"        # the NeRF-synthetic recipe: radius 4.03, upper hemisphere\n\n\
+                 [rig.ring]\nkind     = \"orbit\"\nschedule = \"nerf-test\"   # NeRF-synthetic's test orbit\n\n\
+                 [split.train]\nrig   = \"hemi\"\n{time}\n\n\
+                 [split.val]\nrig   = \"hemi\"\n{val}\nseed  = 3\n\n\
+                 [split.test]\nrig      = \"ring\"\n{test}\n"
+            );
+        }
+    }
+    let _ = writeln!(w, "[output.{}]\nwriter = \"{writer}\"", key_name(writer));
+    if writer == "ply-sequence" {
+        let _ = writeln!(
+            w,
+            "points = 200000   # surface samples per frame\nvoxel  = 0.01     # downsampled on a 1 cm grid"
+        );
+    }
+    Ok(t)
+}
+
+fn up_note(note: &str) -> &'static str {
+    if note.contains("guessed") {
+        "guessed from the first frame's extents: check it"
+    } else {
+        "glTF's own up axis; the world is +Z up"
+    }
+}
+
+/// A TOML bare key from a name.
+fn key_name(s: &str) -> String {
+    let k: String =
+        s.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' || c == '-' { c } else { '_' }).collect();
+    if k.is_empty() {
+        "main".into()
+    } else {
+        k
+    }
+}
+
+fn absolute(p: &Path) -> anyhow::Result<PathBuf> {
+    std::fs::canonicalize(p).with_context(|| format!("{}", p.display()))
+}
+
+/// `to` relative to the folder `from` (both absolute), with `/` separators.
+fn relative(from: &Path, to: &Path) -> String {
+    let (a, b): (Vec<Component>, Vec<Component>) = (from.components().collect(), to.components().collect());
+    let common = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut parts: Vec<String> = vec!["..".into(); a.len() - common];
+    parts.extend(b[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    if parts.is_empty() {
+        ".".into()
+    } else {
+        parts.join("/")
+    }
+}

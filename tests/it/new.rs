@@ -1,0 +1,65 @@
+//! `vvgen new ASSET`: the manifest it writes checks clean and builds as written, for every kind of asset.
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::common::data;
+
+fn vvgen(dir: &Path, args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(dir).args(args).output().unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+#[test]
+fn new_manifests_check_clean_and_build_for_every_asset_kind() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // Assets the test makes: a folder of OBJ frames (the topology changing) and a single PLY mesh (z up, tall).
+    std::fs::create_dir_all(d.join("objs")).unwrap();
+    for f in 0..2 {
+        let mut s = String::new();
+        for (x, y, z) in [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.5, 2.0, 0.0), (0.5, 0.0, 1.0)] {
+            s.push_str(&format!("v {} {y} {z}\n", x + 0.1 * f as f64));
+        }
+        s.push_str(if f == 0 { "f 1 2 3\nf 1 3 4\n" } else { "f 1 2 3\nf 1 3 4\nf 2 3 4\n" });
+        std::fs::write(d.join(format!("objs/frame_{f}.obj")), s).unwrap();
+    }
+    std::fs::write(
+        d.join("tall.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+         0 0 0\n1 0 0\n0.5 0.3 3\n0.5 1 0\n3 0 1 2\n3 1 3 2\n",
+    )
+    .unwrap();
+    let cases: [(&str, String, &str, &str); 6] = [
+        (
+            "animated glTF",
+            data("gltf/CesiumMan/CesiumMan.glb").display().to_string(),
+            "dnerf",
+            "frames = { count = 61, fps = 30 }",
+        ),
+        ("static glTF", data("gltf/BoxTextured/BoxTextured.glb").display().to_string(), "static-frames", "mesh   ="),
+        ("PLY frames", data("seq").display().to_string(), "nerfstudio", "ply_sequence = \""),
+        ("PLY frames as points", data("seq").display().to_string(), "ply-sequence", "points = 200000"),
+        ("OBJ frames", d.join("objs").display().to_string(), "dnerf", "mesh_sequence = \"objs/*.obj\""),
+        ("a PLY mesh", d.join("tall.ply").display().to_string(), "dnerf", "up     = \"z\""),
+    ];
+    for (i, (what, asset, writer, says)) in cases.iter().enumerate() {
+        let name = format!("m{i}.toml");
+        let (code, err) = vvgen(d, &["new", asset, "--writer", writer, "-o", &name]);
+        assert_eq!(code, 0, "{what}: {err}");
+        let text = std::fs::read_to_string(d.join(&name)).unwrap();
+        assert!(text.contains(says), "{what}: {says:?} not in\n{text}");
+        let (code, err) = vvgen(d, &["check", &name]);
+        assert_eq!(code, 0, "{what}: {err}");
+        assert!(!err.contains("error"), "{what}: {err}");
+        let (code, err) = vvgen(d, &["-q", "build", &name]);
+        assert_eq!(code, 0, "{what}: {err}\n{text}");
+    }
+    assert!(d.join("out/CesiumMan/CesiumMan_dnerf/transforms_train.json").is_file());
+    assert!(d.join("out/tall/tall_dnerf/transforms_test.json").is_file());
+    // Never overwrites.
+    let (code, err) = vvgen(d, &["new", &data("seq").display().to_string(), "-o", "m0.toml"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("exists"), "{err}");
+}
