@@ -27,6 +27,14 @@ enum Asset {
 
 /// Writes the manifest for `asset` to `out` (default `<asset name>.toml` here).
 pub fn run(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Result<ExitCode> {
+    // Every problem here is the input's (an asset that cannot be read, a manifest that exists): exit 2.
+    write(asset, writer, out, ui).or_else(|e| {
+        eprintln!("error: {e:#}");
+        Ok(ExitCode::from(super::EXIT_INVALID))
+    })
+}
+
+fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Result<ExitCode> {
     if !WRITERS.contains(&writer) {
         bail!("unknown writer `{writer}`: one of {}", WRITERS.join(", "));
     }

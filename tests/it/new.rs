@@ -60,6 +60,8 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
     assert!(d.join("out/tall/tall_dnerf/transforms_test.json").is_file());
     // Never overwrites.
     let (code, err) = vvgen(d, &["new", &data("seq").display().to_string(), "-o", "m0.toml"]);
-    assert_ne!(code, 0);
+    assert_eq!(code, 2);
     assert!(err.contains("exists"), "{err}");
+    let (code, err) = vvgen(d, &["new", "no-such.glb"]);
+    assert_eq!(code, 2, "{err}");
 }
