@@ -140,6 +140,11 @@ pub enum Command {
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
+    /// Print the manifest's JSON Schema (for Taplo / Even Better TOML: completion, hover docs, inline errors).
+    #[command(
+        after_help = "Example:\n  vvgen schema > vvgen.schema.json   # then `#:schema ./vvgen.schema.json` atop a manifest"
+    )]
+    Schema,
     /// Show a manifest's scene: sources, clips, frames, bounds, resolved transforms, posed-geometry hashes.
     #[command(
         after_help = "Examples:\n  vvgen inspect manifests/cesium-man.toml\n  vvgen inspect manifests/cesium-man.toml --frame 12 --ply posed.ply"
@@ -191,6 +196,12 @@ pub fn run() -> ExitCode {
         Command::Release { manifest } => release::release(&manifest, ui),
         Command::Verify { dir } => release::verify(&dir, ui),
         Command::Gc { keep, max_size, cache } => gc::run(&keep, max_size, cache, ui),
+        Command::Schema => serde_json::to_string_pretty(&crate::manifest::schema::json_schema())
+            .map(|text| {
+                println!("{text}");
+                ExitCode::SUCCESS
+            })
+            .map_err(anyhow::Error::from),
         Command::New { asset, writer, out } => new::run(&asset, &writer, out.as_deref(), ui),
         Command::Inspect { manifest, source, frame, ply } => {
             inspect::run(&manifest, source.as_deref(), frame, ply.as_ref(), ui)

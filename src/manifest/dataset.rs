@@ -6,15 +6,17 @@ use toml::Spanned;
 use super::diag::Diagnostic;
 
 /// The `[dataset]` table.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Dataset {
     /// Dataset name; used in default output directory names.
+    #[schemars(with = "String")]
     pub(super) name: Spanned<String>,
     /// Free-form version string, recorded in metadata.
     #[serde(default)]
     pub version: Option<String>,
     /// Output root, relative to the manifest's directory.
+    #[schemars(with = "String")]
     pub(super) out: Spanned<String>,
     /// Root of every random stream (camera draws, point samples).
     #[serde(default)]
@@ -22,10 +24,12 @@ pub struct Dataset {
     /// Cache directory, relative to the manifest (default `cache/` in the working directory; `VVGEN_CACHE`
     /// overrides both).
     #[serde(default)]
+    #[schemars(with = "Option<String>")]
     pub(super) cache: Option<Spanned<String>>,
     /// Manifests (manifest-relative) that `vvgen build` builds before this one, e.g. the one writing the
     /// point-cloud sequence a `ply_sequence` source here renders.
     #[serde(default)]
+    #[schemars(with = "Vec<String>")]
     pub(super) after: Vec<Spanned<String>>,
 }
 

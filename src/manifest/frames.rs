@@ -13,7 +13,7 @@ pub const MAX_FRAMES: u64 = 1_000_000;
 /// For glTF sources, frame `i` is at time `clip_start + i / fps`; `start`/`end` are frame numbers at `fps`
 /// (end inclusive). For PLY sequences, `start`/`end` are the numbers substituted into the pattern (or
 /// positions in the sorted glob), end inclusive.
-#[derive(Debug, Clone, Deserialize, Default, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Default, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Frames {
     /// Number of frames (from `start`, default 0).
@@ -84,7 +84,7 @@ impl Frames {
 }
 
 /// A split's frame subset: a list of frame positions, or `{ start, end, every }` over the source's frames.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum FrameSubset {
     /// Explicit frame positions (0-based, into the source's selected frames).

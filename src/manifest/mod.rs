@@ -13,6 +13,7 @@ pub mod frames;
 pub mod output;
 pub mod render;
 pub mod rig;
+pub mod schema;
 pub mod sequence;
 pub mod source;
 pub mod split;

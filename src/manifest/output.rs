@@ -12,26 +12,35 @@ use super::suggest::inapplicable_keys;
 pub const MAX_POINTS: u64 = 100_000_000;
 
 /// One `[output.NAME]` table.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
     /// The writer.
+    #[schemars(with = "Writer")]
     pub(super) writer: Spanned<Writer>,
     /// Directory under `[dataset] out` (default depends on the writer, e.g. `<name>_dnerf`).
+    #[schemars(with = "Option<String>")]
     pub(super) dir: Option<Spanned<String>>,
     /// Splits to write (default: all).
+    #[schemars(with = "Option<Vec<String>>")]
     pub(super) splits: Option<Vec<Spanned<String>>>,
     /// Which source (default: all sources together).
+    #[schemars(with = "Option<String>")]
     pub(super) source: Option<Spanned<String>>,
     /// Image writers: points in the `points3d.ply` / `fused.ply` initialization cloud (default 100 000; 0 = none).
+    #[schemars(with = "Option<u64>")]
     pub(super) init_points: Option<Spanned<u64>>,
     /// `instant-ngp`: aabb_scale (power of two, 1..=128).
+    #[schemars(with = "Option<u32>")]
     pub(super) aabb_scale: Option<Spanned<u32>>,
     /// `ply-sequence`: surface samples per frame.
+    #[schemars(with = "Option<u64>")]
     pub(super) points: Option<Spanned<u64>>,
     /// `ply-sequence`: voxel edge for downsampling, world units.
+    #[schemars(with = "Option<f64>")]
     pub(super) voxel: Option<Spanned<f64>>,
     /// `ply-sequence`: quantize to a 2^vox integer grid (8..=16), like 8i's vox10.
+    #[schemars(with = "Option<u32>")]
     pub(super) vox: Option<Spanned<u32>>,
     /// `ply-sequence`: keep point identity across frames (default true for animated sources).
     pub correspondence: Option<bool>,
@@ -45,6 +54,7 @@ pub struct Output {
     /// `ply-sequence`: colour averaging space, `"linear"` (default) or `"srgb"`.
     pub color_average: Option<ColorAverage>,
     /// `ply-sequence`: file name pattern (default `{name}_{frame:04}.ply`).
+    #[schemars(with = "Option<String>")]
     pub(super) pattern: Option<Spanned<String>>,
     /// `ply-sequence`: `"binary"` (default) or `"ascii"`.
     pub format: Option<PlyFormat>,
@@ -79,7 +89,7 @@ impl Output {
 }
 
 /// Dataset writers.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, PartialOrd, Ord, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Writer {
     /// D-NeRF / NeRF-synthetic transforms_{train,val,test}.json (+ points3d.ply, fused.ply).
@@ -141,7 +151,7 @@ impl Writer {
 }
 
 /// Voxel reduction.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Reduce {
     /// Mean position and colour.
@@ -154,7 +164,7 @@ pub enum Reduce {
 }
 
 /// Where a voxel's representative point is placed.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum VoxelPosition {
     /// The reduction's own position: the mean, or the chosen point's.
@@ -165,7 +175,7 @@ pub enum VoxelPosition {
 }
 
 /// Colour averaging space.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum ColorAverage {
     /// Average in linear light.
@@ -176,7 +186,7 @@ pub enum ColorAverage {
 }
 
 /// PLY encoding.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum PlyFormat {
     /// binary_little_endian.

@@ -14,19 +14,23 @@ pub const MAX_RESOLUTION: u32 = 16384;
 pub const NERF_CAMERA_ANGLE_X: f64 = 0.6911112070083618;
 
 /// The `[render]` table. Absent: 800×800, NeRF-synthetic field of view, one sample, unlit, RGBA only.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Render {
     /// `[width, height]` in pixels.
     #[serde(default = "default_resolution")]
+    #[schemars(with = "[u32; 2]")]
     pub(super) resolution: Spanned<[u32; 2]>,
     /// Horizontal field of view in radians.
+    #[schemars(with = "Option<f64>")]
     pub(super) camera_angle_x: Option<Spanned<f64>>,
     /// Focal length in mm (with `sensor_mm`, Blender's sensor width, default 36).
+    #[schemars(with = "Option<f64>")]
     pub(super) focal_mm: Option<Spanned<f64>>,
     /// Sensor width in mm (default 36, Blender's).
     pub sensor_mm: Option<f64>,
     /// Focal length in pixels, x.
+    #[schemars(with = "Option<f64>")]
     pub(super) fx: Option<Spanned<f64>>,
     /// Focal length in pixels, y (default `fx`).
     pub fy: Option<f64>,
@@ -40,15 +44,18 @@ pub struct Render {
     pub far: Option<f64>,
     /// Supersampling: 1, 4, 9 or 16 samples per pixel.
     #[serde(default = "one")]
+    #[schemars(with = "u32")]
     pub(super) samples: Spanned<u32>,
     /// `"unlit"` (albedo) or `"lambert"`.
     #[serde(default)]
     pub shading: Shading,
     /// `"transparent"` (default), `"white"`, `"black"` or `[r, g, b]` in 0..1 sRGB.
     #[serde(default)]
+    #[schemars(with = "Option<Background>")]
     pub(super) background: Option<Spanned<Background>>,
     /// Which images to write per view: `rgba`, `depth`, `normal`, `mask`.
     #[serde(default = "default_passes")]
+    #[schemars(with = "Vec<Pass>")]
     pub(super) passes: Spanned<Vec<Pass>>,
     /// Depth pass options.
     #[serde(default)]
@@ -107,7 +114,7 @@ impl Default for Render {
 }
 
 /// Surface shading.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Shading {
     /// Albedo only: base colour × texture × vertex colour.
@@ -118,7 +125,7 @@ pub enum Shading {
 }
 
 /// Background of the RGBA pass.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum Background {
     /// `"transparent"`, `"white"` or `"black"`.
@@ -128,7 +135,7 @@ pub enum Background {
 }
 
 /// An image pass.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, PartialOrd, Ord, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Pass {
     /// 8-bit sRGB straight-alpha RGBA.
@@ -144,7 +151,7 @@ pub enum Pass {
 }
 
 /// `[render.depth]`.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DepthOptions {
     /// `"planar"` z-depth (default, what nerfstudio and instant-ngp read) or `"ray"` distance.
@@ -156,7 +163,7 @@ pub struct DepthOptions {
 }
 
 /// Depth convention.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum DepthKind {
     /// Distance along the optical axis.
@@ -167,7 +174,7 @@ pub enum DepthKind {
 }
 
 /// `[render.normal]`.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NormalOptions {
     /// `"world"` (default) or `"camera"` (OpenGL camera axes).
@@ -179,7 +186,7 @@ pub struct NormalOptions {
 }
 
 /// Normal pass coordinate frame.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum NormalSpace {
     /// World axes (+Z up).
@@ -190,7 +197,7 @@ pub enum NormalSpace {
 }
 
 /// `[render.splat]`: how points are drawn.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SplatOptions {
     /// `"cube"` (default), `"square"` or `"disk"`.
@@ -205,7 +212,7 @@ pub struct SplatOptions {
 }
 
 /// Splat shape.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum SplatShape {
     /// A 3D cube of edge `size` centred on the point.
@@ -220,7 +227,7 @@ pub enum SplatShape {
 }
 
 /// A directional light.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Light {
     /// Direction the light travels, world space.
@@ -235,7 +242,7 @@ fn unit() -> f64 {
 }
 
 /// PNG compression level.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum PngCompression {
     /// fdeflate, ~3 ms per 800² image.

@@ -12,18 +12,21 @@ use super::suggest::inapplicable_keys;
 pub const NERF_RADIUS: f64 = 4.031128874149275;
 
 /// One `[rig.NAME]` table.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Rig {
     /// The recipe.
+    #[schemars(with = "RigKind")]
     pub(super) kind: Spanned<RigKind>,
     /// Distance from the target (default `hypot(4, 0.5)` = 4.031128874149275, NeRF-synthetic's `(0, 4, 0.5)`).
+    #[schemars(with = "Option<f64>")]
     pub(super) radius: Option<Spanned<f64>>,
     /// Point the cameras look at (default the origin).
     pub target: Option<[f64; 3]>,
     /// `sphere`/`fibonacci`/`dome`: elevation band, `"full"` or `"upper"` (default `"upper"`).
     pub band: Option<Band>,
     /// `sphere`/`fibonacci`/`dome`: elevation limits in degrees, `[min, max]` (overrides `band`).
+    #[schemars(with = "Option<[f64; 2]>")]
     pub(super) elevation_range_deg: Option<Spanned<[f64; 2]>>,
     /// `orbit`: elevation in degrees (default 30).
     pub elevation_deg: Option<f64>,
@@ -32,6 +35,7 @@ pub struct Rig {
     /// `orbit`/`dome`: azimuth of the first view in degrees.
     pub start_azimuth_deg: Option<f64>,
     /// `dome`: number of rings (the split's views are shared evenly among them).
+    #[schemars(with = "Option<u32>")]
     pub(super) rings: Option<Spanned<u32>>,
     /// `forward-facing`: `"plane"` grid (default) or `"spiral"`.
     pub layout: Option<ForwardLayout>,
@@ -41,15 +45,17 @@ pub struct Rig {
     /// view of which the first places the camera, instead of vvgen's keyed stream.
     pub numpy_seed: Option<u32>,
     /// `explicit`: the poses.
+    #[schemars(with = "Option<Vec<Pose>>")]
     pub(super) poses: Option<Spanned<Vec<Pose>>>,
     /// `from-file`: a transforms.json (NeRF, D-NeRF, nerfstudio) whose cameras to reuse.
+    #[schemars(with = "Option<String>")]
     pub(super) file: Option<Spanned<String>>,
     /// Random perturbation of each pose.
     pub jitter: Option<Jitter>,
 }
 
 /// Camera placement recipe.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum RigKind {
     /// NeRF-synthetic's random upper hemisphere.
@@ -107,7 +113,7 @@ impl RigKind {
 }
 
 /// Elevation band.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Band {
     /// −90° … 90°.
@@ -117,7 +123,7 @@ pub enum Band {
 }
 
 /// Orbit elevation schedule.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum OrbitSchedule {
     /// Constant `elevation_deg`.
@@ -127,7 +133,7 @@ pub enum OrbitSchedule {
 }
 
 /// Forward-facing camera layout.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum ForwardLayout {
     /// A regular grid on a plane.
@@ -137,7 +143,7 @@ pub enum ForwardLayout {
 }
 
 /// One explicit pose: a camera-to-world matrix (OpenGL axes, rows), or a position and a target.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Pose {
     /// 4×4 camera-to-world, rows, OpenGL/Blender camera axes.
@@ -149,7 +155,7 @@ pub struct Pose {
 }
 
 /// Random pose perturbation.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Jitter {
     /// Position noise, world units (uniform in a ball).

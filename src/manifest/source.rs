@@ -9,23 +9,29 @@ use super::frames::Frames;
 use super::transform::Transform;
 
 /// One `[source.NAME]` table. Exactly one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence` is set.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Source {
     /// An animated (or static) glTF 2.0 file, `.gltf` or `.glb`.
+    #[schemars(with = "Option<String>")]
     pub(super) gltf: Option<Spanned<String>>,
     /// A static mesh, glTF or PLY.
+    #[schemars(with = "Option<String>")]
     pub(super) mesh: Option<Spanned<String>>,
     /// A PLY sequence: a pattern with `{frame}` / `{frame:04}`, or a glob (`*`, `?`, `[…]`).
+    #[schemars(with = "Option<String>")]
     pub(super) ply_sequence: Option<Spanned<String>>,
     /// A mesh sequence, one file per frame (OBJ with MTL and textures, textured PLY, or glTF), with the same
     /// patterns and globs as `ply_sequence`; the topology may change every frame.
+    #[schemars(with = "Option<String>")]
     pub(super) mesh_sequence: Option<Spanned<String>>,
     /// Which glTF animation clips play: an index, a name, a list of them, or `"all"`. Default: the first clip.
+    #[schemars(with = "Option<AnimationSel>")]
     pub(super) animation: Option<Spanned<AnimationSel>>,
     /// Which glTF scene (default: the file's default scene, else all scenes).
     pub scene: Option<u32>,
     /// Frame times (glTF) or frame numbers (PLY sequences).
+    #[schemars(with = "Option<Frames>")]
     pub(super) frames: Option<Spanned<Frames>>,
     /// A transform applied to this source alone, before the global `[transform]`.
     pub transform: Option<Transform>,
@@ -52,7 +58,7 @@ impl SourceKind {
 }
 
 /// Clip selection: `animation = 0`, `"Walk"`, `[0, "Wave"]` or `"all"`.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum AnimationSel {
     /// A clip by index.
@@ -64,7 +70,7 @@ pub enum AnimationSel {
 }
 
 /// One clip reference inside a list.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum ClipRef {
     /// By index.

@@ -10,19 +10,23 @@ use super::frames::FrameSubset;
 pub const MAX_VIEWS: u32 = 1_000_000;
 
 /// One `[split.NAME]` table.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Split {
     /// The rig whose cameras this split uses.
+    #[schemars(with = "String")]
     pub(super) rig: Spanned<String>,
     /// Number of camera poses (not needed for `explicit`/`from-file` rigs).
+    #[schemars(with = "Option<u32>")]
     pub(super) views: Option<Spanned<u32>>,
     /// How views meet frames (default `"all"`).
     #[serde(default)]
     pub time: TimeMode,
     /// `time = "random"`: how many (view, frame) pairs.
+    #[schemars(with = "Option<u32>")]
     pub(super) pairs: Option<Spanned<u32>>,
     /// Which of the source frames this split uses (default all).
+    #[schemars(with = "Option<FrameSubset>")]
     pub(super) frames: Option<Spanned<FrameSubset>>,
     /// Seed of this split's random streams (default: derived from the dataset seed and the split name).
     pub seed: Option<u64>,
@@ -32,7 +36,7 @@ pub struct Split {
 }
 
 /// How views meet time.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum TimeMode {
     /// Every view renders every selected frame (synchronized multi-view video).

@@ -11,12 +11,13 @@ use super::diag::Diagnostic;
 
 /// One transform table. Every key is optional; a source's table overrides nothing of the global one: the
 /// source's transform applies first, the global one to the whole scene after it.
-#[derive(Debug, Clone, Deserialize, Default, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Default, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Transform {
     /// The source's up axis: `"y"` (glTF, most scanners) or `"z"`. Default: `"y"` for glTF, `"z"` otherwise.
     pub up: Option<UpAxis>,
     /// Scale so that one measure of the bounds has this size.
+    #[schemars(with = "Option<Fit>")]
     pub(super) fit: Option<Spanned<Fit>>,
     /// Which point moves to the origin (default `"none"`).
     pub center: Option<Center>,
@@ -27,13 +28,14 @@ pub struct Transform {
     /// Extra scale: one number or one per axis.
     pub scale: Option<Scale>,
     /// A raw 4×4 matrix (rows), applied first to source coordinates.
+    #[schemars(with = "Option<[[f64; 4]; 4]>")]
     pub(super) matrix: Option<Spanned<[[f64; 4]; 4]>>,
     /// Which frames the bounds for `fit`/`center` come from.
     pub over: Option<Over>,
 }
 
 /// Source up axis.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum UpAxis {
     /// +Y up (glTF's convention).
@@ -43,7 +45,7 @@ pub enum UpAxis {
 }
 
 /// `fit = { height = … }` / `{ radius = … }` / `{ extent = … }`: exactly one.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Fit {
     /// Size along world Z.
@@ -55,7 +57,7 @@ pub struct Fit {
 }
 
 /// Centering rule.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Center {
     /// Centre of the bounding box.
@@ -67,7 +69,7 @@ pub enum Center {
 }
 
 /// Extra scale.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum Scale {
     /// The same on every axis.
@@ -77,7 +79,7 @@ pub enum Scale {
 }
 
 /// Which frames define the normalization.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Over {
     /// The union of every frame's bounds: the subject never jumps or breathes.

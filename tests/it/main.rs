@@ -16,6 +16,7 @@ mod points;
 mod render;
 mod rigs;
 mod scene;
+mod schema;
 mod slurm;
 mod transform;
 mod video;
