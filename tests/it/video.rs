@@ -180,3 +180,38 @@ fn videos_are_cached_and_deterministic() {
     let r = vvgen::build::build(&m, &a.path().join("cache"), Default::default(), &vvgen::build::Silent).unwrap();
     assert!(r.nothing_to_do());
 }
+
+/// Sharded builds render a DyNeRF dataset's images between them and leave the videos (which read every frame of
+/// a camera) to the final unsharded build, which then renders nothing; the result is the single-process one.
+#[test]
+fn shards_leave_the_videos_to_the_final_build() {
+    use vvgen::build::{build as run, Options};
+    use vvgen::execute::Shard;
+    use vvgen::plan::actions::Kind;
+    let (one, sharded) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let single = built(one.path());
+    // The same manifest, built in two shards and then once more.
+    std::fs::copy(one.path().join("m.toml"), sharded.path().join("m.toml")).unwrap();
+    let m = crate::common::load(&sharded.path().join("m.toml"));
+    let cache = sharded.path().join("cache");
+    let mut renders = 0;
+    for index in 0..2 {
+        let r = run(
+            &m,
+            &cache,
+            Options { shard: Some(Shard { index, count: 2 }), ..Default::default() },
+            &vvgen::build::Silent,
+        )
+        .unwrap();
+        assert_eq!(r.ran(Kind::Video), 0, "shard {index} encoded a video");
+        renders += r.ran(Kind::RenderPass);
+    }
+    assert_eq!(renders, 24, "4 cameras × 6 frames, each rendered once");
+    let r = run(&m, &cache, Options::default(), &vvgen::build::Silent).unwrap();
+    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Video)), (0, 4));
+    let root = sharded.path().join("out/m_dynerf");
+    for c in 0..4 {
+        let name = format!("cam{c:02}.mp4");
+        assert_eq!(std::fs::read(root.join(&name)).unwrap(), std::fs::read(single.join(&name)).unwrap(), "{name}");
+    }
+}
