@@ -85,18 +85,21 @@ struct Writing<'a, 'd> {
 }
 
 impl Writing<'_, '_> {
-    fn warn(&mut self, message: String, help: String) {
-        let d = Diagnostic::warning(message, Some(self.out.writer.span())).with_help(help);
+    /// A warning at the output's `writer`: "output `NAME` (WRITER)" followed by `what` (` with …`, `: …`).
+    fn warn(&mut self, what: impl AsRef<str>, help: impl Into<String>) {
+        let d = Diagnostic::warning(self.message(what.as_ref()), Some(self.out.writer.span())).with_help(help);
         self.diags.push(d);
     }
 
-    fn error(&mut self, message: String, help: String) {
-        let d = Diagnostic::error(message, Some(self.out.writer.span())).with_help(help);
+    /// An error, worded as [`Writing::warn`].
+    fn error(&mut self, what: impl AsRef<str>, help: impl Into<String>) {
+        let d = Diagnostic::error(self.message(what.as_ref()), Some(self.out.writer.span())).with_help(help);
         self.diags.push(d);
     }
 
-    fn label(&self) -> String {
-        format!("output `{}` ({})", self.name, self.out.writer.get_ref().name())
+    fn message(&self, what: &str) -> String {
+        let sep = if what.starts_with(':') { "" } else { " " };
+        format!("output `{}` ({}){sep}{what}", self.name, self.out.writer.get_ref().name())
     }
 
     /// The dataset root as the consumers see it (absolute when the manifest's folder is).
@@ -105,75 +108,58 @@ impl Writing<'_, '_> {
         self.m.out_dir().join(dir).to_string_lossy().into_owned()
     }
 
-    fn non_square_pixels(&self) -> bool {
-        let (fx, fy, _, _) = self.m.render.intrinsics();
-        (fx - fy).abs() > 1e-9 * fx.abs().max(1.0)
-    }
-
-    fn off_centre(&self) -> Option<(f64, f64)> {
-        let (_, _, cx, cy) = self.m.render.intrinsics();
+    /// fx ≠ fy (when `focal` says why it matters) and an off-centre principal point, for writers whose consumers
+    /// read one focal length or assume the image centre.
+    fn focal_and_centre(&mut self, focal: Option<String>, centre: impl Into<String>) {
+        let (fx, fy, cx, cy) = self.m.render.intrinsics();
         let (w, h) = self.m.render.size();
-        let centred = (cx - w as f64 / 2.0).abs() <= 1e-9 && (cy - h as f64 / 2.0).abs() <= 1e-9;
-        (!centred).then_some((cx, cy))
+        if let Some(help) = focal.filter(|_| (fx - fy).abs() > 1e-9 * fx.abs().max(1.0)) {
+            self.warn(format!("with fx = {fx} ≠ fy = {fy} (non-square pixels)"), help);
+        }
+        if (cx - w as f64 / 2.0).abs() > 1e-9 || (cy - h as f64 / 2.0).abs() > 1e-9 {
+            self.warn(format!("with an off-centre principal point ({cx}, {cy}) in a {w}×{h} image"), centre);
+        }
     }
 
-    /// fx ≠ fy and an off-centre principal point, for writers whose consumers read one focal and the centre.
+    /// [`Writing::focal_and_centre`] for the loaders of a NeRF-synthetic transforms file.
     fn one_focal_and_centre(&mut self, loaders: &str) {
-        let (fx, fy, _, _) = self.m.render.intrinsics();
-        if self.non_square_pixels() {
-            let l = self.label();
-            self.warn(
-                format!("{l} with fx = {fx} ≠ fy = {fy} (non-square pixels)"),
-                format!("{loaders} take one focal length for both axes and ignore fl_y: set `fy` equal to fx"),
-            );
-        }
-        if let Some((cx, cy)) = self.off_centre() {
-            let (w, h) = self.m.render.size();
-            let l = self.label();
-            self.warn(
-                format!("{l} with an off-centre principal point ({cx}, {cy}) in a {w}×{h} image"),
-                format!("{loaders} project about the image centre and ignore cx, cy: leave `cx`, `cy` unset"),
-            );
-        }
+        self.focal_and_centre(
+            Some(format!("{loaders} take one focal length for both axes and ignore fl_y: set `fy` equal to fx")),
+            format!("{loaders} project about the image centre and ignore cx, cy: leave `cx`, `cy` unset"),
+        );
     }
 
     fn dnerf(&mut self) {
         let (w, h) = self.m.render.size();
         if w != h {
-            let l = self.label();
             self.warn(
-                format!("{l} with non-square {w}×{h} images"),
+                format!("with non-square {w}×{h} images"),
                 "K-Planes swaps W and H when resizing, Deformable-3DGS swaps FovX and FovY, 4DGaussians resizes to \
-                 800×800 and D-NeRF's half_res resizes wrongly: use square images"
-                    .into(),
+                 800×800 and D-NeRF's half_res resizes wrongly: use square images",
             );
         }
         self.one_focal_and_centre(DNERF_ONE_FOCAL);
         let selected = selected_splits(self.m, self.out);
         for split in selected.iter().filter(|s| s.contains("_r")) {
-            let l = self.label();
             self.error(
-                format!("{l} writes split `{split}`, whose name contains `_r`"),
-                "K-Planes splits D-NeRF file paths at `_r` (fetch_360vid_info): rename the split".into(),
+                format!("writes split `{split}`, whose name contains `_r`"),
+                "K-Planes splits D-NeRF file paths at `_r` (fetch_360vid_info): rename the split",
             );
         }
         for needed in ["train", "val", "test"] {
             if !selected.contains(&needed) {
-                let l = self.label();
                 self.warn(
-                    format!("{l} has no `{needed}` split"),
+                    format!("has no `{needed}` split"),
                     "D-NeRF opens transforms_train/val/test.json unconditionally and nerfstudio's dnerf-data needs \
-                     val while training"
-                        .into(),
+                     val while training",
                 );
             }
         }
         let root = self.root();
         let dir = self.out.dir_name(self.m.dataset.name.get_ref());
         if !dir.contains("dnerf") && !dir.contains("lego") {
-            let l = self.label();
             self.warn(
-                format!("{l}: directory `{dir}` does not contain \"dnerf\""),
+                format!(": directory `{dir}` does not contain \"dnerf\""),
                 format!("K-Planes picks its D-NeRF loader by that substring in the path ({root})"),
             );
         }
@@ -182,10 +168,9 @@ impl Writing<'_, '_> {
     fn static_frames(&mut self) {
         let (w, h) = self.m.render.size();
         if w != h {
-            let l = self.label();
             self.warn(
-                format!("{l} with non-square {w}×{h} images"),
-                "NeRF's load_blender.py with half_res resizes non-square images wrongly".into(),
+                format!("with non-square {w}×{h} images"),
+                "NeRF's load_blender.py with half_res resizes non-square images wrongly",
             );
         }
         self.one_focal_and_centre(STATIC_ONE_FOCAL);
@@ -194,80 +179,56 @@ impl Writing<'_, '_> {
     fn nerfstudio(&mut self) {
         // nerfstudio-data reads fl_x, fl_y, cx, cy, w, h exactly: no intrinsics caveat.
         if self.m.render.has_pass(Pass::Depth) && self.m.render.depth.kind == DepthKind::Ray {
-            let l = self.label();
             self.warn(
-                format!("{l} writes ray-distance depth"),
+                "writes ray-distance depth",
                 "nerfstudio's depth-nerfacto reads planar z-depth unless run with \
                  `--pipeline.model.is-euclidean-depth True`; transforms.json has no key to say so (vvgen/dataset.json \
-                 records the kind): pass that flag, or use depth = { kind = \"planar\" }"
-                    .into(),
+                 records the kind): pass that flag, or use depth = { kind = \"planar\" }",
             );
         }
         let selected = selected_splits(self.m, self.out);
         if !selected.iter().any(|s| *s == "val" || *s == "test") {
-            let l = self.label();
-            self.warn(format!("{l} has no `val` or `test` split"), "nerfstudio's eval lists will be empty".into());
+            self.warn("has no `val` or `test` split", "nerfstudio's eval lists will be empty");
         }
     }
 
     fn instant_ngp(&mut self) {
         if self.m.render.has_pass(Pass::Depth) && self.m.render.depth.kind == DepthKind::Ray {
-            let l = self.label();
             self.error(
-                format!("{l} with ray-distance depth"),
+                "with ray-distance depth",
                 "instant-ngp supervises with planar z-depth (target = |ray.d| · depth, camera z = 1) and its \
                  format has no key for another kind: use depth = { kind = \"planar\" }, or a separate output for \
-                 the ray depth"
-                    .into(),
+                 the ray depth",
             );
         }
     }
 
     fn colmap(&mut self) {
         // fx ≠ fy is fine: 3DGS turns fx and fy into two FoVs; nerfstudio's colmap parser reads all four.
-        if let Some((cx, cy)) = self.off_centre() {
-            let l = self.label();
-            self.warn(
-                format!("{l} with an off-centre principal point ({cx}, {cy})"),
-                "3DGS's COLMAP reader (and 4DGaussians' and Deformable-3DGS' copies) use only the focal lengths and \
-                 project about the image centre; nerfstudio's colmap parser reads cx, cy: leave `cx`, `cy` unset \
-                 for 3DGS"
-                    .into(),
-            );
-        }
+        self.focal_and_centre(
+            None,
+            "3DGS's COLMAP reader (and 4DGaussians' and Deformable-3DGS' copies) use only the focal lengths and \
+             project about the image centre; nerfstudio's colmap parser reads cx, cy: leave `cx`, `cy` unset for 3DGS",
+        );
     }
 
     fn dynerf(&mut self) {
-        let (fx, fy, _, _) = self.m.render.intrinsics();
-        if self.non_square_pixels() {
-            let l = self.label();
-            self.warn(
-                format!("{l} with fx = {fx} ≠ fy = {fy} (non-square pixels)"),
-                format!("poses_bounds.npy holds one focal length (fx): {DYNERF_LOADERS} use it for both axes"),
-            );
-        }
-        if let Some((cx, cy)) = self.off_centre() {
-            let l = self.label();
-            self.warn(
-                format!("{l} with an off-centre principal point ({cx}, {cy})"),
-                format!("poses_bounds.npy has no principal point: {DYNERF_LOADERS} assume the image centre"),
-            );
-        }
+        self.focal_and_centre(
+            Some(format!("poses_bounds.npy holds one focal length (fx): {DYNERF_LOADERS} use it for both axes")),
+            format!("poses_bounds.npy has no principal point: {DYNERF_LOADERS} assume the image centre"),
+        );
         let (w, h) = self.m.render.size();
         if (w, h) != (2704, 2028) {
-            let l = self.label();
             self.warn(
-                format!("{l} with {w}×{h} images"),
+                format!("with {w}×{h} images"),
                 "4DGaussians hard-codes DyNeRF's 2704×2028 (resized to 1352×1014, focal halved): its cameras are \
                  right only at a 4:3 aspect with the focal given for 2704 px; K-Planes and Deformable-3DGS read any \
-                 size"
-                    .into(),
+                 size",
             );
         }
         if w % 2 == 1 || h % 2 == 1 {
-            let l = self.label();
             self.warn(
-                format!("{l} with odd-sized {w}×{h} images"),
+                format!("with odd-sized {w}×{h} images"),
                 format!(
                     "H.264 4:2:0 has only even sizes: camNN.mp4 is {}×{} (the last column or row repeated); the PNG \
                      frames keep {w}×{h}",
@@ -278,19 +239,16 @@ impl Writing<'_, '_> {
         }
         let root = self.root();
         if root.contains("dnerf") || root.contains("lego") {
-            let l = self.label();
             self.warn(
-                format!("{l}: the path {root} contains `dnerf` or `lego`"),
-                "K-Planes reads a path containing `dnerf` or `lego` as D-NeRF data: choose another `dir`".into(),
+                format!(": the path {root} contains `dnerf` or `lego`"),
+                "K-Planes reads a path containing `dnerf` or `lego` as D-NeRF data: choose another `dir`",
             );
         }
         if root.contains('.') {
-            let l = self.label();
             self.warn(
-                format!("{l}: the path {root} contains a `.`"),
+                format!(": the path {root} contains a `.`"),
                 "4DGaussians takes everything before the first `.` of a video's path as its frame folder: keep dots \
-                 out of the path it is given"
-                    .into(),
+                 out of the path it is given",
             );
         }
     }

@@ -334,10 +334,7 @@ fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut 
 /// The DyNeRF layout is synchronized video: every split it writes has every camera at every frame, over the
 /// same frames (the plan refuses it too; here it is refused before anything renders).
 fn dynerf_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<Diagnostic>) {
-    let selected: Vec<&str> = match &out.splits {
-        Some(s) => s.iter().map(|s| s.get_ref().as_str()).collect(),
-        None => m.splits.keys().map(String::as_str).collect(),
-    };
+    let selected = consumers::selected_splits(m, out);
     let mut frames: Option<(&str, Option<&frames::FrameSubset>)> = None;
     for split_name in selected {
         let Some(split) = m.splits.get(split_name) else { continue };
