@@ -111,6 +111,7 @@ impl Error {
             Error::Execute { source, .. } => match &**source {
                 execute::Error::Scene { .. } | execute::Error::Content { .. } => true,
                 execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),
+                execute::Error::Video { source, .. } => matches!(source, execute::video::Error::TooLarge { .. }),
                 execute::Error::Cache { .. } => false,
             },
             Error::Export { source, .. } => {

@@ -50,6 +50,15 @@ pub enum Error {
         #[source]
         source: crate::sample::Error,
     },
+    /// Encoding a video failed.
+    #[error("{action}")]
+    Video {
+        /// The action's label.
+        action: String,
+        /// Why.
+        #[source]
+        source: video::Error,
+    },
     /// The scene cannot give what the action asks (an empty scene to bound).
     #[error("{action}: {message}")]
     Content {

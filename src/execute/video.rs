@@ -20,9 +20,8 @@ use openh264::encoder::{
 use openh264::formats::YUVBuffer;
 use openh264::OpenH264API;
 
-use super::{Error, Inputs, Made};
+use super::{Inputs, Made};
 use crate::cache::Digest;
-use crate::plan::actions::Action;
 use crate::plan::graph::{ActionId, Graph};
 
 /// The finest quantizer OpenH264's rate control allows (its `GOM_MIN_QP_MODE`; lower minimums are raised to it).
@@ -32,6 +31,49 @@ const GOP: u32 = 30;
 /// Ticks per second of the video track.
 const TIMESCALE: u32 = 90_000;
 
+/// What can go wrong encoding a video.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A frame's bytes do not match its size.
+    #[error("a {width}×{height} frame of {bytes} bytes")]
+    FrameSize {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// Bytes given.
+        bytes: usize,
+    },
+    /// A frame is larger than MP4 can describe (65 535 pixels a side).
+    #[error("{width}×{height} is larger than MP4 can describe")]
+    TooLarge {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+    },
+    /// A frame of another size than the first.
+    #[error("a frame of {got:?} in a {want:?} video")]
+    SizeChanged {
+        /// The frame's size.
+        got: (u32, u32),
+        /// The video's size.
+        want: (u32, u32),
+    },
+    /// The video has no frames.
+    #[error("no frames were encoded")]
+    Empty,
+    /// A composite is not a PNG.
+    #[error("a frame")]
+    Decode(#[from] image::ImageError),
+    /// OpenH264 failed.
+    #[error("the H.264 encoder")]
+    Encoder(#[from] openh264::Error),
+    /// The MP4 writer failed.
+    #[error("the MP4 writer")]
+    Container(#[from] mp4::Error),
+}
+
 /// Runs the video actions `ids`, in parallel; each encodes its frames in order.
 pub(super) fn videos(
     g: &Graph,
@@ -39,16 +81,15 @@ pub(super) fn videos(
     blobs: &[Option<Vec<Digest>>],
     ids: &[ActionId],
     done: &(dyn Fn() + Sync),
-) -> Result<Made, Error> {
+) -> Result<Made, super::Error> {
     x.each(g, ids, done, |id| {
         let n = g.node(id);
-        let Action::Video { fps_milli, .. } = n.action else { unreachable!("a video") };
-        let fail = |message: String| Error::Content { action: n.label.clone(), message };
-        let mut video = Video::new(fps_milli as f64 / 1000.0);
+        let fail = |source: Error| super::Error::Video { action: n.label.clone(), source };
+        let mut video = Video::new(g.keying.video_fps_milli as f64 / 1000.0);
         for &d in &n.deps {
             let png = x.read(g, blobs, d, 0)?;
             let img = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
-                .map_err(|e| fail(e.to_string()))?
+                .map_err(|e| fail(e.into()))?
                 .into_rgb8();
             let (w, h) = img.dimensions();
             video.push(img.as_raw(), w, h).map_err(fail)?;
@@ -77,13 +118,13 @@ impl Video {
 
     /// Appends a frame of packed 8-bit sRGB (`w·h·3` bytes). Every frame has the first one's size; odd sizes
     /// are padded to even (4:2:0 has no odd sizes) by repeating the last column and row.
-    pub fn push(&mut self, rgb: &[u8], w: u32, h: u32) -> Result<(), String> {
+    pub fn push(&mut self, rgb: &[u8], w: u32, h: u32) -> Result<(), Error> {
         if rgb.len() != w as usize * h as usize * 3 || w == 0 || h == 0 {
-            return Err(format!("a {w}×{h} frame of {} bytes", rgb.len()));
+            return Err(Error::FrameSize { width: w, height: h, bytes: rgb.len() });
         }
         if self.encoder.is_none() {
-            if w > u16::MAX as u32 || h > u16::MAX as u32 {
-                return Err(format!("{w}×{h} is larger than MP4 can describe"));
+            if w >= u16::MAX as u32 || h >= u16::MAX as u32 {
+                return Err(Error::TooLarge { width: w, height: h });
             }
             let config = EncoderConfig::new()
                 .usage_type(UsageType::CameraVideoRealTime)
@@ -95,16 +136,15 @@ impl Video {
                 .intra_frame_period(IntraFramePeriod::from_num_frames(GOP))
                 .num_threads(1)
                 .vui(VuiConfig::bt601());
-            let e = Encoder::with_api_config(OpenH264API::from_source(), config).map_err(|e| e.to_string())?;
-            self.encoder = Some(e);
+            self.encoder = Some(Encoder::with_api_config(OpenH264API::from_source(), config)?);
             self.size = (w, h);
         } else if self.size != (w, h) {
-            return Err(format!("frame of {w}×{h} in a {}×{} video", self.size.0, self.size.1));
+            return Err(Error::SizeChanged { got: (w, h), want: self.size });
         }
         let (ew, eh) = (w.next_multiple_of(2) as usize, h.next_multiple_of(2) as usize);
         let frame = YUVBuffer::from_vec(rgb_to_i420(rgb, w as usize, h as usize), ew, eh);
         let encoder = self.encoder.as_mut().expect("BUG: made above");
-        let stream = encoder.encode(&frame).map_err(|e| e.to_string())?.to_vec();
+        let stream = encoder.encode(&frame)?.to_vec();
         let (mut sample, mut idr) = (Vec::new(), false);
         for nal in openh264::nal_units(&stream) {
             let nal = strip_start_code(nal);
@@ -126,10 +166,9 @@ impl Video {
     }
 
     /// The MP4 file.
-    pub fn finish(self) -> Result<Vec<u8>, String> {
-        let err = |e: mp4::Error| e.to_string();
+    pub fn finish(self) -> Result<Vec<u8>, Error> {
         if self.samples.is_empty() || self.sps.is_empty() || self.pps.is_empty() {
-            return Err("no frames were encoded".into());
+            return Err(Error::Empty);
         }
         let brand = |s: &str| s.parse::<FourCC>().expect("BUG: a four-letter brand");
         let config = Mp4Config {
@@ -138,7 +177,7 @@ impl Video {
             compatible_brands: ["isom", "iso2", "avc1", "mp41"].map(brand).to_vec(),
             timescale: 1000,
         };
-        let mut w = Mp4Writer::write_start(std::io::Cursor::new(Vec::new()), &config).map_err(err)?;
+        let mut w = Mp4Writer::write_start(std::io::Cursor::new(Vec::new()), &config)?;
         let (width, height) = (self.size.0.next_multiple_of(2) as u16, self.size.1.next_multiple_of(2) as u16);
         w.add_track(&TrackConfig {
             track_type: TrackType::Video,
@@ -150,17 +189,16 @@ impl Video {
                 seq_param_set: self.sps,
                 pic_param_set: self.pps,
             }),
-        })
-        .map_err(err)?;
+        })?;
         // Frame i starts at round(i · timescale / fps): no drift over long videos at fractional rates.
         let start = |i: usize| (i as f64 * TIMESCALE as f64 / self.fps).round() as u64;
         for (i, (bytes, is_sync)) in self.samples.into_iter().enumerate() {
             let duration = (start(i + 1) - start(i)).max(1) as u32;
             let sample =
                 Mp4Sample { start_time: start(i), duration, rendering_offset: 0, is_sync, bytes: Bytes::from(bytes) };
-            w.write_sample(1, &sample).map_err(err)?;
+            w.write_sample(1, &sample)?;
         }
-        w.write_end().map_err(err)?;
+        w.write_end()?;
         Ok(w.into_writer().into_inner())
     }
 }

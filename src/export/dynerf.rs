@@ -34,7 +34,6 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
         let (near, far) = depth_range(&c2w, bounds, c0.near);
         rows.extend(llff_row(&c2w, c0.height, c0.width, c0.fx));
         rows.extend([near, far]);
-        let mut list = Vec::new();
         for (fi, &f) in frames.iter().enumerate() {
             let img = x.plan.splits[s]
                 .images
@@ -47,11 +46,9 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
             let rgb = x.opaque_rgb(img)?;
             files.image_blob(img, "rgb", &format!("frames/cam{ci:02}/{fi:04}.png"), rgb)?;
             files.blob(&format!("cam{ci:02}/images/{fi:04}.png"), rgb)?;
-            list.push(img);
         }
         // K-Planes decodes camNN.mp4 (sorted, cam00 is its test camera); 4DGaussians asserts they exist.
-        let fps_milli = (crate::plan::graph::video_fps(x.manifest) * 1000.0).round() as u64;
-        files.blob(&format!("cam{ci:02}.mp4"), x.blob(&Action::Video { images: list, fps_milli })?)?;
+        files.blob(&format!("cam{ci:02}.mp4"), x.blob(&Action::Video { split: s, view: v })?)?;
     }
     files.bytes("poses_bounds.npy", &npy_f64(&rows, cams.len(), 17))?;
     let n = init_points(out);

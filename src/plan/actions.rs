@@ -104,13 +104,12 @@ pub enum Action {
         /// Opaque background, sRGB.
         background: [u8; 3],
     },
-    /// One camera's video: plan images `images`, one per frame in frame order, at `fps`. Deps: their
-    /// [`Action::Composite`]s, in the same order.
+    /// One camera's video, at [`Keying::video_fps_milli`]. Deps: the [`Action::Composite`]s of its images, in frame order.
     Video {
-        /// Indices into [`Plan::images`].
-        images: Vec<usize>,
-        /// Frames per second, in thousandths (an integer, so the action hashes and compares exactly).
-        fps_milli: u64,
+        /// Index into [`Plan::splits`].
+        split: usize,
+        /// The camera (view) within the split.
+        view: u32,
     },
     /// `points` samples spread over `frames`. No deps.
     InitCloud {
@@ -219,6 +218,9 @@ pub struct Keying<'a> {
     pub seed: u64,
     /// blake3 of the manifest text (an output's `vvgen/dataset.json` records it).
     pub manifest: Digest,
+    /// The frame rate of videos, in thousandths of a frame per second (an integer, so it keys exactly): the first
+    /// source's `fps` (the sources of a scene share one time axis), 30 without one.
+    pub video_fps_milli: u64,
     /// Resolved settings of every `ply-sequence` output, by name.
     pub points: std::collections::BTreeMap<String, PointSettings>,
 }
@@ -243,10 +245,10 @@ impl Action {
                 w.f64s("background", &background.map(f64::from));
                 w.str("png compression", png_name(cx.encoding.png));
             }
-            Action::Video { images: _, fps_milli } => {
-                // The frames enter through their composites' keys; which images they are does not matter.
+            Action::Video { split: _, view: _ } => {
+                // The frames enter through their composites' keys; which camera they are does not matter.
                 w.str("encoder", VIDEO_SALT);
-                w.u64("fps (thousandths)", *fps_milli);
+                w.u64("fps (thousandths)", cx.video_fps_milli);
                 for d in deps {
                     w.digest("frame", d);
                 }

@@ -65,6 +65,8 @@ impl<'a> Graph<'a> {
             encoding: m.render.encoding(),
             seed: m.dataset.seed,
             manifest: Digest::of(m.text.as_bytes()),
+            video_fps_milli: (m.sources.values().find_map(|s| s.frames().map(|f| f.fps())).unwrap_or(30.0) * 1000.0)
+                .round() as u64,
             points: BTreeMap::new(),
         };
         let mut g = Graph { nodes: Vec::new(), keying, index: HashMap::new(), by_key: HashMap::new() };
@@ -207,12 +209,11 @@ impl<'a> Graph<'a> {
                     for &i in &images {
                         cameras.entry((plan.images[i].split, plan.images[i].view)).or_default().push(i);
                     }
-                    let fps_milli = (video_fps(m) * 1000.0).round() as u64;
                     for ((split, view), mut list) in cameras {
                         list.sort_by_key(|&i| plan.images[i].frame);
                         let inputs = list.iter().map(|i| composites[i]).collect();
                         let label = format!("video {}/{view}", plan.splits[split].name);
-                        deps.push(self.add(Action::Video { images: list, fps_milli }, label, inputs));
+                        deps.push(self.add(Action::Video { split, view }, label, inputs));
                     }
                 }
                 if writer == Writer::Colmap {
@@ -243,12 +244,6 @@ impl<'a> Graph<'a> {
 pub fn image_label(plan: &Plan, i: usize) -> String {
     let img = &plan.images[i];
     format!("{}/{}/{}", plan.splits[img.split].name, img.view, img.frame)
-}
-
-/// The frame rate of a dataset's videos: its first source's `fps` (every source of a scene shares the time
-/// axis), 30 without one.
-pub fn video_fps(m: &Manifest) -> f64 {
-    m.sources.values().find_map(|s| s.frames().map(|f| f.fps())).unwrap_or(30.0)
 }
 
 /// The DyNeRF layout is synchronized video: every camera of every split at every frame.
