@@ -113,13 +113,7 @@ fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
 
 /// The up axis of a scan: its tallest extent (a standing subject), said with the extents.
 fn tallest(s: &scene::PosedScene, path: &Path) -> (&'static str, String) {
-    let (mut lo, mut hi) = (glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY));
-    for p in &s.primitives {
-        for v in p.positions.iter() {
-            (lo, hi) = (lo.min(*v), hi.max(*v));
-        }
-    }
-    let e = hi - lo;
+    let e = s.bounds().map_or(glam::Vec3::ZERO, |(lo, hi)| hi - lo);
     let up = if e.y >= e.z && e.y >= e.x { "y" } else { "z" };
     let name = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
     (up, format!("up \"{up}\" guessed: the taller of y and z in {name} (extent {:.3} × {:.3} × {:.3})", e.x, e.y, e.z))

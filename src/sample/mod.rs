@@ -177,15 +177,21 @@ pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, Error> {
 pub fn points(scene: &PosedScene) -> Points {
     let mut out = Points::default();
     for p in scene.primitives.iter().filter(|p| p.kind == PrimKind::Points) {
-        let m = &scene.materials[p.material as usize];
-        for (i, pos) in p.positions.iter().enumerate() {
-            out.positions.push(pos.to_array());
-            out.normals.push(p.normals.get(i).copied().unwrap_or(Vec3::ZERO).to_array());
-            let c = m.albedo(&scene.textures, p.uvs.get(i).copied(), p.colors.get(i).copied());
-            out.colors.push(c.truncate().to_array());
+        for i in 0..p.positions.len() {
+            push_point(&mut out, scene, p, i);
         }
     }
     out
+}
+
+/// Appends point `i` of point primitive `p`: its position, normal (zero where unknown) and linear albedo.
+#[inline]
+fn push_point(out: &mut Points, scene: &PosedScene, p: &crate::scene::PosedPrimitive, i: usize) {
+    out.positions.push(p.positions[i].to_array());
+    out.normals.push(p.normals.get(i).copied().unwrap_or(Vec3::ZERO).to_array());
+    let c =
+        scene.materials[p.material as usize].albedo(&scene.textures, p.uvs.get(i).copied(), p.colors.get(i).copied());
+    out.colors.push(c.truncate().to_array());
 }
 
 /// `n` area-uniform samples of `scene`'s triangles plus every point of its point primitives; `key` names the
@@ -220,17 +226,13 @@ pub fn sample_at_most(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
     let mut index = 0usize;
     let mut next = chosen.iter().copied().peekable();
     for p in scene.primitives.iter().filter(|p| p.kind == PrimKind::Points) {
-        let m = &scene.materials[p.material as usize];
         while let Some(&c) = next.peek() {
             let i = c - index;
             if i >= p.positions.len() {
                 break;
             }
             next.next();
-            out.positions.push(p.positions[i].to_array());
-            out.normals.push(p.normals.get(i).copied().unwrap_or(Vec3::ZERO).to_array());
-            let col = m.albedo(&scene.textures, p.uvs.get(i).copied(), p.colors.get(i).copied());
-            out.colors.push(col.truncate().to_array());
+            push_point(&mut out, scene, p, i);
         }
         index += p.positions.len();
     }

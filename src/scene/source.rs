@@ -71,16 +71,7 @@ impl LoadedSource {
                 SourceData::Gltf { asset: Box::new(asset), clips, times }
             }
             SourceKind::Mesh if is_ply => SourceData::Static(ply_scene(&full)?),
-            SourceKind::Mesh => {
-                let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
-                let mut posed = PosedScene {
-                    materials: Arc::new(asset.materials.clone()),
-                    textures: Arc::clone(&asset.textures),
-                    ..Default::default()
-                };
-                asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
-                SourceData::Static(posed)
-            }
+            SourceKind::Mesh => SourceData::Static(gltf_at_rest(&full, s.scene.map(|x| x as usize))?),
             SourceKind::PlySequence | SourceKind::MeshSequence => {
                 let frames = s.frames().cloned().unwrap_or_default();
                 let sequence = sequence::resolve(dir, path, &frames)
@@ -181,17 +172,20 @@ pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
     match ext.as_str() {
         "obj" => super::obj::scene(path),
         "ply" => ply_scene(path),
-        _ => {
-            let asset = super::gltf::load(path, None)?;
-            let mut posed = PosedScene {
-                materials: Arc::new(asset.materials.clone()),
-                textures: Arc::clone(&asset.textures),
-                ..Default::default()
-            };
-            asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
-            Ok(posed)
-        }
+        _ => gltf_at_rest(path, None),
     }
+}
+
+/// A glTF file's scene `scene` (default: the file's) posed at rest, in source space.
+fn gltf_at_rest(path: &std::path::Path, scene: Option<usize>) -> Result<PosedScene, Error> {
+    let asset = super::gltf::load(path, scene)?;
+    let mut posed = PosedScene {
+        materials: Arc::new(asset.materials.clone()),
+        textures: Arc::clone(&asset.textures),
+        ..Default::default()
+    };
+    asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
+    Ok(posed)
 }
 
 /// The files one mesh-sequence frame is read from besides itself (an OBJ's MTL files and textures, a PLY's
