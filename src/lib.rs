@@ -19,6 +19,7 @@ pub mod execute;
 pub mod export;
 pub mod manifest;
 pub mod plan;
+pub mod preview;
 pub mod release;
 pub mod render;
 pub mod rig;

@@ -112,7 +112,7 @@ impl Error {
                 execute::Error::Scene { .. } | execute::Error::Content { .. } => true,
                 execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),
                 execute::Error::Video { source, .. } => matches!(source, execute::video::Error::TooLarge { .. }),
-                execute::Error::Cache { .. } => false,
+                execute::Error::Cache { .. } | execute::Error::Preview { .. } => false,
             },
             Error::Export { source, .. } => {
                 matches!(**source, export::Error::Pattern(_) | export::Error::EmptyScene | export::Error::NonFinite(_))

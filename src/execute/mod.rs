@@ -4,6 +4,7 @@
 //! reader of the graph shares: which actions are cached, which must run, which are not needed.
 
 mod points;
+mod preview;
 mod render;
 pub mod video;
 
@@ -58,6 +59,15 @@ pub enum Error {
         /// Why.
         #[source]
         source: video::Error,
+    },
+    /// A preview picture cannot be drawn from its inputs (a damaged cache).
+    #[error("{action}")]
+    Preview {
+        /// The action's label.
+        action: String,
+        /// Why.
+        #[source]
+        source: crate::preview::Error,
     },
     /// The scene cannot give what the action asks (an empty scene to bound).
     #[error("{action}: {message}")]
@@ -234,11 +244,11 @@ impl Inputs<'_> {
 /// the inputs they read that must run too (a shared input such as a sequence's bounds: cheap, and the same bytes
 /// whichever shard makes it). Readers come after their inputs, so one walk from the end settles it.
 pub(crate) fn runs_here(g: &Graph, state: &[State], shard: Option<Shard>) -> Vec<bool> {
-    // A video reads every frame of its camera: in a shard it would pull renders other shards own, so videos are
-    // left to the unsharded build that writes the outputs (by then their composites are cached).
+    // A video reads every frame of its camera, a contact sheet a whole split: in a shard they would pull renders
+    // other shards own, so they are left to the unsharded build that writes the outputs (`Kind::gathers`).
     let owns = |id: ActionId| match shard {
         None => true,
-        Some(s) => g.node(id).action.kind() != Kind::Video && s.owns(&owner_key(g, id)),
+        Some(s) => !g.node(id).action.kind().gathers() && s.owns(&owner_key(g, id)),
     };
     let mut here = vec![false; g.nodes.len()];
     for id in g.ids().rev() {
@@ -316,6 +326,7 @@ pub(crate) fn run(
             Kind::RenderPass => render::passes(g, x, &ids, &tick)?,
             Kind::Composite => render::composites(g, x, &blobs, &ids, &tick)?,
             Kind::Video => video::videos(g, x, &blobs, &ids, &tick)?,
+            Kind::PreviewSheet | Kind::PreviewRig | Kind::PreviewStrip => preview::run(g, x, &blobs, &ids, &tick)?,
             Kind::WriteOutput => unreachable!("outputs are not cached actions"),
             _ => points::run(g, x, &blobs, &ids, &tick)?,
         };

@@ -108,9 +108,13 @@ fn make(
             }
             Ok(txt.into_bytes())
         }
-        Action::RenderPass { .. } | Action::Composite { .. } | Action::Video { .. } | Action::WriteOutput { .. } => {
-            unreachable!("not a point action")
-        }
+        Action::RenderPass { .. }
+        | Action::Composite { .. }
+        | Action::Video { .. }
+        | Action::PreviewSheet { .. }
+        | Action::PreviewRig { .. }
+        | Action::PreviewStrip { .. }
+        | Action::WriteOutput { .. } => unreachable!("not a point action"),
     }
 }
 

@@ -8,6 +8,7 @@ mod dynerf;
 mod meta;
 mod nerf;
 mod points;
+mod preview;
 
 pub use meta::META;
 
@@ -264,6 +265,7 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
         Writer::Dynerf => dynerf::write(x, out, &images, &mut files)?,
         Writer::PlySequence => points::sequence(x, name, &mut files)?,
     }
+    preview::place(x, name, out, &images, &mut files)?;
     meta::write(x, name, out, &images, &mut files)?;
     Ok(files.finish())
 }

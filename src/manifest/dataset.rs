@@ -31,6 +31,14 @@ pub struct Dataset {
     #[serde(default)]
     #[schemars(with = "Vec<String>")]
     pub(super) after: Vec<Spanned<String>>,
+    /// Write a preview beside each dataset (`preview/`: contact sheets, rig plot, point-cloud strip, HTML viewer);
+    /// `vvgen build --no-preview` turns it off for one build.
+    #[serde(default = "yes")]
+    pub preview: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Dataset {

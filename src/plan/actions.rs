@@ -47,13 +47,19 @@ pub enum Kind {
     SampleFrame,
     /// One frame of a point-cloud sequence, reduced and encoded as PLY.
     PointFrame,
+    /// A split's contact sheet (PNG): thumbnails of its renders.
+    PreviewSheet,
+    /// The rig plot (PNG): an output's cameras around the subject.
+    PreviewRig,
+    /// A point-cloud output's strip (PNG): a few frames rendered.
+    PreviewStrip,
     /// An output's dataset directory: place every blob, write the metadata (not cached in the store).
     WriteOutput,
 }
 
 impl Kind {
     /// Every kind, in execution order (an action's inputs are of earlier kinds).
-    pub const ALL: [Kind; 9] = [
+    pub const ALL: [Kind; 12] = [
         Kind::RenderPass,
         Kind::Bounds,
         Kind::SampleFrame,
@@ -62,6 +68,9 @@ impl Kind {
         Kind::Composite,
         Kind::Video,
         Kind::PointFrame,
+        Kind::PreviewSheet,
+        Kind::PreviewRig,
+        Kind::PreviewStrip,
         Kind::WriteOutput,
     ];
 
@@ -76,6 +85,9 @@ impl Kind {
             Kind::Bounds => "bounds",
             Kind::SampleFrame => "sample-frame",
             Kind::PointFrame => "point-frame",
+            Kind::PreviewSheet => "preview-sheet",
+            Kind::PreviewRig => "preview-rig",
+            Kind::PreviewStrip => "preview-strip",
             Kind::WriteOutput => "write-output",
         }
     }
@@ -83,6 +95,13 @@ impl Kind {
     /// Whether results of this kind live in the cache (all but writing an output).
     pub fn cached(self) -> bool {
         self != Kind::WriteOutput
+    }
+
+    /// Whether actions of this kind gather results from across the graph (every frame of a camera, thumbnails
+    /// of a whole split): a shard would pull work other shards own, so they are left to the unsharded build
+    /// that writes the outputs (by then their inputs are cached).
+    pub fn gathers(self) -> bool {
+        matches!(self, Kind::Video | Kind::PreviewSheet | Kind::PreviewRig | Kind::PreviewStrip)
     }
 }
 
@@ -145,6 +164,25 @@ pub enum Action {
         /// Scene frame.
         frame: usize,
     },
+    /// Split `split`'s contact sheet. Deps: per image of [`crate::preview::sheet::layout`], its RGBA pass, then
+    /// its `extras` passes (depth, mask) in that order.
+    PreviewSheet {
+        /// Index into [`Plan::splits`].
+        split: usize,
+        /// The passes shown besides RGBA.
+        extras: Vec<Pass>,
+    },
+    /// The rig plot of `splits`' cameras. Deps: the [`Action::Bounds`] of their frames, then the subject's
+    /// samples ([`Action::InitCloud`] of [`crate::preview::subject_frame`], [`crate::preview::POINTS`]).
+    PreviewRig {
+        /// Indices into [`Plan::splits`], ascending.
+        splits: Vec<usize>,
+    },
+    /// Point output `output`'s strip. Deps: the [`Action::PointFrame`]s of [`crate::preview::strip_frames`].
+    PreviewStrip {
+        /// The `[output.NAME]`.
+        output: String,
+    },
     /// Output `output`'s directory. Deps: every action whose result it places.
     WriteOutput {
         /// The `[output.NAME]`.
@@ -164,6 +202,9 @@ impl Action {
             Action::Bounds { .. } => Kind::Bounds,
             Action::SampleFrame { .. } => Kind::SampleFrame,
             Action::PointFrame { .. } => Kind::PointFrame,
+            Action::PreviewSheet { .. } => Kind::PreviewSheet,
+            Action::PreviewRig { .. } => Kind::PreviewRig,
+            Action::PreviewStrip { .. } => Kind::PreviewStrip,
             Action::WriteOutput { .. } => Kind::WriteOutput,
         }
     }
@@ -218,6 +259,8 @@ pub struct Keying<'a> {
     pub seed: u64,
     /// blake3 of the manifest text (an output's `vvgen/dataset.json` records it).
     pub manifest: Digest,
+    /// `[dataset] name` (previews are titled with it).
+    pub dataset: String,
     /// The frame rate of videos, in thousandths of a frame per second (an integer, so it keys exactly): the first
     /// source's `fps` (the sources of a scene share one time axis), 30 without one.
     pub video_fps_milli: u64,
@@ -289,6 +332,55 @@ impl Action {
                 }
                 reduction(w, s, if s.vox.is_some() { deps.last() } else { None });
             }
+            Action::PreviewSheet { split, extras } => {
+                let sp = &cx.plan.splits[*split];
+                w.str("preview", crate::preview::SALT);
+                w.str("dataset", &cx.dataset);
+                w.str("split", &sp.name);
+                w.u64("images in split", sp.images.len() as u64);
+                w.u64("columns", crate::preview::sheet::layout(cx.plan, *split).columns as u64);
+                for p in extras {
+                    w.str("also", pass_name(*p));
+                }
+                // Per thumbnail: its label, then its passes' keys.
+                let per = 1 + extras.len();
+                for (k, &i) in crate::preview::sheet::layout(cx.plan, *split).images.iter().enumerate() {
+                    let img = &cx.plan.images[i];
+                    w.u64("view", img.view as u64);
+                    w.u64("frame", img.frame as u64);
+                    w.f64("time", img.time);
+                    for d in deps.iter().skip(k * per).take(per) {
+                        w.digest("pass", d);
+                    }
+                }
+            }
+            Action::PreviewRig { splits } => {
+                w.str("preview", crate::preview::SALT);
+                w.str("dataset", &cx.dataset);
+                w.digest("bounds", &deps[0]);
+                w.digest("subject samples", &deps[1]);
+                w.u64("subject frame", rig_subject_frame(cx.plan, splits) as u64);
+                for &s in splits {
+                    let sp = &cx.plan.splits[s];
+                    w.str("split", &sp.name);
+                    // Every view's camera: the pose, and the intrinsics the crop count projects with.
+                    if let Some(&first) = sp.images.first() {
+                        let c = cx.plan.images[first].camera;
+                        for pose in &sp.poses {
+                            camera(w, &crate::camera::Camera { c2w: *pose, ..c });
+                        }
+                    }
+                }
+            }
+            Action::PreviewStrip { output } => {
+                w.str("preview", crate::preview::SALT);
+                w.str("dataset", &cx.dataset);
+                w.str("output", output);
+                for (f, d) in crate::preview::strip_frames(cx.plan.frames).iter().zip(deps) {
+                    w.u64("frame", *f as u64);
+                    w.digest("points", d);
+                }
+            }
             Action::WriteOutput { output } => {
                 w.str("tool", env!("CARGO_PKG_VERSION"));
                 w.digest("manifest", &cx.manifest);
@@ -299,6 +391,17 @@ impl Action {
             }
         }
     }
+}
+
+/// The frames a rig plot's splits cover, ascending.
+pub fn rig_frames(plan: &Plan, splits: &[usize]) -> Vec<usize> {
+    let images: Vec<usize> = splits.iter().flat_map(|&s| plan.splits[s].images.iter().copied()).collect();
+    plan.frames_of(&images)
+}
+
+/// The frame whose samples stand for the subject in a rig plot of `splits`.
+pub fn rig_subject_frame(plan: &Plan, splits: &[usize]) -> usize {
+    crate::preview::subject_frame(&rig_frames(plan, splits))
 }
 
 /// The manifest spelling of a pass.

@@ -65,6 +65,7 @@ impl<'a> Graph<'a> {
             encoding: m.render.encoding(),
             seed: m.dataset.seed,
             manifest: Digest::of(m.text.as_bytes()),
+            dataset: m.dataset.name().to_string(),
             video_fps_milli: (m.sources.values().find_map(|s| s.frames().map(|f| f.fps())).unwrap_or(30.0) * 1000.0)
                 .round() as u64,
             points: BTreeMap::new(),
@@ -141,6 +142,7 @@ impl<'a> Graph<'a> {
                 let frames: Vec<usize> = (0..plan.frames).collect();
                 self.add(Action::Bounds { frames }, format!("bounds {name}"), vec![])
             });
+            let mut frame_ids = Vec::with_capacity(plan.frames);
             for f in 0..plan.frames {
                 let mut inputs = Vec::new();
                 if s.reduces() {
@@ -149,9 +151,15 @@ impl<'a> Graph<'a> {
                 }
                 inputs.extend(bounds);
                 let a = Action::PointFrame { output: name.to_string(), frame: f };
-                deps.push(self.add(a, format!("points {name}/{f}"), inputs));
+                frame_ids.push(self.add(a, format!("points {name}/{f}"), inputs));
             }
+            deps.extend(&frame_ids);
             deps.extend(bounds);
+            if m.dataset.preview {
+                let shown = crate::preview::strip_frames(plan.frames).iter().map(|&f| frame_ids[f]).collect();
+                let a = Action::PreviewStrip { output: name.to_string() };
+                deps.push(self.add(a, format!("preview-strip {name}"), shown));
+            }
             return Ok(deps);
         }
         let images = plan.images_of(out)?;
@@ -231,7 +239,45 @@ impl<'a> Graph<'a> {
             }
             Writer::PlySequence => unreachable!("planned above"),
         }
+        if m.dataset.preview {
+            self.plan_preview(m, name, &images, &mut deps);
+        }
         Ok(deps)
+    }
+
+    /// The preview of an image output over `images`: a contact sheet per split (when RGBA is rendered), the
+    /// rig plot, and the bounds and subject samples the viewer reads; appended to `deps`.
+    fn plan_preview(&mut self, m: &Manifest, name: &str, images: &[usize], deps: &mut Vec<ActionId>) {
+        use crate::preview::{self, sheet};
+        let plan = self.keying.plan;
+        let mut splits: Vec<usize> = images.iter().map(|&i| plan.images[i].split).collect();
+        splits.sort_unstable();
+        splits.dedup();
+        let passes = m.render.passes();
+        if passes.contains(&Pass::Rgba) {
+            let extras = sheet::extra_passes(passes);
+            for &s in &splits {
+                let mut inputs = Vec::new();
+                for i in sheet::layout(plan, s).images {
+                    inputs.push(self.render_pass(i, Pass::Rgba));
+                    for &p in &extras {
+                        inputs.push(self.render_pass(i, p));
+                    }
+                }
+                let a = Action::PreviewSheet { split: s, extras: extras.clone() };
+                deps.push(self.add(a, format!("preview-sheet {}", plan.splits[s].name), inputs));
+            }
+        }
+        let frames = super::actions::rig_frames(plan, &splits);
+        let subject = vec![preview::subject_frame(&frames)];
+        let bounds = self.add(Action::Bounds { frames }, format!("bounds {name}"), vec![]);
+        let cloud = self.add(
+            Action::InitCloud { frames: subject, points: preview::POINTS },
+            format!("preview-cloud {name}"),
+            vec![],
+        );
+        let rig = self.add(Action::PreviewRig { splits }, format!("preview-rig {name}"), vec![bounds, cloud]);
+        deps.extend([bounds, cloud, rig]);
     }
 
     fn render_pass(&mut self, image: usize, pass: Pass) -> ActionId {

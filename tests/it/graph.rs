@@ -83,7 +83,9 @@ fn every_kind_runs_once_and_a_second_build_has_nothing_to_do() {
         assert!(c.planned > 0 && c.ran == c.planned, "{kind:?}: {c:?}");
     }
     // Shared work is one action: dnerf and nerfstudio ask for the same init cloud.
-    assert_eq!(first.actions[&Kind::InitCloud].planned, 1 + 2 + 1, "d/ns, two static frames, dynerf");
+    // The previews of the six image outputs share one sample of the subject (the same frame and count).
+    assert_eq!(first.actions[&Kind::InitCloud].planned, 1 + 2 + 1 + 1, "d/ns, two static frames, dynerf, preview");
+    assert_eq!(first.actions[&Kind::PreviewSheet].planned, 2, "one sheet per split, shared by the outputs");
     assert_eq!(first.actions[&Kind::Composite].planned, 6, "colmap and dynerf share the composites");
     let again = run(dir.path(), &text);
     assert!(again.nothing_to_do(), "{:?}", again.actions);
@@ -103,7 +105,8 @@ fn a_changed_point_count_is_stale_in_status_plan_and_release() {
     run(d, &manifest("", points));
     let changed = manifest("", &points.replace("2000", "3000"));
     let st = status(d, &changed);
-    assert_eq!(to_run(&st), BTreeMap::from([(Kind::SampleFrame, 2), (Kind::PointFrame, 2), (Kind::WriteOutput, 1)]));
+    let expect = [(Kind::SampleFrame, 2), (Kind::PointFrame, 2), (Kind::PreviewStrip, 1), (Kind::WriteOutput, 1)];
+    assert_eq!(to_run(&st), BTreeMap::from(expect));
     assert!(!st.up_to_date());
     for r in reasons(&st, Kind::SampleFrame) {
         assert_eq!(r, ["points: 2000 → 3000"]);
@@ -113,7 +116,7 @@ fn a_changed_point_count_is_stale_in_status_plan_and_release() {
         assert!(r.len() == 1 && r[0].starts_with("samples: "), "{r:?}");
     }
     let err = vvgen::release::release(&load(&d.join("m.toml")), &d.join("cache")).unwrap_err();
-    assert!(matches!(err, Error::NotBuilt { pending: 4 }), "{err}");
+    assert!(matches!(err, Error::NotBuilt { pending: 5 }), "{err}");
     assert_eq!(err.exit_code(), 1);
     let r = run(d, &changed);
     assert_eq!((r.ran(Kind::SampleFrame), r.ran(Kind::PointFrame), r.ran(Kind::RenderPass)), (2, 2, 0));
@@ -148,9 +151,9 @@ fn gc_after_the_grace_period_keeps_everything_the_graph_reaches() {
     run(d, &edited);
     backdate(&d.join("cache"), 2);
     let c = build::collect_garbage(&[load(&d.join("m.toml"))], &d.join("cache"), None).unwrap();
-    // 2 sample and 2 point-frame records, their 4 blobs, and both outputs' old metadata (which record the
-    // manifest's digest).
-    assert_eq!(c.files, 2 * 2 * 2 + 2);
+    // 2 sample and 2 point-frame records and the strip's, their 5 blobs, and both outputs' old metadata (which
+    // record the manifest's digest).
+    assert_eq!(c.files, (2 * 2 + 1) * 2 + 2);
     assert!(run(d, &edited).nothing_to_do());
     // The cached intermediate samples survived too: a reduction change re-runs only the reduction.
     let r = run(d, &edited.replace("vox = 8", "vox = 9"));
@@ -165,7 +168,9 @@ fn asking_for_exr_is_explained_by_the_field_that_changed() {
     let outputs = "[output.d]\nwriter = \"dnerf\"\ninit_points = 0\n";
     run(d, &manifest("", outputs));
     let st = status(d, &manifest("depth = { exr = true }", outputs));
-    assert_eq!(to_run(&st), BTreeMap::from([(Kind::RenderPass, 6), (Kind::WriteOutput, 1)]));
+    // The contact sheets read the depth renders (by their keys).
+    let expect = [(Kind::RenderPass, 6), (Kind::PreviewSheet, 2), (Kind::WriteOutput, 1)];
+    assert_eq!(to_run(&st), BTreeMap::from(expect));
     let stale: Vec<_> = st.actions.iter().filter(|a| a.kind == Kind::RenderPass && a.state == State::Run).collect();
     for a in &stale {
         assert!(a.label.ends_with(" depth"), "{}", a.label);
@@ -190,13 +195,30 @@ fn each_setting_invalidates_exactly_the_actions_that_read_it() {
     /// What changed, the edited manifest, and what must run besides the three outputs.
     type Case = (&'static str, String, Vec<(Kind, usize)>);
     let cases: [Case; 8] = [
-        ("background", manifest("background = \"black\"", outputs), vec![(RenderPass, 6), (Composite, 6)]),
-        ("depth kind", manifest("depth = { kind = \"ray\" }", outputs), vec![(RenderPass, 6)]),
+        // The contact sheets (one per split) read the RGBA, depth and mask renders; the strip the point frames.
+        (
+            "background",
+            manifest("background = \"black\"", outputs),
+            vec![(RenderPass, 6), (Composite, 6), (PreviewSheet, 2)],
+        ),
+        ("depth kind", manifest("depth = { kind = \"ray\" }", outputs), vec![(RenderPass, 6), (PreviewSheet, 2)]),
         ("normal space", manifest("normal = { space = \"camera\" }", outputs), vec![(RenderPass, 6)]),
-        ("lights", manifest("shading = \"lambert\"", outputs), vec![(RenderPass, 6), (Composite, 6)]),
-        ("samples", base.replace("samples = 4", "samples = 1"), vec![(RenderPass, 24), (Composite, 6)]),
-        ("png", manifest("png_compression = \"best\"", outputs), vec![(RenderPass, 24), (Composite, 6)]),
-        ("voxel", base.replace("voxel = 0.05", "voxel = 0.08"), vec![(PointFrame, 2)]),
+        (
+            "lights",
+            manifest("shading = \"lambert\"", outputs),
+            vec![(RenderPass, 6), (Composite, 6), (PreviewSheet, 2)],
+        ),
+        (
+            "samples",
+            base.replace("samples = 4", "samples = 1"),
+            vec![(RenderPass, 24), (Composite, 6), (PreviewSheet, 2)],
+        ),
+        (
+            "png",
+            manifest("png_compression = \"best\"", outputs),
+            vec![(RenderPass, 24), (Composite, 6), (PreviewSheet, 2)],
+        ),
+        ("voxel", base.replace("voxel = 0.05", "voxel = 0.08"), vec![(PointFrame, 2), (PreviewStrip, 1)]),
         ("init points", base.replace("init_points = 100", "init_points = 150"), vec![(InitCloud, 1)]),
     ];
     let dir = tempfile::tempdir().unwrap();

@@ -1,0 +1,262 @@
+//! An opaque sRGB canvas the preview pictures are drawn on: filled rectangles, anti-aliased lines and dots,
+//! images scaled in, and text set in an embedded font through `ab_glyph`. Drawing is plain sequential code, so
+//! a picture's bytes depend only on what is drawn, in order.
+
+use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
+
+/// DejaVu Sans, subset to printable ASCII and a few symbols (`vendor/DejaVu.LICENSE`): 26 KB in the binary.
+const FONT: &[u8] = include_bytes!("vendor/DejaVuSans-subset.ttf");
+
+/// An sRGB colour.
+pub type Rgb = [u8; 3];
+
+/// Borrowed RGB pixels, rows top first: what [`Canvas::image`] scales in.
+#[derive(Clone, Copy)]
+pub struct Pixels<'a> {
+    /// The pixels.
+    pub px: &'a [Rgb],
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+/// An opaque RGB picture, rows top first.
+pub struct Canvas {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    px: Vec<Rgb>,
+    font: FontRef<'static>,
+}
+
+impl Canvas {
+    /// A `width` × `height` canvas filled with `background`.
+    pub fn new(width: u32, height: u32, background: Rgb) -> Canvas {
+        let font = FontRef::try_from_slice(FONT).expect("BUG: the embedded font parses");
+        Canvas { width, height, px: vec![background; width as usize * height as usize], font }
+    }
+
+    /// Blends `c` over pixel (x, y) with opacity `a` (0..=1); outside the canvas, nothing.
+    pub fn blend(&mut self, x: i64, y: i64, c: Rgb, a: f32) {
+        if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 || a <= 0.0 {
+            return;
+        }
+        let p = &mut self.px[y as usize * self.width as usize + x as usize];
+        let a = a.min(1.0);
+        for k in 0..3 {
+            p[k] = (p[k] as f32 + (c[k] as f32 - p[k] as f32) * a).round() as u8;
+        }
+    }
+
+    /// Fills the rectangle at (x, y) of size w × h.
+    pub fn fill(&mut self, x: i64, y: i64, w: i64, h: i64, c: Rgb) {
+        for yy in y.max(0)..(y + h).min(self.height as i64) {
+            for xx in x.max(0)..(x + w).min(self.width as i64) {
+                self.px[yy as usize * self.width as usize + xx as usize] = c;
+            }
+        }
+    }
+
+    /// The outline of the rectangle at (x, y) of size w × h, one pixel wide.
+    pub fn frame(&mut self, x: i64, y: i64, w: i64, h: i64, c: Rgb) {
+        self.fill(x, y, w, 1, c);
+        self.fill(x, y + h - 1, w, 1, c);
+        self.fill(x, y, 1, h, c);
+        self.fill(x + w - 1, y, 1, h, c);
+    }
+
+    /// An anti-aliased line (Xiaolin Wu's), with opacity `a`.
+    pub fn line(&mut self, (x0, y0): (f32, f32), (x1, y1): (f32, f32), c: Rgb, a: f32) {
+        if !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite()) {
+            return;
+        }
+        let steep = (y1 - y0).abs() > (x1 - x0).abs();
+        let (mut x0, mut y0, mut x1, mut y1) = if steep { (y0, x0, y1, x1) } else { (x0, y0, x1, y1) };
+        if x0 > x1 {
+            std::mem::swap(&mut x0, &mut x1);
+            std::mem::swap(&mut y0, &mut y1);
+        }
+        // Lines far outside the canvas are clipped to a generous range, so a wild projection costs little.
+        let limit = 4.0 * (self.width.max(self.height) as f32);
+        if x1 < -limit || x0 > limit {
+            return;
+        }
+        let dx = x1 - x0;
+        let gradient = if dx.abs() < 1e-6 { 1.0 } else { (y1 - y0) / dx };
+        let start = x0.round().max(-limit);
+        let end = x1.round().min(limit);
+        let mut x = start;
+        while x <= end {
+            let y = y0 + gradient * (x - x0);
+            let (yi, frac) = (y.floor(), y - y.floor());
+            let (px, py) = (x as i64, yi as i64);
+            if steep {
+                self.blend(py, px, c, a * (1.0 - frac));
+                self.blend(py + 1, px, c, a * frac);
+            } else {
+                self.blend(px, py, c, a * (1.0 - frac));
+                self.blend(px, py + 1, c, a * frac);
+            }
+            x += 1.0;
+        }
+    }
+
+    /// A filled dot of radius `r` pixels at (x, y), with opacity `a`.
+    pub fn dot(&mut self, x: f32, y: f32, r: f32, c: Rgb, a: f32) {
+        if !(x.is_finite() && y.is_finite()) {
+            return;
+        }
+        let (lo_x, hi_x) = ((x - r - 1.0).floor() as i64, (x + r + 1.0).ceil() as i64);
+        let (lo_y, hi_y) = ((y - r - 1.0).floor() as i64, (y + r + 1.0).ceil() as i64);
+        for yy in lo_y..=hi_y {
+            for xx in lo_x..=hi_x {
+                let d = ((xx as f32 + 0.5 - x).powi(2) + (yy as f32 + 0.5 - y).powi(2)).sqrt();
+                self.blend(xx, yy, c, a * (r + 0.5 - d).clamp(0.0, 1.0));
+            }
+        }
+    }
+
+    /// Draws `img` scaled into the rectangle at (x, y) of size tw × th by averaging the source pixels each
+    /// target pixel covers (box filter: thumbnails of renders stay sharp and alias-free).
+    pub fn image(&mut self, x: i64, y: i64, tw: u32, th: u32, img: Pixels) {
+        let Pixels { px: img, width: w, height: h } = img;
+        if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < w as usize * h as usize {
+            return;
+        }
+        for ty in 0..th {
+            let (sy0, sy1) = span(ty, th, h);
+            for tx in 0..tw {
+                let (sx0, sx1) = span(tx, tw, w);
+                let mut sum = [0u32; 3];
+                for sy in sy0..sy1 {
+                    for sx in sx0..sx1 {
+                        let p = img[sy as usize * w as usize + sx as usize];
+                        for k in 0..3 {
+                            sum[k] += p[k] as u32;
+                        }
+                    }
+                }
+                let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
+                let c = sum.map(|s| ((s + n / 2) / n) as u8);
+                self.blend(x + tx as i64, y + ty as i64, c, 1.0);
+            }
+        }
+    }
+
+    /// Sets `text` at (x, baseline y) in `size`-pixel type; returns the width it took.
+    pub fn text(&mut self, x: f32, y: f32, size: f32, text: &str, c: Rgb) -> f32 {
+        let font = self.font.clone();
+        let scaled = font.as_scaled(PxScale::from(size));
+        let mut pen = x;
+        let mut last = None;
+        for ch in text.chars() {
+            let id = scaled.glyph_id(ch);
+            if let Some(prev) = last {
+                pen += scaled.kern(prev, id);
+            }
+            let glyph = id.with_scale_and_position(size, ab_glyph::point(pen, y));
+            if let Some(outline) = font.outline_glyph(glyph) {
+                let b = outline.px_bounds();
+                outline.draw(|gx, gy, cov| self.blend(b.min.x as i64 + gx as i64, b.min.y as i64 + gy as i64, c, cov));
+            }
+            pen += scaled.h_advance(id);
+            last = Some(id);
+        }
+        pen - x
+    }
+
+    /// The width `text` takes in `size`-pixel type.
+    pub fn text_width(&self, size: f32, text: &str) -> f32 {
+        let scaled = self.font.as_scaled(PxScale::from(size));
+        let mut w = 0.0;
+        let mut last = None;
+        for ch in text.chars() {
+            let id = scaled.glyph_id(ch);
+            if let Some(prev) = last {
+                w += scaled.kern(prev, id);
+            }
+            w += scaled.h_advance(id);
+            last = Some(id);
+        }
+        w
+    }
+
+    /// The picture as PNG.
+    pub fn png(&self) -> Vec<u8> {
+        let bytes: Vec<u8> = self.px.iter().flatten().copied().collect();
+        crate::render::encode::rgb_png(&bytes, self.width, self.height, crate::render::encode::PngCompression::Default)
+    }
+}
+
+/// The source rows (or columns) `[a, b)` that target row `t` of `n` covers in a source of `m`; never empty.
+fn span(t: u32, n: u32, m: u32) -> (u32, u32) {
+    let a = (t as u64 * m as u64 / n as u64) as u32;
+    let b = (((t as u64 + 1) * m as u64).div_ceil(n as u64) as u32).max(a + 1).min(m);
+    (a.min(m - 1), b)
+}
+
+/// A checkerboard cell colour at (x, y): what transparent pixels are drawn over.
+pub fn checker(x: u32, y: u32) -> Rgb {
+    if ((x / 8) + (y / 8)).is_multiple_of(2) {
+        [200, 200, 200]
+    } else {
+        [150, 150, 150]
+    }
+}
+
+/// Straight-alpha sRGB RGBA over the checkerboard, at full resolution (before scaling, so edges stay clean).
+pub fn over_checker(rgba: &[u8], w: u32, h: u32) -> Vec<Rgb> {
+    let mut out = Vec::with_capacity(w as usize * h as usize);
+    for (i, p) in rgba.chunks_exact(4).enumerate() {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        // The checker is sized for the thumbnail: cells of 8 thumbnail pixels whatever the source size.
+        let bg = checker(x * 160 / w.max(1), y * 160 / w.max(1));
+        let a = p[3] as u32;
+        out.push([0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8));
+    }
+    out
+}
+
+/// A perceptual colour map (a few stops of viridis) for `t` in 0..=1.
+pub fn viridis(t: f32) -> Rgb {
+    const STOPS: [[f32; 3]; 5] =
+        [[68.0, 1.0, 84.0], [59.0, 82.0, 139.0], [33.0, 145.0, 140.0], [94.0, 201.0, 98.0], [253.0, 231.0, 37.0]];
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * (STOPS.len() - 1) as f32;
+    let i = (t.floor() as usize).min(STOPS.len() - 2);
+    let f = t - i as f32;
+    [0, 1, 2].map(|k| (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * f).round() as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_puts_ink_where_it_is_set_and_nowhere_else() {
+        let mut c = Canvas::new(120, 30, [0, 0, 0]);
+        let w = c.text(4.0, 20.0, 16.0, "view 3", [255, 255, 255]);
+        assert!(w > 30.0 && w < 80.0, "{w}");
+        assert!((w - c.text_width(16.0, "view 3")).abs() < 1e-3);
+        let inked: Vec<usize> = (0..c.px.len()).filter(|&i| c.px[i][0] > 0).collect();
+        assert!(inked.len() > 40, "{}", inked.len());
+        assert!(inked.iter().all(|&i| (i % 120) as f32 <= 4.0 + w + 1.0 && i / 120 <= 22));
+    }
+
+    #[test]
+    fn box_scaling_keeps_the_mean() {
+        let img: Vec<Rgb> = (0..64 * 64).map(|i| if (i % 64 + i / 64) % 2 == 0 { [255; 3] } else { [0; 3] }).collect();
+        let mut c = Canvas::new(8, 8, [7, 7, 7]);
+        c.image(0, 0, 8, 8, Pixels { px: &img, width: 64, height: 64 });
+        assert!(c.px.iter().all(|p| p[0] == 128), "{:?}", &c.px[..4]);
+    }
+
+    #[test]
+    fn lines_reach_both_ends() {
+        let mut c = Canvas::new(50, 50, [0, 0, 0]);
+        c.line((5.0, 5.0), (44.0, 30.0), [255, 0, 0], 1.0);
+        assert!(c.px[5 * 50 + 5][0] > 100 && c.px[30 * 50 + 44][0] > 100);
+        assert_eq!(c.px[40 * 50 + 5], [0, 0, 0]);
+    }
+}
