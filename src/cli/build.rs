@@ -76,8 +76,21 @@ pub(super) fn parse_shard(s: &str) -> Result<Shard, String> {
     Ok(Shard { index, count })
 }
 
-pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, ui: Ui) -> anyhow::Result<ExitCode> {
-    let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
+/// `vvgen build`: `preview: false` (`--no-preview`) skips the previews for this build.
+pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, preview: bool, ui: Ui) -> anyhow::Result<ExitCode> {
+    let Some(mut m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
+    m.dataset.preview &= preview;
+    build_and_report(&m, jobs, opts, ui)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Builds `m` with a progress display and prints what the build did.
+pub(super) fn build_and_report(
+    m: &crate::manifest::Manifest,
+    jobs: Option<usize>,
+    opts: Options,
+    ui: Ui,
+) -> anyhow::Result<build::Report> {
     let bar = (!ui.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
         b.set_style(
@@ -87,9 +100,9 @@ pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, ui: Ui) -> anyho
         b
     });
     let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
-    let cache = cache_dir(&m);
+    let cache = cache_dir(m);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.unwrap_or(0)).build()?;
-    let result = pool.install(|| build::build(&m, &cache, opts, &display));
+    let result = pool.install(|| build::build(m, &cache, opts, &display));
     if let Some(b) = &display.bar {
         b.finish_and_clear();
     }
@@ -103,6 +116,10 @@ pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, ui: Ui) -> anyho
                 eprintln!("warning: output `{name}`: {warning}");
             }
             eprintln!("{name}: {} files in {}", w.files.len(), w.root.display());
+            let page = format!("{}/index.html", crate::preview::DIR);
+            if w.files.iter().any(|(f, _)| *f == page) {
+                eprintln!("  preview: {}", w.root.join(&page).display());
+            }
         }
         let render = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
         let rate = if render.seconds > 0.0 { report.renders as f64 / render.seconds } else { 0.0 };
@@ -126,5 +143,5 @@ pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, ui: Ui) -> anyho
             eprintln!("ran: {}", kinds.join(", "));
         }
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(report)
 }

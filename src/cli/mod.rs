@@ -7,6 +7,7 @@ mod gc;
 mod inspect;
 mod new;
 mod plan;
+mod preview;
 mod release;
 
 use std::io::IsTerminal;
@@ -77,6 +78,23 @@ pub enum Command {
         /// Go ahead even when this process would render more than 100 000 images.
         #[arg(long)]
         yes: bool,
+        /// Skip the preview (`preview/` in each dataset: contact sheets, rig plot, viewer) for this build.
+        #[arg(long)]
+        no_preview: bool,
+    },
+    /// Build a manifest's datasets with their previews (contact sheets, rig plot, point-cloud strip, HTML
+    /// viewer); with `--out`, also copy each output's preview to DIR/OUTPUT.
+    #[command(after_help = "Example:\n  vvgen preview manifests/cesium-man.toml --out /tmp/look")]
+    Preview {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Copy each output's preview to DIR/<output name>/ (its viewer links the dataset's images by absolute
+        /// path).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: one per core).
+        #[arg(long, short)]
+        jobs: Option<usize>,
     },
     /// Show what a build would do: images cached, stale (changed since the last build) and new.
     #[command(after_help = "Example:\n  vvgen plan manifests/cesium-man.toml --explain")]
@@ -186,11 +204,12 @@ pub fn run() -> ExitCode {
     let ui = Ui { color, quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Check { manifests } => check::run(&manifests, ui),
-        Command::Build { manifest, jobs, shard, verify, yes } => {
+        Command::Build { manifest, jobs, shard, verify, yes, no_preview } => {
             let max_images = (!yes).then_some(build::MAX_IMAGES_WITHOUT_YES);
             let opts = crate::build::Options { shard, verify, max_images, ..Default::default() };
-            build::run(&manifest, jobs, opts, ui)
+            build::run(&manifest, jobs, opts, !no_preview, ui)
         }
+        Command::Preview { manifest, out, jobs } => preview::run(&manifest, out.as_deref(), jobs, ui),
         Command::Plan { manifest, explain, json, verify } => plan::run(&manifest, explain, json, verify, ui),
         Command::Status { manifest, verify } => plan::status(&manifest, verify, ui),
         Command::Release { manifest } => release::release(&manifest, ui),

@@ -13,6 +13,7 @@ mod meshseq;
 mod new;
 mod ply;
 mod points;
+mod preview;
 mod render;
 mod rigs;
 mod scene;
