@@ -21,6 +21,17 @@ pub struct Pixels<'a> {
     pub height: u32,
 }
 
+/// Borrowed straight-alpha sRGB RGBA bytes, rows top first: what [`Canvas::image_rgba`] scales in.
+#[derive(Clone, Copy)]
+pub struct RgbaPixels<'a> {
+    /// The bytes, 4 per pixel.
+    pub px: &'a [u8],
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
 /// An opaque RGB picture, rows top first.
 pub struct Canvas {
     /// Width in pixels.
@@ -145,6 +156,42 @@ impl Canvas {
         }
     }
 
+    /// Draws `img` scaled into the rectangle at (x, y) of size tw × th over a checkerboard (so transparency
+    /// shows): the covered source pixels are averaged premultiplied (a transparent pixel adds no colour),
+    /// then composited at the target's resolution.
+    pub fn image_rgba(&mut self, x: i64, y: i64, tw: u32, th: u32, img: RgbaPixels) {
+        let RgbaPixels { px: img, width: w, height: h } = img;
+        if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < 4 * w as usize * h as usize {
+            return;
+        }
+        for ty in 0..th {
+            let (sy0, sy1) = span(ty, th, h);
+            for tx in 0..tw {
+                let (sx0, sx1) = span(tx, tw, w);
+                // Premultiplied sums, in units of 1/255.
+                let (mut sum, mut alpha) = ([0u32; 3], 0u32);
+                for sy in sy0..sy1 {
+                    let row = &img[4 * (sy as usize * w as usize)..];
+                    for sx in sx0..sx1 {
+                        let p = &row[4 * sx as usize..4 * sx as usize + 4];
+                        let a = p[3] as u32;
+                        sum[0] += p[0] as u32 * a;
+                        sum[1] += p[1] as u32 * a;
+                        sum[2] += p[2] as u32 * a;
+                        alpha += a;
+                    }
+                }
+                let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
+                let bg = checker(tx, ty);
+                let c = [0, 1, 2].map(|k| {
+                    let v = (sum[k] + bg[k] as u32 * (255 * n - alpha)) as f32 / (255 * n) as f32;
+                    v.round() as u8
+                });
+                self.blend(x + tx as i64, y + ty as i64, c, 1.0);
+            }
+        }
+    }
+
     /// Sets `text` at (x, baseline y) in `size`-pixel type; returns the width it took.
     pub fn text(&mut self, x: f32, y: f32, size: f32, text: &str, c: Rgb) -> f32 {
         let font = self.font.clone();
@@ -186,7 +233,7 @@ impl Canvas {
     /// The picture as PNG.
     pub fn png(&self) -> Vec<u8> {
         let bytes: Vec<u8> = self.px.iter().flatten().copied().collect();
-        crate::render::encode::rgb_png(&bytes, self.width, self.height, crate::render::encode::PngCompression::Default)
+        crate::render::encode::rgb_png(&bytes, self.width, self.height, crate::render::encode::PngCompression::Fast)
     }
 }
 
@@ -197,26 +244,13 @@ fn span(t: u32, n: u32, m: u32) -> (u32, u32) {
     (a.min(m - 1), b)
 }
 
-/// A checkerboard cell colour at (x, y): what transparent pixels are drawn over.
+/// The checkerboard transparent pixels are drawn over, at (x, y) of a picture: cells of 8 pixels.
 pub fn checker(x: u32, y: u32) -> Rgb {
     if ((x / 8) + (y / 8)).is_multiple_of(2) {
         [200, 200, 200]
     } else {
         [150, 150, 150]
     }
-}
-
-/// Straight-alpha sRGB RGBA over the checkerboard, at full resolution (before scaling, so edges stay clean).
-pub fn over_checker(rgba: &[u8], w: u32, h: u32) -> Vec<Rgb> {
-    let mut out = Vec::with_capacity(w as usize * h as usize);
-    for (i, p) in rgba.chunks_exact(4).enumerate() {
-        let (x, y) = (i as u32 % w, i as u32 / w);
-        // The checker is sized for the thumbnail: cells of 8 thumbnail pixels whatever the source size.
-        let bg = checker(x * 160 / w.max(1), y * 160 / w.max(1));
-        let a = p[3] as u32;
-        out.push([0, 1, 2].map(|k| ((p[k] as u32 * a + bg[k] as u32 * (255 - a) + 127) / 255) as u8));
-    }
-    out
 }
 
 /// A perceptual colour map (a few stops of viridis) for `t` in 0..=1.
@@ -250,6 +284,17 @@ mod tests {
         let mut c = Canvas::new(8, 8, [7, 7, 7]);
         c.image(0, 0, 8, 8, Pixels { px: &img, width: 64, height: 64 });
         assert!(c.px.iter().all(|p| p[0] == 128), "{:?}", &c.px[..4]);
+    }
+
+    #[test]
+    fn transparent_pixels_add_no_colour_when_scaled() {
+        // Half the source opaque red, half transparent (with a green that must not bleed in).
+        let img: Vec<u8> =
+            (0..16 * 16).flat_map(|i| if i % 2 == 0 { [255, 0, 0, 255] } else { [0, 255, 0, 0] }).collect();
+        let mut c = Canvas::new(2, 2, [0, 0, 0]);
+        c.image_rgba(0, 0, 2, 2, RgbaPixels { px: &img, width: 16, height: 16 });
+        // Half red over the light checker cell.
+        assert_eq!(c.px[0], [228, 100, 100]);
     }
 
     #[test]

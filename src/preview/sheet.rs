@@ -3,7 +3,7 @@
 //! monocular and random splits are shown time-major. Each cell is the RGBA render over a checkerboard (so
 //! transparency and crops show), with depth and mask below when those passes exist, and a label.
 
-use super::canvas::{over_checker, viridis, Canvas, Pixels, Rgb};
+use super::canvas::{viridis, Canvas, Pixels, Rgb, RgbaPixels};
 use crate::manifest::render::Pass;
 use crate::manifest::split::TimeMode;
 use crate::plan::Plan;
@@ -85,18 +85,32 @@ pub struct Error {
     what: &'static str,
 }
 
+/// A cell's passes, decoded.
+struct Decoded {
+    rgba: image::RgbaImage,
+    depth: Option<image::ImageBuffer<image::Luma<u16>, Vec<u16>>>,
+    mask: Option<image::GrayImage>,
+}
+
+fn decode(c: &Cell) -> Result<Decoded, Error> {
+    let read = |b: &[u8], what| image::load_from_memory(b).map_err(|_| Error { view: c.view, frame: c.frame, what });
+    Ok(Decoded {
+        rgba: read(&c.rgba, "the RGBA render")?.into_rgba8(),
+        depth: c.depth.as_deref().map(|b| read(b, "the depth render")).transpose()?.map(|d| d.into_luma16()),
+        mask: c.mask.as_deref().map(|b| read(b, "the mask render")).transpose()?.map(|m| m.into_luma8()),
+    })
+}
+
 /// Draws the sheet of `cells` (in reading order) with `columns` columns; `title` heads it.
 pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Error> {
-    let decode =
-        |c: &Cell, b: &[u8], what| image::load_from_memory(b).map_err(|_| Error { view: c.view, frame: c.frame, what });
-    let first = match cells.first() {
-        Some(c) => decode(c, &c.rgba, "the RGBA render")?,
-        None => image::DynamicImage::new_rgb8(1, 1),
-    };
-    let (w, h) = (first.width().max(1), first.height().max(1));
+    use rayon::prelude::*;
+    // Decoding is most of the work: in parallel (the drawing after it is sequential, so bytes do not depend on
+    // threads).
+    let decoded: Vec<Decoded> = cells.par_iter().map(decode).collect::<Result<_, _>>()?;
+    let (w, h) = decoded.first().map_or((1, 1), |d| (d.rgba.width().max(1), d.rgba.height().max(1)));
     let tw = THUMB;
     let th = ((THUMB as u64 * h as u64 / w as u64) as u32).clamp(8, 2 * THUMB);
-    let extras = cells.first().is_some_and(|c| c.depth.is_some() || c.mask.is_some());
+    let extras = decoded.first().is_some_and(|c| c.depth.is_some() || c.mask.is_some());
     let strip = if extras { th / 2 } else { 0 };
     let (pad, label, head) = (8u32, 16u32, 34u32);
     let cell_h = th + strip + label;
@@ -108,28 +122,20 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
     c.text(pad as f32, 22.0, 15.0, title, [235, 235, 235]);
 
     // Depth is coloured over one range for the whole sheet, so depths compare across thumbnails.
-    let mut depths = Vec::new();
-    for cell in cells {
-        depths.push(match &cell.depth {
-            Some(b) => Some(decode(cell, b, "the depth render")?.into_luma16()),
-            None => None,
-        });
-    }
-    let (lo, hi) = depths
+    let (lo, hi) = decoded
         .iter()
-        .flatten()
+        .filter_map(|d| d.depth.as_ref())
         .flat_map(|d| d.as_raw().iter().copied().filter(|&v| v > 0))
         .fold((u16::MAX, 0u16), |(lo, hi), v| (lo.min(v), hi.max(v)));
 
-    for (k, cell) in cells.iter().enumerate() {
+    for (k, (cell, dec)) in cells.iter().zip(&decoded).enumerate() {
         let (col, row) = ((k % columns) as u32, (k / columns) as u32);
         let (x, y) = ((pad + col * (tw + pad)) as i64, (head + row * (cell_h + pad)) as i64);
-        let rgba = decode(cell, &cell.rgba, "the RGBA render")?.into_rgba8();
-        let (iw, ih) = rgba.dimensions();
-        c.image(x, y, tw, th, Pixels { px: &over_checker(rgba.as_raw(), iw, ih), width: iw, height: ih });
+        let (iw, ih) = dec.rgba.dimensions();
+        c.image_rgba(x, y, tw, th, RgbaPixels { px: dec.rgba.as_raw(), width: iw, height: ih });
         if extras {
             let half = tw / 2;
-            if let Some(d) = &depths[k] {
+            if let Some(d) = &dec.depth {
                 let (dw, dh) = d.dimensions();
                 let span = (hi.saturating_sub(lo)).max(1) as f32;
                 // Near is bright: 1 at the nearest depth on the sheet, 0 at the farthest; background black.
@@ -140,8 +146,7 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
                     .collect();
                 c.image(x, y + th as i64, half, strip, Pixels { px: &px, width: dw, height: dh });
             }
-            if let Some(b) = &cell.mask {
-                let m = decode(cell, b, "the mask render")?.into_luma8();
+            if let Some(m) = &dec.mask {
                 let (mw, mh) = m.dimensions();
                 let px: Vec<Rgb> = m.as_raw().iter().map(|&v| [v, v, v]).collect();
                 c.image(x + half as i64, y + th as i64, tw - half, strip, Pixels { px: &px, width: mw, height: mh });
@@ -152,7 +157,7 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
         c.text(x as f32 + 2.0, (y + (th + strip + label) as i64 - 3) as f32, 12.0, &text, [200, 200, 200]);
     }
     if extras && hi > 0 {
-        let mask = if cells.first().is_some_and(|c| c.mask.is_some()) { " · mask" } else { "" };
+        let mask = if decoded.first().is_some_and(|c| c.mask.is_some()) { " · mask" } else { "" };
         let note =
             format!("below each: depth {:.2}–{:.2} m (near bright){mask}", lo as f64 / 1000.0, hi as f64 / 1000.0);
         let w = c.text_width(12.0, &note);

@@ -4,7 +4,7 @@
 
 use glam::{Vec3, Vec4};
 
-use super::canvas::{over_checker, Canvas, Pixels};
+use super::canvas::{Canvas, RgbaPixels};
 use crate::camera::Camera;
 use crate::render::{self, RenderSettings, Shading, SplatSettings, SplatShape, SplatSize};
 use crate::scene::material::{srgb_to_linear, Material};
@@ -96,8 +96,7 @@ pub fn draw(title: &str, frames: &[usize], plys: &[Vec<u8>]) -> Result<Vec<u8>, 
         );
         let picture = render::render(&scene, &camera, &settings);
         let x = (pad + k as u32 * (SIDE + pad)) as i64;
-        let px = over_checker(&picture.rgba, SIDE, SIDE);
-        c.image(x, head as i64, SIDE, SIDE, Pixels { px: &px, width: SIDE, height: SIDE });
+        c.image_rgba(x, head as i64, SIDE, SIDE, RgbaPixels { px: &picture.rgba, width: SIDE, height: SIDE });
         let text = format!("frame {frame} · {n} points");
         c.text(x as f32 + 2.0, (head + SIDE + 15) as f32, 12.0, &text, [200, 200, 200]);
     }
