@@ -134,6 +134,7 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
         let (iw, ih) = dec.rgba.dimensions();
         c.image_rgba(x, y, tw, th, RgbaPixels { px: dec.rgba.as_raw(), width: iw, height: ih });
         if extras {
+            // Depth and mask side by side at half size (the thumbnail's aspect kept).
             let half = tw / 2;
             if let Some(d) = &dec.depth {
                 let (dw, dh) = d.dimensions();
