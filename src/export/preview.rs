@@ -13,8 +13,27 @@ pub(super) fn place(x: &Export, name: &str, out: &Output, images: &[usize], file
     }
     let dir = preview::DIR;
     if out.writer() == Writer::PlySequence {
-        let d = x.blob(&Action::PreviewStrip { output: name.to_string() })?;
-        return files.blob(&format!("{dir}/points.png"), d);
+        let strip = Action::PreviewStrip { output: name.to_string() };
+        let blobs = x.blobs_of(&strip)?.to_vec();
+        let (png, thinned) = match blobs[..] {
+            [png, thinned] => (png, thinned),
+            _ => return Err(Error::Unplanned("the preview strip's two blobs".into())),
+        };
+        files.blob(&format!("{dir}/points.png"), png)?;
+        let clouds = preview::decode_clouds(&x.store.get(&thinned)?)
+            .ok_or_else(|| Error::Unplanned("the viewer's point frames (a damaged cache blob)".into()))?;
+        let shown: Vec<viewer::Cloud> = clouds
+            .iter()
+            .map(|(f, s)| viewer::Cloud {
+                frame: *f,
+                time: crate::plan::time_of(*f, x.plan.frames),
+                positions: &s.positions,
+                colors: &s.colors,
+            })
+            .collect();
+        let page = viewer::html(&format!("{} · {name}", x.manifest.dataset.name()), &[], &shown, None);
+        files.bytes(&format!("{dir}/index.html"), page.as_bytes())?;
+        return files.bytes(&format!("{dir}/three.min.js"), viewer::THREE_JS);
     }
     let plan = x.plan;
     let mut splits: Vec<usize> = images.iter().map(|&i| plan.images[i].split).collect();
@@ -59,7 +78,14 @@ pub(super) fn place(x: &Export, name: &str, out: &Output, images: &[usize], file
         })
         .collect();
     let title = format!("{} · {name}", x.manifest.dataset.name());
-    let page = viewer::html(&title, &list, &samples.positions, &samples.colors, bounds);
+    let subject = rig_subject_frame(plan, &splits);
+    let cloud = viewer::Cloud {
+        frame: subject,
+        time: crate::plan::time_of(subject, plan.frames),
+        positions: &samples.positions,
+        colors: &samples.colors,
+    };
+    let page = viewer::html(&title, &list, &[cloud], bounds);
     files.bytes(&format!("{dir}/index.html"), page.as_bytes())?;
     files.bytes(&format!("{dir}/three.min.js"), viewer::THREE_JS)
 }

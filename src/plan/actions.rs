@@ -178,7 +178,8 @@ pub enum Action {
         /// Indices into [`Plan::splits`], ascending.
         splits: Vec<usize>,
     },
-    /// Point output `output`'s strip. Deps: the [`Action::PointFrame`]s of [`crate::preview::strip_frames`].
+    /// Point output `output`'s strip (and its viewer's thinned frames, a second blob). Deps: the
+    /// [`Action::PointFrame`]s of [`crate::preview::point_frames`].
     PreviewStrip {
         /// The `[output.NAME]`.
         output: String,
@@ -376,7 +377,7 @@ impl Action {
                 w.str("preview", crate::preview::SALT);
                 w.str("dataset", &cx.dataset);
                 w.str("output", output);
-                for (f, d) in crate::preview::strip_frames(cx.plan.frames).iter().zip(deps) {
+                for (f, d) in crate::preview::point_frames(cx.plan.frames).iter().zip(deps) {
                     w.u64("frame", *f as u64);
                     w.digest("points", d);
                 }

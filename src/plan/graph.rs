@@ -156,7 +156,7 @@ impl<'a> Graph<'a> {
             deps.extend(&frame_ids);
             deps.extend(bounds);
             if m.dataset.preview {
-                let shown = crate::preview::strip_frames(plan.frames).iter().map(|&f| frame_ids[f]).collect();
+                let shown = crate::preview::point_frames(plan.frames).iter().map(|&f| frame_ids[f]).collect();
                 let a = Action::PreviewStrip { output: name.to_string() };
                 deps.push(self.add(a, format!("preview-strip {name}"), shown));
             }

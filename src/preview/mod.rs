@@ -32,6 +32,15 @@ pub enum Error {
     /// The subject's samples do not read back.
     #[error("the subject's surface samples do not read back")]
     Cloud(#[source] crate::scene::ply::PlyError),
+    /// A point-cloud frame the viewer shows does not read back.
+    #[error("frame {frame}: the point-cloud file does not read back")]
+    Frame {
+        /// The frame.
+        frame: usize,
+        /// Why.
+        #[source]
+        source: crate::scene::ply::PlyError,
+    },
 }
 
 /// The frame whose surface samples stand for the subject: the middle of `frames` (ascending).
@@ -42,6 +51,63 @@ pub fn subject_frame(frames: &[usize]) -> usize {
 /// The frames of an `n`-frame point sequence its strip shows.
 pub fn strip_frames(n: usize) -> Vec<usize> {
     sheet::evenly(n, strip::MOST)
+}
+
+/// Frames of a point sequence its viewer steps through, at most.
+const VIEWER_FRAMES: usize = 24;
+/// Points of each of those frames the viewer draws, at most (every k-th point of the file).
+const VIEWER_POINTS: usize = 8_000;
+
+/// The frames of an `n`-frame point sequence its viewer steps through.
+pub fn viewer_frames(n: usize) -> Vec<usize> {
+    sheet::evenly(n, VIEWER_FRAMES)
+}
+
+/// The frames a point sequence's preview reads: the strip's and the viewer's, ascending.
+pub fn point_frames(n: usize) -> Vec<usize> {
+    let mut f = strip_frames(n);
+    f.extend(viewer_frames(n));
+    f.sort_unstable();
+    f.dedup();
+    f
+}
+
+/// A point-cloud frame thinned for the viewer: every k-th point, at most [`VIEWER_POINTS`].
+pub fn thin(ply: &[u8]) -> Result<Samples, crate::scene::ply::PlyError> {
+    let d = crate::scene::ply::read(ply)?;
+    let step = d.positions.len().div_ceil(VIEWER_POINTS).max(1);
+    let colors = d.colors.map(|c| c.iter().step_by(step).map(|c| [c[0], c[1], c[2]]).collect());
+    let positions: Vec<[f32; 3]> = d.positions.iter().step_by(step).copied().collect();
+    let colors = colors.unwrap_or_else(|| vec![[200, 200, 200]; positions.len()]);
+    Ok(Samples { positions, colors })
+}
+
+/// Frames of thinned clouds as one blob: per frame, its number and point count (u32 LE), then positions
+/// (3 × f32 LE) and colours (3 × u8) per point.
+pub fn encode_clouds(clouds: &[(usize, Samples)]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for (frame, s) in clouds {
+        out.extend((*frame as u32).to_le_bytes());
+        out.extend((s.positions.len() as u32).to_le_bytes());
+        out.extend(bytemuck::cast_slice::<[f32; 3], u8>(&s.positions));
+        out.extend(s.colors.iter().flatten());
+    }
+    out
+}
+
+/// The clouds of [`encode_clouds`]; `None` for bytes it did not write (a damaged cache).
+pub fn decode_clouds(mut b: &[u8]) -> Option<Vec<(usize, Samples)>> {
+    let mut out = Vec::new();
+    let u32_at = |b: &[u8], at: usize| b.get(at..at + 4).map(|x| u32::from_le_bytes(x.try_into().unwrap()) as usize);
+    while !b.is_empty() {
+        let (frame, n) = (u32_at(b, 0)?, u32_at(b, 4)?);
+        let body = b.get(8..8 + n.checked_mul(15)?)?;
+        let positions = body[..12 * n].chunks_exact(12).map(bytemuck::pod_read_unaligned::<[f32; 3]>).collect();
+        let colors = body[12 * n..].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        out.push((frame, Samples { positions, colors }));
+        b = &b[8 + 15 * n..];
+    }
+    Some(out)
 }
 
 /// The subject's surface samples, as the rig plot and the viewer draw them.
@@ -60,4 +126,30 @@ pub fn cloud(ply: &[u8]) -> Result<Samples, Error> {
         None => vec![[200, 200, 200]; d.positions.len()],
     };
     Ok(Samples { positions: d.positions, colors })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thinned_clouds_round_trip_and_damage_is_refused() {
+        let a = Samples { positions: vec![[1.0, 2.0, 3.0], [-1.0, 0.5, 9.0]], colors: vec![[1, 2, 3], [4, 5, 6]] };
+        let b = Samples { positions: vec![], colors: vec![] };
+        let bytes = encode_clouds(&[(3, a), (7, b)]);
+        let back = decode_clouds(&bytes).unwrap();
+        assert_eq!(back.iter().map(|(f, s)| (*f, s.positions.len())).collect::<Vec<_>>(), [(3, 2), (7, 0)]);
+        assert_eq!(back[0].1.positions[1], [-1.0, 0.5, 9.0]);
+        assert_eq!(back[0].1.colors[1], [4, 5, 6]);
+        assert!(decode_clouds(&bytes[..bytes.len() - 9]).is_none());
+        assert!(decode_clouds(&[0xff; 8]).is_none(), "an absurd count is refused, not allocated");
+    }
+
+    #[test]
+    fn the_viewer_reads_the_strips_frames_and_its_own() {
+        assert_eq!(point_frames(3), [0, 1, 2]);
+        let f = point_frames(300);
+        assert!(strip_frames(300).iter().chain(&viewer_frames(300)).all(|x| f.contains(x)));
+        assert_eq!(viewer_frames(300).len(), 24);
+    }
 }

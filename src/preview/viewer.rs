@@ -36,14 +36,22 @@ pub struct ViewerImage<'a> {
     pub path: &'a str,
 }
 
-/// The page for `images`, around the samples `points` (with sRGB `colors`) and `bounds`.
-pub fn html(
-    title: &str,
-    images: &[ViewerImage],
-    points: &[[f32; 3]],
-    colors: &[[u8; 3]],
-    bounds: Option<(Vec3, Vec3)>,
-) -> String {
+/// Points the viewer draws at one frame: the subject's samples (image datasets: one, at the middle frame), or a
+/// frame of a point-cloud sequence.
+pub struct Cloud<'a> {
+    /// Scene frame.
+    pub frame: usize,
+    /// Normalized time.
+    pub time: f64,
+    /// World positions.
+    pub positions: &'a [[f32; 3]],
+    /// sRGB colours.
+    pub colors: &'a [[u8; 3]],
+}
+
+/// The page for `images` (none for a point-cloud sequence) around `clouds` (the slider steps through the
+/// images' frames, or the clouds' when there are no images) and `bounds`.
+pub fn html(title: &str, images: &[ViewerImage], clouds: &[Cloud], bounds: Option<(Vec3, Vec3)>) -> String {
     // Cameras: one per (split, view), with the images it took.
     let mut cameras: BTreeMap<(usize, u32), (serde_json::Value, Vec<serde_json::Value>)> = BTreeMap::new();
     let mut splits: BTreeMap<usize, (&str, usize)> = BTreeMap::new();
@@ -60,6 +68,9 @@ pub fn html(
         });
         e.1.push(json!([im.frame, im.path]));
         frames.insert(im.frame, im.time);
+    }
+    if images.is_empty() {
+        frames.extend(clouds.iter().map(|c| (c.frame, c.time)));
     }
     let split_ids: Vec<usize> = splits.keys().copied().collect();
     let cams: Vec<serde_json::Value> = cameras
@@ -84,8 +95,9 @@ pub fn html(
     match bounds {
         Some((a, b)) => (lo, hi) = (a, b),
         None => {
-            for im in images {
-                let p = im.camera.c2w.w_axis.truncate().as_vec3();
+            let cameras = images.iter().map(|im| im.camera.c2w.w_axis.truncate().as_vec3());
+            let points = clouds.iter().flat_map(|c| c.positions.iter().map(|p| Vec3::from_array(*p)));
+            for p in cameras.chain(points).filter(|p| p.is_finite()) {
                 lo = lo.min(p);
                 hi = hi.max(p);
             }
@@ -106,10 +118,11 @@ pub fn html(
         "images": images.len(),
         "frames": frames.keys().collect::<Vec<_>>(),
         "time": frames.values().collect::<Vec<_>>(),
-        "points": {
-            "positions": b64.encode(bytemuck::cast_slice::<[f32; 3], u8>(points)),
-            "colors": b64.encode(colors.iter().flatten().copied().collect::<Vec<u8>>()),
-        },
+        "clouds": clouds.iter().map(|c| json!({
+            "frame": c.frame,
+            "positions": b64.encode(bytemuck::cast_slice::<[f32; 3], u8>(c.positions)),
+            "colors": b64.encode(c.colors.iter().flatten().copied().collect::<Vec<u8>>()),
+        })).collect::<Vec<_>>(),
         "bounds": bounds.map(|(a, b)| json!([a.to_array(), b.to_array()])),
         "centre": centre.to_array(),
         "radius": radius,
@@ -180,7 +193,8 @@ mod tests {
                 path: "test/r_0.png",
             },
         ];
-        let page = html("a & b", &images, &[[0.0, 0.0, 0.0]], &[[255, 0, 0]], None);
+        let cloud = Cloud { frame: 1, time: 1.0, positions: &[[0.0, 0.0, 0.0]], colors: &[[255, 0, 0]] };
+        let page = html("a & b", &images, &[cloud], None);
         assert!(page.contains("<title>vvgen · a &amp; b</title>"));
         assert_eq!(page.matches("</script>").count(), 3, "the data cannot close its script");
         assert!(page.contains(r#""frames":[0,1]"#) && page.contains(r#""images":3"#));

@@ -151,9 +151,10 @@ fn gc_after_the_grace_period_keeps_everything_the_graph_reaches() {
     run(d, &edited);
     backdate(&d.join("cache"), 2);
     let c = build::collect_garbage(&[load(&d.join("m.toml"))], &d.join("cache"), None).unwrap();
-    // 2 sample and 2 point-frame records and the strip's, their 5 blobs, and both outputs' old metadata (which
-    // record the manifest's digest).
-    assert_eq!(c.files, (2 * 2 + 1) * 2 + 2);
+    // 2 sample and 2 point-frame records with their 4 blobs, the preview strip's record with its 2 blobs (the
+    // picture and the viewer's frames), both outputs' old metadata (which record the manifest's digest) and the
+    // point output's old viewer page (which embeds its frames).
+    assert_eq!(c.files, 2 * 2 * 2 + 3 + 2 + 1);
     assert!(run(d, &edited).nothing_to_do());
     // The cached intermediate samples survived too: a reduction change re-runs only the reduction.
     let r = run(d, &edited.replace("vox = 8", "vox = 9"));

@@ -43,7 +43,8 @@ fn previews_are_planned_cached_locked_and_out_of_the_consumers_way() {
     let files: BTreeSet<String> = tree(&root.join("preview")).into_keys().collect();
     let expect = ["index.html", "rig.png", "sheet-test.png", "sheet-train.png", "three.min.js"];
     assert_eq!(files, expect.iter().map(|s| s.to_string()).collect());
-    assert!(d.join("out/m_points/preview/points.png").exists());
+    let points: BTreeSet<String> = tree(&d.join("out/m_points/preview")).into_keys().collect();
+    assert_eq!(points, ["index.html", "points.png", "three.min.js"].iter().map(|s| s.to_string()).collect());
     // Nothing a consumer reads moved: the root holds what it held, and no JSON is in the preview (instant-ngp
     // loads every root `*.json`; nerfstudio, D-NeRF and K-Planes read named files).
     assert!(tree(&root).keys().all(|f| !f.starts_with("preview/") || !f.ends_with(".json")));
@@ -182,6 +183,13 @@ fn the_viewer_renders_in_headless_chromium_and_shows_a_cameras_image() {
         // The selected camera's image at that frame loaded from disk (its natural width).
         assert_eq!(attribute(&dom, "photo", "data-loaded").as_deref(), Some("48"), "{}", page.display());
     }
+
+    // A point-cloud sequence's viewer steps through its frames, with no cameras.
+    let page = d.join("out/m_points/preview/index.html");
+    let dom = browse(&chromium, &d.join("profile-points"), &format!("file://{}#frame=2", page.display()), "--dump-dom");
+    assert_eq!(attribute(&dom, "status", "data-ready").as_deref(), Some("1"), "{dom:.2000}");
+    assert_eq!(attribute(&dom, "status", "data-cameras").as_deref(), Some("0"));
+    assert_eq!(attribute(&dom, "status", "data-frames").as_deref(), Some("3"));
 
     // The canvas is not blank: the subject's samples, the frusta and the axes cover part of it in many colours.
     let shot = d.join("shot.png");
