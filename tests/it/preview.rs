@@ -184,6 +184,13 @@ fn the_viewer_renders_in_headless_chromium_and_shows_a_cameras_image() {
         assert_eq!(attribute(&dom, "photo", "data-loaded").as_deref(), Some("48"), "{}", page.display());
     }
 
+    // A click where a camera is drawn selects it and shows its image (the click is dispatched at the camera's
+    // projected position; the page picks the nearest camera within 14 px).
+    let url = format!("file://{}#frame=2&click=test/1", root.join("preview/index.html").display());
+    let dom = browse(&chromium, &d.join("profile-click"), &url, "--dump-dom");
+    assert_eq!(attribute(&dom, "photo", "data-camera").as_deref(), Some("test/1"), "{dom:.3000}");
+    assert_eq!(attribute(&dom, "photo", "data-loaded").as_deref(), Some("48"));
+
     // A point-cloud sequence's viewer steps through its frames, with no cameras.
     let page = d.join("out/m_points/preview/index.html");
     let dom = browse(&chromium, &d.join("profile-points"), &format!("file://{}#frame=2", page.display()), "--dump-dom");
