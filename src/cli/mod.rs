@@ -88,7 +88,7 @@ pub enum Command {
     Preview {
         /// The manifest.
         manifest: PathBuf,
-        /// Copy each output's preview to DIR/<output name>/ (its viewer links the dataset's images by absolute
+        /// Copy each output's preview to DIR/OUTPUT/ (its viewer links the dataset's images by absolute
         /// path).
         #[arg(long)]
         out: Option<PathBuf>,

@@ -1,7 +1,7 @@
 //! What each writer's consumers cannot read, decided before anything renders: per writer, about that writer's
 //! own consumers only (../shared/specs/consumer-formats.md §10 lists what was seen in their loaders' code).
 //!
-//! [`diagnose`] needs the manifest alone and runs inside [`super::parse`], so `vvgen check` and `build` raise
+//! `diagnose` needs the manifest alone and runs inside [`super::parse`], so `vvgen check` and `build` raise
 //! the same errors and warnings. [`frame_diagnostics`] needs the scene's frame count (a glTF clip's length or a
 //! PLY sequence's file count), which `check` reads from the inputs and `build` from the scene it loads.
 

@@ -72,7 +72,7 @@ pub fn point_frames(n: usize) -> Vec<usize> {
     f
 }
 
-/// A point-cloud frame thinned for the viewer: every k-th point, at most [`VIEWER_POINTS`].
+/// A point-cloud frame thinned for the viewer: every k-th point, at most 8 000 (`VIEWER_POINTS`).
 pub fn thin(ply: &[u8]) -> Result<Samples, crate::scene::ply::PlyError> {
     let d = crate::scene::ply::read(ply)?;
     let step = d.positions.len().div_ceil(VIEWER_POINTS).max(1);
