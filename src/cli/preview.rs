@@ -23,7 +23,7 @@ pub fn run(manifest: &Path, out: Option<&Path>, jobs: Option<usize>, ui: Ui) -> 
             let mut bytes = std::fs::read(&src).with_context(|| format!("reading {}", src.display()))?;
             if rel.ends_with("index.html") {
                 // The copy links the dataset's images where they are, not beside it.
-                let root = std::path::absolute(&w.root).unwrap_or_else(|_| w.root.clone());
+                let root = std::fs::canonicalize(&w.root).unwrap_or_else(|_| w.root.clone());
                 let page = String::from_utf8_lossy(&bytes);
                 bytes = viewer::relocate(&page, &root.to_string_lossy()).into_bytes();
             }
