@@ -129,66 +129,21 @@ impl Canvas {
         }
     }
 
-    /// Draws `img` scaled into the rectangle at (x, y) of size tw × th by averaging the source pixels each
-    /// target pixel covers (box filter: thumbnails of renders stay sharp and alias-free).
+    /// Draws `img` scaled into the rectangle at (x, y) of size tw × th ([`shrink`]).
     pub fn image(&mut self, x: i64, y: i64, tw: u32, th: u32, img: Pixels) {
-        let Pixels { px: img, width: w, height: h } = img;
-        if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < w as usize * h as usize {
-            return;
-        }
-        for ty in 0..th {
-            let (sy0, sy1) = span(ty, th, h);
-            for tx in 0..tw {
-                let (sx0, sx1) = span(tx, tw, w);
-                let mut sum = [0u32; 3];
-                for sy in sy0..sy1 {
-                    for sx in sx0..sx1 {
-                        let p = img[sy as usize * w as usize + sx as usize];
-                        for k in 0..3 {
-                            sum[k] += p[k] as u32;
-                        }
-                    }
-                }
-                let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
-                let c = sum.map(|s| ((s + n / 2) / n) as u8);
-                self.blend(x + tx as i64, y + ty as i64, c, 1.0);
-            }
-        }
+        self.blit(x, y, Pixels { px: &shrink(img, tw, th), width: tw, height: th });
     }
 
-    /// Draws `img` scaled into the rectangle at (x, y) of size tw × th over a checkerboard (so transparency
-    /// shows): the covered source pixels are averaged premultiplied (a transparent pixel adds no colour),
-    /// then composited at the target's resolution.
+    /// Draws `img` scaled into the rectangle at (x, y) of size tw × th over a checkerboard ([`shrink_rgba`]).
     pub fn image_rgba(&mut self, x: i64, y: i64, tw: u32, th: u32, img: RgbaPixels) {
-        let RgbaPixels { px: img, width: w, height: h } = img;
-        if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < 4 * w as usize * h as usize {
-            return;
-        }
-        for ty in 0..th {
-            let (sy0, sy1) = span(ty, th, h);
-            for tx in 0..tw {
-                let (sx0, sx1) = span(tx, tw, w);
-                // Premultiplied sums, in units of 1/255.
-                let (mut sum, mut alpha) = ([0u32; 3], 0u32);
-                for sy in sy0..sy1 {
-                    let row = &img[4 * (sy as usize * w as usize)..];
-                    for sx in sx0..sx1 {
-                        let p = &row[4 * sx as usize..4 * sx as usize + 4];
-                        let a = p[3] as u32;
-                        sum[0] += p[0] as u32 * a;
-                        sum[1] += p[1] as u32 * a;
-                        sum[2] += p[2] as u32 * a;
-                        alpha += a;
-                    }
-                }
-                let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
-                let bg = checker(tx, ty);
-                let c = [0, 1, 2].map(|k| {
-                    let v = (sum[k] + bg[k] as u32 * (255 * n - alpha)) as f32 / (255 * n) as f32;
-                    v.round() as u8
-                });
-                self.blend(x + tx as i64, y + ty as i64, c, 1.0);
-            }
+        self.blit(x, y, Pixels { px: &shrink_rgba(img, tw, th), width: tw, height: th });
+    }
+
+    /// Copies `img` to (x, y), pixel for pixel (clipped to the canvas).
+    pub fn blit(&mut self, x: i64, y: i64, img: Pixels) {
+        for (i, c) in img.px.iter().take(img.width as usize * img.height as usize).enumerate() {
+            let (tx, ty) = ((i as u32 % img.width) as i64, (i as u32 / img.width) as i64);
+            self.blend(x + tx, y + ty, *c, 1.0);
         }
     }
 
@@ -235,6 +190,98 @@ impl Canvas {
         let bytes: Vec<u8> = self.px.iter().flatten().copied().collect();
         crate::render::encode::rgb_png(&bytes, self.width, self.height, crate::render::encode::PngCompression::Fast)
     }
+}
+
+/// `img` scaled to tw × th by averaging the source pixels each target pixel covers (a box filter: thumbnails of
+/// renders stay sharp and alias-free). Empty when either size is 0.
+pub fn shrink(img: Pixels, tw: u32, th: u32) -> Vec<Rgb> {
+    let Pixels { px: img, width: w, height: h } = img;
+    if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < w as usize * h as usize {
+        return Vec::new();
+    }
+    let mut out = Vec::with_capacity(tw as usize * th as usize);
+    for ty in 0..th {
+        let (sy0, sy1) = span(ty, th, h);
+        for tx in 0..tw {
+            let (sx0, sx1) = span(tx, tw, w);
+            let mut sum = [0u32; 3];
+            for sy in sy0..sy1 {
+                for sx in sx0..sx1 {
+                    let p = img[sy as usize * w as usize + sx as usize];
+                    for k in 0..3 {
+                        sum[k] += p[k] as u32;
+                    }
+                }
+            }
+            let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
+            out.push(sum.map(|s| ((s + n / 2) / n) as u8));
+        }
+    }
+    out
+}
+
+/// Straight-alpha `img` scaled to tw × th over a checkerboard (so transparency shows): the covered source pixels
+/// are averaged premultiplied (a transparent pixel adds no colour), then composited at the target's
+/// resolution. Empty when either size is 0.
+pub fn shrink_rgba(img: RgbaPixels, tw: u32, th: u32) -> Vec<Rgb> {
+    let RgbaPixels { px: img, width: w, height: h } = img;
+    if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < 4 * w as usize * h as usize {
+        return Vec::new();
+    }
+    let mut out = Vec::with_capacity(tw as usize * th as usize);
+    for ty in 0..th {
+        let (sy0, sy1) = span(ty, th, h);
+        for tx in 0..tw {
+            let (sx0, sx1) = span(tx, tw, w);
+            // Premultiplied sums, in units of 1/255.
+            let (mut sum, mut alpha) = ([0u32; 3], 0u32);
+            for sy in sy0..sy1 {
+                let row = &img[4 * (sy as usize * w as usize)..];
+                for sx in sx0..sx1 {
+                    let p = &row[4 * sx as usize..4 * sx as usize + 4];
+                    let a = p[3] as u32;
+                    sum[0] += p[0] as u32 * a;
+                    sum[1] += p[1] as u32 * a;
+                    sum[2] += p[2] as u32 * a;
+                    alpha += a;
+                }
+            }
+            let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
+            let bg = checker(tx, ty);
+            out.push([0, 1, 2].map(|k| {
+                let v = (sum[k] + bg[k] as u32 * (255 * n - alpha)) as f32 / (255 * n) as f32;
+                v.round() as u8
+            }));
+        }
+    }
+    out
+}
+
+/// Depth (millimetres, 0 = nothing) scaled to tw × th: per target pixel, the mean of the covered source depths
+/// and the share of source pixels covered.
+pub fn shrink_depth(depth: &[u16], w: u32, h: u32, tw: u32, th: u32) -> Vec<(f32, f32)> {
+    if w == 0 || h == 0 || tw == 0 || th == 0 || depth.len() < w as usize * h as usize {
+        return Vec::new();
+    }
+    let mut out = Vec::with_capacity(tw as usize * th as usize);
+    for ty in 0..th {
+        let (sy0, sy1) = span(ty, th, h);
+        for tx in 0..tw {
+            let (sx0, sx1) = span(tx, tw, w);
+            let (mut sum, mut covered) = (0u64, 0u32);
+            for sy in sy0..sy1 {
+                for &v in &depth[sy as usize * w as usize + sx0 as usize..sy as usize * w as usize + sx1 as usize] {
+                    if v > 0 {
+                        sum += v as u64;
+                        covered += 1;
+                    }
+                }
+            }
+            let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
+            out.push((if covered > 0 { sum as f32 / covered as f32 } else { 0.0 }, covered as f32 / n as f32));
+        }
+    }
+    out
 }
 
 /// The source rows (or columns) `[a, b)` that target row `t` of `n` covers in a source of `m`; never empty.
@@ -295,6 +342,14 @@ mod tests {
         c.image_rgba(0, 0, 2, 2, RgbaPixels { px: &img, width: 16, height: 16 });
         // Half red over the light checker cell.
         assert_eq!(c.px[0], [228, 100, 100]);
+    }
+
+    #[test]
+    fn shrunk_depth_averages_only_what_is_covered() {
+        // Left half at 1000 mm and 3000 mm, right half empty.
+        let d: Vec<u16> = (0..16).map(|i| if i % 4 < 2 { 1000 + 2000 * (i / 8) as u16 } else { 0 }).collect();
+        assert_eq!(shrink_depth(&d, 4, 4, 1, 1), [(2000.0, 0.5)]);
+        assert_eq!(shrink_depth(&d, 4, 4, 2, 1), [(2000.0, 1.0), (0.0, 0.0)]);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! monocular and random splits are shown time-major. Each cell is the RGBA render over a checkerboard (so
 //! transparency and crops show), with depth and mask below when those passes exist, and a label.
 
-use super::canvas::{viridis, Canvas, Pixels, Rgb, RgbaPixels};
+use super::canvas::{shrink, shrink_depth, shrink_rgba, viridis, Canvas, Pixels, Rgb, RgbaPixels};
 use crate::manifest::render::Pass;
 use crate::manifest::split::TimeMode;
 use crate::plan::Plan;
@@ -85,32 +85,66 @@ pub struct Error {
     what: &'static str,
 }
 
-/// A cell's passes, decoded.
-struct Decoded {
-    rgba: image::RgbaImage,
-    depth: Option<image::ImageBuffer<image::Luma<u16>, Vec<u16>>>,
-    mask: Option<image::GrayImage>,
+/// A cell's thumbnails: each render decoded and shrunk in one task, so a sheet holds thumbnails, not renders
+/// (32 renders at 4K would be gigabytes).
+struct Thumbs {
+    rgba: Vec<Rgb>,
+    depth: Option<DepthThumb>,
+    mask: Option<Vec<Rgb>>,
 }
 
-fn decode(c: &Cell) -> Result<Decoded, Error> {
+/// A depth thumbnail: mean millimetres and coverage per pixel, and the render's nearest and farthest depth.
+type DepthThumb = (Vec<(f32, f32)>, u16, u16);
+
+/// The size of `c`'s RGBA render (from its PNG header).
+fn size(c: &Cell) -> Result<(u32, u32), Error> {
+    let bad = || Error { view: c.view, frame: c.frame, what: "the RGBA render" };
+    let r = image::ImageReader::new(std::io::Cursor::new(&c.rgba)).with_guessed_format().map_err(|_| bad())?;
+    r.into_dimensions().map_err(|_| bad())
+}
+
+/// `c`'s thumbnails at tw × th (depth and mask at half size).
+fn thumbs(c: &Cell, tw: u32, th: u32) -> Result<Thumbs, Error> {
     let read = |b: &[u8], what| image::load_from_memory(b).map_err(|_| Error { view: c.view, frame: c.frame, what });
-    Ok(Decoded {
-        rgba: read(&c.rgba, "the RGBA render")?.into_rgba8(),
-        depth: c.depth.as_deref().map(|b| read(b, "the depth render")).transpose()?.map(|d| d.into_luma16()),
-        mask: c.mask.as_deref().map(|b| read(b, "the mask render")).transpose()?.map(|m| m.into_luma8()),
-    })
+    let (hw, hh) = (tw / 2, th / 2);
+    let rgba = read(&c.rgba, "the RGBA render")?.into_rgba8();
+    let (w, h) = rgba.dimensions();
+    let rgba = shrink_rgba(RgbaPixels { px: rgba.as_raw(), width: w, height: h }, tw, th);
+    let depth = match &c.depth {
+        Some(b) => {
+            let d = read(b, "the depth render")?.into_luma16();
+            let (w, h) = d.dimensions();
+            let covered = d.as_raw().iter().copied().filter(|&v| v > 0);
+            let (lo, hi) = covered.fold((u16::MAX, 0u16), |(lo, hi), v| (lo.min(v), hi.max(v)));
+            Some((shrink_depth(d.as_raw(), w, h, hw, hh), lo, hi))
+        }
+        None => None,
+    };
+    let mask = match &c.mask {
+        Some(b) => {
+            let m = read(b, "the mask render")?.into_luma8();
+            let (w, h) = m.dimensions();
+            let px: Vec<Rgb> = m.as_raw().iter().map(|&v| [v, v, v]).collect();
+            Some(shrink(Pixels { px: &px, width: w, height: h }, tw - hw, hh))
+        }
+        None => None,
+    };
+    Ok(Thumbs { rgba, depth, mask })
 }
 
 /// Draws the sheet of `cells` (in reading order) with `columns` columns; `title` heads it.
 pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Error> {
     use rayon::prelude::*;
-    // Decoding is most of the work: in parallel (the drawing after it is sequential, so bytes do not depend on
-    // threads).
-    let decoded: Vec<Decoded> = cells.par_iter().map(decode).collect::<Result<_, _>>()?;
-    let (w, h) = decoded.first().map_or((1, 1), |d| (d.rgba.width().max(1), d.rgba.height().max(1)));
+    let (w, h) = match cells.first() {
+        Some(c) => size(c)?,
+        None => (1, 1),
+    };
     let tw = THUMB;
-    let th = ((THUMB as u64 * h as u64 / w as u64) as u32).clamp(8, 2 * THUMB);
-    let extras = decoded.first().is_some_and(|c| c.depth.is_some() || c.mask.is_some());
+    let th = ((THUMB as u64 * h.max(1) as u64 / w.max(1) as u64) as u32).clamp(8, 2 * THUMB);
+    // Decoding and shrinking are most of the work: in parallel (the drawing after it is sequential, so bytes do
+    // not depend on threads).
+    let thumbs: Vec<Thumbs> = cells.par_iter().map(|c| thumbs(c, tw, th)).collect::<Result<_, _>>()?;
+    let extras = thumbs.first().is_some_and(|c| c.depth.is_some() || c.mask.is_some());
     let strip = if extras { th / 2 } else { 0 };
     let (pad, label, head) = (8u32, 16u32, 34u32);
     let cell_h = th + strip + label;
@@ -122,35 +156,34 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
     c.text(pad as f32, 22.0, 15.0, title, [235, 235, 235]);
 
     // Depth is coloured over one range for the whole sheet, so depths compare across thumbnails.
-    let (lo, hi) = decoded
+    let (lo, hi) = thumbs
         .iter()
-        .filter_map(|d| d.depth.as_ref())
-        .flat_map(|d| d.as_raw().iter().copied().filter(|&v| v > 0))
-        .fold((u16::MAX, 0u16), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        .filter_map(|t| t.depth.as_ref())
+        .filter(|(_, lo, hi)| lo <= hi)
+        .fold((u16::MAX, 0u16), |(a, b), (_, lo, hi)| (a.min(*lo), b.max(*hi)));
 
-    for (k, (cell, dec)) in cells.iter().zip(&decoded).enumerate() {
+    for (k, (cell, t)) in cells.iter().zip(&thumbs).enumerate() {
         let (col, row) = ((k % columns) as u32, (k / columns) as u32);
         let (x, y) = ((pad + col * (tw + pad)) as i64, (head + row * (cell_h + pad)) as i64);
-        let (iw, ih) = dec.rgba.dimensions();
-        c.image_rgba(x, y, tw, th, RgbaPixels { px: dec.rgba.as_raw(), width: iw, height: ih });
+        c.blit(x, y, Pixels { px: &t.rgba, width: tw, height: th });
         if extras {
             // Depth and mask side by side at half size (the thumbnail's aspect kept).
             let half = tw / 2;
-            if let Some(d) = &dec.depth {
-                let (dw, dh) = d.dimensions();
+            if let Some((d, _, _)) = &t.depth {
                 let span = (hi.saturating_sub(lo)).max(1) as f32;
-                // Near is bright: 1 at the nearest depth on the sheet, 0 at the farthest; background black.
+                // Near is bright: 1 at the nearest depth on the sheet, 0 at the farthest; background black, edges
+                // blended by coverage.
                 let px: Vec<Rgb> = d
-                    .as_raw()
                     .iter()
-                    .map(|&v| if v == 0 { [0, 0, 0] } else { viridis(1.0 - (v - lo.min(v)) as f32 / span) })
+                    .map(|&(mm, cover)| {
+                        let v = viridis(1.0 - (mm - lo as f32).max(0.0) / span);
+                        v.map(|c| (c as f32 * cover).round() as u8)
+                    })
                     .collect();
-                c.image(x, y + th as i64, half, strip, Pixels { px: &px, width: dw, height: dh });
+                c.blit(x, y + th as i64, Pixels { px: &px, width: half, height: strip });
             }
-            if let Some(m) = &dec.mask {
-                let (mw, mh) = m.dimensions();
-                let px: Vec<Rgb> = m.as_raw().iter().map(|&v| [v, v, v]).collect();
-                c.image(x + half as i64, y + th as i64, tw - half, strip, Pixels { px: &px, width: mw, height: mh });
+            if let Some(m) = &t.mask {
+                c.blit(x + half as i64, y + th as i64, Pixels { px: m, width: tw - half, height: strip });
             }
         }
         c.frame(x - 1, y - 1, tw as i64 + 2, (th + strip) as i64 + 2, [70, 70, 78]);
@@ -158,7 +191,7 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
         c.text(x as f32 + 2.0, (y + (th + strip + label) as i64 - 3) as f32, 12.0, &text, [200, 200, 200]);
     }
     if extras && hi > 0 {
-        let mask = if decoded.first().is_some_and(|c| c.mask.is_some()) { " · mask" } else { "" };
+        let mask = if thumbs.first().is_some_and(|c| c.mask.is_some()) { " · mask" } else { "" };
         let note =
             format!("below each: depth {:.2}–{:.2} m (near bright){mask}", lo as f64 / 1000.0, hi as f64 / 1000.0);
         let w = c.text_width(12.0, &note);
