@@ -42,6 +42,9 @@ pub enum Error {
     /// A number a writer would emit is NaN or infinite (the last line of defence: no writer emits one).
     #[error("{0} is not finite (degenerate or overflowing input geometry or transforms)")]
     NonFinite(String),
+    /// A preview's cached inputs do not read back (a damaged cache).
+    #[error("preview")]
+    Preview(#[from] crate::preview::Error),
     /// A writer asked for an action the graph did not plan (a bug: all work is planned).
     #[error("BUG: the plan has no {0}")]
     Unplanned(String),

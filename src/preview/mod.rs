@@ -32,6 +32,9 @@ pub enum Error {
     /// The subject's samples do not read back.
     #[error("the subject's surface samples do not read back")]
     Cloud(#[source] crate::scene::ply::PlyError),
+    /// The viewer's thinned point frames do not read back.
+    #[error("the viewer's thinned point frames do not read back (a damaged cache blob)")]
+    Thinned,
     /// A point-cloud frame the viewer shows does not read back.
     #[error("frame {frame}: the point-cloud file does not read back")]
     Frame {
