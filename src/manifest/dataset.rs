@@ -44,10 +44,10 @@ fn yes() -> bool {
 impl Dataset {
     pub(crate) fn validate(&self, diags: &mut Vec<Diagnostic>) {
         let name = self.name.get_ref();
-        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
+        if !super::is_plain_name(name) {
             diags.push(
                 Diagnostic::error(format!("dataset name `{name}` is not a plain file name"), Some(self.name.span()))
-                    .with_help("use letters, digits, `-`, `_` and `.` only; it names output folders"),
+                    .with_help("use letters, digits, `-`, `_` and `.` only (not dots alone); it names output folders"),
             );
         }
         if self.out.get_ref().trim().is_empty() {

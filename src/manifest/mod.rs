@@ -268,6 +268,14 @@ struct Broken {
     splits: BTreeSet<String>,
 }
 
+/// Whether `name` is safe as a file or folder name on every platform: letters, digits, `-`, `_` and `.`, and not
+/// dots alone (`.` and `..` name directories).
+pub(crate) fn is_plain_name(name: &str) -> bool {
+    !name.is_empty()
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+        && !name.chars().all(|c| c == '.')
+}
+
 /// Deserializes every entry of a `[kind.NAME]` table; keeps each entry's span and key list, and returns the
 /// names of entries that could not be recovered.
 fn named<T: serde::de::DeserializeOwned>(
@@ -281,6 +289,19 @@ fn named<T: serde::de::DeserializeOwned>(
         return (out, broken);
     };
     for (name, key_span, entry) in walk::entries(value, kind, diags) {
+        // Split names become file and folder names inside a dataset (`train/r_0000.png`, `transforms_train.json`,
+        // `preview/sheet-train.png`), output names folder names (`vvgen preview --out DIR/OUTPUT`): a name that
+        // is not a plain file name could write outside the dataset.
+        if matches!(kind, "split" | "output") && !is_plain_name(name) {
+            diags.push(
+                Diagnostic::error(format!("{kind} name `{name}` is not a plain file name"), Some(key_span.clone()))
+                    .with_help(
+                        "use letters, digits, `-`, `_` and `.` only (not dots alone): it names files in the dataset",
+                    ),
+            );
+            broken.insert(name.to_string());
+            continue;
+        }
         if !matches!(entry.get_ref(), DeValue::Table(_)) {
             diags.push(
                 Diagnostic::error(format!("`{kind}.{name}` must be a table"), Some(key_span))

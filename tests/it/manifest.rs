@@ -276,6 +276,26 @@ fn output_path_may_not_escape() {
     assert!(check(&full_manifest().replace("dir = \"full_dnerf\"", "dir = \"a/../b_dnerf\"")).is_ok());
 }
 
+/// Split and output names become file and folder names: one that could climb out of the dataset is refused at
+/// its key, and a plain one with dots is fine.
+#[test]
+fn split_and_output_names_are_plain_file_names() {
+    let text = full_manifest().replace("[split.train]", "[split.\"../../evil\"]");
+    let line = text.lines().position(|l| l.contains("../../evil")).unwrap() + 1;
+    let l = lines(&errors(&text));
+    assert!(
+        l.iter().any(|(n, m, _)| *n == line && m.contains("split name `../../evil` is not a plain file name")),
+        "{l:?}"
+    );
+    let l = lines(&errors(&full_manifest().replace("[split.train]", "[split.\"..\"]")));
+    assert!(l.iter().any(|(_, m, _)| m.contains("split name `..`")), "{l:?}");
+    let text = full_manifest().replacen("[output.", "[output.\"a/b\".x]\n[output.", 1);
+    let l = lines(&errors(&text));
+    assert!(l.iter().any(|(_, m, _)| m.contains("output name `a/b` is not a plain file name")), "{l:?}");
+    let fine = full_manifest().replace("[split.train]", "[split.\"train.v2\"]").replace("\"train\"", "\"train.v2\"");
+    assert!(check(&fine).is_ok(), "{:?}", check(&fine).err().map(|r| lines(&r)));
+}
+
 #[test]
 fn zero_and_absurd_counts() {
     for (from, to, expect) in [
