@@ -2,6 +2,10 @@
 //! nothing whose metadata is unchanged: source files, and blobs (which are also the dataset files, by hard
 //! link). A file whose metadata changed is hashed again; a file edited in place gets a new mtime, so a flipped
 //! byte in a blob or a dataset file is noticed.
+//!
+//! It also remembers small facts derived from a file's content, by the content's digest ([`StatCache::derived`]):
+//! the material libraries an OBJ frame names, which keying needs on every build and which would otherwise mean
+//! reading every frame in full. A fact is kept while some file with that content is tracked.
 
 use std::collections::HashMap;
 use std::fs;
@@ -48,9 +52,14 @@ pub struct StatCache {
     path: PathBuf,
     /// Path → metadata, digest, and whether the entry is racy (hash again before trusting it).
     entries: Mutex<HashMap<PathBuf, (Meta, Digest, bool)>>,
+    /// (kind, content digest) → a fact derived from that content.
+    derived: Mutex<HashMap<(String, Digest), String>>,
     /// Whether anything changed since loading (a no-op build need not rewrite the file).
     dirty: std::sync::atomic::AtomicBool,
 }
+
+/// The first field of a derived-fact line (never a digest's hex).
+const DERIVED: &str = "derived";
 
 impl StatCache {
     /// Loads the cache file at `path` (a missing or damaged file is an empty cache).
@@ -62,8 +71,20 @@ impl StatCache {
     /// finds bit rot that left size, mtime and inode alone.
     pub fn load_with(path: &Path, verify: bool) -> StatCache {
         let mut entries = HashMap::new();
+        let mut derived = HashMap::new();
         if let Ok(text) = fs::read_to_string(path) {
             for line in text.lines() {
+                if let Some(rest) = line.strip_prefix(DERIVED).and_then(|r| r.strip_prefix('\t')) {
+                    // `derived <kind> <digest> <JSON string>`; not trusted under `verify`.
+                    let f: Vec<&str> = rest.splitn(3, '\t').collect();
+                    let value = f.get(2).and_then(|v| serde_json::from_str::<String>(v).ok());
+                    if let (false, [kind, d, _], Some(value)) = (verify, f.as_slice(), value) {
+                        if let Some(d) = Digest::from_hex(d) {
+                            derived.insert((kind.to_string(), d), value);
+                        }
+                    }
+                    continue;
+                }
                 let f: Vec<&str> = line.splitn(5, '\t').collect();
                 if f.len() != 5 {
                     continue;
@@ -76,7 +97,12 @@ impl StatCache {
                 entries.insert(PathBuf::from(f[4]), (Meta { size, mtime_ns, ino }, d, verify));
             }
         }
-        StatCache { path: path.to_path_buf(), entries: Mutex::new(entries), dirty: false.into() }
+        StatCache {
+            path: path.to_path_buf(),
+            entries: Mutex::new(entries),
+            derived: Mutex::new(derived),
+            dirty: false.into(),
+        }
     }
 
     /// blake3 of the file at `p`, from the cache when its size, mtime and inode are unchanged.
@@ -108,7 +134,31 @@ impl StatCache {
         }
     }
 
-    /// Writes the cache back (atomically; entries for vanished files are dropped).
+    /// The fact of kind `kind` derived from the file at `p`, computed by `derive` unless it is remembered for
+    /// the file's current content. The outer error is hashing the file; `derive`'s errors are returned inside
+    /// and not remembered.
+    pub fn derived<E>(
+        &self,
+        kind: &str,
+        p: &Path,
+        derive: impl FnOnce() -> Result<String, E>,
+    ) -> std::io::Result<Result<String, E>> {
+        let d = self.digest(p)?;
+        let key = (kind.to_string(), d);
+        if let Some(v) = self.derived.lock().unwrap().get(&key) {
+            return Ok(Ok(v.clone()));
+        }
+        let v = match derive() {
+            Ok(v) => v,
+            Err(e) => return Ok(Err(e)),
+        };
+        self.derived.lock().unwrap().insert(key, v.clone());
+        self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
+        Ok(Ok(v))
+    }
+
+    /// Writes the cache back (atomically; entries for vanished files are dropped, and facts about content no
+    /// tracked file holds any more).
     pub fn save(&self) -> std::io::Result<()> {
         if !self.dirty.load(std::sync::atomic::Ordering::Relaxed) && self.path.exists() {
             return Ok(());
@@ -120,6 +170,11 @@ impl StatCache {
             .filter(|(p, (_, _, is_racy))| !is_racy && p.exists())
             .map(|(p, (m, d, _))| format!("{}\t{}\t{}\t{}\t{}", d.hex(), m.size, m.mtime_ns, m.ino, p.display()))
             .collect();
+        let held: std::collections::HashSet<Digest> = entries.values().map(|(_, d, _)| *d).collect();
+        for ((kind, d), v) in self.derived.lock().unwrap().iter().filter(|((_, d), _)| held.contains(d)) {
+            let value = serde_json::Value::String(v.clone());
+            lines.push(format!("{DERIVED}\t{kind}\t{}\t{value}", d.hex()));
+        }
         lines.sort();
         let mut text = lines.join("\n");
         text.push('\n');
@@ -153,5 +208,36 @@ mod tests {
         stat.save().unwrap();
         let saved = std::fs::read_to_string(dir.path().join("stat")).unwrap();
         assert!(saved.contains("/old") && !saved.contains("/f\n"), "{saved}");
+    }
+
+    /// A derived fact is computed once per content, survives a reload, and is recomputed after an edit.
+    #[test]
+    fn derived_facts_follow_content() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("f.obj");
+        std::fs::write(&p, b"mtllib a.mtl\n").unwrap();
+        std::fs::File::options().append(true).open(&p).unwrap().set_modified(std::time::UNIX_EPOCH).unwrap();
+        let calls = std::cell::Cell::new(0);
+        let derive = || -> std::io::Result<String> {
+            calls.set(calls.get() + 1);
+            Ok(String::from_utf8(std::fs::read(&p)?).unwrap().replace('\n', "\t"))
+        };
+        let get = |s: &StatCache| s.derived("libs", &p, derive).unwrap().unwrap();
+        let stat = StatCache::load(&dir.path().join("stat"));
+        assert_eq!(get(&stat), "mtllib a.mtl\t");
+        assert_eq!(get(&stat), "mtllib a.mtl\t");
+        stat.save().unwrap();
+        let again = StatCache::load(&dir.path().join("stat"));
+        assert_eq!(get(&again), "mtllib a.mtl\t");
+        assert_eq!(calls.get(), 1, "remembered across builds");
+        std::fs::write(&p, b"mtllib b.mtl\n").unwrap();
+        assert_eq!(get(&again), "mtllib b.mtl\t");
+        assert_eq!(calls.get(), 2);
+        // A failure is not remembered.
+        let failing = again.derived("other", &p, || Err::<String, &str>("no"));
+        assert_eq!(failing.unwrap(), Err("no"));
+        assert_eq!(again.derived("other", &p, || Ok::<_, &str>("yes".into())).unwrap(), Ok("yes".to_string()));
+        // Under --verify nothing remembered is trusted.
+        assert_eq!(StatCache::load_with(&dir.path().join("stat"), true).derived.lock().unwrap().len(), 0);
     }
 }

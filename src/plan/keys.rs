@@ -27,7 +27,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache) -> Result<Vec<Digest>, Error>
                 .map(|f| {
                     // The frame's file and what it reads besides (MTL files, textures), each by content.
                     let mut parts: Vec<Digest> = Vec::new();
-                    let deps = crate::scene::source::mesh_frame_deps(&f.path)?;
+                    let deps = crate::scene::source::mesh_frame_deps_cached(&f.path, stat)?;
                     for p in std::iter::once(&f.path).chain(&deps) {
                         parts.push(stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e })?);
                     }

@@ -25,10 +25,35 @@ fn at(path: &Path, line: usize, message: String) -> Error {
 /// problem; returns the files the OBJ depends on (MTL files, then textures), in the order named.
 pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
     let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    let text = String::from_utf8_lossy(&text);
-    let dir = path.parent().unwrap_or(Path::new("."));
+    resolve(path, &libraries(path, &text)?)
+}
+
+/// [`scan`], reading the OBJ only when the stat cache does not remember its libraries for its current content:
+/// what the OBJ's text decides (face indices in range, which libraries it names) cannot change without its
+/// content changing, so a build that keys unchanged frames reads none of them. The libraries and textures are
+/// checked every time.
+pub fn scan_cached(path: &Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
+    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    let text = stat
+        .derived("obj libraries 1", path, || {
+            let bytes = std::fs::read(path).map_err(io)?;
+            libraries(path, &bytes).map(|l| serde_json::to_string(&l).expect("BUG: a list of names serializes"))
+        })
+        .map_err(io)??;
+    let libs: Vec<(usize, String)> = serde_json::from_str(&text).map_err(|e| Error::Mesh {
+        path: path.to_path_buf(),
+        line: None,
+        message: format!("BUG: remembered libraries do not read back: {e}"),
+    })?;
+    resolve(path, &libs)
+}
+
+/// What an OBJ's text alone decides: every face index is in range (else an error at its line); returns the
+/// `mtllib` names with their lines.
+fn libraries(path: &Path, text: &[u8]) -> Result<Vec<(usize, String)>, Error> {
+    let text = String::from_utf8_lossy(text);
     let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
-    let mut deps = Vec::new();
+    let mut libs = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line_no = i + 1;
         let mut words = line.split_whitespace();
@@ -64,17 +89,24 @@ pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
                     }
                 }
             }
-            Some("mtllib") => {
-                let name = line.trim_start()["mtllib".len()..].trim();
-                let mtl = dir.join(name);
-                if !mtl.is_file() {
-                    return Err(at(path, line_no, format!("material library `{name}` not found ({})", mtl.display())));
-                }
-                deps.push(mtl.clone());
-                deps.extend(scan_mtl(&mtl)?);
-            }
+            Some("mtllib") => libs.push((line_no, line.trim_start()["mtllib".len()..].trim().to_string())),
             _ => {}
         }
+    }
+    Ok(libs)
+}
+
+/// The MTL files `libs` (named at their OBJ lines), each checked to exist, each followed by its textures.
+fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut deps = Vec::new();
+    for (line_no, name) in libs {
+        let mtl = dir.join(name);
+        if !mtl.is_file() {
+            return Err(at(path, *line_no, format!("material library `{name}` not found ({})", mtl.display())));
+        }
+        deps.push(mtl.clone());
+        deps.extend(scan_mtl(&mtl)?);
     }
     Ok(deps)
 }

@@ -203,6 +203,29 @@ pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
     }
 }
 
+/// [`mesh_frame_deps`] for keying: what a frame's own content decides (an OBJ's face indices and the libraries it
+/// names, a PLY's texture name) is remembered by the stat cache for that content, so keying unchanged frames
+/// reads none of them in full; the files they name are checked every time.
+pub fn mesh_frame_deps_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    match ext.as_str() {
+        "obj" => super::obj::scan_cached(path, stat),
+        "ply" => {
+            let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+            let name = stat
+                .derived("ply texture 1", path, || {
+                    let bytes = std::fs::read(path).map_err(io)?;
+                    let header =
+                        ply::parse_header(&bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
+                    Ok(header.comments.into_iter().find(|c| c.trim().starts_with("TextureFile")).unwrap_or_default())
+                })
+                .map_err(io)??;
+            Ok(texture_file(&[name], path)?.into_iter().collect())
+        }
+        _ => Ok(Vec::new()),
+    }
+}
+
 /// The texture a PLY's `comment TextureFile NAME` names, beside the PLY, checked to exist.
 fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<PathBuf>, Error> {
     let Some(name) = comments.iter().find_map(|c| c.trim().strip_prefix("TextureFile").map(str::trim)) else {

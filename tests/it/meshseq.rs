@@ -99,6 +99,40 @@ fn an_obj_sequence_renders_its_textures_and_rebuilds_per_frame() {
     assert!(errors.render(false).contains("`correspondence` needs mesh sources"), "{}", errors.render(false));
 }
 
+/// Keying remembers what each frame's own content decides (its face indices check out, the libraries it names),
+/// so a build with nothing to do reads no frame in full; the libraries and textures are checked every build, and
+/// an edited frame is scanned again.
+#[test]
+fn keying_remembers_each_frames_libraries_by_content() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    write_sequence(d);
+    std::fs::write(d.join("m.toml"), manifest("mesh_sequence = \"seq/f_{frame:03}.obj\"")).unwrap();
+    run(d);
+    // One remembered fact per frame content (three different frames), in the dataset's stat cache.
+    let stat_dir = d.join("cache/stat");
+    let facts: usize = std::fs::read_dir(&stat_dir)
+        .unwrap()
+        .map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap())
+        .map(|t| t.lines().filter(|l| l.starts_with("derived\tobj libraries 1\t")).count())
+        .sum();
+    assert_eq!(facts, 3);
+    assert!(run(d).nothing_to_do());
+    // A remembered frame's library is still checked: a texture the MTL now names but that is missing is an error
+    // at the MTL's line, though no frame changed.
+    std::fs::write(d.join("seq/skin.mtl"), "newmtl skin\nKd 1 1 1\nmap_Kd gone.png\n").unwrap();
+    let m = crate::common::load(&d.join("m.toml"));
+    let err = build(&m, &d.join("cache"), Options::default(), &Silent).unwrap_err();
+    let text = format!("{:#}", anyhow::Error::from(err));
+    assert!(text.contains("skin.mtl:3") && text.contains("gone.png"), "{text}");
+    std::fs::write(d.join("seq/skin.mtl"), "newmtl skin\nKd 1 1 1\nmap_Kd tex.png\n").unwrap();
+    // An edited frame is scanned again: a face index out of range is named at its line.
+    std::fs::write(d.join("seq/f_001.obj"), obj(1) + "f 1 2 99\n").unwrap();
+    let err = build(&m, &d.join("cache"), Options::default(), &Silent).unwrap_err();
+    let text = format!("{:#}", anyhow::Error::from(err));
+    assert!(text.contains("f_001.obj") && text.contains("vertex 99"), "{text}");
+}
+
 #[test]
 fn a_textured_ply_sequence_reads_texture_coordinates_and_its_texture_file() {
     let tmp = tempfile::tempdir().unwrap();
