@@ -47,6 +47,13 @@ pub const SCHEMA_TABLES: [&str; 7] = ["dataset", "source", "transform", "render"
 /// The JSON Schema of a manifest.
 pub fn json_schema() -> serde_json::Value {
     let mut s = serde_json::to_value(schemars::schema_for!(ManifestFile)).expect("BUG: a schema serializes");
+    // Split and output names become file names in the dataset (`super::is_plain_name`).
+    let plain = serde_json::json!({ "pattern": "^(?!\\.+$)[A-Za-z0-9_.-]+$" });
+    for table in ["split", "output"] {
+        if let Some(t) = s.pointer_mut(&format!("/properties/{table}")).and_then(|t| t.as_object_mut()) {
+            t.insert("propertyNames".into(), plain.clone());
+        }
+    }
     s["$id"] = serde_json::json!("https://vvgen.dev/schema/manifest.json");
     s["title"] = serde_json::json!("vvgen manifest");
     s

@@ -47,6 +47,7 @@ fn the_schema_accepts_the_shipped_manifests_and_rejects_typos() {
         ("veiws", base.replacen("views = 12", "veiws = 12", 1)),
         ("an unknown rig kind", base.replacen("kind   = \"hemisphere\"", "kind   = \"hemisfere\"", 1)),
         ("a string for a number", base.replacen("samples        = 4", "samples        = \"4\"", 1)),
+        ("a split name that climbs out", base.replacen("[split.val]", "[split.\"../val\"]", 1)),
     ];
     let mut files: Vec<String> = shipped.iter().map(|p| p.display().to_string()).collect();
     for (i, (_, t)) in typos.iter().enumerate() {
