@@ -45,7 +45,7 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
     let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
     let stat = store.stat_cache(&m.out_dir(), false);
     let mut inputs = BTreeMap::new();
-    for f in input_files(m)? {
+    for f in input_files(m, &stat)? {
         let d = stat.digest(&f).map_err(|e| Error::cache(m, cache::Error::io(&f, e)))?;
         let name = f.strip_prefix(&m.dir).unwrap_or(&f).to_string_lossy().replace('\\', "/");
         inputs.insert(name, d.hex());
@@ -85,8 +85,9 @@ pub fn release(m: &Manifest, cache: &Path) -> Result<Vec<PathBuf>, Error> {
 }
 
 /// The files `m`'s sources are read from: the glTF or mesh file, or every frame of a sequence (listed from the
-/// manifest, as `check` lists them; nothing is loaded or posed).
-fn input_files(m: &Manifest) -> Result<Vec<PathBuf>, Error> {
+/// manifest, as `check` lists them; nothing is loaded or posed). A mesh frame's libraries come from what the
+/// build's keying remembered in `stat`.
+fn input_files(m: &Manifest, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
     let mut out = Vec::new();
     for (name, s) in &m.sources {
         match s.kind() {
@@ -100,11 +101,8 @@ fn input_files(m: &Manifest) -> Result<Vec<PathBuf>, Error> {
                 for f in seq {
                     // A mesh frame's MTL files and textures are inputs too.
                     if kind == SourceKind::MeshSequence {
-                        let deps = crate::scene::source::mesh_frame_deps(&f.path).map_err(|e| Error::Scene {
-                            manifest: m.path.clone(),
-                            source: Box::new(e),
-                            hint: "",
-                        })?;
+                        let deps = crate::scene::source::mesh_frame_deps_cached(&f.path, stat)
+                            .map_err(|e| Error::Scene { manifest: m.path.clone(), source: Box::new(e), hint: "" })?;
                         out.extend(deps);
                     }
                     out.push(f.path);

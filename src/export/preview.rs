@@ -3,7 +3,7 @@
 
 use super::{Error, Export, Files};
 use crate::manifest::output::{Output, Writer};
-use crate::plan::actions::{rig_frames, rig_subject_frame, Action};
+use crate::plan::actions::{rig_frames, rig_subject_frame, splits_of, Action};
 use crate::preview::{self, sheet, viewer, DIR};
 
 /// Writes `preview/` for output `name` over `images`, when the manifest asks for previews.
@@ -46,9 +46,7 @@ fn points(x: &Export, name: &str, title: &str, files: &mut Files) -> Result<Stri
 /// writer placed, around the subject's samples).
 fn pictures(x: &Export, images: &[usize], title: &str, files: &mut Files) -> Result<String, Error> {
     let plan = x.plan;
-    let mut splits: Vec<usize> = images.iter().map(|&i| plan.images[i].split).collect();
-    splits.sort_unstable();
-    splits.dedup();
+    let splits = splits_of(plan, images);
     let extras = sheet::extra_passes(x.manifest.render.passes());
     for &s in &splits {
         // Sheets exist where RGBA is rendered.

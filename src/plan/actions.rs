@@ -335,17 +335,18 @@ impl Action {
             }
             Action::PreviewSheet { split, extras } => {
                 let sp = &cx.plan.splits[*split];
+                let layout = crate::preview::sheet::layout(cx.plan, *split);
                 w.str("preview", crate::preview::SALT);
                 w.str("dataset", &cx.dataset);
                 w.str("split", &sp.name);
                 w.u64("images in split", sp.images.len() as u64);
-                w.u64("columns", crate::preview::sheet::layout(cx.plan, *split).columns as u64);
+                w.u64("columns", layout.columns as u64);
                 for p in extras {
                     w.str("also", pass_name(*p));
                 }
                 // Per thumbnail: its label, then its passes' keys.
                 let per = 1 + extras.len();
-                for (k, &i) in crate::preview::sheet::layout(cx.plan, *split).images.iter().enumerate() {
+                for (k, &i) in layout.images.iter().enumerate() {
                     let img = &cx.plan.images[i];
                     w.u64("view", img.view as u64);
                     w.u64("frame", img.frame as u64);
@@ -392,6 +393,15 @@ impl Action {
             }
         }
     }
+}
+
+/// The splits (indices into [`Plan::splits`]) plan images `images` belong to, ascending: what an output's rig
+/// plot shows.
+pub fn splits_of(plan: &Plan, images: &[usize]) -> Vec<usize> {
+    let mut splits: Vec<usize> = images.iter().map(|&i| plan.images[i].split).collect();
+    splits.sort_unstable();
+    splits.dedup();
+    splits
 }
 
 /// The frames a rig plot's splits cover, ascending.

@@ -250,9 +250,7 @@ impl<'a> Graph<'a> {
     fn plan_preview(&mut self, m: &Manifest, name: &str, images: &[usize], deps: &mut Vec<ActionId>) {
         use crate::preview::{self, sheet};
         let plan = self.keying.plan;
-        let mut splits: Vec<usize> = images.iter().map(|&i| plan.images[i].split).collect();
-        splits.sort_unstable();
-        splits.dedup();
+        let splits = super::actions::splits_of(plan, images);
         let passes = m.render.passes();
         if passes.contains(&Pass::Rgba) {
             let extras = sheet::extra_passes(passes);

@@ -129,11 +129,6 @@ impl Canvas {
         }
     }
 
-    /// Draws `img` scaled into the rectangle at (x, y) of size tw × th ([`shrink`]).
-    pub fn image(&mut self, x: i64, y: i64, tw: u32, th: u32, img: Pixels) {
-        self.blit(x, y, Pixels { px: &shrink(img, tw, th), width: tw, height: th });
-    }
-
     /// Draws `img` scaled into the rectangle at (x, y) of size tw × th over a checkerboard ([`shrink_rgba`]).
     pub fn image_rgba(&mut self, x: i64, y: i64, tw: u32, th: u32, img: RgbaPixels) {
         self.blit(x, y, Pixels { px: &shrink_rgba(img, tw, th), width: tw, height: th });
@@ -195,72 +190,61 @@ impl Canvas {
 /// `img` scaled to tw × th by averaging the source pixels each target pixel covers (a box filter: thumbnails of
 /// renders stay sharp and alias-free). Empty when either size is 0.
 pub fn shrink(img: Pixels, tw: u32, th: u32) -> Vec<Rgb> {
-    let Pixels { px: img, width: w, height: h } = img;
-    if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < w as usize * h as usize {
-        return Vec::new();
-    }
-    let mut out = Vec::with_capacity(tw as usize * th as usize);
-    for ty in 0..th {
-        let (sy0, sy1) = span(ty, th, h);
-        for tx in 0..tw {
-            let (sx0, sx1) = span(tx, tw, w);
-            let mut sum = [0u32; 3];
-            for sy in sy0..sy1 {
-                for sx in sx0..sx1 {
-                    let p = img[sy as usize * w as usize + sx as usize];
-                    for k in 0..3 {
-                        sum[k] += p[k] as u32;
-                    }
-                }
+    boxes(img.px, img.width, img.height, tw, th, |_, _, n, rows| {
+        let mut sum = [0u32; 3];
+        for p in rows.flatten() {
+            for k in 0..3 {
+                sum[k] += p[k] as u32;
             }
-            let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
-            out.push(sum.map(|s| ((s + n / 2) / n) as u8));
         }
-    }
-    out
+        sum.map(|s| ((s + n / 2) / n) as u8)
+    })
 }
 
 /// Straight-alpha `img` scaled to tw × th over a checkerboard (so transparency shows): the covered source pixels
 /// are averaged premultiplied (a transparent pixel adds no colour), then composited at the target's
 /// resolution. Empty when either size is 0.
 pub fn shrink_rgba(img: RgbaPixels, tw: u32, th: u32) -> Vec<Rgb> {
-    let RgbaPixels { px: img, width: w, height: h } = img;
-    if w == 0 || h == 0 || tw == 0 || th == 0 || img.len() < 4 * w as usize * h as usize {
-        return Vec::new();
-    }
-    let mut out = Vec::with_capacity(tw as usize * th as usize);
-    for ty in 0..th {
-        let (sy0, sy1) = span(ty, th, h);
-        for tx in 0..tw {
-            let (sx0, sx1) = span(tx, tw, w);
-            // Premultiplied sums, in units of 1/255.
-            let (mut sum, mut alpha) = ([0u32; 3], 0u32);
-            for sy in sy0..sy1 {
-                let row = &img[4 * (sy as usize * w as usize)..];
-                for sx in sx0..sx1 {
-                    let p = &row[4 * sx as usize..4 * sx as usize + 4];
-                    let a = p[3] as u32;
-                    sum[0] += p[0] as u32 * a;
-                    sum[1] += p[1] as u32 * a;
-                    sum[2] += p[2] as u32 * a;
-                    alpha += a;
-                }
-            }
-            let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
-            let bg = checker(tx, ty);
-            out.push([0, 1, 2].map(|k| {
-                let v = (sum[k] + bg[k] as u32 * (255 * n - alpha)) as f32 / (255 * n) as f32;
-                v.round() as u8
-            }));
+    let px: &[[u8; 4]] = bytemuck::cast_slice(&img.px[..img.px.len() / 4 * 4]);
+    boxes(px, img.width, img.height, tw, th, |tx, ty, n, rows| {
+        // Premultiplied sums, in units of 1/255.
+        let (mut sum, mut alpha) = ([0u32; 3], 0u32);
+        for p in rows.flatten() {
+            let a = p[3] as u32;
+            sum[0] += p[0] as u32 * a;
+            sum[1] += p[1] as u32 * a;
+            sum[2] += p[2] as u32 * a;
+            alpha += a;
         }
-    }
-    out
+        let bg = checker(tx, ty);
+        [0, 1, 2].map(|k| ((sum[k] + bg[k] as u32 * (255 * n - alpha)) as f32 / (255 * n) as f32).round() as u8)
+    })
 }
 
 /// Depth (millimetres, 0 = nothing) scaled to tw × th: per target pixel, the mean of the covered source depths
 /// and the share of source pixels covered.
 pub fn shrink_depth(depth: &[u16], w: u32, h: u32, tw: u32, th: u32) -> Vec<(f32, f32)> {
-    if w == 0 || h == 0 || tw == 0 || th == 0 || depth.len() < w as usize * h as usize {
+    boxes(depth, w, h, tw, th, |_, _, n, rows| {
+        let (mut sum, mut covered) = (0u64, 0u32);
+        for &v in rows.flatten().filter(|&&v| v > 0) {
+            sum += v as u64;
+            covered += 1;
+        }
+        (if covered > 0 { sum as f32 / covered as f32 } else { 0.0 }, covered as f32 / n as f32)
+    })
+}
+
+/// The box-scaling walk the shrinks share: for each target pixel of tw × th (rows top first), `cell(tx, ty, n,
+/// rows)` with the `n` source pixels it covers as row slices. Empty when either size is 0 or `src` is short.
+fn boxes<P, T>(
+    src: &[P],
+    w: u32,
+    h: u32,
+    tw: u32,
+    th: u32,
+    mut cell: impl FnMut(u32, u32, u32, &mut dyn Iterator<Item = &[P]>) -> T,
+) -> Vec<T> {
+    if w == 0 || h == 0 || tw == 0 || th == 0 || src.len() < w as usize * h as usize {
         return Vec::new();
     }
     let mut out = Vec::with_capacity(tw as usize * th as usize);
@@ -268,17 +252,9 @@ pub fn shrink_depth(depth: &[u16], w: u32, h: u32, tw: u32, th: u32) -> Vec<(f32
         let (sy0, sy1) = span(ty, th, h);
         for tx in 0..tw {
             let (sx0, sx1) = span(tx, tw, w);
-            let (mut sum, mut covered) = (0u64, 0u32);
-            for sy in sy0..sy1 {
-                for &v in &depth[sy as usize * w as usize + sx0 as usize..sy as usize * w as usize + sx1 as usize] {
-                    if v > 0 {
-                        sum += v as u64;
-                        covered += 1;
-                    }
-                }
-            }
             let n = ((sy1 - sy0) * (sx1 - sx0)).max(1);
-            out.push((if covered > 0 { sum as f32 / covered as f32 } else { 0.0 }, covered as f32 / n as f32));
+            let row = |sy: u32| &src[sy as usize * w as usize + sx0 as usize..sy as usize * w as usize + sx1 as usize];
+            out.push(cell(tx, ty, n, &mut (sy0..sy1).map(row)));
         }
     }
     out
@@ -329,7 +305,7 @@ mod tests {
     fn box_scaling_keeps_the_mean() {
         let img: Vec<Rgb> = (0..64 * 64).map(|i| if (i % 64 + i / 64) % 2 == 0 { [255; 3] } else { [0; 3] }).collect();
         let mut c = Canvas::new(8, 8, [7, 7, 7]);
-        c.image(0, 0, 8, 8, Pixels { px: &img, width: 64, height: 64 });
+        c.blit(0, 0, Pixels { px: &shrink(Pixels { px: &img, width: 64, height: 64 }, 8, 8), width: 8, height: 8 });
         assert!(c.px.iter().all(|p| p[0] == 128), "{:?}", &c.px[..4]);
     }
 

@@ -79,10 +79,17 @@ pub fn point_frames(n: usize) -> Vec<usize> {
 pub fn thin(ply: &[u8]) -> Result<Samples, crate::scene::ply::PlyError> {
     let d = crate::scene::ply::read(ply)?;
     let step = d.positions.len().div_ceil(VIEWER_POINTS).max(1);
-    let colors = d.colors.map(|c| c.iter().step_by(step).map(|c| [c[0], c[1], c[2]]).collect());
+    Ok(every(&d, step))
+}
+
+/// Every `step`-th point of `d`, light grey where the file has no colours.
+fn every(d: &crate::scene::ply::PlyData, step: usize) -> Samples {
     let positions: Vec<[f32; 3]> = d.positions.iter().step_by(step).copied().collect();
-    let colors = colors.unwrap_or_else(|| vec![[200, 200, 200]; positions.len()]);
-    Ok(Samples { positions, colors })
+    let colors = match &d.colors {
+        Some(c) => c.iter().step_by(step).map(|c| [c[0], c[1], c[2]]).collect(),
+        None => vec![[200, 200, 200]; positions.len()],
+    };
+    Samples { positions, colors }
 }
 
 /// Frames of thinned clouds as one blob: per frame, its number and point count (u32 LE), then positions
@@ -123,12 +130,7 @@ pub struct Samples {
 
 /// The samples of an init-cloud PLY.
 pub fn cloud(ply: &[u8]) -> Result<Samples, Error> {
-    let d = crate::scene::ply::read(ply).map_err(Error::Cloud)?;
-    let colors = match d.colors {
-        Some(c) => c.iter().map(|c| [c[0], c[1], c[2]]).collect(),
-        None => vec![[200, 200, 200]; d.positions.len()],
-    };
-    Ok(Samples { positions: d.positions, colors })
+    Ok(every(&crate::scene::ply::read(ply).map_err(Error::Cloud)?, 1))
 }
 
 #[cfg(test)]
