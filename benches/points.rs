@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec4};
 use vvgen::sample::{self, voxel};
-use vvgen::scene::material::{AlphaMode, Material, Texture, TextureRef};
+use vvgen::scene::material::{Material, Texture, TextureRef};
 use vvgen::scene::ply::{self, PlyOut};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
@@ -49,14 +49,8 @@ fn torus_100k() -> PosedScene {
         })
         .collect();
     let texture = Texture::new(size, size, rgba, true);
-    let material = Material {
-        base_color: Vec4::ONE,
-        base_color_texture: Some(TextureRef::new(0)),
-        alpha_mode: AlphaMode::Opaque,
-        alpha_cutoff: 0.5,
-        double_sided: false,
-        emissive: Vec3::ZERO,
-    };
+    let material =
+        Material { base_color: Vec4::ONE, base_color_texture: Some(TextureRef::new(0)), ..Material::default() };
     PosedScene {
         primitives: vec![PosedPrimitive {
             kind: PrimKind::Triangles,

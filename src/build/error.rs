@@ -112,6 +112,10 @@ impl Error {
                 execute::Error::Scene { .. } | execute::Error::Content { .. } => true,
                 execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),
                 execute::Error::Video { source, .. } => matches!(source, execute::video::Error::TooLarge { .. }),
+                // A map that does not decode is the input's fault; a damaged prefiltered blob the cache's.
+                execute::Error::Environment { source, .. } => {
+                    !matches!(source, crate::render::light::environment::Error::Damaged(_))
+                }
                 execute::Error::Cache { .. } | execute::Error::Preview { .. } => false,
             },
             Error::Export { source, .. } => {

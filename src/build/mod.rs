@@ -230,12 +230,14 @@ pub(crate) struct Prepared {
     pub stat: StatCache,
     /// Key of every scene frame.
     pub frame_keys: Vec<Digest>,
+    /// Content key of the environment map, when there is one.
+    pub environment: Option<Digest>,
 }
 
 impl Prepared {
     /// The action graph of `m` (the manifest this was prepared from).
     pub fn graph(&self, m: &Manifest) -> Result<Graph<'_>, Error> {
-        Graph::new(m, &self.plan, &self.scene, &self.frame_keys).map_err(|e| Error::plan(m, e))
+        Graph::new(m, &self.plan, &self.scene, &self.frame_keys, self.environment).map_err(|e| Error::plan(m, e))
     }
 }
 
@@ -254,8 +256,10 @@ pub(crate) fn prepare(m: &Manifest, cache: &Path, verify: bool) -> Result<Prepar
     let plan = Plan::new(m, scene.frames).map_err(|e| Error::plan(m, e))?;
     let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
     let stat = store.stat_cache(&m.out_dir(), verify);
-    let frame_keys = keys::frame_keys(&scene, &stat).map_err(|e| Error::plan(m, e))?;
-    Ok(Prepared { scene, plan, store, stat, frame_keys })
+    let lit = m.render.shading == crate::manifest::render::Shading::Pbr;
+    let frame_keys = keys::frame_keys(&scene, &stat, lit).map_err(|e| Error::plan(m, e))?;
+    let environment = keys::environment_key(m, &stat).map_err(|e| Error::plan(m, e))?;
+    Ok(Prepared { scene, plan, store, stat, frame_keys, environment })
 }
 
 /// Builds every output of `m`, using the store at `cache`: runs only the actions the cache lacks. The
@@ -316,7 +320,8 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
             return Err(Error::TooMuchWork { manifest: m.path.clone(), images, max });
         }
     }
-    let inputs = Inputs { scene: &p.scene, store: &p.store, stat: &p.stat };
+    let environment = m.environment.as_ref().and_then(|e| e.map()).map(|f| m.resolve(f));
+    let inputs = Inputs { scene: &p.scene, store: &p.store, stat: &p.stat, environment: environment.as_deref() };
     let outcome = execute::run(&g, &inputs, look, opts.shard, &|c, w| progress.started(c, w), &|n| progress.ran(n))
         .map_err(|source| Error::Execute { manifest: m.path.clone(), source: Box::new(source) })?;
     let (images, hits, renders) = image_counts(&g, &outcome);

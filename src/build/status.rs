@@ -102,6 +102,7 @@ pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> R
             crate::manifest::render::Pass::Normal => 3 + if m.render.normal.exr { 12 } else { 0 },
             crate::manifest::render::Pass::Mask => 1,
             crate::manifest::render::Pass::Instance => 2,
+            crate::manifest::render::Pass::Albedo => 4,
         })
         .sum();
     let bytes_upper_bound = images_to_render as u64 * w as u64 * h as u64 * per_pixel;

@@ -51,6 +51,15 @@ pub enum Error {
         #[source]
         source: crate::sample::Error,
     },
+    /// The environment map cannot be read, or its prefiltered blob is damaged.
+    #[error("{action}")]
+    Environment {
+        /// The action's label.
+        action: String,
+        /// Why.
+        #[source]
+        source: crate::render::light::environment::Error,
+    },
     /// Encoding a video failed.
     #[error("{action}")]
     Video {
@@ -199,6 +208,8 @@ pub(crate) struct Inputs<'a> {
     pub store: &'a Store,
     /// The stat cache of this dataset.
     pub stat: &'a StatCache,
+    /// The `[environment] map`, when there is one.
+    pub environment: Option<&'a std::path::Path>,
 }
 
 impl Inputs<'_> {
@@ -323,7 +334,8 @@ pub(crate) fn run(
         }
         let t = std::time::Instant::now();
         let made: Made = match kind {
-            Kind::RenderPass => render::passes(g, x, &ids, &tick)?,
+            Kind::Environment => render::environment(g, x, &ids, &tick)?,
+            Kind::RenderPass => render::passes(g, x, &blobs, &ids, &tick)?,
             Kind::Composite => render::composites(g, x, &blobs, &ids, &tick)?,
             Kind::Video => video::videos(g, x, &blobs, &ids, &tick)?,
             Kind::PreviewSheet | Kind::PreviewRig | Kind::PreviewStrip => preview::run(g, x, &blobs, &ids, &tick)?,
@@ -347,7 +359,7 @@ fn owner_key(g: &Graph, id: ActionId) -> Digest {
     let key_of = |a: &Action| g.id(a).map(|i| g.node(i).key);
     match &g.node(id).action {
         Action::RenderPass { image, .. } | Action::Composite { image, .. } => {
-            let first = [Pass::Rgba, Pass::Depth, Pass::Normal, Pass::Mask, Pass::Instance]
+            let first = [Pass::Rgba, Pass::Depth, Pass::Normal, Pass::Mask, Pass::Instance, Pass::Albedo]
                 .into_iter()
                 .find_map(|pass| key_of(&Action::RenderPass { image: *image, pass }));
             first.unwrap_or(g.node(id).key)

@@ -108,7 +108,8 @@ fn make(
             }
             Ok(txt.into_bytes())
         }
-        Action::RenderPass { .. }
+        Action::Environment
+        | Action::RenderPass { .. }
         | Action::Composite { .. }
         | Action::Video { .. }
         | Action::PreviewSheet { .. }

@@ -13,12 +13,68 @@ use crate::manifest::render::Pass;
 use crate::plan::actions::Action;
 use crate::plan::graph::{ActionId, Graph};
 use crate::render::encode::{self, Encoding, NormalSpace};
-use crate::render::{self, Frame};
+use crate::render::light::environment::{self, EnvMap, Prefiltered};
+use crate::render::light::{EnvLight, FrameLight};
+use crate::render::{self, Frame, RenderSettings, Shading};
 use crate::scene::Poser;
+use std::sync::Arc;
+
+/// Runs the environment action: reads the map and prefilters it.
+pub(super) fn environment(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() + Sync)) -> Result<Made, Error> {
+    let mut out = Vec::new();
+    for &id in ids {
+        let map = load_map(g, x, id)?;
+        let bytes = environment::prefilter(&map).encode();
+        out.push((id, x.store(g, id, &[bytes])?));
+        done();
+    }
+    Ok(out)
+}
+
+fn load_map(g: &Graph, x: &Inputs, id: ActionId) -> Result<EnvMap, Error> {
+    let label = || g.node(id).label.clone();
+    let path =
+        x.environment.ok_or_else(|| Error::Content { action: label(), message: "BUG: no environment map".into() })?;
+    environment::load(path).map_err(|source| Error::Environment { action: label(), source })
+}
+
+/// The environment lit renders read: the prefiltered map from the environment action (deps), with the map itself
+/// when it is the visible background; the built-in studio environment when no map is named.
+fn env_light(
+    g: &Graph,
+    x: &Inputs,
+    blobs: &[Option<Vec<Digest>>],
+    ids: &[ActionId],
+) -> Result<Option<EnvLight>, Error> {
+    let settings = &g.keying.render.lighting.environment;
+    if g.keying.render.shading != Shading::Pbr {
+        return Ok(None);
+    }
+    let Some(env_id) = ids.iter().find_map(|&id| g.node(id).deps.first().copied()) else {
+        return Ok(Some(settings.studio()));
+    };
+    let label = g.node(env_id).label.clone();
+    let pre = Prefiltered::decode(&x.read(g, blobs, env_id, 0)?)
+        .map_err(|source| Error::Environment { action: label.clone(), source })?;
+    let map = if settings.visible {
+        load_map(g, x, env_id)?
+    } else {
+        EnvMap { width: 1, height: 1, texels: vec![Vec3::ZERO] }
+    };
+    Ok(Some(settings.with(Arc::new(pre), Arc::new(map))))
+}
 
 /// Runs the render-pass actions `ids`.
-pub(super) fn passes(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() + Sync)) -> Result<Made, Error> {
+pub(super) fn passes(
+    g: &Graph,
+    x: &Inputs,
+    blobs: &[Option<Vec<Digest>>],
+    ids: &[ActionId],
+    done: &(dyn Fn() + Sync),
+) -> Result<Made, Error> {
     let plan = g.keying.plan;
+    let env = env_light(g, x, blobs, ids)?;
+    let albedo_settings = RenderSettings { shading: render::Shading::Unlit, ..g.keying.render.clone() };
     // Frame → image → its passes to run.
     let mut by_frame: BTreeMap<usize, BTreeMap<usize, Vec<(ActionId, Pass)>>> = BTreeMap::new();
     for &id in ids {
@@ -34,14 +90,31 @@ pub(super) fn passes(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() +
         let posed = x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: label.clone(), source })?;
         super::check_posed(posed, &label)?;
         let images: Vec<(usize, Vec<(ActionId, Pass)>)> = images.into_iter().collect();
+        // Shadow maps and the environment's visibility, once for every view of the frame that renders lit.
+        let lit = images.iter().any(|(_, todo)| todo.iter().any(|(_, p)| *p != Pass::Albedo));
+        let light = match (&env, lit) {
+            (Some(env), true) => Some(FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone())),
+            _ => None,
+        };
         let made: Vec<Result<Made, Error>> = images
             .par_iter()
             .map(|(image, todo)| {
                 let camera = &plan.images[*image].camera;
-                let f = render::render(posed, camera, &g.keying.render);
+                let main = todo.iter().any(|(_, p)| *p != Pass::Albedo);
+                let f = main.then(|| render::render_lit(posed, camera, &g.keying.render, light.as_ref()));
+                // The albedo pass is the unlit image: its own render when the main one is lit.
+                let albedo = todo.iter().any(|(_, p)| *p == Pass::Albedo).then(|| match &f {
+                    Some(f) if g.keying.render.shading == render::Shading::Unlit => f.clone(),
+                    _ => render::render(posed, camera, &albedo_settings),
+                });
                 let mut v = Vec::with_capacity(todo.len());
                 for &(id, pass) in todo {
-                    let bytes = encode_pass(&f, pass, &g.keying.encoding, &camera.c2w);
+                    let frame = match (pass, &f, &albedo) {
+                        (Pass::Albedo, _, Some(a)) => a,
+                        (_, Some(f), _) => f,
+                        _ => unreachable!("a frame is rendered for every pass asked"),
+                    };
+                    let bytes = encode_pass(frame, pass, &g.keying.encoding, &camera.c2w);
                     v.push((id, x.store(g, id, &bytes)?));
                     done();
                 }
@@ -86,7 +159,7 @@ pub(super) fn composites(
 fn encode_pass(f: &Frame, pass: Pass, e: &Encoding, c2w: &glam::DMat4) -> Vec<Vec<u8>> {
     let (w, h, c) = (f.width, f.height, e.png);
     match pass {
-        Pass::Rgba => vec![encode::rgba_png(&f.rgba, w, h, c)],
+        Pass::Rgba | Pass::Albedo => vec![encode::rgba_png(&f.rgba, w, h, c)],
         Pass::Depth => {
             let mut v = vec![encode::depth_mm_png(&f.depth, w, h, c)];
             if e.depth_exr {

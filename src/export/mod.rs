@@ -92,6 +92,7 @@ impl Export<'_> {
                 Pass::Normal => (r.normal, r.normal_exr) = (first, second),
                 Pass::Mask => r.mask = first,
                 Pass::Instance => r.instance = first,
+                Pass::Albedo => r.albedo = first,
             }
         }
         Ok(r)
@@ -149,6 +150,7 @@ struct Rendered {
     normal_exr: Option<Digest>,
     mask: Option<Digest>,
     instance: Option<Digest>,
+    albedo: Option<Digest>,
 }
 
 /// What one writer produced.

@@ -16,6 +16,7 @@ struct Names {
     normal: String,
     mask: String,
     instance: String,
+    albedo: String,
 }
 
 fn names(split: &str, base: &str) -> Names {
@@ -25,6 +26,7 @@ fn names(split: &str, base: &str) -> Names {
         normal: format!("normal/{split}/{base}"),
         mask: format!("mask/{split}/{base}"),
         instance: format!("instance/{split}/{base}"),
+        albedo: format!("albedo/{split}/{base}"),
     }
 }
 
@@ -39,6 +41,7 @@ fn place(x: &Export, i: usize, n: &Names, prefix: &str, files: &mut Files) -> Re
         ("normal_exr", r.normal_exr, &n.normal, "exr"),
         ("mask", r.mask, &n.mask, "png"),
         ("instance", r.instance, &n.instance, "png"),
+        ("albedo", r.albedo, &n.albedo, "png"),
     ];
     for (pass, d, rel, ext) in passes {
         if let Some(d) = d {

@@ -10,6 +10,7 @@ pub mod consumers;
 pub mod dataset;
 pub mod diag;
 pub mod frames;
+pub mod light;
 pub mod output;
 pub mod render;
 pub mod rig;
@@ -39,7 +40,8 @@ pub use transform::Transform;
 use suggest::did_you_mean;
 
 /// The top-level tables, in the order the reference documents them.
-pub const TABLES: &[&str] = &["dataset", "source", "transform", "render", "rig", "split", "output"];
+pub const TABLES: &[&str] =
+    &["dataset", "source", "transform", "render", "environment", "light", "rig", "split", "output"];
 
 /// A validated manifest. Named tables are kept sorted by name, so table order in the file never matters.
 #[derive(Debug, Clone)]
@@ -58,6 +60,10 @@ pub struct Manifest {
     pub transform: Transform,
     /// `[render]`.
     pub render: Render,
+    /// `[environment]`, when given.
+    pub environment: Option<light::Environment>,
+    /// `[light.NAME]`.
+    pub lights: BTreeMap<String, light::Light>,
     /// `[rig.NAME]`.
     pub rigs: BTreeMap<String, Rig>,
     /// `[split.NAME]`.
@@ -164,6 +170,8 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
     let transform: Option<Transform> =
         tables.get("transform").map_or(Some(Transform::default()), |v| walk::typed(v, diags));
     let render: Option<Render> = tables.get("render").map_or(Some(Render::default()), |v| walk::typed(v, diags));
+    let environment: Option<light::Environment> = tables.get("environment").and_then(|v| walk::typed(v, diags));
+    let lights = named::<light::Light>(tables.get("light"), "light", diags);
     let sources = named::<Source>(tables.get("source"), "source", diags);
     let rigs = named::<Rig>(tables.get("rig"), "rig", diags);
     let splits = named::<Split>(tables.get("split"), "split", diags);
@@ -204,6 +212,12 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
             s.validate(name, span.clone(), diags);
             check_source_files(&dir, s, &produced, diags);
         }
+    }
+    if let Some(e) = &environment {
+        e.validate(&dir, diags);
+    }
+    for (name, (l, span, _)) in &lights.0 {
+        l.validate(name, span.clone(), diags);
     }
     {
         let (rigs, _) = &rigs;
@@ -246,6 +260,8 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
         sources: strip(sources.0),
         transform: transform.unwrap_or_default(),
         render: render.unwrap_or_default(),
+        environment,
+        lights: strip(lights.0),
         rigs: strip(rigs.0),
         splits: strip(splits.0),
         outputs: strip(outputs.0),
@@ -523,6 +539,20 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                     .with_help("give one of them its own `dir`"),
                 );
             }
+        }
+    }
+    if m.render.shading != render::Shading::Pbr {
+        let unused = m
+            .lights
+            .keys()
+            .next()
+            .map(|n| format!("`[light.{n}]`"))
+            .or(m.environment.as_ref().map(|_| "`[environment]`".to_string()));
+        if let Some(what) = unused {
+            diags.push(
+                Diagnostic::warning(format!("{what} lights nothing: `[render] shading` is not \"pbr\""), None)
+                    .with_help("set `[render] shading = \"pbr\"` to render lit"),
+            );
         }
     }
     consumers::diagnose(m, diags);

@@ -46,7 +46,7 @@ pub struct Render {
     #[serde(default = "one")]
     #[schemars(with = "u32")]
     pub(super) samples: Spanned<u32>,
-    /// `"unlit"` (albedo) or `"lambert"`.
+    /// `"unlit"` (albedo), `"lambert"` or `"pbr"` (lit by `[light.NAME]` and `[environment]`).
     #[serde(default)]
     pub shading: Shading,
     /// `"transparent"` (default), `"white"`, `"black"` or `[r, g, b]` in 0..1 sRGB.
@@ -122,6 +122,8 @@ pub enum Shading {
     Unlit,
     /// Albedo × (ambient + Σ lights · max(0, n·l)).
     Lambert,
+    /// glTF metallic-roughness materials under `[light.NAME]`s and the `[environment]`, with shadows.
+    Pbr,
 }
 
 /// Background of the RGBA pass.
@@ -148,6 +150,8 @@ pub enum Pass {
     Mask,
     /// 16-bit object ids (0 = background, 1 + the source's mesh instance otherwise).
     Instance,
+    /// 8-bit sRGB straight-alpha albedo (the unlit image), beside a lit `rgba`.
+    Albedo,
 }
 
 /// `[render.depth]`.
@@ -286,7 +290,10 @@ impl Render {
             shading: match self.shading {
                 Shading::Unlit => render::Shading::Unlit,
                 Shading::Lambert => render::Shading::Lambert,
+                Shading::Pbr => render::Shading::Pbr,
             },
+            // Filled in by the caller, which knows the manifest's lights and environment.
+            lighting: render::Lighting::default(),
             lights: self
                 .lights
                 .iter()

@@ -8,7 +8,7 @@ use super::diag::Diagnostic;
 use super::frames::Frames;
 use super::transform::Transform;
 
-/// One `[source.NAME]` table. Exactly one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence` is set.
+/// One `[source.NAME]` table. Exactly one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence`, `plane` is set.
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Source {
@@ -25,6 +25,10 @@ pub struct Source {
     /// patterns and globs as `ply_sequence`; the topology may change every frame.
     #[schemars(with = "Option<String>")]
     pub(super) mesh_sequence: Option<Spanned<String>>,
+    /// A built-in ground: a double-sided diffuse rectangle in the world's XY plane, centred on the origin,
+    /// that receives shadows and casts none (world units: `[transform]` does not apply to it).
+    #[schemars(with = "Option<Plane>")]
+    pub(super) plane: Option<Spanned<Plane>>,
     /// Which glTF animation clips play: an index, a name, a list of them, or `"all"`. Default: the first clip.
     #[schemars(with = "Option<AnimationSel>")]
     pub(super) animation: Option<Spanned<AnimationSel>>,
@@ -35,6 +39,23 @@ pub struct Source {
     pub(super) frames: Option<Spanned<Frames>>,
     /// A transform applied to this source alone, before the global `[transform]`.
     pub transform: Option<Transform>,
+}
+
+/// `plane = { size = [w, d], color = [r, g, b], z = … }`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Plane {
+    /// Width along X and depth along Y, world units.
+    pub size: [f64; 2],
+    /// Linear RGB albedo, as glTF's `baseColorFactor` (default 0.8, Blender's default grey).
+    #[serde(default = "grey")]
+    pub color: [f64; 3],
+    /// Height; default: the lowest point of the other sources over all frames (the subject stands on it).
+    pub z: Option<f64>,
+}
+
+fn grey() -> [f64; 3] {
+    [0.8; 3]
 }
 
 /// What kind of source a table describes.
@@ -92,22 +113,55 @@ impl Source {
     }
 
     pub(crate) fn validate(&self, name: &str, table_span: std::ops::Range<usize>, diags: &mut Vec<Diagnostic>) {
-        let set: Vec<&Spanned<String>> =
-            [&self.gltf, &self.mesh, &self.ply_sequence, &self.mesh_sequence].into_iter().flatten().collect();
+        let mut set: Vec<std::ops::Range<usize>> = [&self.gltf, &self.mesh, &self.ply_sequence, &self.mesh_sequence]
+            .into_iter()
+            .flatten()
+            .map(|s| s.span())
+            .collect();
+        set.extend(self.plane.as_ref().map(|p| p.span()));
+        set.sort_by_key(|s| s.start);
         match set.len() {
             0 => diags.push(
                 Diagnostic::error(format!("source `{name}` names no file"), Some(table_span.clone())).with_help(
-                    "add one of `gltf = \"…\"`, `mesh = \"…\"`, `ply_sequence = \"…\"` or `mesh_sequence = \"…\"`",
+                    "add one of `gltf = \"…\"`, `mesh = \"…\"`, `ply_sequence = \"…\"`, `mesh_sequence = \"…\"` or \
+                     `plane = { size = [w, d] }`",
                 ),
             ),
             1 => {}
             _ => diags.push(
                 Diagnostic::error(
-                    format!("source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence`"),
-                    Some(set[1].span()),
+                    format!(
+                        "source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence`, `plane`"
+                    ),
+                    Some(set[1].clone()),
                 )
                 .with_help("one source is one file or sequence; declare another `[source.…]` for the second"),
             ),
+        }
+        if let Some(p) = &self.plane {
+            let v = p.get_ref();
+            if !v.size.iter().all(|s| *s > 0.0 && *s <= 1e6) {
+                diags.push(
+                    Diagnostic::error("a plane's `size` must be two positive extents", Some(p.span()))
+                        .with_help("e.g. plane = { size = [6, 6] }"),
+                );
+            }
+            if v.color.iter().any(|c| !(0.0..=1.0).contains(c)) {
+                diags.push(Diagnostic::error("a plane's `color` components must be in 0..1", Some(p.span())));
+            }
+            for (key, set) in [
+                ("animation", self.animation.is_some()),
+                ("frames", self.frames.is_some()),
+                ("transform", self.transform.is_some()),
+                ("scene", self.scene.is_some()),
+            ] {
+                if set {
+                    diags.push(
+                        Diagnostic::error(format!("`{key}` does not apply to a `plane`"), Some(table_span.clone()))
+                            .with_help("a plane is static and placed in world units"),
+                    );
+                }
+            }
         }
         if let Some((kind, _)) = self.kind() {
             if kind != SourceKind::Gltf {
@@ -184,6 +238,11 @@ impl Source {
     /// The mesh sequence pattern or glob, when given.
     pub fn mesh_sequence(&self) -> Option<&str> {
         self.mesh_sequence.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The ground plane, when this source is one.
+    pub fn plane(&self) -> Option<&Plane> {
+        self.plane.as_ref().map(|p| p.get_ref())
     }
 
     /// The animation selection, when given.

@@ -31,6 +31,8 @@ pub const VIDEO_SALT: &str = "video 1: openh264 0.9, qp 12, bt601 limited 4:2:0,
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Kind {
+    /// Prefilter the environment map (lit shading): irradiance and specular levels.
+    Environment,
     /// Render one pass of one image (PNG, plus EXR or instance ids where asked).
     RenderPass,
     /// Composite an RGBA image over an opaque background (COLMAP, DyNeRF).
@@ -59,7 +61,8 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in execution order (an action's inputs are of earlier kinds).
-    pub const ALL: [Kind; 12] = [
+    pub const ALL: [Kind; 13] = [
+        Kind::Environment,
         Kind::RenderPass,
         Kind::Bounds,
         Kind::SampleFrame,
@@ -77,6 +80,7 @@ impl Kind {
     /// The kebab-case name used in listings and JSON.
     pub fn name(self) -> &'static str {
         match self {
+            Kind::Environment => "environment",
             Kind::RenderPass => "render-pass",
             Kind::Composite => "composite",
             Kind::Video => "video",
@@ -109,7 +113,10 @@ impl Kind {
 /// (in the order documented per variant); source content enters through the plan's frame keys.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub enum Action {
-    /// Pass `pass` of plan image `image`. No deps.
+    /// The environment map, prefiltered. No deps (the map enters by its content key).
+    Environment,
+    /// Pass `pass` of plan image `image`. Deps: for a lit (`pbr`) RGBA pass lit by a map, its
+    /// [`Action::Environment`].
     RenderPass {
         /// Index into [`Plan::images`].
         image: usize,
@@ -195,6 +202,7 @@ impl Action {
     /// The action's kind.
     pub fn kind(&self) -> Kind {
         match self {
+            Action::Environment => Kind::Environment,
             Action::RenderPass { .. } => Kind::RenderPass,
             Action::Composite { .. } => Kind::Composite,
             Action::Video { .. } => Kind::Video,
@@ -274,6 +282,10 @@ impl Action {
     /// order [`Action`] documents.
     pub fn walk(&self, cx: &Keying, deps: &[Digest], w: &mut dyn KeyWriter) {
         match self {
+            Action::Environment => {
+                w.str("prefilter", crate::render::light::environment::SALT);
+                w.str("map content", cx.render.lighting.environment.map.as_deref().unwrap_or("studio"));
+            }
             Action::RenderPass { image, pass } => {
                 let img = &cx.plan.images[*image];
                 w.str("renderer", RENDER_SALT);
@@ -281,6 +293,9 @@ impl Action {
                 w.digest("frame content", &cx.frame_keys[img.frame]);
                 camera(w, &img.camera);
                 render_settings(w, &cx.render, *pass);
+                if let Some(env) = deps.first() {
+                    w.digest("prefiltered environment", env);
+                }
                 encoding(w, &cx.encoding, *pass);
             }
             Action::Composite { image: _, background } => {
@@ -423,6 +438,7 @@ pub fn pass_name(p: Pass) -> &'static str {
         Pass::Normal => "normal",
         Pass::Mask => "mask",
         Pass::Instance => "instance",
+        Pass::Albedo => "albedo",
     }
 }
 
@@ -441,7 +457,7 @@ fn camera(w: &mut dyn KeyWriter, c: &Camera) {
 
 /// The render settings that shape `pass`: geometry settings shape every pass, colour settings only RGBA.
 fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
-    let RenderSettings { samples, shading, lights, ambient, background, depth, splat, buffers } = s;
+    let RenderSettings { samples, shading, lights, ambient, lighting, background, depth, splat, buffers } = s;
     // Which auxiliary buffers are filled never changes the bytes of a pass (it only skips unused work).
     let _ = buffers;
     w.u64("samples", *samples as u64);
@@ -464,6 +480,10 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
         SplatSize::World(v) => w.f64("splat size (world)", *v as f64),
         SplatSize::Pixels(v) => w.f64("splat size (px)", *v as f64),
     }
+    let background = |w: &mut dyn KeyWriter| match background {
+        Some(c) => w.f64s("background", &[c.x as f64, c.y as f64, c.z as f64]),
+        None => w.str("background", "transparent"),
+    };
     match pass {
         Pass::Rgba => {
             w.str(
@@ -471,17 +491,21 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
                 match shading {
                     Shading::Unlit => "unlit",
                     Shading::Lambert => "lambert",
+                    Shading::Pbr => "pbr",
                 },
             );
             for (dir, intensity) in lights {
                 w.f64s("light", &[dir.x as f64, dir.y as f64, dir.z as f64, *intensity as f64]);
             }
             w.f64("ambient", *ambient as f64);
-            match background {
-                Some(c) => w.f64s("background", &[c.x as f64, c.y as f64, c.z as f64]),
-                None => w.str("background", "transparent"),
+            // Only lit renders read the lighting: unlit and Lambert datasets keep their keys.
+            if *shading == Shading::Pbr {
+                lighting_fields(w, lighting);
             }
+            background(w);
         }
+        // The unlit image: albedo needs no lights.
+        Pass::Albedo => background(w),
         Pass::Depth => w.str(
             "depth kind",
             match depth {
@@ -491,6 +515,45 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
         ),
         Pass::Normal | Pass::Mask | Pass::Instance => {}
     }
+}
+
+/// What lights a `pbr` render: every light, and the environment's settings (its map enters through the
+/// prefiltered environment's key, a dep).
+fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
+    use crate::render::light::{Light, LightKind};
+    let crate::render::Lighting { lights, environment } = l;
+    for Light { kind, color, intensity, shadows } in lights {
+        let v = |a: glam::Vec3| [a.x as f64, a.y as f64, a.z as f64];
+        match *kind {
+            LightKind::Sun { direction, angle } => {
+                w.str("light", "sun");
+                w.f64s("direction", &v(direction));
+                w.f64("angle", angle as f64);
+            }
+            LightKind::Point { position, radius } => {
+                w.str("light", "point");
+                w.f64s("position", &v(position));
+                w.f64("radius", radius as f64);
+            }
+            LightKind::Spot { position, direction, cone, blend, radius } => {
+                w.str("light", "spot");
+                w.f64s("position", &v(position));
+                w.f64s("direction", &v(direction));
+                w.f64("cone", cone as f64);
+                w.f64("blend", blend as f64);
+                w.f64("radius", radius as f64);
+            }
+        }
+        w.f64s("color", &v(*color));
+        w.f64("intensity", *intensity as f64);
+        w.bool("shadows", *shadows);
+    }
+    let crate::render::Environment { map, strength, rotation_deg, visible } = environment;
+    // The built-in studio map has no prefiltering action: its version is the renderer's.
+    w.str("environment", if map.is_some() { "map" } else { "studio" });
+    w.f64("environment strength", *strength as f64);
+    w.f64("environment rotation (deg)", *rotation_deg as f64);
+    w.bool("environment visible", *visible);
 }
 
 fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
@@ -508,7 +571,7 @@ fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
             );
             w.bool("exr", *normal_exr);
         }
-        Pass::Rgba | Pass::Mask | Pass::Instance => {}
+        Pass::Rgba | Pass::Mask | Pass::Instance | Pass::Albedo => {}
     }
 }
 

@@ -15,6 +15,7 @@ use crate::cache::Digest;
 use crate::manifest::output::{Output, Writer};
 use crate::manifest::render::Pass;
 use crate::manifest::Manifest;
+use crate::render::Shading;
 use crate::scene::{Scene, SourceData};
 
 /// Default number of points in an image dataset's initialization cloud.
@@ -50,7 +51,15 @@ pub struct Graph<'a> {
 
 impl<'a> Graph<'a> {
     /// Plans every action of `m`'s outputs over `plan` (the images) and `scene`, keyed by `frame_keys`.
-    pub fn new(m: &Manifest, plan: &'a Plan, scene: &Scene, frame_keys: &'a [Digest]) -> Result<Graph<'a>, Error> {
+    ///
+    /// `environment` is the content key of the `[environment] map`, when there is one.
+    pub fn new(
+        m: &Manifest,
+        plan: &'a Plan,
+        scene: &Scene,
+        frame_keys: &'a [Digest],
+        environment: Option<Digest>,
+    ) -> Result<Graph<'a>, Error> {
         let keying = Keying {
             plan,
             frame_keys,
@@ -60,6 +69,7 @@ impl<'a> Graph<'a> {
                     // Splat settings shape nothing without points: no minimum footprint to key.
                     r.splat.min_px = 0.0;
                 }
+                r.lighting = super::keys::lighting(m, environment);
                 r
             },
             encoding: m.render.encoding(),
@@ -280,7 +290,14 @@ impl<'a> Graph<'a> {
 
     fn render_pass(&mut self, image: usize, pass: Pass) -> ActionId {
         let label = format!("render {} {}", image_label(self.keying.plan, image), pass_name(pass));
-        self.add(Action::RenderPass { image, pass }, label, vec![])
+        // A lit RGBA pass reads the prefiltered environment map (the built-in studio map needs no action).
+        let r = &self.keying.render;
+        let deps = if pass == Pass::Rgba && r.shading == Shading::Pbr && r.lighting.environment.map.is_some() {
+            vec![self.add(Action::Environment, "environment".into(), vec![])]
+        } else {
+            vec![]
+        };
+        self.add(Action::RenderPass { image, pass }, label, deps)
     }
 }
 

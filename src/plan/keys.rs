@@ -5,10 +5,12 @@
 
 use super::Error;
 use crate::cache::{key, Digest, StatCache};
+use crate::manifest::Manifest;
 use crate::scene::{Poser, Scene, SourceData};
 
-/// The key of every scene frame.
-pub fn frame_keys(scene: &Scene, stat: &StatCache) -> Result<Vec<Digest>, Error> {
+/// The key of every scene frame. `lit` keys what only lit shading reads of the materials too (metalness,
+/// roughness, their textures): unlit datasets keep the keys they had before lit shading existed.
+pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<Vec<Digest>, Error> {
     let mut per_source: Vec<Vec<Digest>> = Vec::new();
     let mut poser = Poser::default();
     for (i, src) in scene.sources.iter().enumerate() {
@@ -42,7 +44,13 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache) -> Result<Vec<Digest>, Error>
                 let mut materials = None;
                 for f in 0..n {
                     let posed = scene.pose_source(i, f, &mut poser)?;
-                    let m = *materials.get_or_insert_with(|| posed.material_digest());
+                    let m = *materials.get_or_insert_with(|| {
+                        if lit {
+                            posed.lit_material_digest()
+                        } else {
+                            posed.material_digest()
+                        }
+                    });
                     keys.push(key("frame posed", &[posed.geometry_digest().as_bytes(), m.as_bytes()]));
                 }
                 keys
@@ -57,4 +65,25 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache) -> Result<Vec<Digest>, Error>
             key("frame", &parts)
         })
         .collect())
+}
+
+/// The content key of `m`'s `[environment] map`, when it names one.
+pub fn environment_key(m: &Manifest, stat: &StatCache) -> Result<Option<Digest>, Error> {
+    let Some(map) = m.environment.as_ref().and_then(|e| e.map()) else { return Ok(None) };
+    let path = m.resolve(map);
+    stat.digest(&path).map(Some).map_err(|e| Error::Input { path, source: e })
+}
+
+/// The renderer's lighting for `m`: its lights, and its environment with the map's content key.
+pub fn lighting(m: &Manifest, environment: Option<Digest>) -> crate::render::Lighting {
+    let e = m.environment.as_ref();
+    crate::render::Lighting {
+        lights: m.lights.values().map(|l| l.resolve()).collect(),
+        environment: crate::render::Environment {
+            map: environment.map(|d| d.hex()),
+            strength: e.map_or(1.0, |e| e.strength()) as f32,
+            rotation_deg: e.map_or(0.0, |e| e.rotation_deg) as f32,
+            visible: e.is_some_and(|e| e.visible),
+        },
+    }
 }

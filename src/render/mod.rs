@@ -5,6 +5,7 @@
 
 pub mod bin;
 pub mod encode;
+pub mod light;
 pub mod raster;
 pub mod splat;
 
@@ -28,6 +29,71 @@ pub enum Shading {
     Unlit,
     /// Albedo × (ambient + Σ lights · max(0, n·l)).
     Lambert,
+    /// glTF metallic-roughness shading under the scene's lights and environment, with shadows ([`light`]).
+    Pbr,
+}
+
+/// What lights a `pbr` render (a description: the environment's data is prepared per build, see
+/// [`light::FrameLight`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Lighting {
+    /// Lights, manifest order.
+    pub lights: Vec<light::Light>,
+    /// The environment.
+    pub environment: Environment,
+}
+
+/// The environment a `pbr` render is lit by.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Environment {
+    /// Which map: the built-in studio, or a file by its content key (hex blake3 of its bytes).
+    pub map: Option<String>,
+    /// Radiance multiplier.
+    pub strength: f32,
+    /// Rotation about world +Z, degrees.
+    pub rotation_deg: f32,
+    /// Whether the map is the RGBA pass's background.
+    pub visible: bool,
+}
+
+impl Default for Environment {
+    fn default() -> Self {
+        Environment { map: None, strength: 1.0, rotation_deg: 0.0, visible: false }
+    }
+}
+
+impl Environment {
+    /// World → map frame: the lookup direction is this times the world direction (Blender: a Mapping node of
+    /// type Point rotating Z by `rotation_deg`, in front of the Environment Texture node).
+    pub fn rotation(&self) -> glam::Mat3 {
+        glam::Mat3::from_rotation_z(self.rotation_deg.to_radians())
+    }
+
+    /// The built-in studio environment's lighting under these settings (its prefiltering is computed once per
+    /// process).
+    pub fn studio(&self) -> light::EnvLight {
+        static STUDIO: std::sync::LazyLock<(std::sync::Arc<light::EnvMap>, std::sync::Arc<light::Prefiltered>)> =
+            std::sync::LazyLock::new(|| {
+                let map = light::environment::studio();
+                let pre = light::environment::prefilter(&map);
+                (std::sync::Arc::new(map), std::sync::Arc::new(pre))
+            });
+        self.with(STUDIO.1.clone(), STUDIO.0.clone())
+    }
+
+    /// These settings over a prefiltered map and the map itself (the background, when visible).
+    pub fn with(
+        &self,
+        prefiltered: std::sync::Arc<light::Prefiltered>,
+        map: std::sync::Arc<light::EnvMap>,
+    ) -> light::EnvLight {
+        light::EnvLight {
+            prefiltered,
+            strength: self.strength,
+            rotation: self.rotation(),
+            background: self.visible.then_some(map),
+        }
+    }
 }
 
 /// What the depth buffer holds.
@@ -51,6 +117,8 @@ pub struct RenderSettings {
     pub lights: Vec<(Vec3, f32)>,
     /// Lambert ambient term.
     pub ambient: f32,
+    /// Lights and environment of `pbr` shading.
+    pub lighting: Lighting,
     /// Opaque background (linear RGB), or transparent.
     pub background: Option<Vec3>,
     /// Planar z-depth or ray distance in the depth buffer.
@@ -86,6 +154,7 @@ impl Default for RenderSettings {
             shading: Shading::Unlit,
             lights: Vec::new(),
             ambient: 0.3,
+            lighting: Lighting::default(),
             background: None,
             depth: DepthKind::Planar,
             splat: SplatSettings::default(),
@@ -116,8 +185,19 @@ pub struct Frame {
     pub coverage: Vec<u8>,
 }
 
-/// Renders one view of a posed scene.
+/// Renders one view of a posed scene. A `pbr` render is lit by the built-in studio environment and
+/// `s.lighting`'s lights; a build prepares each frame's lighting once and calls [`render_lit`].
 pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
+    if s.shading == Shading::Pbr {
+        let light = light::FrameLight::prepare(scene, &s.lighting.lights, s.lighting.environment.studio());
+        return render_lit(scene, cam, s, Some(&light));
+    }
+    render_lit(scene, cam, s, None)
+}
+
+/// Renders one view with a frame's prepared lighting (used when `s.shading` is `pbr`).
+pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: Option<&light::FrameLight>) -> Frame {
+    let light = light.filter(|_| s.shading == Shading::Pbr);
     let k = (s.samples as f64).sqrt().round().max(1.0) as i64;
     let (w, h) = (cam.width as i64, cam.height as i64);
     let proj = Projection {
@@ -136,7 +216,8 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     let ts = TILE * k;
     // Triangles and splats are binned in scene order: the depth test keeps the first of equal depths, so order
     // matters and must not depend on threads.
-    let tris = raster::setup(scene, &proj, raster::Tiles { side: ts, across: tw, down: th });
+    let vis = light.map(|l| l.vertex_visibility.as_slice());
+    let tris = raster::setup(scene, &proj, raster::Tiles { side: ts, across: tw, down: th }, vis);
     let splats = splat::setup(scene, &proj, &s.splat, k as f32, ts);
     let shade = Shade {
         lambert: (s.shading == Shading::Lambert).then(|| {
@@ -147,7 +228,8 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             };
             (s.ambient, lights)
         }),
-        normals: s.shading == Shading::Lambert || s.buffers.normal,
+        lit: light.map(|light| raster::Lit { light, c2w: cam.c2w.as_mat4(), eye: cam.c2w.w_axis.truncate().as_vec3() }),
+        normals: s.shading != Shading::Unlit || s.buffers.normal,
     };
     let n = (w * h) as usize;
     let b = s.buffers;
@@ -177,6 +259,7 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             width: w,
         })
         .collect();
+    let env_bg = light.filter(|l| l.has_background()).map(|light| EnvBackground { light, cam });
     // Sample buffers are reused by the bands a worker takes.
     let scratch = || (None::<raster::SampleTile>, splat::Layer::default());
     bands.into_par_iter().enumerate().for_each_init(scratch, |(st, layer), (band, mut out)| {
@@ -191,7 +274,20 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             if tris.tile_is_empty(ti) && !has_splats {
                 // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
                 // the other buffers start zeroed.
-                if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
+                if let Some(env) = &env_bg {
+                    for py in 0..ph {
+                        for px in 0..pw {
+                            let i = ((py * w + x0 + px) * 4) as usize;
+                            let c = env.at(x0 + px, ty * TILE + py);
+                            out.rgba[i..i + 4].copy_from_slice(&[
+                                linear_to_srgb8(c.x),
+                                linear_to_srgb8(c.y),
+                                linear_to_srgb8(c.z),
+                                255,
+                            ]);
+                        }
+                    }
+                } else if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
                     for py in 0..ph {
                         let row = ((py * w + x0) * 4) as usize;
                         for px in out.rgba[row..row + (pw * 4) as usize].chunks_exact_mut(4) {
@@ -204,7 +300,7 @@ pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
             let work = raster::TileWork { tris: &tris, tile: ti, splats: has_splats.then_some((&splats, &*layer)) };
             let st = st.get_or_insert_with(|| raster::SampleTile::new(rect));
             raster::raster_tile(scene, work, &shade, rect, &proj, st);
-            resolve(st, k, s, cam, x0, &mut out);
+            resolve(st, k, s, cam, x0, env_bg.as_ref(), &mut out);
         }
     });
     f
@@ -220,9 +316,33 @@ struct Pixels<'a> {
     width: i64,
 }
 
+/// The visible environment behind a lit render.
+struct EnvBackground<'a> {
+    light: &'a light::FrameLight,
+    cam: &'a Camera,
+}
+
+impl EnvBackground<'_> {
+    /// The environment's radiance along the ray through pixel (x, y)'s centre.
+    fn at(&self, x: i64, y: i64) -> Vec3 {
+        let c = self.cam;
+        let d = glam::DVec3::new((x as f64 + 0.5 - c.cx) / c.fx, -((y as f64 + 0.5 - c.cy) / c.fy), -1.0);
+        let world = glam::DMat3::from_mat4(c.c2w) * d;
+        self.light.background(world.as_vec3().normalize()).unwrap_or(Vec3::ZERO)
+    }
+}
+
 /// Resolves a tile's samples into its pixels of the band `out` (tile columns from `x0`): straight-alpha colour,
 /// majority depth / normal / object.
-fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0: i64, out: &mut Pixels) {
+fn resolve(
+    st: &raster::SampleTile,
+    k: i64,
+    s: &RenderSettings,
+    cam: &Camera,
+    x0: i64,
+    env: Option<&EnvBackground>,
+    out: &mut Pixels,
+) {
     let (pw, ph) = (st.w / k, st.h / k);
     let total = (k * k) as u32;
     let y0 = st.y0 / k;
@@ -248,7 +368,18 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0
             }
             if covered == 0 {
                 // The other buffers start zeroed.
-                out.rgba[i * 4..i * 4 + 4].copy_from_slice(&empty);
+                match env {
+                    Some(env) => {
+                        let c = env.at(x0 + px, y0 + py);
+                        out.rgba[i * 4..i * 4 + 4].copy_from_slice(&[
+                            linear_to_srgb8(c.x),
+                            linear_to_srgb8(c.y),
+                            linear_to_srgb8(c.z),
+                            255,
+                        ]);
+                    }
+                    None => out.rgba[i * 4..i * 4 + 4].copy_from_slice(&empty),
+                }
                 continue;
             }
             let alpha = covered as f32 / total as f32;
@@ -256,7 +387,11 @@ fn resolve(st: &raster::SampleTile, k: i64, s: &RenderSettings, cam: &Camera, x0
             // covered·255/total rounded half up, in integers.
             let coverage = ((covered * 510 + total) / (2 * total)) as u8;
             let mut a8 = coverage;
-            if let Some(bg) = s.background {
+            if let Some(env) = env {
+                // The environment shows where the surface does not cover the pixel.
+                rgb = rgb * alpha + env.at(x0 + px, y0 + py) * (1.0 - alpha);
+                a8 = 255;
+            } else if let Some(bg) = s.background {
                 rgb = rgb * alpha + bg * (1.0 - alpha);
                 a8 = 255;
             }

@@ -8,7 +8,8 @@ use rayon::prelude::*;
 
 use super::bin::Binned;
 use super::splat::{Layer, Splats};
-use crate::scene::material::AlphaMode;
+use crate::render::light::Surface;
+use crate::scene::material::{AlphaMode, Material, Texture, TextureRef};
 use crate::scene::{PosedScene, PrimKind};
 
 /// Sub-sample precision of the fixed-point grid (8 bits).
@@ -30,6 +31,8 @@ struct ClipVert {
     uv: Vec2,
     normal: Vec3,
     color: Vec4,
+    /// The environment's visibility (lit shading; 1 otherwise).
+    vis: f32,
 }
 
 impl ClipVert {
@@ -39,6 +42,7 @@ impl ClipVert {
             uv: self.uv.lerp(o.uv, t),
             normal: self.normal.lerp(o.normal, t),
             color: self.color.lerp(o.color, t),
+            vis: self.vis + (o.vis - self.vis) * t,
         }
     }
 }
@@ -54,6 +58,7 @@ pub struct Tri {
     uv: [Vec2; 3],
     normal: [Vec3; 3],
     color: [Vec4; 3],
+    vis: [f32; 3],
     /// Per sample step along x and y: the change of Σ bᵢ·uvᵢ/zᵢ and of Σ bᵢ/zᵢ (constants of the triangle), from
     /// which the perspective-correct uv derivative at any sample follows for the mip level.
     duv_step: [Vec2; 2],
@@ -147,9 +152,11 @@ impl Tris {
 
 /// Clips, projects and orients every triangle of the scene, in scene order (chunks run in parallel and keep
 /// their order, so the order does not depend on threads), and bins them by tile.
-pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles) -> Tris {
+/// `visibility` is the environment's visibility per primitive and vertex (lit shading), or `None`.
+pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles, visibility: Option<&[Vec<f32>]>) -> Tris {
     let mut out = Tris::default();
-    for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Triangles) {
+    for (pi, prim) in scene.primitives.iter().enumerate().filter(|(_, q)| q.kind == PrimKind::Triangles) {
+        let vis: &[f32] = visibility.and_then(|v| v.get(pi)).map_or(&[], |v| v.as_slice());
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
         // Vertices are shared by about six triangles of a mesh: project each once. Triangles whose vertices are
         // all inside the clip planes use these; clipped ones project their new vertices the same way.
@@ -175,6 +182,7 @@ pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles) -> Tris {
                             uv: prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO),
                             normal: prim.normals[i],
                             color: prim.colors.get(i).copied().unwrap_or(Vec4::ONE),
+                            vis: vis.get(i).copied().unwrap_or(1.0),
                         }
                     };
                     let v = [vert(t[0]), vert(t[1]), vert(t[2])];
@@ -346,6 +354,7 @@ fn assemble(
         ds_step,
         normal: [v[idx[0]].normal, v[idx[1]].normal, v[idx[2]].normal],
         color: [v[idx[0]].color, v[idx[1]].color, v[idx[2]].color],
+        vis: [v[idx[0]].vis, v[idx[1]].vis, v[idx[2]].vis],
         bbox,
         material,
         object,
@@ -420,11 +429,25 @@ impl SampleTile {
 
 /// What shading needs besides the scene.
 #[derive(Debug, Clone)]
-pub struct Shade {
+pub struct Shade<'a> {
     /// `None` for unlit; else ambient and lights as (direction toward the light, intensity).
     pub lambert: Option<(f32, Vec<(Vec3, f32)>)>,
-    /// Whether anything reads the normals (Lambert or the normal pass): if not, they are not interpolated.
+    /// Lit (`pbr`) shading, when asked.
+    pub lit: Option<Lit<'a>>,
+    /// Whether anything reads the normals (Lambert, lit shading or the normal pass): if not, they are not
+    /// interpolated.
     pub normals: bool,
+}
+
+/// What lit shading needs of the view: the frame's lighting and how to go from a sample back to the world.
+#[derive(Debug, Clone, Copy)]
+pub struct Lit<'a> {
+    /// The frame's lights, shadows and environment.
+    pub light: &'a crate::render::light::FrameLight,
+    /// Camera to world.
+    pub c2w: Mat4,
+    /// The camera centre.
+    pub eye: Vec3,
 }
 
 /// A rectangle of samples.
@@ -486,6 +509,7 @@ pub fn raster_tile(
         let inv_area = 1.0 / tri.area as f32;
         let mat = &scene.materials[tri.material as usize];
         let tex = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
+        let lit = shade.lit.map(|l| (l, LitMaterial::of(mat, &scene.textures)));
         for sy in by0..=by1 {
             let mut wgt = row;
             for i in 0..3 {
@@ -510,11 +534,12 @@ pub fn raster_tile(
                 let k = [pb[0] * z, pb[1] * z, pb[2] * z];
                 let vc = tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2];
                 let mut albedo = mat.base_color * vc;
+                let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
+                // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
+                let footprint =
+                    || ((tri.duv_step[0] - uv * tri.ds_step[0]) * z, (tri.duv_step[1] - uv * tri.ds_step[1]) * z);
                 if let Some((r, texture)) = tex {
-                    let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
-                    // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
-                    let dx = (tri.duv_step[0] - uv * tri.ds_step[0]) * z;
-                    let dy = (tri.duv_step[1] - uv * tri.ds_step[1]) * z;
+                    let (dx, dy) = footprint();
                     albedo *= texture.sample_footprint(&r, uv, dx, dy);
                 }
                 match mat.alpha_mode {
@@ -532,10 +557,37 @@ pub fn raster_tile(
                 }
                 let mut rgb = albedo.truncate();
                 if let Some((ambient, lights)) = &shade.lambert {
-                    let lit: f32 = lights.iter().map(|(l, k)| k * nrm.dot(*l).max(0.0)).sum();
-                    rgb *= ambient + lit;
+                    let sum: f32 = lights.iter().map(|(l, k)| k * nrm.dot(*l).max(0.0)).sum();
+                    rgb *= ambient + sum;
                 }
-                rgb += mat.emissive;
+                if let Some((l, m)) = &lit {
+                    let (dx, dy) = footprint();
+                    let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
+                    // Back to the world: the sample's view-space point at depth z.
+                    let (sx, sy) =
+                        ((sx as f32 + 0.5 - proj.f[2]) / proj.f[0], (sy as f32 + 0.5 - proj.f[3]) / proj.f[1]);
+                    let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
+                    let v = (l.eye - p).normalize_or_zero();
+                    let mut surface =
+                        Surface { base: rgb, metallic: mat.metallic, roughness: mat.roughness, specular: mat.specular };
+                    if let Some(mr) = sample(m.metallic_roughness) {
+                        surface.roughness *= mr.y;
+                        surface.metallic *= mr.z;
+                    }
+                    let ao = match (sample(m.occlusion), mat.occlusion_texture) {
+                        (Some(o), Some((_, strength))) => 1.0 + strength * (o.x - 1.0),
+                        _ => 1.0,
+                    };
+                    let vis = tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2];
+                    rgb = l.light.shade(p, nrm, v, &surface, ao, vis);
+                    if let Some(e) = sample(m.emissive) {
+                        rgb += mat.emissive * e.truncate();
+                    } else {
+                        rgb += mat.emissive;
+                    }
+                } else {
+                    rgb += mat.emissive;
+                }
                 t.color[i] = rgb.extend(1.0);
                 t.depth[i] = z;
                 t.normal[i] = nrm;
@@ -563,4 +615,22 @@ pub fn raster_tile(
 /// The camera's backward axis in world space (the head light's direction toward the light).
 pub fn camera_back(c2w: &Mat4) -> Vec3 {
     Mat3::from_mat4(*c2w).z_axis.normalize()
+}
+
+/// A material's textures that lit shading reads, resolved once per triangle.
+struct LitMaterial<'t> {
+    metallic_roughness: Option<(TextureRef, &'t Texture)>,
+    occlusion: Option<(TextureRef, &'t Texture)>,
+    emissive: Option<(TextureRef, &'t Texture)>,
+}
+
+impl<'t> LitMaterial<'t> {
+    fn of(m: &Material, textures: &'t [Texture]) -> LitMaterial<'t> {
+        let get = |r: Option<TextureRef>| r.and_then(|r| textures.get(r.texture as usize).map(|t| (r, t)));
+        LitMaterial {
+            metallic_roughness: get(m.metallic_roughness_texture),
+            occlusion: get(m.occlusion_texture.map(|(r, _)| r)),
+            emissive: get(m.emissive_texture),
+        }
+    }
 }

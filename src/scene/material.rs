@@ -1,5 +1,5 @@
-//! Materials and textures as the renderer and the point sampler read them (glTF metallic-roughness, base
-//! colour only: vvgen renders albedo or Lambert, not PBR).
+//! Materials and textures as the renderer and the point sampler read them: glTF 2.0 metallic-roughness (base
+//! colour, metallic and roughness, occlusion, emissive), with what `shading = "pbr"` needs besides albedo.
 
 use std::sync::{LazyLock, OnceLock};
 
@@ -99,10 +99,25 @@ pub struct Material {
     pub double_sided: bool,
     /// Linear emissive factor (× strength).
     pub emissive: Vec3,
+    /// Emissive texture (sRGB), multiplying `emissive`.
+    pub emissive_texture: Option<TextureRef>,
+    /// Metalness factor, 0..1.
+    pub metallic: f32,
+    /// Perceptual roughness factor, 0..1.
+    pub roughness: f32,
+    /// Metallic-roughness texture (linear; roughness in G, metalness in B), multiplying the factors.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// Occlusion texture (linear, R) and its strength.
+    pub occlusion_texture: Option<(TextureRef, f32)>,
+    /// Scale of the dielectric specular layer: 1 is glTF's (F0 = 0.04), 0 a purely diffuse (Lambertian)
+    /// surface such as the built-in ground plane.
+    pub specular: f32,
+    /// Whether the surface casts shadows (the ground plane receives only).
+    pub casts_shadows: bool,
 }
 
 impl Default for Material {
-    /// glTF's default material: white, opaque, single-sided.
+    /// The default material: white, opaque, single-sided, dielectric with roughness 0.5.
     fn default() -> Self {
         Material {
             base_color: Vec4::ONE,
@@ -111,6 +126,15 @@ impl Default for Material {
             alpha_cutoff: 0.5,
             double_sided: false,
             emissive: Vec3::ZERO,
+            emissive_texture: None,
+            // Blender's default surface (what its glTF importer gives a primitive without a material), not glTF's
+            // metallic default: an unmaterialed mesh should look grey and diffuse, not like a mirror.
+            metallic: 0.0,
+            roughness: 0.5,
+            metallic_roughness_texture: None,
+            occlusion_texture: None,
+            specular: 1.0,
+            casts_shadows: true,
         }
     }
 }
@@ -340,6 +364,19 @@ pub fn wrap(mode: Wrap, i: i64, n: u32) -> u32 {
 }
 
 impl Material {
+    /// Every texture reference of the material, with whether it holds colour (sRGB) rather than data.
+    pub fn texture_refs_mut(&mut self) -> impl Iterator<Item = (&mut TextureRef, bool)> {
+        let occlusion = self.occlusion_texture.as_mut().map(|(r, _)| r);
+        [
+            (self.base_color_texture.as_mut(), true),
+            (self.emissive_texture.as_mut(), true),
+            (self.metallic_roughness_texture.as_mut(), false),
+            (occlusion, false),
+        ]
+        .into_iter()
+        .filter_map(|(r, srgb)| r.map(|r| (r, srgb)))
+    }
+
     /// Albedo (linear RGBA) at a surface point: base colour × texture × vertex colour.
     pub fn albedo(&self, textures: &[Texture], uv: Option<Vec2>, vertex_color: Option<Vec4>) -> Vec4 {
         let mut c = self.base_color;

@@ -150,6 +150,11 @@ impl Scene {
         let mut posed = PosedScene::default();
         let mut locals = Vec::new();
         for (src, (_, cfg)) in sources.iter().zip(&m.sources) {
+            if src.ground.is_some() {
+                // Placed in world units: no transform, and no part in fitting the others.
+                locals.push(Mat4::IDENTITY);
+                continue;
+            }
             let t = cfg.transform.clone().unwrap_or_default();
             let up = t.up.or(m.transform.up).unwrap_or(src.default_up);
             let over = t.over.or(m.transform.over).unwrap_or_default();
@@ -169,18 +174,49 @@ impl Scene {
         let g_pre = transform::pre(&g, UpAxis::Z).as_mat4();
         let mut stats = Stats::default();
         if transform::needs_stats(&g) {
-            for (src, local) in sources.iter().zip(&locals) {
+            for (src, local) in sources.iter().zip(&locals).filter(|(s, _)| s.ground.is_none()) {
                 gather(src, g_pre * *local, g.over.unwrap_or_default(), &mut scratch, &mut posed, &mut stats)?;
             }
         }
         let global = transform::resolve(&g, UpAxis::Z, &stats)
             .map_err(|source| Error::Transform { table: "[transform]".into(), source })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
-        Ok(Scene { sources, locals, global, frames, warnings })
+        let mut scene = Scene { sources, locals, global, frames, warnings };
+        scene.place_ground(&mut scratch, &mut posed)?;
+        Ok(scene)
     }
 
-    /// Source → world matrix of source `i`.
+    /// Makes the ground planes' geometry: at their `z`, or at the lowest point of the other sources over all
+    /// their frames (read once here, like a fitted transform's bounds).
+    fn place_ground(&mut self, scratch: &mut PoseScratch, posed: &mut PosedScene) -> Result<(), Error> {
+        if !self.sources.iter().any(|s| s.ground.is_some_and(|g| g.z.is_none())) {
+            for s in &mut self.sources {
+                if let Some(g) = s.ground {
+                    s.data = SourceData::Static(source::ground(&g, g.z.unwrap_or(0.0) as f32));
+                }
+            }
+            return Ok(());
+        }
+        let mut stats = Stats::default();
+        for i in 0..self.sources.len() {
+            if self.sources[i].ground.is_none() {
+                gather(&self.sources[i], self.world_from_source(i), Over::AllFrames, scratch, posed, &mut stats)?;
+            }
+        }
+        let lowest = if stats.count > 0 { stats.lo.z as f32 } else { 0.0 };
+        for s in &mut self.sources {
+            if let Some(g) = s.ground {
+                s.data = SourceData::Static(source::ground(&g, g.z.map_or(lowest, |z| z as f32)));
+            }
+        }
+        Ok(())
+    }
+
+    /// Source → world matrix of source `i` (identity for a ground plane, placed in world units).
     pub fn world_from_source(&self, i: usize) -> Mat4 {
+        if self.sources[i].ground.is_some() {
+            return Mat4::IDENTITY;
+        }
         self.global * self.locals[i]
     }
 
@@ -281,7 +317,7 @@ fn merge(parts: &[PosedScene], out: &mut PosedScene) {
     for part in parts {
         let (mb, tb) = (materials.len() as u32, textures.len() as u32);
         materials.extend(part.materials.iter().cloned().map(|mut m: material::Material| {
-            if let Some(t) = &mut m.base_color_texture {
+            for (t, _) in m.texture_refs_mut() {
                 t.texture += tb;
             }
             m

@@ -100,9 +100,27 @@ impl PosedScene {
         h.finalize()
     }
 
-    /// blake3 of the materials and texture content only (constant over a source's frames).
+    /// blake3 of the materials and texture content only (constant over a source's frames): what an albedo
+    /// render reads. The fields that only lit (`pbr`) shading reads are in [`PosedScene::lit_material_digest`],
+    /// so that adding them to vvgen left the keys of existing unlit datasets as they were.
     pub fn material_digest(&self) -> blake3::Hash {
         let mut h = blake3::Hasher::new();
+        let legacy: Vec<legacy::Material> = self.materials.iter().map(legacy::Material::of).collect();
+        h.update(format!("{legacy:?}").as_bytes());
+        // Colour textures only: linear copies for data slots are lit-only.
+        for t in self.textures.iter().filter(|t| t.srgb) {
+            h.update(&t.width.to_le_bytes());
+            h.update(&t.height.to_le_bytes());
+            h.update(&[t.srgb as u8]);
+            h.update(&t.rgba);
+        }
+        h.finalize()
+    }
+
+    /// blake3 of everything in the materials and textures, lit-only fields included: what a `pbr` render reads.
+    pub fn lit_material_digest(&self) -> blake3::Hash {
+        let mut h = blake3::Hasher::new();
+        h.update(b"vvgen.materials.lit.v1");
         h.update(format!("{:?}", self.materials).as_bytes());
         for t in self.textures.iter() {
             h.update(&t.width.to_le_bytes());
@@ -133,5 +151,42 @@ impl PosedScene {
             h.update(&p.object.to_le_bytes());
         }
         h.finalize()
+    }
+}
+
+/// The material as albedo rendering saw it before lit shading existed: its `Debug` text is what
+/// [`PosedScene::material_digest`] hashes, byte for byte as before (the struct keeps the name and field order).
+mod legacy {
+    use glam::{Vec3, Vec4};
+
+    use crate::scene::material::{self as m, AlphaMode, TextureRef};
+
+    #[derive(Debug)]
+    pub(super) struct Material {
+        #[allow(dead_code)] // read through Debug
+        base_color: Vec4,
+        #[allow(dead_code)]
+        base_color_texture: Option<TextureRef>,
+        #[allow(dead_code)]
+        alpha_mode: AlphaMode,
+        #[allow(dead_code)]
+        alpha_cutoff: f32,
+        #[allow(dead_code)]
+        double_sided: bool,
+        #[allow(dead_code)]
+        emissive: Vec3,
+    }
+
+    impl Material {
+        pub(super) fn of(x: &m::Material) -> Material {
+            Material {
+                base_color: x.base_color,
+                base_color_texture: x.base_color_texture,
+                alpha_mode: x.alpha_mode,
+                alpha_cutoff: x.alpha_cutoff,
+                double_sided: x.double_sided,
+                emissive: x.emissive,
+            }
+        }
     }
 }

@@ -44,12 +44,18 @@ pub struct LoadedSource {
     pub data: SourceData,
     /// The up axis its transform assumes by default.
     pub default_up: UpAxis,
+    /// A built-in ground plane, placed in world units ([`super::Scene::open`] makes its geometry).
+    pub ground: Option<crate::manifest::source::Plane>,
 }
 
 impl LoadedSource {
     /// Loads a manifest source; `dir` is the manifest's folder.
     pub fn load(name: &str, s: &Source, dir: &std::path::Path) -> Result<LoadedSource, Error> {
         let invalid = |message: String| Error::Source { name: name.to_string(), message };
+        if let Some(p) = s.plane() {
+            let data = SourceData::Static(PosedScene::default());
+            return Ok(LoadedSource { name: name.to_string(), data, default_up: UpAxis::Z, ground: Some(*p) });
+        }
         let (kind, path) = s.kind().ok_or_else(|| invalid("names no file".into()))?;
         let full: PathBuf = dir.join(path);
         let is_ply = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
@@ -85,7 +91,7 @@ impl LoadedSource {
         };
         // PLY is a scanner's format (Z up); OBJ and glTF are Y up.
         let default_up = if is_ply || kind == SourceKind::PlySequence { UpAxis::Z } else { UpAxis::Y };
-        Ok(LoadedSource { name: name.to_string(), data, default_up })
+        Ok(LoadedSource { name: name.to_string(), data, default_up, ground: None })
     }
 
     /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
@@ -314,4 +320,42 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
         o.normals.clear();
         o.normals.extend(p.normals.iter().map(|n| (nm * *n).normalize_or_zero()));
     }
+}
+
+/// Cells along each side of the ground plane: the environment's shadowing is evaluated per vertex, so the plane is
+/// tessellated finely enough for a subject's contact shadow to show (about 3 cm cells on a 4 m plane).
+const GROUND_CELLS: u32 = 128;
+
+/// The ground plane's geometry at height `z`, in world space: a double-sided diffuse grid facing +Z that
+/// receives shadows and casts none.
+pub fn ground(p: &crate::manifest::source::Plane, z: f32) -> PosedScene {
+    let n = GROUND_CELLS;
+    let [w, d] = p.size.map(|v| v as f32);
+    let mut positions = Vec::with_capacity(((n + 1) * (n + 1)) as usize);
+    for j in 0..=n {
+        for i in 0..=n {
+            let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+            positions.push(Vec3::new((u - 0.5) * w, (v - 0.5) * d, z));
+        }
+    }
+    let mut indices = Vec::with_capacity((n * n * 6) as usize);
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            let (b, c, e) = (a + 1, a + n + 2, a + n + 1);
+            indices.extend_from_slice(&[a, b, c, a, c, e]);
+        }
+    }
+    let normals = vec![Vec3::Z; positions.len()];
+    let c = p.color.map(|v| v as f32);
+    let material = Material {
+        base_color: Vec4::new(c[0], c[1], c[2], 1.0),
+        double_sided: true,
+        metallic: 0.0,
+        roughness: 1.0,
+        specular: 0.0,
+        casts_shadows: false,
+        ..Material::default()
+    };
+    PosedScene::single(PrimKind::Triangles, positions, normals, Vec::new(), indices, material)
 }

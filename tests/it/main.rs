@@ -8,6 +8,7 @@ mod consumers;
 mod engine;
 mod fuzz;
 mod graph;
+mod lit;
 mod manifest;
 mod meshseq;
 mod new;

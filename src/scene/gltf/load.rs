@@ -183,6 +183,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
     }
 
     let mut materials: Vec<Material> = doc.materials().map(|m| material(&m)).collect();
+    linear_data_textures(&mut materials, &mut textures);
     let default_material = materials.len() as u32;
     materials.push(Material::default());
 
@@ -427,37 +428,13 @@ fn percent_decode(s: &str) -> String {
 
 fn material(m: &gltf::Material<'_>) -> Material {
     let pbr = m.pbr_metallic_roughness();
-    let base_color_texture = pbr.base_color_texture().map(|info| {
-        let s = info.texture().sampler();
-        let wrap = |w: gltf::texture::WrappingMode| match w {
-            gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
-            gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
-            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
-        };
-        let (mut tex_coord, mut transform) = (info.tex_coord(), None);
-        if let Some(t) = info.texture_transform() {
-            // uv' = T · R · S · uv, with R rotating by -rotation as the extension specifies.
-            let (sn, cs) = t.rotation().sin_cos();
-            let [sx, sy] = t.scale();
-            transform = Some([Vec2::new(cs * sx, -sn * sx), Vec2::new(sn * sy, cs * sy), Vec2::from(t.offset())]);
-            if let Some(tc) = t.tex_coord() {
-                tex_coord = tc;
-            }
-        }
-        TextureRef {
-            texture: info.texture().index() as u32,
-            tex_coord,
-            wrap_s: wrap(s.wrap_s()),
-            wrap_t: wrap(s.wrap_t()),
-            nearest: s.mag_filter() == Some(gltf::texture::MagFilter::Nearest),
-            transform,
-        }
-    });
     let [r, g, b, a] = pbr.base_color_factor();
     let strength = m.emissive_strength().unwrap_or(1.0);
     Material {
         base_color: Vec4::new(r, g, b, a),
-        base_color_texture,
+        base_color_texture: pbr
+            .base_color_texture()
+            .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
         alpha_mode: match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             gltf::material::AlphaMode::Mask => AlphaMode::Mask,
@@ -466,6 +443,70 @@ fn material(m: &gltf::Material<'_>) -> Material {
         alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
         double_sided: m.double_sided(),
         emissive: Vec3::from(m.emissive_factor()) * strength,
+        emissive_texture: m.emissive_texture().map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
+        metallic: pbr.metallic_factor(),
+        roughness: pbr.roughness_factor(),
+        metallic_roughness_texture: pbr
+            .metallic_roughness_texture()
+            .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
+        occlusion_texture: m
+            .occlusion_texture()
+            .map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.strength())),
+        specular: 1.0,
+        casts_shadows: true,
+    }
+}
+
+/// A material's use of `texture`, with its sampler and `KHR_texture_transform`.
+fn texture_ref(
+    texture: &gltf::Texture<'_>,
+    tex_coord: u32,
+    transform: Option<gltf::texture::TextureTransform<'_>>,
+) -> TextureRef {
+    let s = texture.sampler();
+    let wrap = |w: gltf::texture::WrappingMode| match w {
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+    };
+    let (mut tex_coord, mut map) = (tex_coord, None);
+    if let Some(t) = transform {
+        // uv' = T · R · S · uv, with R rotating by -rotation as the extension specifies.
+        let (sn, cs) = t.rotation().sin_cos();
+        let [sx, sy] = t.scale();
+        map = Some([Vec2::new(cs * sx, -sn * sx), Vec2::new(sn * sy, cs * sy), Vec2::from(t.offset())]);
+        if let Some(tc) = t.tex_coord() {
+            tex_coord = tc;
+        }
+    }
+    TextureRef {
+        texture: texture.index() as u32,
+        tex_coord,
+        wrap_s: wrap(s.wrap_s()),
+        wrap_t: wrap(s.wrap_t()),
+        nearest: s.mag_filter() == Some(gltf::texture::MagFilter::Nearest),
+        transform: map,
+    }
+}
+
+/// Gives every data texture (metallic-roughness, occlusion) a linear copy of its image: textures are decoded as
+/// sRGB colour, and a data texture read through the sRGB curve would be wrong. An image used both ways is copied.
+fn linear_data_textures(materials: &mut [Material], textures: &mut Vec<Texture>) {
+    let mut linear: std::collections::BTreeMap<u32, u32> = std::collections::BTreeMap::new();
+    for m in materials.iter_mut() {
+        for (r, srgb) in m.texture_refs_mut() {
+            if srgb {
+                continue;
+            }
+            if let Some(&copy) = linear.get(&r.texture) {
+                r.texture = copy;
+                continue;
+            }
+            let Some(t) = textures.get(r.texture as usize) else { continue };
+            textures.push(Texture::new(t.width, t.height, t.rgba.clone(), false));
+            linear.insert(r.texture, textures.len() as u32 - 1);
+            r.texture = textures.len() as u32 - 1;
+        }
     }
 }
 
@@ -526,7 +567,10 @@ fn primitive(
         }
     };
     let material = p.material().index().map_or(default_material, |i| i as u32);
-    let tex_coord = materials[material as usize].base_color_texture.map(|t| t.tex_coord);
+    // One uv set is carried: the base colour texture's, else the first other texture's (glTF files in practice
+    // share TEXCOORD_0 between a material's textures).
+    let mut mat = materials[material as usize].clone();
+    let tex_coord = mat.texture_refs_mut().next().map(|(t, _)| t.tex_coord);
     let uvs = match tex_coord {
         Some(tc) => attr(gltf::Semantic::TexCoords(tc))?
             .map(|v| v.chunks_exact(2).map(Vec2::from_slice).collect())

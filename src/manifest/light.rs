@@ -1,0 +1,271 @@
+//! `[environment]` and `[light.NAME]`: what lights `[render] shading = "pbr"`, in Blender's units.
+
+use std::ops::Range;
+use std::path::Path;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::diag::Diagnostic;
+use crate::render::light as rl;
+
+/// `[environment]`: an HDR equirectangular map lighting the scene (absent: the built-in studio environment).
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Environment {
+    /// An equirectangular map, `.hdr` (Radiance) or `.exr`, relative to the manifest; absent: the built-in
+    /// studio environment.
+    #[schemars(with = "Option<String>")]
+    pub(super) map: Option<Spanned<String>>,
+    /// Radiance multiplier (Blender's Background Strength; default 1).
+    #[schemars(with = "Option<f64>")]
+    pub(super) strength: Option<Spanned<f64>>,
+    /// Rotation about world +Z in degrees (a Mapping node's Z rotation in Blender; default 0).
+    #[serde(default)]
+    pub rotation_deg: f64,
+    /// Whether the map is the RGBA pass's background (default false: transparent, as NeRF datasets expect).
+    #[serde(default)]
+    pub visible: bool,
+}
+
+/// `[light.NAME]`.
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    /// `"sun"`, `"point"` or `"spot"`.
+    #[schemars(with = "LightKind")]
+    pub(super) kind: Spanned<LightKind>,
+    /// Sun: the direction the light travels (world, +Z up), e.g. `[0.3, 0.2, -1]`.
+    #[schemars(with = "Option<[f64; 3]>")]
+    pub(super) direction: Option<Spanned<[f64; 3]>>,
+    /// Point, spot: where the light is.
+    #[schemars(with = "Option<[f64; 3]>")]
+    pub(super) position: Option<Spanned<[f64; 3]>>,
+    /// Spot: the point it aims at (default: the world origin).
+    #[schemars(with = "Option<[f64; 3]>")]
+    pub(super) target: Option<Spanned<[f64; 3]>>,
+    /// Linear RGB colour (Blender's light Color), default white.
+    #[serde(default = "white")]
+    #[schemars(with = "[f64; 3]")]
+    pub(super) color: Spanned<[f64; 3]>,
+    /// Sun: irradiance in W/m² (Blender's Strength); point, spot: power in W (Blender's Power).
+    #[schemars(with = "f64")]
+    pub(super) intensity: Spanned<f64>,
+    /// Sun: angular diameter in degrees (soft shadows; default 0.526, Blender's and the real sun's).
+    #[schemars(with = "Option<f64>")]
+    pub(super) angle_deg: Option<Spanned<f64>>,
+    /// Point, spot: radius in world units (soft shadows; default 0.1, Blender's).
+    #[schemars(with = "Option<f64>")]
+    pub(super) radius: Option<Spanned<f64>>,
+    /// Spot: full cone angle in degrees (Blender's Spot Size; default 45).
+    #[schemars(with = "Option<f64>")]
+    pub(super) cone_deg: Option<Spanned<f64>>,
+    /// Spot: the fraction of the cone over which it fades (Blender's Blend; default 0.15).
+    #[schemars(with = "Option<f64>")]
+    pub(super) blend: Option<Spanned<f64>>,
+    /// Whether it casts shadows (default true).
+    #[serde(default = "yes")]
+    pub shadows: bool,
+}
+
+fn white() -> Spanned<[f64; 3]> {
+    Spanned::new(0..0, [1.0; 3])
+}
+fn yes() -> bool {
+    true
+}
+
+/// The kinds of `[light.NAME]`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum LightKind {
+    /// Parallel light from far away.
+    Sun,
+    /// Light from a point in all directions.
+    Point,
+    /// Light from a point in a cone.
+    Spot,
+}
+
+impl LightKind {
+    fn name(self) -> &'static str {
+        match self {
+            LightKind::Sun => "sun",
+            LightKind::Point => "point",
+            LightKind::Spot => "spot",
+        }
+    }
+}
+
+/// Blender's default sun angle (degrees).
+const SUN_ANGLE: f64 = 0.526;
+
+impl Environment {
+    /// The map file (manifest-relative), when given.
+    pub fn map(&self) -> Option<&str> {
+        self.map.as_ref().map(|m| m.get_ref().as_str())
+    }
+
+    /// The radiance multiplier.
+    pub fn strength(&self) -> f64 {
+        self.strength.as_ref().map_or(1.0, |s| *s.get_ref())
+    }
+
+    pub(super) fn validate(&self, dir: &Path, diags: &mut Vec<Diagnostic>) {
+        if let Some(s) = &self.strength {
+            if *s.get_ref() < 0.0 {
+                diags.push(Diagnostic::error("strength must be ≥ 0", Some(s.span())));
+            }
+        }
+        let Some(m) = &self.map else { return };
+        let path = dir.join(m.get_ref());
+        if !rl::environment::is_map_path(&path) {
+            diags.push(
+                Diagnostic::error(format!("`{}` is not an environment map vvgen reads", m.get_ref()), Some(m.span()))
+                    .with_help("use an equirectangular `.hdr` (Radiance) or `.exr` (OpenEXR) file"),
+            );
+        } else if !path.is_file() {
+            diags.push(
+                Diagnostic::error(format!("file not found: {}", path.display()), Some(m.span()))
+                    .with_help("paths are relative to the manifest's folder"),
+            );
+        } else if let Err(e) = rl::environment::header(&path) {
+            diags.push(Diagnostic::error(format!("environment map: {e}"), Some(m.span())));
+        }
+    }
+}
+
+impl Light {
+    pub(super) fn validate(&self, name: &str, span: Range<usize>, diags: &mut Vec<Diagnostic>) {
+        let kind = *self.kind.get_ref();
+        let wrong = |key: &str, s: Range<usize>, diags: &mut Vec<Diagnostic>| {
+            diags.push(
+                Diagnostic::error(format!("`{key}` does not apply to a {} light", kind.name()), Some(s)).with_help(
+                    match kind {
+                        LightKind::Sun => "a sun takes `direction`, `intensity` (W/m²), `angle_deg`",
+                        LightKind::Point => "a point light takes `position`, `intensity` (W), `radius`",
+                        LightKind::Spot => {
+                            "a spot takes `position`, `target`, `intensity` (W), `cone_deg`, `blend`, `radius`"
+                        }
+                    },
+                ),
+            )
+        };
+        match kind {
+            LightKind::Sun => {
+                match &self.direction {
+                    None => diags.push(
+                        Diagnostic::error(format!("light `{name}` (sun) needs `direction`"), Some(span.clone()))
+                            .with_help("the direction the light travels, e.g. direction = [0.3, 0.2, -1]"),
+                    ),
+                    Some(d) if glam::DVec3::from(*d.get_ref()).length() < 1e-9 => {
+                        diags.push(Diagnostic::error("`direction` must not be zero", Some(d.span())))
+                    }
+                    _ => {}
+                }
+                for (k, v) in [("position", &self.position), ("target", &self.target)] {
+                    if let Some(v) = v {
+                        wrong(k, v.span(), diags);
+                    }
+                }
+                for (k, v) in [("radius", &self.radius), ("cone_deg", &self.cone_deg), ("blend", &self.blend)] {
+                    if let Some(v) = v {
+                        wrong(k, v.span(), diags);
+                    }
+                }
+            }
+            LightKind::Point | LightKind::Spot => {
+                if self.position.is_none() {
+                    diags.push(
+                        Diagnostic::error(
+                            format!("light `{name}` ({}) needs `position`", kind.name()),
+                            Some(span.clone()),
+                        )
+                        .with_help("e.g. position = [2, -2, 3]"),
+                    );
+                }
+                if let Some(d) = &self.direction {
+                    wrong("direction", d.span(), diags);
+                }
+                if let Some(a) = &self.angle_deg {
+                    wrong("angle_deg", a.span(), diags);
+                }
+                if kind == LightKind::Point {
+                    for (k, v) in [("cone_deg", &self.cone_deg), ("blend", &self.blend)] {
+                        if let Some(v) = v {
+                            wrong(k, v.span(), diags);
+                        }
+                    }
+                    if let Some(t) = &self.target {
+                        wrong("target", t.span(), diags);
+                    }
+                }
+                if let (Some(p), LightKind::Spot) = (&self.position, kind) {
+                    let t = self.target.as_ref().map_or([0.0; 3], |t| *t.get_ref());
+                    if (glam::DVec3::from(*p.get_ref()) - glam::DVec3::from(t)).length() < 1e-9 {
+                        diags.push(
+                            Diagnostic::error("the spot's `target` is its `position`", Some(p.span()))
+                                .with_help("aim it at another point (`target` defaults to the world origin)"),
+                        );
+                    }
+                }
+            }
+        }
+        let i = *self.intensity.get_ref();
+        if i < 0.0 {
+            diags.push(Diagnostic::error("intensity must be ≥ 0", Some(self.intensity.span())));
+        }
+        if self.color.get_ref().iter().any(|c| *c < 0.0) {
+            diags.push(Diagnostic::error("colour components must be ≥ 0", Some(self.color.span())));
+        }
+        let ranges = [
+            (&self.angle_deg, "angle_deg", 0.0, 179.0, "a sun's angular diameter in degrees, e.g. 0.526"),
+            (&self.cone_deg, "cone_deg", 1.0, 180.0, "a spot's full cone in degrees, 1..=180"),
+            (&self.blend, "blend", 0.0, 1.0, "a fraction, 0..=1"),
+            (&self.radius, "radius", 0.0, 1e6, "a radius in world units, ≥ 0"),
+        ];
+        for (v, key, lo, hi, help) in ranges {
+            if let Some(v) = v {
+                if !(lo..=hi).contains(v.get_ref()) {
+                    diags.push(
+                        Diagnostic::error(format!("{key} = {} is out of range", v.get_ref()), Some(v.span()))
+                            .with_help(help),
+                    );
+                }
+            }
+        }
+    }
+
+    /// The renderer's light.
+    pub fn resolve(&self) -> rl::Light {
+        let v = |a: [f64; 3]| glam::DVec3::from(a).as_vec3();
+        let kind = match self.kind.get_ref() {
+            LightKind::Sun => rl::LightKind::Sun {
+                direction: v(self.direction.as_ref().map_or([0.0, 0.0, -1.0], |d| *d.get_ref()))
+                    .normalize_or(glam::Vec3::NEG_Z),
+                angle: self.angle_deg.as_ref().map_or(SUN_ANGLE, |a| *a.get_ref()).to_radians() as f32,
+            },
+            LightKind::Point => rl::LightKind::Point {
+                position: v(self.position.as_ref().map_or([0.0; 3], |p| *p.get_ref())),
+                radius: self.radius.as_ref().map_or(0.1, |r| *r.get_ref()) as f32,
+            },
+            LightKind::Spot => {
+                let position = v(self.position.as_ref().map_or([0.0; 3], |p| *p.get_ref()));
+                let target = v(self.target.as_ref().map_or([0.0; 3], |t| *t.get_ref()));
+                rl::LightKind::Spot {
+                    position,
+                    direction: (target - position).normalize_or(glam::Vec3::NEG_Z),
+                    cone: self.cone_deg.as_ref().map_or(45.0, |c| *c.get_ref()).to_radians() as f32,
+                    blend: self.blend.as_ref().map_or(0.15, |b| *b.get_ref()) as f32,
+                    radius: self.radius.as_ref().map_or(0.1, |r| *r.get_ref()) as f32,
+                }
+            }
+        };
+        rl::Light {
+            kind,
+            color: v(*self.color.get_ref()),
+            intensity: *self.intensity.get_ref() as f32,
+            shadows: self.shadows,
+        }
+    }
+}

@@ -1,0 +1,515 @@
+//! Environment lighting: an HDR equirectangular map (Radiance `.hdr` or OpenEXR), mapped exactly as Blender's
+//! Environment Texture node maps it, and prefiltered once per map ([`prefilter`], a cached action of the build)
+//! into what shading reads: diffuse irradiance as 9 spherical-harmonic coefficients, and the map convolved
+//! with the GGX lobe at a few roughnesses (the split-sum approximation's first factor).
+
+use std::f32::consts::PI;
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+
+/// Largest map side read (a 16k map is 1.6 GB of f32 texels; environment maps are 1k–8k wide).
+pub const MAX_SIDE: u32 = 16384;
+
+/// Roughnesses of the prefiltered specular levels: `i / (LEVELS − 1)`.
+pub const LEVELS: usize = 6;
+
+/// Version of the prefiltered data's bytes: bump when prefiltering changes.
+pub const SALT: &str = "environment 1";
+
+/// What can go wrong reading an environment map.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The file cannot be read.
+    #[error("{}: cannot read", path.display())]
+    Io {
+        /// The map.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not a map vvgen reads.
+    #[error("{}: {message}", path.display())]
+    Format {
+        /// The map.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A prefiltered blob is damaged (a damaged cache).
+    #[error("damaged prefiltered environment: {0}")]
+    Damaged(&'static str),
+}
+
+/// An equirectangular map: linear RGB radiance, rows top (+Z) first, columns as Blender's (see [`dir_to_uv`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvMap {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Linear RGB, `width × height`, rows top first.
+    pub texels: Vec<Vec3>,
+}
+
+/// Whether `path` names a map format vvgen reads (by extension).
+pub fn is_map_path(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("hdr") || e.eq_ignore_ascii_case("exr"))
+}
+
+/// The map's size from its header alone (what `vvgen check` reads): an error for what [`load`] would refuse.
+pub fn header(path: &Path) -> Result<(u32, u32), Error> {
+    let bad = |message: String| Error::Format { path: path.to_path_buf(), message };
+    let (w, h) = if is_exr(path) {
+        let meta = exr::meta::MetaData::read_from_file(path, false)
+            .map_err(|e| bad(format!("not a readable OpenEXR file: {e}")))?;
+        let layer = meta.headers.first().ok_or_else(|| bad("an OpenEXR file without layers".into()))?;
+        let size = layer.layer_size;
+        (size.width() as u32, size.height() as u32)
+    } else {
+        let file = std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+        let dec = image::codecs::hdr::HdrDecoder::new(std::io::BufReader::new(file))
+            .map_err(|e| bad(format!("not a readable Radiance HDR file: {e}")))?;
+        let m = dec.metadata();
+        (m.width, m.height)
+    };
+    if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+        return Err(bad(format!("{w}×{h} texels: an environment map is 1..={MAX_SIDE} texels a side")));
+    }
+    Ok((w, h))
+}
+
+fn is_exr(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+/// Reads an equirectangular map: OpenEXR (its RGB channels, any sample type and compression the `exr` crate
+/// reads) or Radiance RGBE. Non-finite or negative texels become 0 (a NaN would spread through every lookup).
+pub fn load(path: &Path) -> Result<EnvMap, Error> {
+    let (w, h) = header(path)?;
+    let bad = |message: String| Error::Format { path: path.to_path_buf(), message };
+    let mut texels = vec![Vec3::ZERO; w as usize * h as usize];
+    if is_exr(path) {
+        use exr::prelude::*;
+        let image = read_first_rgba_layer_from_file(
+            path,
+            |res, _| (res.width(), vec![Vec3::ZERO; res.width() * res.height()]),
+            |(width, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                px[pos.y() * *width + pos.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .map_err(|e| bad(format!("cannot decode: {e}")))?;
+        let (width, px) = image.layer_data.channel_data.pixels;
+        if width != w as usize || px.len() != texels.len() {
+            return Err(bad("the layer's size differs from its header's".into()));
+        }
+        texels = px;
+    } else {
+        let file = std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+        let dec = image::codecs::hdr::HdrDecoder::new(std::io::BufReader::new(file))
+            .map_err(|e| bad(format!("cannot decode: {e}")))?;
+        let img = image::DynamicImage::from_decoder(dec).map_err(|e| bad(format!("cannot decode: {e}")))?.into_rgb32f();
+        for (t, p) in texels.iter_mut().zip(img.pixels()) {
+            *t = Vec3::new(p[0], p[1], p[2]);
+        }
+    }
+    for t in &mut texels {
+        *t = Vec3::new(clean(t.x), clean(t.y), clean(t.z));
+    }
+    Ok(EnvMap { width: w, height: h, texels })
+}
+
+fn clean(v: f32) -> f32 {
+    if v.is_finite() && v > 0.0 {
+        v
+    } else {
+        0.0
+    }
+}
+
+/// The built-in neutral "studio" environment (for `shading = "pbr"` without an `[environment]` map): a soft
+/// overhead sky fading to a darker floor, grey, with a broad brighter key from the front-left (+X −Y, above),
+/// so forms read without one harsh highlight. Radiance about 1 overall.
+pub fn studio() -> EnvMap {
+    let (w, h) = (256u32, 128u32);
+    let key = Vec3::new(0.6, -0.5, 0.62).normalize();
+    let texels = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let d = uv_to_dir(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
+            let sky = 0.35 + 0.85 * smoothstep(-0.3, 0.6, d.z);
+            let lobe = d.dot(key).max(0.0).powi(8) * 2.5;
+            Vec3::splat(sky + lobe)
+        })
+        .collect();
+    EnvMap { width: w, height: h, texels }
+}
+
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Blender's equirectangular mapping (Cycles' `direction_to_equirectangular`): a world direction (+Z up) →
+/// `(u, t)` with `u` across (0 at the left edge, +X at the centre, +Y at a quarter) and `t` down from the top
+/// row (0 is +Z). Blender's `v` is `1 − t` (its images are stored bottom row first).
+#[inline]
+pub fn dir_to_uv(d: Vec3) -> Vec2 {
+    let len = d.length();
+    if len == 0.0 {
+        return Vec2::ZERO;
+    }
+    let u = 0.5 - d.y.atan2(d.x) / (2.0 * PI);
+    let t = (d.z / len).clamp(-1.0, 1.0).acos() / PI;
+    Vec2::new(u, t)
+}
+
+/// The inverse of [`dir_to_uv`].
+#[inline]
+pub fn uv_to_dir(uv: Vec2) -> Vec3 {
+    let phi = PI - 2.0 * PI * uv.x;
+    let theta = PI * uv.y;
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = phi.sin_cos();
+    Vec3::new(st * cp, st * sp, ct)
+}
+
+impl EnvMap {
+    /// Bilinear lookup at `(u, t)`, wrapping across and clamping down.
+    pub fn lookup(&self, uv: Vec2) -> Vec3 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let fx = uv.x * w as f32 - 0.5;
+        let fy = (uv.y * h as f32 - 0.5).clamp(0.0, (h - 1) as f32);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (tx, ty) = (fx - x0, fy - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let at = |x: i64, y: i64| self.texels[(y.clamp(0, h - 1) * w + x.rem_euclid(w)) as usize];
+        let top = at(x0, y0).lerp(at(x0 + 1, y0), tx);
+        let bottom = at(x0, y0 + 1).lerp(at(x0 + 1, y0 + 1), tx);
+        top.lerp(bottom, ty)
+    }
+
+    /// Radiance arriving from world direction `d`.
+    #[inline]
+    pub fn radiance(&self, d: Vec3) -> Vec3 {
+        self.lookup(dir_to_uv(d))
+    }
+
+    /// Half the size (rounding up), box-filtered in 2×2 texels weighted by their solid angle.
+    fn half(&self) -> EnvMap {
+        let (w, h) = (self.width.div_ceil(2).max(1), self.height.div_ceil(2).max(1));
+        let mut texels = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let (mut sum, mut wsum) = (Vec3::ZERO, 0.0);
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let (sx, sy) = ((2 * x + dx).min(self.width - 1), (2 * y + dy).min(self.height - 1));
+                    let s = row_solid_angle(sy, self.height);
+                    sum += self.texels[(sy * self.width + sx) as usize] * s;
+                    wsum += s;
+                }
+                texels.push(if wsum > 0.0 { sum / wsum } else { Vec3::ZERO });
+            }
+        }
+        EnvMap { width: w, height: h, texels }
+    }
+}
+
+/// The solid angle of one texel of row `y` of an equirectangular map `h` rows high, per texel column unit
+/// (times 2π / width for a texel): the exact band area, so the rows of a map sum to exactly 2 (· 2π = 4π).
+fn row_solid_angle(y: u32, h: u32) -> f32 {
+    let t0 = PI * y as f32 / h as f32;
+    let t1 = PI * (y + 1) as f32 / h as f32;
+    t0.cos() - t1.cos()
+}
+
+/// What shading reads of an environment: irradiance SH and GGX-prefiltered radiance at [`LEVELS`] roughnesses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prefiltered {
+    /// Irradiance spherical harmonics (bands 0–2, cosine-convolved): E(n) = Σ sh[i]·Yᵢ(n).
+    pub sh: [Vec3; 9],
+    /// Radiance convolved with the GGX lobe of roughness `i / (LEVELS − 1)`, level i.
+    pub levels: Vec<EnvMap>,
+}
+
+/// The real SH basis of bands 0–2 at unit `n`.
+#[inline]
+fn sh_basis(n: Vec3) -> [f32; 9] {
+    let (x, y, z) = (n.x, n.y, n.z);
+    [
+        0.282_094_8,
+        0.488_602_5 * y,
+        0.488_602_5 * z,
+        0.488_602_5 * x,
+        1.092_548_4 * x * y,
+        1.092_548_4 * y * z,
+        0.315_391_57 * (3.0 * z * z - 1.0),
+        1.092_548_4 * x * z,
+        0.546_274_2 * (x * x - y * y),
+    ]
+}
+
+/// Cosine-lobe convolution per band (Ramamoorthi & Hanrahan): π, 2π/3, π/4.
+const BAND: [f32; 9] =
+    [PI, 2.0 * PI / 3.0, 2.0 * PI / 3.0, 2.0 * PI / 3.0, PI / 4.0, PI / 4.0, PI / 4.0, PI / 4.0, PI / 4.0];
+
+/// Side of the mirror level (level 0) and of each rougher level: the lobe widens, so the levels shrink.
+const LEVEL_WIDTH: [u32; LEVELS] = [512, 256, 128, 64, 32, 32];
+
+/// GGX samples per prefiltered texel.
+const LOBE_SAMPLES: u32 = 96;
+
+/// Prefilters a map: deterministic (fixed sample sets, fixed order; rows in parallel write their own texels).
+pub fn prefilter(map: &EnvMap) -> Prefiltered {
+    use rayon::prelude::*;
+    // Irradiance SH over the full map, rows in parallel, summed in row order. Each row is integrated over
+    // SUB sub-rows with their exact band areas (the midpoint rule over whole rows leaves a residue in the
+    // higher bands: a uniform map would light a sideways face 0.03 % darker than an upward one).
+    const SUB: u32 = 4;
+    let rows: Vec<[Vec3; 9]> = (0..map.height)
+        .into_par_iter()
+        .map(|y| {
+            let mut acc = [Vec3::ZERO; 9];
+            for k in 0..SUB {
+                let (rows, sub) = (map.height * SUB, y * SUB + k);
+                let dw = row_solid_angle(sub, rows) * 2.0 * PI / map.width as f32;
+                let t = (sub as f32 + 0.5) / rows as f32;
+                for x in 0..map.width {
+                    let d = uv_to_dir(Vec2::new((x as f32 + 0.5) / map.width as f32, t));
+                    let l = map.texels[(y * map.width + x) as usize] * dw;
+                    for (a, b) in acc.iter_mut().zip(sh_basis(d)) {
+                        *a += l * b;
+                    }
+                }
+            }
+            acc
+        })
+        .collect();
+    let mut sh = [Vec3::ZERO; 9];
+    for r in &rows {
+        for (s, v) in sh.iter_mut().zip(r) {
+            *s += *v;
+        }
+    }
+    for (s, b) in sh.iter_mut().zip(BAND) {
+        *s *= b;
+    }
+    // A pyramid of the map to read the lobes from (filtered importance sampling: wide, unlikely samples read
+    // coarse levels, so few samples suffice without speckle from a small bright sun).
+    let mut pyramid = vec![map.clone()];
+    while pyramid.last().is_some_and(|m| m.width > 8) {
+        let next = pyramid.last().unwrap().half();
+        pyramid.push(next);
+    }
+    let levels = (0..LEVELS)
+        .map(|i| {
+            let roughness = i as f32 / (LEVELS - 1) as f32;
+            let w = LEVEL_WIDTH[i].min(map.width.max(2));
+            let h = (w / 2).max(1);
+            let texels: Vec<Vec3> = (0..h)
+                .into_par_iter()
+                .flat_map_iter(|y| {
+                    let pyramid = &pyramid;
+                    (0..w).map(move |x| {
+                        let r = uv_to_dir(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
+                        if i == 0 {
+                            return level_for(pyramid, w).radiance(r);
+                        }
+                        convolve(pyramid, r, roughness)
+                    })
+                })
+                .collect();
+            EnvMap { width: w, height: h, texels }
+        })
+        .collect();
+    Prefiltered { sh, levels }
+}
+
+/// The pyramid level nearest `width` texels across (not finer).
+fn level_for(pyramid: &[EnvMap], width: u32) -> &EnvMap {
+    pyramid.iter().find(|m| m.width <= width).unwrap_or_else(|| pyramid.last().expect("a pyramid has a level"))
+}
+
+/// Radiance around `r` weighted by the GGX lobe of `roughness` (n = v = r), by importance sampling.
+fn convolve(pyramid: &[EnvMap], r: Vec3, roughness: f32) -> Vec3 {
+    let a = (roughness * roughness).max(1e-4);
+    let (t, b) = super::brdf::basis(r);
+    let base = &pyramid[0];
+    let texel_solid = 4.0 * PI / (base.width as f32 * base.height as f32);
+    let (mut sum, mut wsum) = (Vec3::ZERO, 0.0);
+    for k in 0..LOBE_SAMPLES {
+        let xi = super::brdf::hammersley(k, LOBE_SAMPLES);
+        let h = super::brdf::ggx_half(xi, a);
+        let hw = t * h.x + b * h.y + r * h.z;
+        let l = 2.0 * r.dot(hw) * hw - r;
+        let nl = r.dot(l);
+        if nl <= 0.0 {
+            continue;
+        }
+        // pdf of l = D(h)·(n·h) / (4 (v·h)) with n = v: D/4.
+        let nh = h.z;
+        let pdf = super::brdf::ggx_d(nh, a) / 4.0;
+        let sample_solid = 1.0 / (LOBE_SAMPLES as f32 * pdf + 1e-6);
+        let lod = (0.5 * (sample_solid / texel_solid).log2() + 1.0).max(0.0);
+        let m = &pyramid[(lod.round() as usize).min(pyramid.len() - 1)];
+        sum += m.radiance(l) * nl;
+        wsum += nl;
+    }
+    if wsum > 0.0 {
+        sum / wsum
+    } else {
+        Vec3::ZERO
+    }
+}
+
+impl Prefiltered {
+    /// Irradiance arriving at a surface of world normal `n` (the map's own frame: rotate first).
+    #[inline]
+    pub fn irradiance(&self, n: Vec3) -> Vec3 {
+        let e = self.sh.iter().zip(sh_basis(n)).fold(Vec3::ZERO, |e, (c, y)| e + *c * y);
+        e.max(Vec3::ZERO)
+    }
+
+    /// GGX-prefiltered radiance around direction `r` for perceptual `roughness`.
+    #[inline]
+    pub fn specular(&self, r: Vec3, roughness: f32) -> Vec3 {
+        let f = roughness.clamp(0.0, 1.0) * (LEVELS - 1) as f32;
+        let i = (f as usize).min(LEVELS - 2);
+        let t = f - i as f32;
+        let uv = dir_to_uv(r);
+        self.levels[i].lookup(uv).lerp(self.levels[i + 1].lookup(uv), t)
+    }
+
+    /// The bytes of the cache's blob: SH, then each level's size and texels, little-endian f32.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        out.extend_from_slice(b"VVENV1\0\0");
+        for c in &self.sh {
+            for v in c.to_array() {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        out.extend_from_slice(&(self.levels.len() as u32).to_le_bytes());
+        for l in &self.levels {
+            out.extend_from_slice(&l.width.to_le_bytes());
+            out.extend_from_slice(&l.height.to_le_bytes());
+            for t in &l.texels {
+                for v in t.to_array() {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+        out
+    }
+
+    /// Reads [`Prefiltered::encode`]'s bytes; a damaged blob is an error, not a panic.
+    pub fn decode(bytes: &[u8]) -> Result<Prefiltered, Error> {
+        let mut r = Reader { bytes, at: 0 };
+        if r.take(8)? != b"VVENV1\0\0" {
+            return Err(Error::Damaged("bad magic"));
+        }
+        let mut sh = [Vec3::ZERO; 9];
+        for c in &mut sh {
+            *c = r.vec3()?;
+        }
+        let n = r.u32()? as usize;
+        if n != LEVELS {
+            return Err(Error::Damaged("level count"));
+        }
+        let mut levels = Vec::with_capacity(n);
+        for _ in 0..n {
+            let (w, h) = (r.u32()?, r.u32()?);
+            if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+                return Err(Error::Damaged("level size"));
+            }
+            let count = w as usize * h as usize;
+            if r.bytes.len() - r.at < count * 12 {
+                return Err(Error::Damaged("truncated"));
+            }
+            let texels = (0..count).map(|_| r.vec3()).collect::<Result<Vec<_>, _>>()?;
+            levels.push(EnvMap { width: w, height: h, texels });
+        }
+        if r.at != bytes.len() {
+            return Err(Error::Damaged("trailing bytes"));
+        }
+        Ok(Prefiltered { sh, levels })
+    }
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Result<&[u8], Error> {
+        let s = self.bytes.get(self.at..self.at + n).ok_or(Error::Damaged("truncated"))?;
+        self.at += n;
+        Ok(s)
+    }
+    fn u32(&mut self) -> Result<u32, Error> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+    }
+    fn vec3(&mut self) -> Result<Vec3, Error> {
+        let mut v = [0f32; 3];
+        for c in &mut v {
+            *c = f32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes"));
+            if !c.is_finite() {
+                return Err(Error::Damaged("a non-finite value"));
+            }
+        }
+        Ok(Vec3::from(v))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blenders_mapping_round_trips_and_puts_axes_where_blender_does() {
+        // +X at the centre column, +Y a quarter across, −Y three quarters, +Z the top row.
+        let c = |d: Vec3| dir_to_uv(d);
+        assert!((c(Vec3::X) - Vec2::new(0.5, 0.5)).length() < 1e-6);
+        assert!((c(Vec3::Y) - Vec2::new(0.25, 0.5)).length() < 1e-6);
+        assert!((c(-Vec3::Y) - Vec2::new(0.75, 0.5)).length() < 1e-6);
+        assert!(c(Vec3::Z).y.abs() < 1e-6 && (c(-Vec3::Z).y - 1.0).abs() < 1e-6);
+        for i in 0..200 {
+            let uv = Vec2::new((i as f32 * 0.618).fract(), 0.02 + 0.96 * (i as f32 * 0.377).fract());
+            let back = dir_to_uv(uv_to_dir(uv));
+            // u wraps: 0 and 1 are the same column edge.
+            let du = (back.x - uv.x + 0.5).rem_euclid(1.0) - 0.5;
+            assert!(du.abs() < 1e-4 && (back.y - uv.y).abs() < 1e-4, "{uv} → {back}");
+        }
+    }
+
+    #[test]
+    fn a_uniform_map_gives_pi_irradiance_and_its_own_radiance_everywhere() {
+        let map = EnvMap { width: 64, height: 32, texels: vec![Vec3::ONE; 64 * 32] };
+        let p = prefilter(&map);
+        for n in [Vec3::X, Vec3::Z, -Vec3::Z, Vec3::new(0.3, -0.5, 0.8).normalize()] {
+            assert!((p.irradiance(n) - Vec3::splat(PI)).abs().max_element() < 1e-4 * PI, "{}", p.irradiance(n));
+            for r in [0.0, 0.3, 1.0] {
+                assert!((p.specular(n, r) - Vec3::ONE).abs().max_element() < 1e-4);
+            }
+        }
+        assert_eq!(Prefiltered::decode(&p.encode()).unwrap(), p);
+        let mut bad = p.encode();
+        bad.truncate(bad.len() - 5);
+        assert!(Prefiltered::decode(&bad).is_err());
+    }
+
+    #[test]
+    fn irradiance_follows_the_bright_half() {
+        // Bright above the horizon, dark below: a face looking up receives more than one looking down.
+        let (w, h) = (64u32, 32u32);
+        let texels = (0..h).flat_map(|y| (0..w).map(move |_| if y < h / 2 { Vec3::ONE } else { Vec3::ZERO })).collect();
+        let p = prefilter(&EnvMap { width: w, height: h, texels });
+        let (up, down) = (p.irradiance(Vec3::Z).x, p.irradiance(-Vec3::Z).x);
+        // Exact: π above, 0 below; bands 0–2 ring a little.
+        assert!((up - PI).abs() < 0.15 && down < 0.15, "{up} {down}");
+    }
+}

@@ -1,0 +1,298 @@
+//! Lit (`pbr`) shading: lights in Blender's units, an HDR environment, shadows, and the glTF metallic-roughness
+//! BRDF ([`brdf`]). Everything that does not depend on the camera — shadow maps, the environment's visibility
+//! at every vertex — is prepared once per posed frame ([`FrameLight::prepare`]) and shared by every view.
+//!
+//! Units are Blender's, measured against Cycles 3.4: a sun of strength S W/m² gives a white Lambertian surface
+//! facing it the value S/π; a point light of P W at distance d gives P/(4π²d²); a spot is a point light times
+//! the cosine of the angle off its axis, faded over `blend` (Blender 3.x's spot falloff); an environment of
+//! radiance L lights a white Lambertian surface to L.
+
+pub mod brdf;
+pub mod environment;
+pub mod shadow;
+
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+use glam::{Mat3, Vec3};
+use rayon::prelude::*;
+
+use crate::scene::{PosedScene, PrimKind};
+pub use brdf::Surface;
+pub use environment::{EnvMap, Prefiltered};
+use shadow::ShadowMap;
+
+/// A light of the scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Light {
+    /// Where it is and how it spreads.
+    pub kind: LightKind,
+    /// Linear RGB colour.
+    pub color: Vec3,
+    /// Sun: irradiance in W/m² (Blender's Strength); point and spot: power in W.
+    pub intensity: f32,
+    /// Whether it casts shadows.
+    pub shadows: bool,
+}
+
+/// The kinds of light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightKind {
+    /// Parallel light travelling along `direction`, from a disk `angle` radians across (soft shadows).
+    Sun {
+        /// Unit direction the light travels.
+        direction: Vec3,
+        /// Angular diameter in radians.
+        angle: f32,
+    },
+    /// Light from a point (a sphere of `radius` for soft shadows).
+    Point {
+        /// World position.
+        position: Vec3,
+        /// Radius in world units.
+        radius: f32,
+    },
+    /// A point light limited to a cone.
+    Spot {
+        /// World position.
+        position: Vec3,
+        /// Unit axis direction.
+        direction: Vec3,
+        /// Full cone angle in radians.
+        cone: f32,
+        /// Blender's spot blend, 0..1.
+        blend: f32,
+        /// Radius in world units.
+        radius: f32,
+    },
+}
+
+/// Side of a sun's shadow map, of a spot's, and of each face of a point light's cube.
+const SUN_MAP: u32 = 2048;
+const SPOT_MAP: u32 = 1024;
+const POINT_MAP: u32 = 512;
+/// Directions the environment's visibility is sampled in, and the side of each direction's map.
+const ENV_DIRECTIONS: usize = 32;
+const ENV_MAP: u32 = 256;
+
+/// The environment as one frame's shading reads it.
+#[derive(Debug, Clone)]
+pub struct EnvLight {
+    /// Prefiltered lighting.
+    pub prefiltered: Arc<Prefiltered>,
+    /// Multiplier of its radiance.
+    pub strength: f32,
+    /// World → map frame: the lookup direction is `rotation · d` (a Mapping node rotating Z in Blender).
+    pub rotation: Mat3,
+    /// The full-resolution map, when it is the visible background.
+    pub background: Option<Arc<EnvMap>>,
+}
+
+/// Everything a frame's lit shading needs besides the camera.
+#[derive(Debug)]
+pub struct FrameLight {
+    lights: Vec<(Light, Vec<ShadowMap>)>,
+    env: EnvLight,
+    /// Per primitive, per vertex: the fraction of the environment's light (weighted by where it comes from and
+    /// by the vertex normal) that no caster blocks. Empty for point primitives.
+    pub vertex_visibility: Vec<Vec<f32>>,
+}
+
+/// Bounds of the geometry that casts shadows.
+fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
+    let mut it = scene
+        .primitives
+        .iter()
+        .filter(|p| p.kind == PrimKind::Triangles)
+        .filter(|p| scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows))
+        .flat_map(|p| p.positions.iter());
+    let first = *it.next()?;
+    Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+}
+
+/// `n` directions spread evenly over the sphere (a Fibonacci lattice).
+fn sphere_directions(n: usize) -> Vec<Vec3> {
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = i as f32 * PI * (3.0 - 5f32.sqrt());
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+impl FrameLight {
+    /// Prepares the lights and environment for one posed frame: shadow maps of every shadowing light, and the
+    /// environment's visibility at every vertex.
+    pub fn prepare(scene: &PosedScene, lights: &[Light], env: EnvLight) -> FrameLight {
+        let bounds = caster_bounds(scene);
+        let lights = lights
+            .par_iter()
+            .map(|l| {
+                let maps = match (l.shadows, bounds) {
+                    (true, Some(b)) => match l.kind {
+                        LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP)],
+                        LightKind::Spot { position, direction, cone, .. } => {
+                            vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP)]
+                        }
+                        LightKind::Point { position, .. } => shadow::CUBE
+                            .iter()
+                            .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP))
+                            .collect(),
+                    },
+                    _ => Vec::new(),
+                };
+                (l.clone(), maps)
+            })
+            .collect();
+        let vertex_visibility = match bounds {
+            Some(b) => environment_visibility(scene, &env, b),
+            None => scene.primitives.iter().map(|p| vec![1.0; p.positions.len()]).collect(),
+        };
+        FrameLight { lights, env, vertex_visibility }
+    }
+
+    /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
+    /// `v` (toward the eye), for surface `s`, with ambient occlusion `ao` (the material's) and the environment's
+    /// visibility `env_vis` (interpolated from the vertices).
+    pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, env_vis: f32) -> Vec3 {
+        let mut out = Vec3::ZERO;
+        for (light, maps) in &self.lights {
+            let (l, radiance, size) = match light.kind {
+                LightKind::Sun { direction, angle } => (-direction, Vec3::ONE, (0.5 * angle).tan()),
+                LightKind::Point { position, radius } => {
+                    let d = position - p;
+                    let d2 = d.length_squared().max(1e-8);
+                    (d / d2.sqrt(), Vec3::splat(1.0 / (4.0 * PI * d2)), radius)
+                }
+                LightKind::Spot { position, direction, cone, blend, radius } => {
+                    let d = position - p;
+                    let d2 = d.length_squared().max(1e-8);
+                    let l = d / d2.sqrt();
+                    let falloff = spot_falloff(-l.dot(direction), cone, blend);
+                    (l, Vec3::splat(falloff / (4.0 * PI * d2)), radius)
+                }
+            };
+            let f = s.eval(n, v, l);
+            if f == Vec3::ZERO || radiance == Vec3::ZERO {
+                continue;
+            }
+            let vis = match (light.kind, maps.len()) {
+                (_, 0) => 1.0,
+                (LightKind::Point { position, .. }, 6) => maps[shadow::cube_face(p - position)].visibility(p, n, size),
+                _ => maps[0].visibility(p, n, size),
+            };
+            out += f * radiance * light.color * (light.intensity * vis);
+        }
+        // Environment: irradiance for the diffuse layer, the split sum for the specular one.
+        let e = &self.env;
+        let nv = n.dot(v).max(1e-4);
+        let r = 2.0 * n.dot(v) * n - v;
+        let ab = brdf::dfg(nv, s.roughness);
+        let w = s.specular_weight();
+        let spec_f = (s.f0() * ab.x + Vec3::splat(ab.y)) * w;
+        let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (e.prefiltered.irradiance(e.rotation * n) / PI);
+        let specular = spec_f * e.prefiltered.specular(e.rotation * r, s.roughness);
+        out + (diffuse + specular) * (e.strength * ao * env_vis)
+    }
+
+    /// The visible background's radiance along world direction `d`, when the environment is visible.
+    #[inline]
+    pub fn background(&self, d: Vec3) -> Option<Vec3> {
+        let map = self.env.background.as_ref()?;
+        Some(map.radiance(self.env.rotation * d) * self.env.strength)
+    }
+
+    /// Whether the environment shows as the background.
+    pub fn has_background(&self) -> bool {
+        self.env.background.is_some()
+    }
+}
+
+/// Blender 3.x's spot falloff at `cos_angle` off the axis: the cosine itself inside the cone, smoothed to 0 over
+/// the outer `blend` fraction.
+fn spot_falloff(cos_angle: f32, cone: f32, blend: f32) -> f32 {
+    let cos_half = (0.5 * cone).cos();
+    let t = cos_angle - cos_half;
+    if t <= 0.0 {
+        return 0.0;
+    }
+    let smooth = (1.0 - cos_half) * blend;
+    let mut a = cos_angle;
+    if t < smooth {
+        let x = t / smooth;
+        a *= x * x * (3.0 - 2.0 * x);
+    }
+    a
+}
+
+/// The environment's visibility at every vertex: [`ENV_DIRECTIONS`] parallel shadow maps from directions over
+/// the sphere, each weighted by the environment's brightness there (so a bright sky above shadows more than a
+/// dark floor) and by the vertex normal's cosine to it.
+fn environment_visibility(scene: &PosedScene, env: &EnvLight, bounds: (Vec3, Vec3)) -> Vec<Vec<f32>> {
+    let dirs = sphere_directions(ENV_DIRECTIONS);
+    let roughest = env.prefiltered.levels.last();
+    let weights: Vec<f32> = dirs
+        .iter()
+        .map(|&d| {
+            roughest.map_or(1.0, |m| m.radiance(env.rotation * d).dot(Vec3::new(0.2126, 0.7152, 0.0722))).max(1e-6)
+        })
+        .collect();
+    let maps: Vec<ShadowMap> = dirs.par_iter().map(|&d| ShadowMap::sun(scene, -d, bounds, ENV_MAP)).collect();
+    scene
+        .primitives
+        .iter()
+        .map(|prim| {
+            if prim.kind != PrimKind::Triangles {
+                return Vec::new();
+            }
+            prim.positions
+                .par_iter()
+                .zip(prim.normals.par_iter())
+                .map(|(&p, &n)| {
+                    let (mut lit, mut all) = (0.0, 0.0);
+                    // The hemisphere the vertex normal faces (a double-sided surface seen from behind, such as the
+                    // ground's underside, is shaded with its front's visibility).
+                    for ((d, w), m) in dirs.iter().zip(&weights).zip(&maps) {
+                        let c = n.dot(*d) * w;
+                        if c <= 0.0 {
+                            continue;
+                        }
+                        all += c;
+                        lit += c * m.visibility(p, n, 0.0);
+                    }
+                    if all > 0.0 {
+                        lit / all
+                    } else {
+                        1.0
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+impl Surface {
+    /// How much of the Fresnel-weighted specular layer is present: all of it for metals, `specular` for
+    /// dielectrics (0 makes a Lambertian surface).
+    #[inline]
+    pub fn specular_weight(&self) -> f32 {
+        self.specular + (1.0 - self.specular) * self.metallic
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blenders_spot_is_its_point_light_times_the_cosine_inside_the_cone() {
+        let cone = 120f32.to_radians();
+        assert!((spot_falloff(1.0, cone, 0.0) - 1.0).abs() < 1e-6);
+        assert!((spot_falloff(0.9, cone, 0.0) - 0.9).abs() < 1e-6);
+        assert_eq!(spot_falloff(0.4, cone, 0.0), 0.0);
+        // Blend fades toward the edge.
+        assert!(spot_falloff(0.55, cone, 1.0) < 0.1);
+    }
+}

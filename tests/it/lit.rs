@@ -1,0 +1,338 @@
+//! Lit (`pbr`) rendering (issue 16), by invariants that need no reference renderer: a white furnace, a shadowed
+//! point that receives only the environment, an environment rotation that turns the lighting, Blender's
+//! equirectangular mapping of the visible background, thread-count byte identity; and in builds: the environment
+//! prefiltered as a cached action, the lights in the keys, and the albedo pass beside the lit one.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{DMat4, Vec3, Vec4};
+use vvgen::render::light::environment::{prefilter, EnvMap};
+use vvgen::render::light::{FrameLight, Light, LightKind};
+use vvgen::render::{render_lit, Camera, Environment, RenderSettings, Shading};
+use vvgen::scene::material::Material;
+use vvgen::scene::{PosedScene, PrimKind};
+
+use crate::common::{cesium_head, load};
+
+fn cam(w: u32, f: f64, c2w: DMat4) -> Camera {
+    Camera { width: w, height: w, fx: f, fy: f, cx: w as f64 / 2.0, cy: w as f64 / 2.0, near: 0.05, far: 100.0, c2w }
+}
+
+/// A UV sphere (smooth normals) of radius `r` at `centre`.
+fn sphere(r: f32, centre: Vec3, material: Material) -> PosedScene {
+    let (seg, rings) = (96u32, 48u32);
+    let (mut pos, mut nrm, mut idx) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..=rings {
+        let th = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..seg {
+            let ph = 2.0 * std::f32::consts::PI * j as f32 / seg as f32;
+            let n = Vec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+            pos.push(centre + n * r);
+            nrm.push(n);
+        }
+    }
+    for i in 0..rings {
+        for j in 0..seg {
+            let (a, b) = (i * seg + j, i * seg + (j + 1) % seg);
+            let (c, d) = (a + seg, b + seg);
+            idx.extend_from_slice(&[a, b, c, b, d, c]);
+        }
+    }
+    PosedScene::single(PrimKind::Triangles, pos, nrm, Vec::new(), idx, material)
+}
+
+fn lambert(grey: f32) -> Material {
+    Material {
+        base_color: Vec4::new(grey, grey, grey, 1.0),
+        metallic: 0.0,
+        roughness: 1.0,
+        specular: 0.0,
+        ..Material::default()
+    }
+}
+
+fn uniform(radiance: f32) -> EnvMap {
+    EnvMap { width: 64, height: 32, texels: vec![Vec3::splat(radiance); 64 * 32] }
+}
+
+/// A lit render of `scene` under `map` (rotated `rotation_deg`, visible or not) and `lights`.
+fn lit(
+    scene: &PosedScene,
+    c: &Camera,
+    map: EnvMap,
+    rotation_deg: f32,
+    visible: bool,
+    lights: &[Light],
+) -> vvgen::render::Frame {
+    let env = Environment { map: None, strength: 1.0, rotation_deg, visible };
+    let light = FrameLight::prepare(scene, lights, env.with(Arc::new(prefilter(&map)), Arc::new(map)));
+    let s = RenderSettings { samples: 4, shading: Shading::Pbr, ..Default::default() };
+    render_lit(scene, c, &s, Some(&light))
+}
+
+fn rgb(f: &vvgen::render::Frame, x: u32, y: u32) -> [u8; 4] {
+    let i = ((y * f.width + x) * 4) as usize;
+    [f.rgba[i], f.rgba[i + 1], f.rgba[i + 2], f.rgba[i + 3]]
+}
+
+#[test]
+fn a_white_lambertian_sphere_in_a_white_furnace_renders_white() {
+    let s = sphere(0.5, Vec3::ZERO, lambert(1.0));
+    let c = cam(96, 180.0, Camera::look_at(Vec3::new(2.0, -2.5, 1.2), Vec3::ZERO, Vec3::Z));
+    let f = lit(&s, &c, uniform(1.0), 0.0, false, &[]);
+    let covered: Vec<[u8; 4]> = f.rgba.chunks(4).filter(|p| p[3] == 255).map(|p| [p[0], p[1], p[2], p[3]]).collect();
+    assert!(covered.len() > 2000, "{}", covered.len());
+    for p in &covered {
+        assert!(p[..3].iter().all(|&v| v >= 254), "{p:?}: the furnace must render white ±1/255");
+    }
+    // A grey one reflects its albedo: 0.5 linear is sRGB 188.
+    let g = lit(&sphere(0.5, Vec3::ZERO, lambert(0.5)), &c, uniform(1.0), 0.0, false, &[]);
+    for p in g.rgba.chunks(4).filter(|p| p[3] == 255) {
+        assert!(p[..3].iter().all(|&v| v.abs_diff(188) <= 1), "{p:?}");
+    }
+}
+
+/// The ground and a box hovering over its centre.
+fn ground_and_caster() -> PosedScene {
+    let plane = vvgen::manifest::source::Plane { size: [4.0, 4.0], color: [0.8; 3], z: None };
+    let ground = vvgen::scene::source::ground(&plane, 0.0);
+    let caster = sphere(0.4, Vec3::new(0.0, 0.0, 1.0), lambert(0.5));
+    let mut scene = ground.clone();
+    let mut mats = (*ground.materials).clone();
+    mats.extend(caster.materials.iter().cloned());
+    let mut prim = caster.primitives[0].clone();
+    prim.material = 1;
+    prim.object = 1;
+    scene.primitives.push(prim);
+    scene.materials = Arc::new(mats);
+    scene
+}
+
+#[test]
+fn a_shadowed_point_receives_only_the_environment_and_a_lit_one_the_sun_too() {
+    let scene = ground_and_caster();
+    let c = cam(128, 110.0, Camera::look_at(Vec3::new(0.0, -0.01, 6.0), Vec3::ZERO, Vec3::Y));
+    let sun = Light {
+        kind: LightKind::Sun { direction: -Vec3::Z, angle: 0.0 },
+        color: Vec3::ONE,
+        intensity: 1.0,
+        shadows: true,
+    };
+    let env = uniform(0.2);
+    let with = lit(&scene, &c, env.clone(), 0.0, false, std::slice::from_ref(&sun));
+    let without = lit(&scene, &c, env, 0.0, false, &[]);
+    // The caster hides the shadow from the camera straight above: look beside it, off centre, where the sun is
+    // blocked only for a ray straight down. Use an oblique sun instead so the shadow falls clear of the caster.
+    let oblique =
+        Light { kind: LightKind::Sun { direction: Vec3::new(1.0, 0.0, -1.0).normalize(), angle: 0.0 }, ..sun };
+    let env = uniform(0.2);
+    let shadowed = lit(&scene, &c, env.clone(), 0.0, false, std::slice::from_ref(&oblique));
+    // The shadow's centre: the ray from the caster's centre (0, 0, 1) along (1, 0, −1) meets the ground at (1, 0, 0).
+    let project = |p: Vec3| {
+        let q = c.c2w.inverse().transform_point3(p.as_dvec3());
+        ((c.cx + c.fx * q.x / -q.z) as u32, (c.cy - c.fy * q.y / -q.z) as u32)
+    };
+    let (sx, sy) = project(Vec3::new(1.0, 0.0, 0.0));
+    let (lx, ly) = project(Vec3::new(-1.2, 0.8, 0.0));
+    let env_only = lit(&scene, &c, env, 0.0, false, &[]);
+    // In the shadow: exactly what the environment alone gives. In the open: more, by the sun's 0.8·E·cos/π.
+    assert_eq!(rgb(&shadowed, sx, sy), rgb(&env_only, sx, sy));
+    let open = rgb(&shadowed, lx, ly)[0];
+    assert!(open > rgb(&env_only, lx, ly)[0] + 40, "{open} vs {:?}", rgb(&env_only, lx, ly));
+    // Straight down, the shadow lies under the caster: the ground beside it is lit the same with or without...
+    assert!(rgb(&with, lx, ly)[0] > rgb(&without, lx, ly)[0]);
+    // ... and the whole ground receives the sun's light where nothing blocks it: 0.8/π·1 + 0.8·0.2·(visibility).
+    let expect = vvgen::scene::material::linear_to_srgb8(0.8 / std::f32::consts::PI + 0.8 * 0.2);
+    let (fx, fy) = project(Vec3::new(-1.8, -1.8, 0.0));
+    assert!(rgb(&with, fx, fy)[0].abs_diff(expect) <= 2, "{:?} vs {expect}", rgb(&with, fx, fy));
+}
+
+/// A map bright over the hemisphere facing +X (the centre half of Blender's mapping), dark elsewhere.
+fn bright_toward_x() -> EnvMap {
+    let (w, h) = (128u32, 64u32);
+    let texels = (0..h)
+        .flat_map(|_| {
+            (0..w).map(move |x| if (w / 4..3 * w / 4).contains(&x) { Vec3::splat(2.0) } else { Vec3::splat(0.05) })
+        })
+        .collect();
+    EnvMap { width: w, height: h, texels }
+}
+
+#[test]
+fn rotating_the_environment_rotates_the_lighting() {
+    let s = sphere(0.5, Vec3::ZERO, lambert(0.8));
+    // From straight above, +X is image right and +Y image up.
+    let c = cam(96, 400.0, Camera::look_at(Vec3::new(0.0, -0.001, 5.0), Vec3::ZERO, Vec3::Y));
+    let at = |f: &vvgen::render::Frame, dx: i32, dy: i32| rgb(f, (48 + dx) as u32, (48 - dy) as u32)[0];
+    let r0 = lit(&s, &c, bright_toward_x(), 0.0, false, &[]);
+    assert!(at(&r0, 30, 0) > at(&r0, -30, 0) + 60, "lit from +X: {} vs {}", at(&r0, 30, 0), at(&r0, -30, 0));
+    // Blender's Mapping node rotates the lookup vector: +90° about Z brings the bright half to −Y.
+    let r90 = lit(&s, &c, bright_toward_x(), 90.0, false, &[]);
+    for (a, b) in [((30, 0), (0, -30)), ((-30, 0), (0, 30)), ((0, 30), (30, 0))] {
+        let (x, y) = (at(&r0, a.0, a.1), at(&r90, b.0, b.1));
+        assert!(x.abs_diff(y) <= 2, "{a:?} unrotated {x} vs {b:?} rotated {y}");
+    }
+}
+
+#[test]
+fn the_visible_background_is_blenders_equirectangular_mapping() {
+    // Four quarters of distinct colour across u: [0, ¼) red, [¼, ½) green (+Y ends it), [½, ¾) blue (+X starts
+    // it), [¾, 1) white; Blender maps +X to u = ½, +Y to u = ¼, −Y to u = ¾.
+    let (w, h) = (256u32, 128u32);
+    let quarter = [Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE];
+    let texels = (0..h).flat_map(|_| (0..w).map(move |x| quarter[(x * 4 / w) as usize] * 0.5)).collect();
+    let map = EnvMap { width: w, height: h, texels };
+    let empty = PosedScene::default();
+    let look = |d: Vec3| {
+        let c = cam(33, 40.0, Camera::look_at(Vec3::ZERO, d, Vec3::Z));
+        let f = lit(&empty, &c, map.clone(), 0.0, true, &[]);
+        rgb(&f, 16, 16)
+    };
+    let half = vvgen::scene::material::linear_to_srgb8(0.5);
+    // Just past +X (toward −Y, u > ½): blue; just past +Y toward +X (u < ½ … ¼ side): green.
+    assert_eq!(look(Vec3::new(1.0, -0.3, 0.0)), [0, 0, half, 255]);
+    assert_eq!(look(Vec3::new(0.3, 1.0, 0.0)), [0, half, 0, 255]);
+    assert_eq!(look(Vec3::new(-1.0, 0.3, 0.0)), [half, 0, 0, 255]);
+    assert_eq!(look(Vec3::new(-0.3, -1.0, 0.0)), [half, half, half, 255]);
+}
+
+#[test]
+fn lit_renders_are_the_same_bytes_whatever_the_thread_count() {
+    let scene = ground_and_caster();
+    let c = cam(96, 120.0, Camera::look_at(Vec3::new(3.0, -4.0, 3.0), Vec3::new(0.0, 0.0, 0.5), Vec3::Z));
+    let sun = Light {
+        kind: LightKind::Sun { direction: Vec3::new(0.5, 0.3, -1.0).normalize(), angle: 0.05 },
+        color: Vec3::new(1.0, 0.9, 0.8),
+        intensity: 2.0,
+        shadows: true,
+    };
+    let spot = Light {
+        kind: LightKind::Spot {
+            position: Vec3::new(-2.0, 0.0, 3.0),
+            direction: Vec3::new(2.0, 0.0, -3.0).normalize(),
+            cone: 1.0,
+            blend: 0.2,
+            radius: 0.1,
+        },
+        color: Vec3::ONE,
+        intensity: 300.0,
+        shadows: true,
+    };
+    let point = Light {
+        kind: LightKind::Point { position: Vec3::new(1.0, -2.0, 2.0), radius: 0.2 },
+        color: Vec3::ONE,
+        intensity: 200.0,
+        shadows: true,
+    };
+    let lights = [sun, spot, point];
+    let go = |n: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+            .install(|| lit(&scene, &c, bright_toward_x(), 30.0, true, &lights))
+    };
+    let (one, two) = (go(1), go(2));
+    assert!(one == two);
+    let mut colours: Vec<&[u8]> = one.rgba.chunks(4).collect();
+    colours.sort();
+    colours.dedup();
+    assert!(colours.len() > 200, "{}", colours.len());
+}
+
+/// Writes a `w × h` Radiance HDR map, bright above the horizon.
+fn write_hdr(path: &Path, w: u32, h: u32) {
+    let px: Vec<image::Rgb<f32>> = (0..h)
+        .flat_map(|y| (0..w).map(move |_| if y < h / 2 { image::Rgb([1.5, 1.4, 1.2]) } else { image::Rgb([0.2; 3]) }))
+        .collect();
+    let f = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    image::codecs::hdr::HdrEncoder::new(f).encode(&px, w as usize, h as usize).unwrap();
+}
+
+fn lit_manifest(extra: &str) -> String {
+    format!(
+        "{}[source.floor]\nplane = {{ size = [4, 4] }}\n\
+         [render]\nresolution = [48, 48]\nsamples = 4\nshading = \"pbr\"\npasses = [\"rgba\", \"albedo\", \"depth\"]\n\
+         [environment]\nmap = \"sky.hdr\"\n\
+         [light.sun]\nkind = \"sun\"\ndirection = [0.3, 0.2, -1]\nintensity = 2.0\n{extra}\n\
+         [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n\
+         [output.d]\nwriter = \"dnerf\"\n",
+        cesium_head(2, 4, 2.0, "preview = false", "")
+    )
+}
+
+fn build_in(dir: &Path, text: &str) -> vvgen::build::Report {
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+    vvgen::build::build(&load(&dir.join("m.toml")), &dir.join("cache"), Default::default(), &vvgen::build::Silent)
+        .unwrap()
+}
+
+#[test]
+fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
+    use vvgen::plan::actions::Kind;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_hdr(&d.join("sky.hdr"), 64, 32);
+    let text = lit_manifest("");
+    let first = build_in(d, &text);
+    assert_eq!(first.ran(Kind::Environment), 1);
+    assert_eq!(first.ran(Kind::RenderPass), 4 * 3);
+    let root = d.join("out/m_dnerf");
+    for f in ["train/r_0000.png", "albedo/train/r_0000.png", "depth/train/r_0000.png"] {
+        assert!(root.join(f).is_file(), "{f}");
+    }
+    let lit_png = image::open(root.join("train/r_0000.png")).unwrap().into_rgba8();
+    let albedo = image::open(root.join("albedo/train/r_0000.png")).unwrap().into_rgba8();
+    assert_ne!(lit_png.as_raw(), albedo.as_raw(), "lit differs from albedo");
+    // The same silhouette: shading does not move geometry.
+    let alpha = |i: &image::RgbaImage| i.pixels().map(|p| p[3]).collect::<Vec<u8>>();
+    assert_eq!(alpha(&lit_png), alpha(&albedo));
+    // Nothing changed: nothing runs.
+    assert!(build_in(d, &text).nothing_to_do());
+    // Moving the sun re-renders the lit pass only, not albedo or depth, and not the prefiltering.
+    let moved = build_in(d, &lit_manifest("").replace("[0.3, 0.2, -1]", "[-0.3, 0.2, -1]"));
+    assert_eq!((moved.ran(Kind::RenderPass), moved.ran(Kind::Environment)), (4, 0));
+    // A new map (same name, other content) is prefiltered again and re-renders the lit pass only.
+    write_hdr(&d.join("sky.hdr"), 32, 16);
+    let remapped = build_in(d, &lit_manifest("").replace("[0.3, 0.2, -1]", "[-0.3, 0.2, -1]"));
+    assert_eq!((remapped.ran(Kind::RenderPass), remapped.ran(Kind::Environment)), (4, 1));
+}
+
+#[test]
+fn lighting_mistakes_are_named_with_their_place_and_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("not-a-map.png"), b"png").unwrap();
+    let cases: &[(&str, &str)] = &[
+        ("[light.sun]\nkind = \"sun\"\nintensity = 2\n", "light `sun` (sun) needs `direction`"),
+        (
+            "[light.sun]\nkind = \"sun\"\ndirection = [0, 0, -1]\nintesity = 2\n",
+            "unknown key `intesity`, did you mean `intensity`?",
+        ),
+        ("[light.s]\nkind = \"spot\"\nposition = [0, 0, 0]\nintensity = 2\n", "the spot's `target` is its `position`"),
+        (
+            "[light.p]\nkind = \"point\"\nposition = [0, 0, 2]\nintensity = 2\nangle_deg = 3\n",
+            "`angle_deg` does not apply to a point light",
+        ),
+        ("[light.p]\nkind = \"lamp\"\nintensity = 2\n", "lamp"),
+        ("[environment]\nmap = \"missing.exr\"\n", "file not found"),
+        ("[environment]\nmap = \"not-a-map.png\"\n", "is not an environment map vvgen reads"),
+        ("[environment]\nmap = \"broken.hdr\"\n", "not a readable Radiance HDR file"),
+        ("[source.floor]\nplane = { size = [0, 4] }\n", "a plane's `size` must be two positive extents"),
+    ];
+    std::fs::write(d.join("broken.hdr"), b"#?RADIANCE\nnonsense").unwrap();
+    for (extra, want) in cases {
+        let text = format!(
+            "[dataset]\nname = \"m\"\nout = \"out\"\n[source.a]\nmesh = \"{}\"\n[render]\nshading = \"pbr\"\n{extra}\
+             [rig.h]\nkind = \"hemisphere\"\n[split.t]\nrig = \"h\"\nviews = 1\n[output.o]\nwriter = \"dnerf\"\n",
+            crate::common::data("gltf/BoxTextured/BoxTextured.glb").display()
+        );
+        let path = d.join("m.toml");
+        std::fs::write(&path, &text).unwrap();
+        let report = vvgen::manifest::load(&path).expect_err(extra);
+        let shown = report.render(false);
+        assert!(shown.contains(want), "{extra}: {shown}");
+        assert!(shown.contains("m.toml:"), "names the file and line: {shown}");
+    }
+}
