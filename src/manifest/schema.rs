@@ -30,6 +30,12 @@ struct ManifestFile {
     /// Image size, camera model, samples, passes, how points are drawn.
     #[schemars(default)]
     render: Option<Render>,
+    /// The environment lighting `shading = "pbr"`: an HDR map, its strength and rotation.
+    #[schemars(default)]
+    environment: Option<super::light::Environment>,
+    /// Lights of `shading = "pbr"`: `[light.NAME]`, sun, point or spot, in Blender's units.
+    #[schemars(default)]
+    light: BTreeMap<String, super::light::Light>,
     /// Camera rigs: `[rig.NAME]`.
     #[schemars(default)]
     rig: BTreeMap<String, Rig>,
@@ -42,7 +48,8 @@ struct ManifestFile {
 }
 
 /// The top-level tables the schema describes, in its order.
-pub const SCHEMA_TABLES: [&str; 7] = ["dataset", "source", "transform", "render", "rig", "split", "output"];
+pub const SCHEMA_TABLES: [&str; 9] =
+    ["dataset", "source", "transform", "render", "environment", "light", "rig", "split", "output"];
 
 /// The JSON Schema of a manifest.
 pub fn json_schema() -> serde_json::Value {

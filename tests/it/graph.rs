@@ -51,6 +51,12 @@ vox = 8
 dir = "vox"
 "#;
 
+/// Lit shading under an environment map: the render settings that plan every kind of action (the map's
+/// prefiltering among them).
+fn lit() -> String {
+    format!("shading = \"pbr\"\n[environment]\nmap = \"{}\"\n", crate::common::data("hdri/sunset.exr").display())
+}
+
 /// Writes `text` as `dir/m.toml` and builds it.
 fn run(dir: &Path, text: &str) -> build::Report {
     std::fs::write(dir.join("m.toml"), text).unwrap();
@@ -76,7 +82,7 @@ fn reasons(st: &Status, kind: Kind) -> Vec<Vec<String>> {
 #[test]
 fn every_kind_runs_once_and_a_second_build_has_nothing_to_do() {
     let dir = tempfile::tempdir().unwrap();
-    let text = manifest("", EVERY_WRITER);
+    let text = manifest(&lit(), EVERY_WRITER);
     let first = run(dir.path(), &text);
     for kind in Kind::ALL {
         let c = first.actions.get(&kind).copied().unwrap_or_default();
@@ -246,8 +252,8 @@ fn each_setting_invalidates_exactly_the_actions_that_read_it() {
 fn plan_json_lists_every_action_with_its_kind_key_state_and_reason() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    run(d, &manifest("", EVERY_WRITER));
-    std::fs::write(d.join("m.toml"), manifest("", &EVERY_WRITER.replace("vox = 8", "vox = 9"))).unwrap();
+    run(d, &manifest(&lit(), EVERY_WRITER));
+    std::fs::write(d.join("m.toml"), manifest(&lit(), &EVERY_WRITER.replace("vox = 8", "vox = 9"))).unwrap();
     let out =
         Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["plan", "--json", "m.toml"]).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

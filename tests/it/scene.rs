@@ -389,7 +389,14 @@ fn flight_helmet_multi_mesh_textures() {
     }
     let a = gltf::load(&p, None).unwrap();
     assert_eq!(a.meshes.len(), 6);
-    assert_eq!(a.textures.len(), 15);
+    // 15 images; the 5 metallic-roughness (ORM) ones also as linear copies, since data textures are not sRGB.
+    assert_eq!(a.textures.len(), 15 + 5);
+    assert!(a.textures[15..].iter().all(|t| !t.srgb) && a.textures[..15].iter().all(|t| t.srgb));
+    for m in &a.materials {
+        if let Some(r) = m.metallic_roughness_texture {
+            assert!(!a.textures[r.texture as usize].srgb, "data textures are read linear");
+        }
+    }
     assert!(a.materials.iter().filter(|m| m.base_color_texture.is_some()).count() >= 5);
     let posed = pose(&a, &[], 0.0);
     assert_eq!(posed.primitives.len(), 6);
