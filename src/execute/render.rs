@@ -21,14 +21,7 @@ use std::sync::Arc;
 
 /// Runs the environment action: reads the map and prefilters it.
 pub(super) fn environment(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() + Sync)) -> Result<Made, Error> {
-    let mut out = Vec::new();
-    for &id in ids {
-        let map = load_map(g, x, id)?;
-        let bytes = environment::prefilter(&map).encode();
-        out.push((id, x.store(g, id, &[bytes])?));
-        done();
-    }
-    Ok(out)
+    x.each(g, ids, done, |id| Ok(environment::prefilter(&load_map(g, x, id)?).encode()))
 }
 
 fn load_map(g: &Graph, x: &Inputs, id: ActionId) -> Result<EnvMap, Error> {
@@ -56,12 +49,9 @@ fn env_light(
     let label = g.node(env_id).label.clone();
     let pre = Prefiltered::decode(&x.read(g, blobs, env_id, 0)?)
         .map_err(|source| Error::Environment { action: label.clone(), source })?;
-    let map = if settings.visible {
-        load_map(g, x, env_id)?
-    } else {
-        EnvMap { width: 1, height: 1, texels: vec![Vec3::ZERO] }
-    };
-    Ok(Some(settings.with(Arc::new(pre), Arc::new(map))))
+    // The full map is read again only to be the visible background.
+    let map = if settings.visible { Some(Arc::new(load_map(g, x, env_id)?)) } else { None };
+    Ok(Some(settings.with(Arc::new(pre), map)))
 }
 
 /// Runs the render-pass actions `ids`.
@@ -91,7 +81,7 @@ pub(super) fn passes(
         super::check_posed(posed, &label)?;
         let images: Vec<(usize, Vec<(ActionId, Pass)>)> = images.into_iter().collect();
         // Shadow maps and the environment's visibility, once for every view of the frame that renders lit.
-        let lit = images.iter().any(|(_, todo)| todo.iter().any(|(_, p)| *p != Pass::Albedo));
+        let lit = images.iter().any(|(_, todo)| needs_main(todo));
         let light = match (&env, lit) {
             (Some(env), true) => Some(FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone())),
             _ => None,
@@ -100,8 +90,7 @@ pub(super) fn passes(
             .par_iter()
             .map(|(image, todo)| {
                 let camera = &plan.images[*image].camera;
-                let main = todo.iter().any(|(_, p)| *p != Pass::Albedo);
-                let f = main.then(|| render::render_lit(posed, camera, &g.keying.render, light.as_ref()));
+                let f = needs_main(todo).then(|| render::render_lit(posed, camera, &g.keying.render, light.as_ref()));
                 // The albedo pass is the unlit image: its own render when the main one is lit.
                 let albedo = todo.iter().any(|(_, p)| *p == Pass::Albedo).then(|| match &f {
                     Some(f) if g.keying.render.shading == render::Shading::Unlit => f.clone(),
@@ -126,6 +115,11 @@ pub(super) fn passes(
         }
     }
     Ok(out)
+}
+
+/// Whether an image's passes need its main render (every pass but albedo reads it).
+fn needs_main(todo: &[(ActionId, Pass)]) -> bool {
+    todo.iter().any(|(_, p)| *p != Pass::Albedo)
 }
 
 /// Runs the composite actions `ids`: the RGBA blob over an opaque background (sRGB bytes, as loaders

@@ -97,6 +97,9 @@ impl LightKind {
     }
 }
 
+/// An optional `[light.NAME]` key: its name, where it is set (if it is), and the kinds it applies to.
+type KeyUse<'a> = (&'a str, Option<Range<usize>>, &'a [LightKind]);
+
 /// Blender's default sun angle (degrees).
 const SUN_ANGLE: f64 = 0.526;
 
@@ -151,65 +154,48 @@ impl Light {
                 ),
             )
         };
-        match kind {
-            LightKind::Sun => {
-                match &self.direction {
-                    None => diags.push(
-                        Diagnostic::error(format!("light `{name}` (sun) needs `direction`"), Some(span.clone()))
-                            .with_help("the direction the light travels, e.g. direction = [0.3, 0.2, -1]"),
-                    ),
-                    Some(d) if glam::DVec3::from(*d.get_ref()).length() < 1e-9 => {
-                        diags.push(Diagnostic::error("`direction` must not be zero", Some(d.span())))
-                    }
-                    _ => {}
-                }
-                for (k, v) in [("position", &self.position), ("target", &self.target)] {
-                    if let Some(v) = v {
-                        wrong(k, v.span(), diags);
-                    }
-                }
-                for (k, v) in [("radius", &self.radius), ("cone_deg", &self.cone_deg), ("blend", &self.blend)] {
-                    if let Some(v) = v {
-                        wrong(k, v.span(), diags);
-                    }
-                }
+        // Which kinds each optional key belongs to; one that is set on another kind is a mistake.
+        use LightKind::{Point, Spot, Sun};
+        let span3 = |v: &Option<Spanned<[f64; 3]>>| v.as_ref().map(|v| v.span());
+        let span1 = |v: &Option<Spanned<f64>>| v.as_ref().map(|v| v.span());
+        let keys: [KeyUse; 7] = [
+            ("direction", span3(&self.direction), &[Sun]),
+            ("angle_deg", span1(&self.angle_deg), &[Sun]),
+            ("position", span3(&self.position), &[Point, Spot]),
+            ("radius", span1(&self.radius), &[Point, Spot]),
+            ("target", span3(&self.target), &[Spot]),
+            ("cone_deg", span1(&self.cone_deg), &[Spot]),
+            ("blend", span1(&self.blend), &[Spot]),
+        ];
+        for (key, at, kinds) in keys {
+            if let Some(at) = at.filter(|_| !kinds.contains(&kind)) {
+                wrong(key, at, diags);
             }
-            LightKind::Point | LightKind::Spot => {
-                if self.position.is_none() {
+        }
+        let needs = |key: &str, example: &str, diags: &mut Vec<Diagnostic>| {
+            diags.push(
+                Diagnostic::error(format!("light `{name}` ({}) needs `{key}`", kind.name()), Some(span.clone()))
+                    .with_help(example.to_string()),
+            )
+        };
+        match (kind, &self.direction, &self.position) {
+            (Sun, None, _) => {
+                needs("direction", "the direction the light travels, e.g. direction = [0.3, 0.2, -1]", diags)
+            }
+            (Sun, Some(d), _) if glam::DVec3::from(*d.get_ref()).length() < 1e-9 => {
+                diags.push(Diagnostic::error("`direction` must not be zero", Some(d.span())))
+            }
+            (Point | Spot, _, None) => needs("position", "e.g. position = [2, -2, 3]", diags),
+            (Spot, _, Some(p)) => {
+                let t = self.target.as_ref().map_or([0.0; 3], |t| *t.get_ref());
+                if (glam::DVec3::from(*p.get_ref()) - glam::DVec3::from(t)).length() < 1e-9 {
                     diags.push(
-                        Diagnostic::error(
-                            format!("light `{name}` ({}) needs `position`", kind.name()),
-                            Some(span.clone()),
-                        )
-                        .with_help("e.g. position = [2, -2, 3]"),
+                        Diagnostic::error("the spot's `target` is its `position`", Some(p.span()))
+                            .with_help("aim it at another point (`target` defaults to the world origin)"),
                     );
                 }
-                if let Some(d) = &self.direction {
-                    wrong("direction", d.span(), diags);
-                }
-                if let Some(a) = &self.angle_deg {
-                    wrong("angle_deg", a.span(), diags);
-                }
-                if kind == LightKind::Point {
-                    for (k, v) in [("cone_deg", &self.cone_deg), ("blend", &self.blend)] {
-                        if let Some(v) = v {
-                            wrong(k, v.span(), diags);
-                        }
-                    }
-                    if let Some(t) = &self.target {
-                        wrong("target", t.span(), diags);
-                    }
-                }
-                if let (Some(p), LightKind::Spot) = (&self.position, kind) {
-                    let t = self.target.as_ref().map_or([0.0; 3], |t| *t.get_ref());
-                    if (glam::DVec3::from(*p.get_ref()) - glam::DVec3::from(t)).length() < 1e-9 {
-                        diags.push(
-                            Diagnostic::error("the spot's `target` is its `position`", Some(p.span()))
-                                .with_help("aim it at another point (`target` defaults to the world origin)"),
-                        );
-                    }
-                }
             }
+            _ => {}
         }
         let i = *self.intensity.get_ref();
         if i < 0.0 {

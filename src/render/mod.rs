@@ -78,20 +78,21 @@ impl Environment {
                 let pre = light::environment::prefilter(&map);
                 (std::sync::Arc::new(map), std::sync::Arc::new(pre))
             });
-        self.with(STUDIO.1.clone(), STUDIO.0.clone())
+        self.with(STUDIO.1.clone(), Some(STUDIO.0.clone()))
     }
 
-    /// These settings over a prefiltered map and the map itself (the background, when visible).
+    /// These settings over a prefiltered map and the map itself (the background, used when `visible`; a caller
+    /// that knows it is not may pass `None`).
     pub fn with(
         &self,
         prefiltered: std::sync::Arc<light::Prefiltered>,
-        map: std::sync::Arc<light::EnvMap>,
+        map: Option<std::sync::Arc<light::EnvMap>>,
     ) -> light::EnvLight {
         light::EnvLight {
             prefiltered,
             strength: self.strength,
             rotation: self.rotation(),
-            background: self.visible.then_some(map),
+            background: map.filter(|_| self.visible),
         }
     }
 }
@@ -278,13 +279,7 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
                     for py in 0..ph {
                         for px in 0..pw {
                             let i = ((py * w + x0 + px) * 4) as usize;
-                            let c = env.at(x0 + px, ty * TILE + py);
-                            out.rgba[i..i + 4].copy_from_slice(&[
-                                linear_to_srgb8(c.x),
-                                linear_to_srgb8(c.y),
-                                linear_to_srgb8(c.z),
-                                255,
-                            ]);
+                            out.rgba[i..i + 4].copy_from_slice(&env.pixel(x0 + px, ty * TILE + py));
                         }
                     }
                 } else if let Some(bg) = empty_pixel(s).filter(|p| p[3] != 0) {
@@ -330,6 +325,12 @@ impl EnvBackground<'_> {
         let world = glam::DMat3::from_mat4(c.c2w) * d;
         self.light.background(world.as_vec3().normalize()).unwrap_or(Vec3::ZERO)
     }
+
+    /// The opaque sRGB pixel (x, y) where nothing covers it.
+    fn pixel(&self, x: i64, y: i64) -> [u8; 4] {
+        let c = self.at(x, y);
+        [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]
+    }
 }
 
 /// Resolves a tile's samples into its pixels of the band `out` (tile columns from `x0`): straight-alpha colour,
@@ -368,18 +369,8 @@ fn resolve(
             }
             if covered == 0 {
                 // The other buffers start zeroed.
-                match env {
-                    Some(env) => {
-                        let c = env.at(x0 + px, y0 + py);
-                        out.rgba[i * 4..i * 4 + 4].copy_from_slice(&[
-                            linear_to_srgb8(c.x),
-                            linear_to_srgb8(c.y),
-                            linear_to_srgb8(c.z),
-                            255,
-                        ]);
-                    }
-                    None => out.rgba[i * 4..i * 4 + 4].copy_from_slice(&empty),
-                }
+                let px = env.map_or(empty, |env| env.pixel(x0 + px, y0 + py));
+                out.rgba[i * 4..i * 4 + 4].copy_from_slice(&px);
                 continue;
             }
             let alpha = covered as f32 / total as f32;

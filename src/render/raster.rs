@@ -510,6 +510,8 @@ pub fn raster_tile(
         let mat = &scene.materials[tri.material as usize];
         let tex = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
         let lit = shade.lit.map(|l| (l, LitMaterial::of(mat, &scene.textures)));
+        // Only textured or lit shading reads the uv: unlit untextured surfaces skip interpolating it.
+        let wants_uv = tex.is_some() || lit.is_some();
         for sy in by0..=by1 {
             let mut wgt = row;
             for i in 0..3 {
@@ -534,7 +536,7 @@ pub fn raster_tile(
                 let k = [pb[0] * z, pb[1] * z, pb[2] * z];
                 let vc = tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2];
                 let mut albedo = mat.base_color * vc;
-                let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
+                let uv = if wants_uv { tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2] } else { Vec2::ZERO };
                 // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
                 let footprint =
                     || ((tri.duv_step[0] - uv * tri.ds_step[0]) * z, (tri.duv_step[1] - uv * tri.ds_step[1]) * z);
@@ -560,6 +562,7 @@ pub fn raster_tile(
                     let sum: f32 = lights.iter().map(|(l, k)| k * nrm.dot(*l).max(0.0)).sum();
                     rgb *= ambient + sum;
                 }
+                let mut emission = mat.emissive;
                 if let Some((l, m)) = &lit {
                     let (dx, dy) = footprint();
                     let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
@@ -574,20 +577,14 @@ pub fn raster_tile(
                         surface.roughness *= mr.y;
                         surface.metallic *= mr.z;
                     }
-                    let ao = match (sample(m.occlusion), mat.occlusion_texture) {
-                        (Some(o), Some((_, strength))) => 1.0 + strength * (o.x - 1.0),
-                        _ => 1.0,
-                    };
+                    let ao = m
+                        .occlusion
+                        .map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
                     let vis = tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2];
                     rgb = l.light.shade(p, nrm, v, &surface, ao, vis);
-                    if let Some(e) = sample(m.emissive) {
-                        rgb += mat.emissive * e.truncate();
-                    } else {
-                        rgb += mat.emissive;
-                    }
-                } else {
-                    rgb += mat.emissive;
+                    emission *= sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
                 }
+                rgb += emission;
                 t.color[i] = rgb.extend(1.0);
                 t.depth[i] = z;
                 t.normal[i] = nrm;
@@ -620,7 +617,8 @@ pub fn camera_back(c2w: &Mat4) -> Vec3 {
 /// A material's textures that lit shading reads, resolved once per triangle.
 struct LitMaterial<'t> {
     metallic_roughness: Option<(TextureRef, &'t Texture)>,
-    occlusion: Option<(TextureRef, &'t Texture)>,
+    /// With its strength.
+    occlusion: Option<(TextureRef, &'t Texture, f32)>,
     emissive: Option<(TextureRef, &'t Texture)>,
 }
 
@@ -629,7 +627,7 @@ impl<'t> LitMaterial<'t> {
         let get = |r: Option<TextureRef>| r.and_then(|r| textures.get(r.texture as usize).map(|t| (r, t)));
         LitMaterial {
             metallic_roughness: get(m.metallic_roughness_texture),
-            occlusion: get(m.occlusion_texture.map(|(r, _)| r)),
+            occlusion: m.occlusion_texture.and_then(|(r, k)| get(Some(r)).map(|(r, t)| (r, t, k))),
             emissive: get(m.emissive_texture),
         }
     }

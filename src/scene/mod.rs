@@ -189,21 +189,18 @@ impl Scene {
     /// Makes the ground planes' geometry: at their `z`, or at the lowest point of the other sources over all
     /// their frames (read once here, like a fitted transform's bounds).
     fn place_ground(&mut self, scratch: &mut PoseScratch, posed: &mut PosedScene) -> Result<(), Error> {
-        if !self.sources.iter().any(|s| s.ground.is_some_and(|g| g.z.is_none())) {
-            for s in &mut self.sources {
-                if let Some(g) = s.ground {
-                    s.data = SourceData::Static(source::ground(&g, g.z.unwrap_or(0.0) as f32));
+        let mut lowest = 0.0;
+        if self.sources.iter().any(|s| s.ground.is_some_and(|g| g.z.is_none())) {
+            let mut stats = Stats::default();
+            for i in 0..self.sources.len() {
+                if self.sources[i].ground.is_none() {
+                    gather(&self.sources[i], self.world_from_source(i), Over::AllFrames, scratch, posed, &mut stats)?;
                 }
             }
-            return Ok(());
-        }
-        let mut stats = Stats::default();
-        for i in 0..self.sources.len() {
-            if self.sources[i].ground.is_none() {
-                gather(&self.sources[i], self.world_from_source(i), Over::AllFrames, scratch, posed, &mut stats)?;
+            if stats.count > 0 {
+                lowest = stats.lo.z as f32;
             }
         }
-        let lowest = if stats.count > 0 { stats.lo.z as f32 } else { 0.0 };
         for s in &mut self.sources {
             if let Some(g) = s.ground {
                 s.data = SourceData::Static(source::ground(&g, g.z.map_or(lowest, |z| z as f32)));

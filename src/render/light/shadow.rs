@@ -183,14 +183,11 @@ impl ShadowMap {
         let widest = self.penumbra(recv, 0.0, size) / self.texel_world(q.z);
         let search = widest.clamp(1.0, 24.0);
         let (mut sum, mut count) = (0.0, 0);
-        for j in 0..4 {
-            for i in 0..4 {
-                let o = Vec2::new(i as f32 - 1.5, j as f32 - 1.5) * (search / 1.5);
-                let d = self.at((q.x + o.x).floor() as i64, (q.y + o.y).floor() as i64);
-                if d < recv {
-                    sum += d;
-                    count += 1;
-                }
+        for o in grid(search) {
+            let d = self.at((q.x + o.x).floor() as i64, (q.y + o.y).floor() as i64);
+            if d < recv {
+                sum += d;
+                count += 1;
             }
         }
         if count == 0 {
@@ -202,13 +199,7 @@ impl ShadowMap {
             return self.pcf(q, recv);
         }
         let radius = radius.min(24.0);
-        let mut lit = 0.0;
-        for j in 0..4 {
-            for i in 0..4 {
-                let o = Vec2::new(i as f32 - 1.5, j as f32 - 1.5) * (radius / 1.5);
-                lit += self.pcf(Vec3::new(q.x + o.x, q.y + o.y, q.z), recv);
-            }
-        }
+        let lit: f32 = grid(radius).map(|o| self.pcf(Vec3::new(q.x + o.x, q.y + o.y, q.z), recv)).sum();
         lit / 16.0
     }
 
@@ -232,6 +223,11 @@ impl ShadowMap {
         let bottom = lit(x0, y0 + 1) + (lit(x0 + 1, y0 + 1) - lit(x0, y0 + 1)) * tx;
         top + (bottom - top) * ty
     }
+}
+
+/// A 4×4 grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's taps.
+fn grid(radius: f32) -> impl Iterator<Item = Vec2> {
+    (0..16).map(move |k| Vec2::new((k % 4) as f32 - 1.5, (k / 4) as f32 - 1.5) * (radius / 1.5))
 }
 
 /// The six 90° faces of a point light's cube, as directions.
