@@ -64,6 +64,7 @@ fn torus_100k() -> PosedScene {
         }],
         materials: Arc::new(vec![material]),
         textures: Arc::new(vec![texture]),
+        lights: Vec::new(),
     }
 }
 

@@ -229,7 +229,7 @@ pub(crate) struct Prepared {
     /// The dataset's stat cache.
     pub stat: StatCache,
     /// Key of every scene frame.
-    pub frame_keys: Vec<Digest>,
+    pub frame_keys: keys::FrameKeys,
     /// Content key of the environment map, when there is one.
     pub environment: Option<Digest>,
 }

@@ -53,6 +53,15 @@ pub fn run(
                 if let (Some(a), Some(b)) = (times.first(), times.last()) {
                     let _ = writeln!(out, "  frame times: {a:.4} s … {b:.4} s");
                 }
+                for (i, l) in asset.lights.iter().enumerate() {
+                    let _ = writeln!(
+                        out,
+                        "  light {i} `{}`: {} (Blender units: {})",
+                        l.name.as_deref().unwrap_or(""),
+                        l.light.kind.name(),
+                        l.light.intensity
+                    );
+                }
                 for c in &asset.cameras {
                     let _ = writeln!(
                         out,

@@ -74,10 +74,17 @@ pub struct Render {
     /// PNG compression: `"fast"` (default), `"default"`, `"best"`.
     #[serde(default)]
     pub png_compression: PngCompression,
+    /// `pbr`: whether lights in glTF sources (`KHR_lights_punctual`) light the scene besides `[light.NAME]`
+    /// (default true).
+    #[serde(default = "yes")]
+    pub gltf_lights: bool,
 }
 
 fn default_resolution() -> Spanned<[u32; 2]> {
     Spanned::new(0..0, [800, 800])
+}
+fn yes() -> bool {
+    true
 }
 fn one() -> Spanned<u32> {
     Spanned::new(0..0, 1)
@@ -109,6 +116,7 @@ impl Default for Render {
             lights: Vec::new(),
             ambient: None,
             png_compression: PngCompression::default(),
+            gltf_lights: true,
         }
     }
 }

@@ -260,6 +260,8 @@ pub struct Keying<'a> {
     pub plan: &'a Plan,
     /// The content key of every scene frame.
     pub frame_keys: &'a [Digest],
+    /// The key of the lights the sources bring at every frame, when they bring any (read by lit passes only).
+    pub frame_lights: &'a [Option<Digest>],
     /// The renderer's settings.
     pub render: RenderSettings,
     /// How passes are encoded.
@@ -293,6 +295,11 @@ impl Action {
                 w.digest("frame content", &cx.frame_keys[img.frame]);
                 camera(w, &img.camera);
                 render_settings(w, &cx.render, *pass);
+                if *pass == Pass::Rgba && cx.render.shading == Shading::Pbr {
+                    if let Some(lights) = &cx.frame_lights[img.frame] {
+                        w.digest("file lights", lights);
+                    }
+                }
                 if let Some(env) = deps.first() {
                     w.digest("prefiltered environment", env);
                 }

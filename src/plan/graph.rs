@@ -57,12 +57,13 @@ impl<'a> Graph<'a> {
         m: &Manifest,
         plan: &'a Plan,
         scene: &Scene,
-        frame_keys: &'a [Digest],
+        frame_keys: &'a super::keys::FrameKeys,
         environment: Option<Digest>,
     ) -> Result<Graph<'a>, Error> {
         let keying = Keying {
             plan,
-            frame_keys,
+            frame_keys: &frame_keys.content,
+            frame_lights: &frame_keys.lights,
             render: {
                 let mut r = m.render.renderer_settings(scene.voxel_size());
                 if !scene.has_points() {

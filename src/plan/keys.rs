@@ -8,10 +8,22 @@ use crate::cache::{key, Digest, StatCache};
 use crate::manifest::Manifest;
 use crate::scene::{Poser, Scene, SourceData};
 
-/// The key of every scene frame. `lit` keys what only lit shading reads of the materials too (metalness,
+/// The keys of every scene frame.
+#[derive(Debug, Clone, Default)]
+pub struct FrameKeys {
+    /// What every action reading frame `f` is keyed by: its geometry, materials and textures.
+    pub content: Vec<Digest>,
+    /// The lights the sources bring at frame `f` (a glTF's `KHR_lights_punctual`, placed by its animated nodes),
+    /// when the scene poses any: what lit shading reads besides the content. `None` when there are none, so
+    /// builds without file lights keep their keys.
+    pub lights: Vec<Option<Digest>>,
+}
+
+/// The keys of every scene frame. `lit` keys what only lit shading reads of the materials too (metalness,
 /// roughness, their textures): unlit datasets keep the keys they had before lit shading existed.
-pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<Vec<Digest>, Error> {
+pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKeys, Error> {
     let mut per_source: Vec<Vec<Digest>> = Vec::new();
+    let mut lights_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
     let mut poser = Poser::default();
     for (i, src) in scene.sources.iter().enumerate() {
         let world = scene.world_from_source(i).to_cols_array();
@@ -42,6 +54,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<Vec<Dige
                 let n = src.frame_count();
                 let mut keys = Vec::with_capacity(n);
                 let mut materials = None;
+                let mut lights = Vec::new();
                 for f in 0..n {
                     let posed = scene.pose_source(i, f, &mut poser)?;
                     let m = *materials.get_or_insert_with(|| {
@@ -52,19 +65,31 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<Vec<Dige
                         }
                     });
                     keys.push(key("frame posed", &[posed.geometry_digest().as_bytes(), m.as_bytes()]));
+                    // The file's lights, posed only for lit builds (see `Scene::file_lights`).
+                    lights.push((!posed.lights.is_empty()).then(|| Digest(*posed.lights_digest().as_bytes())));
                 }
+                lights_per_source.push(lights);
                 keys
             }
         };
         per_source.push(keys);
     }
-    Ok((0..scene.frames)
+    // Shorter sources hold their last frame, as when posing.
+    let at = |k: &[Digest], f: usize| k[f.min(k.len() - 1)];
+    let content = (0..scene.frames)
         .map(|f| {
-            // Shorter sources hold their last frame, as when posing.
-            let parts: Vec<&[u8]> = per_source.iter().map(|k| &k[f.min(k.len() - 1)].0[..]).collect();
-            key("frame", &parts)
+            let parts: Vec<Digest> = per_source.iter().map(|k| at(k, f)).collect();
+            key("frame", &parts.iter().map(|d| &d.0[..]).collect::<Vec<_>>())
         })
-        .collect())
+        .collect();
+    let lights = (0..scene.frames)
+        .map(|f| {
+            let parts: Vec<Digest> =
+                lights_per_source.iter().filter_map(|l| l.get(f.min(l.len().max(1) - 1)).copied().flatten()).collect();
+            (!parts.is_empty()).then(|| key("frame lights", &parts.iter().map(|d| &d.0[..]).collect::<Vec<_>>()))
+        })
+        .collect();
+    Ok(FrameKeys { content, lights })
 }
 
 /// The content key of `m`'s `[environment] map`, when it names one.

@@ -3,6 +3,7 @@
 //! frame, so the subject does not jump or breathe between frames.
 
 pub mod gltf;
+pub mod light;
 pub mod material;
 pub mod obj;
 pub mod ply;
@@ -103,6 +104,10 @@ pub struct Scene {
     pub frames: usize,
     /// Non-fatal problems found while loading.
     pub warnings: Vec<String>,
+    /// Whether the sources' own lights (glTF `KHR_lights_punctual`) are posed with them: in `pbr` renders
+    /// unless `[render] gltf_lights = false`. When not, posed frames carry no lights, so nothing keys or
+    /// shades them.
+    pub file_lights: bool,
 }
 
 /// Reusable buffers for posing a scene; posing a single-source scene after its first frame allocates nothing.
@@ -181,7 +186,8 @@ impl Scene {
         let global = transform::resolve(&g, UpAxis::Z, &stats)
             .map_err(|source| Error::Transform { table: "[transform]".into(), source })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
-        let mut scene = Scene { sources, locals, global, frames, warnings };
+        let file_lights = m.render.shading == crate::manifest::render::Shading::Pbr && m.render.gltf_lights;
+        let mut scene = Scene { sources, locals, global, frames, warnings, file_lights };
         scene.place_ground(&mut scratch, &mut posed)?;
         Ok(scene)
     }
@@ -237,6 +243,9 @@ impl Scene {
     pub fn pose_source<'a>(&self, i: usize, frame: usize, poser: &'a mut Poser) -> Result<&'a PosedScene, Error> {
         poser.scratch.resize_with(self.sources.len(), PoseScratch::default);
         self.sources[i].pose(frame, self.world_from_source(i), &mut poser.scratch[i], &mut poser.out)?;
+        if !self.file_lights {
+            poser.out.lights.clear();
+        }
         Ok(&poser.out)
     }
 
@@ -251,13 +260,16 @@ impl Scene {
         poser.scratch.resize_with(n, PoseScratch::default);
         if n == 1 {
             self.sources[0].pose(frame, self.world_from_source(0), &mut poser.scratch[0], &mut poser.out)?;
-            return Ok(&poser.out);
+        } else {
+            poser.parts.resize_with(n, PosedScene::default);
+            for i in 0..n {
+                self.sources[i].pose(frame, self.world_from_source(i), &mut poser.scratch[i], &mut poser.parts[i])?;
+            }
+            merge(&poser.parts, &mut poser.out);
         }
-        poser.parts.resize_with(n, PosedScene::default);
-        for i in 0..n {
-            self.sources[i].pose(frame, self.world_from_source(i), &mut poser.scratch[i], &mut poser.parts[i])?;
+        if !self.file_lights {
+            poser.out.lights.clear();
         }
-        merge(&poser.parts, &mut poser.out);
         Ok(&poser.out)
     }
 }
@@ -310,8 +322,10 @@ fn merge(parts: &[PosedScene], out: &mut PosedScene) {
     let mut materials = Vec::new();
     let mut textures = Vec::new();
     out.primitives.clear();
+    out.lights.clear();
     let mut object_base = 0;
     for part in parts {
+        out.lights.extend(part.lights.iter().cloned());
         let (mb, tb) = (materials.len() as u32, textures.len() as u32);
         materials.extend(part.materials.iter().cloned().map(|mut m: material::Material| {
             for (t, _) in m.texture_refs_mut() {

@@ -200,7 +200,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
             object: object as u32,
         });
     }
-    Ok(PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures) })
+    Ok(PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures), lights: Vec::new() })
 }
 
 /// An image file as an sRGB base-colour texture.

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
+use super::light::Light;
 use super::material::{Material, Texture};
 
 /// What a primitive is drawn as.
@@ -47,6 +48,8 @@ pub struct PosedScene {
     pub materials: Arc<Vec<Material>>,
     /// Textures.
     pub textures: Arc<Vec<Texture>>,
+    /// Lights the sources bring (a glTF's `KHR_lights_punctual`), placed where their nodes are at this frame.
+    pub lights: Vec<Light>,
 }
 
 impl PosedScene {
@@ -72,6 +75,7 @@ impl PosedScene {
             }],
             materials: Arc::new(vec![material]),
             textures: Arc::new(Vec::new()),
+            lights: Vec::new(),
         }
     }
 
@@ -128,6 +132,14 @@ impl PosedScene {
             h.update(&[t.srgb as u8]);
             h.update(&t.rgba);
         }
+        h.finalize()
+    }
+
+    /// blake3 of the lights the sources bring, as placed at this frame (empty input when there are none).
+    pub fn lights_digest(&self) -> blake3::Hash {
+        let mut h = blake3::Hasher::new();
+        h.update(b"vvgen.posed.lights.v1");
+        h.update(format!("{:?}", self.lights).as_bytes());
         h.finalize()
     }
 

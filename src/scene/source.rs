@@ -303,6 +303,8 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
     let nm = super::gltf::pose::normal_matrix(&m);
     out.materials = rest.materials.clone();
     out.textures = rest.textures.clone();
+    out.lights.clear();
+    out.lights.extend(rest.lights.iter().map(|l| l.transformed(m)));
     out.primitives.truncate(rest.primitives.len());
     for (i, p) in rest.primitives.iter().enumerate() {
         if i == out.primitives.len() {

@@ -7,6 +7,7 @@ mod common;
 mod consumers;
 mod engine;
 mod fuzz;
+mod gltf_lights;
 mod graph;
 mod lit;
 mod manifest;

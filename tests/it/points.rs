@@ -127,6 +127,7 @@ fn textured_quad() -> (PosedScene, Vec<u8>) {
             ..Material::default()
         }]),
         textures: Arc::new(vec![Texture::new(size, size, rgba.clone(), true)]),
+        lights: Vec::new(),
     };
     (scene, rgba)
 }

@@ -23,6 +23,7 @@ fn mesh(positions: Vec<Vec3>, indices: Vec<u32>, material: Material) -> PosedSce
         }],
         materials: Arc::new(vec![material]),
         textures: Arc::new(Vec::new()),
+        lights: Vec::new(),
     }
 }
 
@@ -251,6 +252,7 @@ fn points(positions: Vec<Vec3>, color: Vec4) -> PosedScene {
         }],
         materials: Arc::new(vec![Material::default()]),
         textures: Arc::new(Vec::new()),
+        lights: Vec::new(),
     }
 }
 

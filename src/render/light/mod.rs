@@ -17,55 +17,11 @@ use std::sync::Arc;
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
+pub use crate::scene::light::{Light, LightKind};
 use crate::scene::{PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
 use shadow::ShadowMap;
-
-/// A light of the scene.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Light {
-    /// Where it is and how it spreads.
-    pub kind: LightKind,
-    /// Linear RGB colour.
-    pub color: Vec3,
-    /// Sun: irradiance in W/m² (Blender's Strength); point and spot: power in W.
-    pub intensity: f32,
-    /// Whether it casts shadows.
-    pub shadows: bool,
-}
-
-/// The kinds of light.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum LightKind {
-    /// Parallel light travelling along `direction`, from a disk `angle` radians across (soft shadows).
-    Sun {
-        /// Unit direction the light travels.
-        direction: Vec3,
-        /// Angular diameter in radians.
-        angle: f32,
-    },
-    /// Light from a point (a sphere of `radius` for soft shadows).
-    Point {
-        /// World position.
-        position: Vec3,
-        /// Radius in world units.
-        radius: f32,
-    },
-    /// A point light limited to a cone.
-    Spot {
-        /// World position.
-        position: Vec3,
-        /// Unit axis direction.
-        direction: Vec3,
-        /// Full cone angle in radians.
-        cone: f32,
-        /// Blender's spot blend, 0..1.
-        blend: f32,
-        /// Radius in world units.
-        radius: f32,
-    },
-}
 
 /// Side of a sun's shadow map, of a spot's, and of each face of a point light's cube.
 const SUN_MAP: u32 = 2048;
@@ -123,11 +79,12 @@ fn sphere_directions(n: usize) -> Vec<Vec3> {
 }
 
 impl FrameLight {
-    /// Prepares the lights and environment for one posed frame: shadow maps of every shadowing light, and the
-    /// environment's visibility at every vertex.
+    /// Prepares the lights and environment for one posed frame: shadow maps of every shadowing light (`lights`,
+    /// the manifest's, then the scene's own), and the environment's visibility at every vertex.
     pub fn prepare(scene: &PosedScene, lights: &[Light], env: EnvLight) -> FrameLight {
         let bounds = caster_bounds(scene);
-        let lights = lights
+        let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
+        let lights = all
             .par_iter()
             .map(|l| {
                 let maps = match (l.shadows, bounds) {
@@ -143,7 +100,7 @@ impl FrameLight {
                     },
                     _ => Vec::new(),
                 };
-                (l.clone(), maps)
+                ((*l).clone(), maps)
             })
             .collect();
         let vertex_visibility = match bounds {

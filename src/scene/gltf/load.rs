@@ -10,11 +10,13 @@ use gltf::mesh::Mode;
 
 use super::accessor::{read_f32, read_u32};
 use super::anim::{Animation, Channel, Interp, Sampler, Target};
+use crate::scene::light::{FileLight, GltfLightKind};
 use crate::scene::material::{AlphaMode, Material, Texture, TextureRef, Wrap};
 use crate::scene::posed::PrimKind;
 
 /// Extensions vvgen understands; a file that *requires* any other is refused.
-const SUPPORTED_REQUIRED: &[&str] = &["KHR_texture_transform", "KHR_materials_emissive_strength"];
+const SUPPORTED_REQUIRED: &[&str] =
+    &["KHR_texture_transform", "KHR_materials_emissive_strength", "KHR_lights_punctual"];
 
 /// A loaded glTF: everything needed to pose it at any time, with no further I/O.
 #[derive(Debug, Clone)]
@@ -36,6 +38,8 @@ pub struct GltfAsset {
     pub animations: Vec<Animation>,
     /// Root nodes of the scenes in use.
     pub roots: Vec<usize>,
+    /// `KHR_lights_punctual` lights (index = the extension's light index), in Blender's units.
+    pub lights: Vec<FileLight>,
     /// Cameras in the file: (node name, vertical fov in radians, aspect ratio) of perspective cameras.
     pub cameras: Vec<FileCamera>,
     /// Non-fatal problems (skipped line primitives, normalized quaternions).
@@ -107,6 +111,8 @@ pub struct Node {
     pub skin: Option<usize>,
     /// Morph weights: node's, else the mesh's defaults, else zeros.
     pub weights: Vec<f32>,
+    /// `KHR_lights_punctual` light index.
+    pub light: Option<usize>,
 }
 
 /// A skin.
@@ -231,6 +237,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
                 mesh: n.mesh().map(|m| m.index()),
                 skin: n.skin().map(|s| s.index()),
                 weights,
+                light: n.light().map(|l| l.index()),
             }
         })
         .collect();
@@ -331,6 +338,23 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
             })
         })
         .collect();
+    let lights = match doc.lights() {
+        Some(lights) => lights
+            .map(|l| {
+                use gltf::khr_lights_punctual::Kind;
+                let kind = match l.kind() {
+                    Kind::Directional => GltfLightKind::Directional,
+                    Kind::Point => GltfLightKind::Point,
+                    Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                        GltfLightKind::Spot { inner: inner_cone_angle, outer: outer_cone_angle }
+                    }
+                };
+                FileLight::from_gltf(l.name(), l.color(), l.intensity(), kind)
+                    .map_err(|e| err(path, format!("KHR_lights_punctual.lights[{}]: {e}", l.index())))
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+        None => Vec::new(),
+    };
     let mut asset = GltfAsset {
         path: path.to_path_buf(),
         materials,
@@ -340,6 +364,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
         skins,
         animations,
         roots,
+        lights,
         cameras,
         warnings,
         order: Vec::new(),

@@ -100,6 +100,12 @@ impl GltfAsset {
                 None => local,
             };
         }
+        out.lights.clear();
+        for &(n, _) in &self.order {
+            if let Some(light) = self.nodes[n].light.and_then(|l| self.lights.get(l)) {
+                out.lights.push(light.place(post * s.world[n]));
+            }
+        }
         let mut slot = 0;
         for (object, &(n, _)) in self.order.iter().enumerate() {
             let node = &self.nodes[n];

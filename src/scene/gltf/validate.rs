@@ -39,9 +39,14 @@ fn items<'v>(v: &'v Value, key: &str) -> &'v [Value] {
     v.get(key).and_then(Value::as_array).map_or(&[], Vec::as_slice)
 }
 
-impl Checker<'_> {
+impl<'a> Checker<'a> {
     fn len(&self, array: &str) -> usize {
         items(self.root, array).len()
+    }
+
+    /// The document's `KHR_lights_punctual` lights.
+    fn lights(&self) -> &'a [Value] {
+        self.root.get("extensions").and_then(|e| e.get("KHR_lights_punctual")).map_or(&[], |x| items(x, "lights"))
     }
 
     /// `v[key]`, when present, indexes an array of `len` entries (called `target`).
@@ -103,6 +108,18 @@ impl Checker<'_> {
             self.index(n, "mesh", &p, "meshes");
             self.index(n, "skin", &p, "skins");
             self.index(n, "camera", &p, "cameras");
+            if let Some(l) = n.get("extensions").and_then(|e| e.get("KHR_lights_punctual")) {
+                let len = self.lights().len();
+                self.index_into(l, "light", &format!("{p}.extensions.KHR_lights_punctual"), "lights", len);
+            }
+        }
+        for (i, l) in self.lights().iter().enumerate() {
+            self.one_of(
+                l,
+                "type",
+                &format!("KHR_lights_punctual.lights[{i}]"),
+                &strs(&["directional", "point", "spot"]),
+            );
         }
         for (i, m) in items(root, "meshes").iter().enumerate() {
             for (j, prim) in items(m, "primitives").iter().enumerate() {
