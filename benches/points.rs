@@ -56,6 +56,7 @@ fn torus_100k() -> PosedScene {
             kind: PrimKind::Triangles,
             positions,
             normals,
+            tangents: Vec::new(),
             uvs: Arc::new(uvs),
             colors: Arc::new(colors),
             indices: Arc::new(indices),

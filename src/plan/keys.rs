@@ -64,7 +64,14 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                             posed.material_digest()
                         }
                     });
-                    keys.push(key("frame posed", &[posed.geometry_digest().as_bytes(), m.as_bytes()]));
+                    let geometry = posed.geometry_digest();
+                    let mut parts: Vec<&[u8]> = vec![geometry.as_bytes(), m.as_bytes()];
+                    // Tangents (posed for normal textures) are read by lit shading only.
+                    let tangents = if lit { posed.tangents_digest() } else { None };
+                    if let Some(t) = &tangents {
+                        parts.push(t.as_bytes());
+                    }
+                    keys.push(key("frame posed", &parts));
                     // The file's lights, posed only for lit builds (see `Scene::file_lights`).
                     lights.push((!posed.lights.is_empty()).then(|| Digest(*posed.lights_digest().as_bytes())));
                 }

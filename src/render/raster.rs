@@ -33,6 +33,8 @@ struct ClipVert {
     color: Vec4,
     /// The environment's visibility (lit shading; 1 otherwise).
     vis: f32,
+    /// Tangent and handedness for a normal texture (zero without one).
+    tangent: Vec4,
 }
 
 impl ClipVert {
@@ -43,6 +45,7 @@ impl ClipVert {
             normal: self.normal.lerp(o.normal, t),
             color: self.color.lerp(o.color, t),
             vis: self.vis + (o.vis - self.vis) * t,
+            tangent: self.tangent.lerp(o.tangent, t),
         }
     }
 }
@@ -59,6 +62,7 @@ pub struct Tri {
     normal: [Vec3; 3],
     color: [Vec4; 3],
     vis: [f32; 3],
+    tangent: [Vec4; 3],
     /// Per sample step along x and y: the change of Σ bᵢ·uvᵢ/zᵢ and of Σ bᵢ/zᵢ (constants of the triangle), from
     /// which the perspective-correct uv derivative at any sample follows for the mip level.
     duv_step: [Vec2; 2],
@@ -183,6 +187,7 @@ pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles, visibility: Optio
                             normal: prim.normals[i],
                             color: prim.colors.get(i).copied().unwrap_or(Vec4::ONE),
                             vis: vis.get(i).copied().unwrap_or(1.0),
+                            tangent: prim.tangents.get(i).copied().unwrap_or(Vec4::ZERO),
                         }
                     };
                     let v = [vert(t[0]), vert(t[1]), vert(t[2])];
@@ -355,6 +360,7 @@ fn assemble(
         normal: [v[idx[0]].normal, v[idx[1]].normal, v[idx[2]].normal],
         color: [v[idx[0]].color, v[idx[1]].color, v[idx[2]].color],
         vis: [v[idx[0]].vis, v[idx[1]].vis, v[idx[2]].vis],
+        tangent: [v[idx[0]].tangent, v[idx[1]].tangent, v[idx[2]].tangent],
         bbox,
         material,
         object,
@@ -581,7 +587,14 @@ pub fn raster_tile(
                         .occlusion
                         .map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
                     let vis = tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2];
-                    rgb = l.light.shade(p, nrm, v, &surface, ao, vis);
+                    let tangent = || tri.tangent[0] * k[0] + tri.tangent[1] * k[1] + tri.tangent[2] * k[2];
+                    let n = match m.normal {
+                        Some((r, t, scale)) => {
+                            normal_mapped(nrm, tri.back, tangent(), t.sample_footprint(&r, uv, dx, dy), scale)
+                        }
+                        None => nrm,
+                    };
+                    rgb = l.light.shade(p, n, v, &surface, ao, vis);
                     emission *= sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
                 }
                 rgb += emission;
@@ -620,6 +633,8 @@ struct LitMaterial<'t> {
     /// With its strength.
     occlusion: Option<(TextureRef, &'t Texture, f32)>,
     emissive: Option<(TextureRef, &'t Texture)>,
+    /// With its scale.
+    normal: Option<(TextureRef, &'t Texture, f32)>,
 }
 
 impl<'t> LitMaterial<'t> {
@@ -629,6 +644,32 @@ impl<'t> LitMaterial<'t> {
             metallic_roughness: get(m.metallic_roughness_texture),
             occlusion: m.occlusion_texture.and_then(|(r, k)| get(Some(r)).map(|(r, t)| (r, t, k))),
             emissive: get(m.emissive_texture),
+            normal: m.normal_texture.and_then(|(r, k)| get(Some(r)).map(|(r, t)| (r, t, k))),
         }
+    }
+}
+
+/// The shading normal from a normal texture's texel `texel` (linear, 0..1 per channel) in the tangent frame of the
+/// interpolated normal `n` (flipped toward the eye when `back`) and `tangent` (xyz, handedness w), glTF's way:
+/// the texel's X and Y are scaled by `scale` and the result is T·x + B·y + N·z with B = w·(N × T). A back face is
+/// mapped in its front's frame, then flipped, as its geometric normal is. Without a usable tangent (none given,
+/// or degenerate) the normal stays as it is.
+fn normal_mapped(n: Vec3, back: bool, tangent: Vec4, texel: Vec4, scale: f32) -> Vec3 {
+    let front = if back { -n } else { n };
+    // Gram–Schmidt: the interpolated tangent leans off the interpolated normal.
+    let t = tangent.truncate() - front * front.dot(tangent.truncate());
+    if t.length_squared() < 1e-12 {
+        return n;
+    }
+    let t = t.normalize();
+    let b = front.cross(t) * if tangent.w < 0.0 { -1.0 } else { 1.0 };
+    let x = (texel.x * 2.0 - 1.0) * scale;
+    let y = (texel.y * 2.0 - 1.0) * scale;
+    let z = texel.z * 2.0 - 1.0;
+    let mapped = (t * x + b * y + front * z).normalize_or(front);
+    if back {
+        -mapped
+    } else {
+        mapped
     }
 }

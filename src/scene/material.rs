@@ -109,6 +109,8 @@ pub struct Material {
     pub metallic_roughness_texture: Option<TextureRef>,
     /// Occlusion texture (linear, R) and its strength.
     pub occlusion_texture: Option<(TextureRef, f32)>,
+    /// Tangent-space normal texture (linear, RGB) and its scale (of X and Y).
+    pub normal_texture: Option<(TextureRef, f32)>,
     /// Scale of the dielectric specular layer: 1 is glTF's (F0 = 0.04), 0 a purely diffuse (Lambertian)
     /// surface such as the built-in ground plane.
     pub specular: f32,
@@ -133,6 +135,7 @@ impl Default for Material {
             roughness: 0.5,
             metallic_roughness_texture: None,
             occlusion_texture: None,
+            normal_texture: None,
             specular: 1.0,
             casts_shadows: true,
         }
@@ -367,11 +370,13 @@ impl Material {
     /// Every texture reference of the material, with whether it holds colour (sRGB) rather than data.
     pub fn texture_refs_mut(&mut self) -> impl Iterator<Item = (&mut TextureRef, bool)> {
         let occlusion = self.occlusion_texture.as_mut().map(|(r, _)| r);
+        let normal = self.normal_texture.as_mut().map(|(r, _)| r);
         [
             (self.base_color_texture.as_mut(), true),
             (self.emissive_texture.as_mut(), true),
             (self.metallic_roughness_texture.as_mut(), false),
             (occlusion, false),
+            (normal, false),
         ]
         .into_iter()
         .filter_map(|(r, srgb)| r.map(|r| (r, srgb)))

@@ -193,6 +193,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
             kind: if indices.is_empty() { PrimKind::Points } else { PrimKind::Triangles },
             positions,
             normals,
+            tangents: Vec::new(),
             uvs: Arc::new(uvs),
             colors: Arc::new(colors),
             indices: Arc::new(indices),

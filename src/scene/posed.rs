@@ -27,6 +27,8 @@ pub struct PosedPrimitive {
     pub positions: Vec<Vec3>,
     /// World-space unit normals (same length as positions; zero where unknown for points).
     pub normals: Vec<Vec3>,
+    /// World-space unit tangents with their handedness in w, for a normal texture (empty when none).
+    pub tangents: Vec<Vec4>,
     /// Texture coordinates for the base colour texture (empty when none).
     pub uvs: Arc<Vec<Vec2>>,
     /// Linear RGBA vertex colours, COLOR_0 (empty means white).
@@ -67,6 +69,7 @@ impl PosedScene {
                 kind,
                 positions,
                 normals,
+                tangents: Vec::new(),
                 uvs: Arc::new(Vec::new()),
                 colors: Arc::new(colors),
                 indices: Arc::new(indices),
@@ -133,6 +136,21 @@ impl PosedScene {
             h.update(&t.rgba);
         }
         h.finalize()
+    }
+
+    /// blake3 of the posed tangents (what a normal texture is read along), `None` when no primitive has any.
+    pub fn tangents_digest(&self) -> Option<blake3::Hash> {
+        if self.primitives.iter().all(|p| p.tangents.is_empty()) {
+            return None;
+        }
+        let mut h = blake3::Hasher::new();
+        h.update(b"vvgen.posed.tangents.v1");
+        for p in &self.primitives {
+            let part: &[u8] = bytemuck::cast_slice(&p.tangents);
+            h.update(&(part.len() as u64).to_le_bytes());
+            h.update(part);
+        }
+        Some(h.finalize())
     }
 
     /// blake3 of the lights the sources bring, as placed at this frame (empty input when there are none).

@@ -308,7 +308,12 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
     out.primitives.truncate(rest.primitives.len());
     for (i, p) in rest.primitives.iter().enumerate() {
         if i == out.primitives.len() {
-            out.primitives.push(PosedPrimitive { positions: Vec::new(), normals: Vec::new(), ..p.clone() });
+            out.primitives.push(PosedPrimitive {
+                positions: Vec::new(),
+                normals: Vec::new(),
+                tangents: Vec::new(),
+                ..p.clone()
+            });
         }
         let o = &mut out.primitives[i];
         o.kind = p.kind;
@@ -321,6 +326,8 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
         o.positions.extend(p.positions.iter().map(|v| m.transform_point3(*v)));
         o.normals.clear();
         o.normals.extend(p.normals.iter().map(|n| (nm * *n).normalize_or_zero()));
+        o.tangents.clear();
+        o.tangents.extend(p.tangents.iter().map(|t| super::gltf::pose::tangent(&m, *t)));
     }
 }
 

@@ -13,6 +13,7 @@ mod lit;
 mod manifest;
 mod meshseq;
 mod new;
+mod normal_maps;
 mod ply;
 mod points;
 mod preview;

@@ -115,6 +115,7 @@ fn textured_quad() -> (PosedScene, Vec<u8>) {
             kind: PrimKind::Triangles,
             positions,
             normals: vec![Vec3::Z; 4],
+            tangents: Vec::new(),
             uvs: Arc::new(uvs),
             colors: Arc::new(Vec::new()),
             indices: Arc::new(vec![0, 1, 2, 0, 2, 3]),

@@ -74,6 +74,9 @@ pub struct Primitive {
     pub uvs: Vec<Vec2>,
     /// COLOR_0, linear RGBA (empty means white).
     pub colors: Vec<Vec4>,
+    /// Tangents (xyz toward +u, w the handedness) for the material's normal texture: TANGENT, else generated
+    /// by MikkTSpace. Empty without a normal texture.
+    pub tangents: Vec<Vec4>,
     /// Triangle list indices (empty for points).
     pub indices: Vec<u32>,
     /// Material index into [`GltfAsset::materials`].
@@ -477,6 +480,7 @@ fn material(m: &gltf::Material<'_>) -> Material {
         occlusion_texture: m
             .occlusion_texture()
             .map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.strength())),
+        normal_texture: m.normal_texture().map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.scale())),
         specular: 1.0,
         casts_shadows: true,
     }
@@ -619,6 +623,20 @@ fn primitive(
             *v = v.normalize_or_zero();
         }
     }
+    // A normal texture needs tangents on the uv set carried (the one its texture reads).
+    let normal_map = mat.normal_texture.is_some_and(|(r, _)| Some(r.tex_coord) == tex_coord && !uvs.is_empty());
+    let tangents = match attr(gltf::Semantic::Tangents)? {
+        _ if !normal_map || kind != PrimKind::Triangles => Vec::new(),
+        Some(t) if t.len() == 4 * n => t
+            .chunks_exact(4)
+            .map(|c| {
+                let xyz = Vec3::new(c[0], c[1], c[2]).normalize_or_zero();
+                xyz.extend(if c[3] < 0.0 { -1.0 } else { 1.0 })
+            })
+            .collect(),
+        Some(_) => return Err("TANGENT must be VEC4 with one element per vertex".into()),
+        None => super::tangents::mikktspace(&positions, &normals, &uvs, &indices),
+    };
     // Skinning: every JOINTS_n / WEIGHTS_n set, 4 influences each.
     let mut sets = 0;
     while p.get(&gltf::Semantic::Joints(sets)).is_some() && p.get(&gltf::Semantic::Weights(sets)).is_some() {
@@ -666,6 +684,7 @@ fn primitive(
         kind,
         positions,
         normals,
+        tangents,
         uvs,
         colors,
         indices,

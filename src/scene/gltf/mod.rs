@@ -4,6 +4,7 @@ mod accessor;
 pub mod anim;
 pub mod load;
 pub mod pose;
+mod tangents;
 
 pub use load::{load, load_slice, GltfAsset};
 pub use pose::PoseScratch;

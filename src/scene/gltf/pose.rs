@@ -5,7 +5,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat3, Mat4, Quat, Vec3};
+use glam::{Mat3, Mat4, Quat, Vec3, Vec4};
 
 use super::anim::Target;
 use super::load::GltfAsset;
@@ -33,6 +33,15 @@ pub fn normal_matrix(m: &Mat4) -> Mat3 {
     } else {
         cof
     }
+}
+
+/// Tangent `t` (xyz, handedness w) moved by `m`: along the surface like a position difference, its handedness
+/// flipped by a mirroring `m` (so that w·(n × t) stays the bitangent `m` carries).
+#[inline]
+pub fn tangent(m: &Mat4, t: Vec4) -> Vec4 {
+    let (c0, c1, c2) = (m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate());
+    let w = if c0.dot(c1.cross(c2)) < 0.0 { -t.w } else { t.w };
+    m.transform_vector3(t.truncate()).normalize_or_zero().extend(w)
 }
 
 impl GltfAsset {
@@ -123,6 +132,7 @@ impl GltfAsset {
                         kind: prim.kind,
                         positions: Vec::with_capacity(prim.positions.len()),
                         normals: Vec::with_capacity(prim.positions.len()),
+                        tangents: Vec::with_capacity(prim.tangents.len()),
                         uvs: Arc::new(prim.uvs.clone()),
                         colors: Arc::new(prim.colors.clone()),
                         indices: Arc::new(prim.indices.clone()),
@@ -134,6 +144,8 @@ impl GltfAsset {
                 slot += 1;
                 o.positions.clear();
                 o.normals.clear();
+                o.tangents.clear();
+                let tangents = !prim.tangents.is_empty();
                 let w = &s.weights[n];
                 let morphing = w.iter().any(|&x| x != 0.0) && !prim.morph_positions.is_empty();
                 for v in 0..prim.positions.len() {
@@ -163,10 +175,16 @@ impl GltfAsset {
                             }
                             o.positions.push(m.transform_point3(p));
                             o.normals.push((normal_matrix(&m) * nr).normalize_or_zero());
+                            if tangents {
+                                o.tangents.push(tangent(&m, prim.tangents[v]));
+                            }
                         }
                         _ => {
                             o.positions.push(model.transform_point3(p));
                             o.normals.push((nmat * nr).normalize_or_zero());
+                            if tangents {
+                                o.tangents.push(tangent(&model, prim.tangents[v]));
+                            }
                         }
                     }
                 }
