@@ -10,9 +10,10 @@ use rayon::prelude::*;
 
 use super::{Error, Inputs, Made};
 use crate::cache::Digest;
-use crate::manifest::output::{ColorAverage, PlyFormat};
+use crate::manifest::output::{ColorAverage, PlyFormat, PointColor};
 use crate::plan::actions::{Action, PointSettings};
 use crate::plan::graph::{ActionId, Graph};
+use crate::render::light::FrameLight;
 use crate::sample::voxel::{self, Reduction};
 use crate::sample::{self, Draw, Points};
 use crate::scene::material::{linear_to_srgb, srgb_to_linear};
@@ -56,10 +57,7 @@ fn make(
                 [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z].iter().flat_map(|v| v.to_le_bytes()).collect()
             }))
         }
-        Action::SampleFrame { output, frame } => {
-            let s = &g.keying.points[output];
-            Ok(samples(g, x, s, *frame, draws.get(output), &n.label)?.0.to_bytes())
-        }
+        Action::SampleFrame { output, frame } => Ok(samples(g, x, blobs, id, *frame, draws.get(output))?.0.to_bytes()),
         Action::PointFrame { output, frame } => {
             let s = &g.keying.points[output];
             let (pts, motion) = if s.reduces() {
@@ -67,7 +65,7 @@ fn make(
                 let pts = Points::from_bytes(&raw).map_err(|source| Error::Sample { action: label(), source })?;
                 (pts, None)
             } else {
-                samples(g, x, s, *frame, draws.get(output), &n.label)?
+                samples(g, x, blobs, id, *frame, draws.get(output))?
             };
             let grid = match s.vox {
                 Some(vox) => {
@@ -157,27 +155,49 @@ fn pose<'a>(
 /// One frame's samples, and their motion to the next frame.
 type Samples = (Points, Option<Vec<[f32; 3]>>);
 
-/// Samples frame `f` of a point output: fresh draws, or the correspondence draws re-evaluated (plus the
-/// scene's own points), with motion to the next frame when asked.
+/// Samples frame `f` of a point output for action `id` (a sample or point frame): fresh draws, or the
+/// correspondence draws re-evaluated (plus the scene's own points), with motion to the next frame when asked;
+/// coloured by their albedo, or lit when the output asks.
 fn samples(
     g: &Graph,
     x: &Inputs,
-    s: &PointSettings,
+    blobs: &[Option<Vec<Digest>>],
+    id: ActionId,
     f: usize,
     draws: Option<&Vec<Draw>>,
-    label: &str,
 ) -> Result<Samples, Error> {
+    let node = g.node(id);
+    let (label, s) = match &node.action {
+        Action::SampleFrame { output, .. } | Action::PointFrame { output, .. } => {
+            (node.label.as_str(), &g.keying.points[output])
+        }
+        _ => unreachable!("samples are drawn for sample and point frames"),
+    };
     let seed = g.keying.seed.to_le_bytes();
     let frames = g.keying.plan.frames;
     let scene_err = |source| Error::Scene { action: label.to_string(), source };
     let content = |source| Error::Sample { action: label.to_string(), source };
     let mut poser = Poser::default();
+    // Lit colours: the whole frame's lighting (every source casts shadows, whichever is sampled).
+    let light = match s.color {
+        PointColor::Lit => {
+            let env_id = s.environment_dep(&g.keying.render).then(|| node.deps[0]);
+            let env = super::render::environment_light(g, x, blobs, env_id, false)?;
+            let whole = x.scene.pose(f, &mut poser).map_err(scene_err)?;
+            Some(FrameLight::prepare(whole, &g.keying.render.lighting.lights, env))
+        }
+        PointColor::Albedo => None,
+    };
+    let bake =
+        light.as_ref().map(|l| move |p: Vec3, n: Vec3, albedo: Vec3, emission: Vec3| l.bake(p, n, albedo, emission));
+    let shader: Option<sample::Shader> = bake.as_ref().map(|b| b as sample::Shader);
     let posed = pose(x, s, f, &mut poser).map_err(scene_err)?.clone();
     super::check_posed(&posed, label)?;
     let Some(d) = draws.filter(|_| s.correspondence) else {
-        return Ok((sample::sample(&posed, s.points as usize, &[b"sequence", &seed, &(f as u64).to_le_bytes()]), None));
+        let key: [&[u8]; 3] = [b"sequence", &seed, &(f as u64).to_le_bytes()];
+        return Ok((sample::sample_shaded(&posed, s.points as usize, &key, shader), None));
     };
-    let mut pts = sample::evaluate(&posed, d).map_err(content)?;
+    let mut pts = sample::evaluate_shaded(&posed, d, shader).map_err(content)?;
     let motion = if s.motion {
         let next = if f + 1 < frames {
             sample::evaluate(pose(x, s, f + 1, &mut poser).map_err(scene_err)?, d).map_err(content)?
@@ -188,7 +208,7 @@ fn samples(
     } else {
         None
     };
-    pts.extend(&sample::points(&posed));
+    pts.extend(&sample::points_shaded(&posed, shader));
     Ok((pts, motion))
 }
 

@@ -39,19 +39,30 @@ fn env_light(
     blobs: &[Option<Vec<Digest>>],
     ids: &[ActionId],
 ) -> Result<Option<EnvLight>, Error> {
-    let settings = &g.keying.render.lighting.environment;
     if g.keying.render.shading != Shading::Pbr {
         return Ok(None);
     }
-    let Some(env_id) = ids.iter().find_map(|&id| g.node(id).deps.first().copied()) else {
-        return Ok(Some(settings.studio()));
-    };
+    let env_id = ids.iter().find_map(|&id| g.node(id).deps.first().copied());
+    let visible = g.keying.render.lighting.environment.visible;
+    environment_light(g, x, blobs, env_id, visible).map(Some)
+}
+
+/// The environment as the prefiltered map of action `env_id` (the built-in studio environment without one),
+/// with the full map as the `background` when asked (read again only for that).
+pub(super) fn environment_light(
+    g: &Graph,
+    x: &Inputs,
+    blobs: &[Option<Vec<Digest>>],
+    env_id: Option<ActionId>,
+    background: bool,
+) -> Result<EnvLight, Error> {
+    let settings = &g.keying.render.lighting.environment;
+    let Some(env_id) = env_id else { return Ok(settings.studio()) };
     let label = g.node(env_id).label.clone();
     let pre = Prefiltered::decode(&x.read(g, blobs, env_id, 0)?)
         .map_err(|source| Error::Environment { action: label.clone(), source })?;
-    // The full map is read again only to be the visible background.
-    let map = if settings.visible { Some(Arc::new(load_map(g, x, env_id)?)) } else { None };
-    Ok(Some(settings.with(Arc::new(pre), map)))
+    let map = if background { Some(Arc::new(load_map(g, x, env_id)?)) } else { None };
+    Ok(settings.with(Arc::new(pre), map))
 }
 
 /// Runs the render-pass actions `ids`.

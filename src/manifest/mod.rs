@@ -75,6 +75,12 @@ pub struct Manifest {
 }
 
 impl Manifest {
+    /// Whether anything is lit: `pbr` renders, or a `ply-sequence` with `color = "lit"`.
+    pub fn lit(&self) -> bool {
+        self.render.shading == render::Shading::Pbr
+            || self.outputs.values().any(|o| o.color == Some(output::PointColor::Lit))
+    }
+
     /// Resolves a manifest-relative path.
     pub fn resolve(&self, p: &str) -> PathBuf {
         self.dir.join(p)
@@ -541,7 +547,7 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
             }
         }
     }
-    if m.render.shading != render::Shading::Pbr {
+    if !m.lit() {
         let unused = m
             .lights
             .keys()
@@ -551,7 +557,9 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         if let Some(what) = unused {
             diags.push(
                 Diagnostic::warning(format!("{what} lights nothing: `[render] shading` is not \"pbr\""), None)
-                    .with_help("set `[render] shading = \"pbr\"` to render lit"),
+                    .with_help(
+                        "set `[render] shading = \"pbr\"` to render lit (or a ply-sequence's `color = \"lit\"`)",
+                    ),
             );
         }
     }

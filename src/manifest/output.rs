@@ -53,6 +53,9 @@ pub struct Output {
     pub position: Option<VoxelPosition>,
     /// `ply-sequence`: colour averaging space, `"linear"` (default) or `"srgb"`.
     pub color_average: Option<ColorAverage>,
+    /// `ply-sequence`: point colours, `"albedo"` (default: the surface colour) or `"lit"` (baked: diffuse
+    /// lighting and shadows from `[light.NAME]`, the file's lights and the `[environment]`).
+    pub color: Option<PointColor>,
     /// `ply-sequence`: file name pattern (default `{name}_{frame:04}.ply`).
     #[schemars(with = "Option<String>")]
     pub(super) pattern: Option<Spanned<String>>,
@@ -141,6 +144,7 @@ impl Writer {
                 "reduce",
                 "position",
                 "color_average",
+                "color",
                 "pattern",
                 "format",
             ],
@@ -148,6 +152,18 @@ impl Writer {
             _ => &["dir", "splits", "init_points"],
         }
     }
+}
+
+/// What a `ply-sequence`'s point colours are.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, Default, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum PointColor {
+    /// The surface's albedo (base colour × texture × vertex colour), unlit.
+    #[default]
+    Albedo,
+    /// The albedo lit, view-independently: diffuse light from every light and the environment, with shadows and
+    /// the environment's occlusion, plus emission (the 6-DoF toolkit's "baked" colours).
+    Lit,
 }
 
 /// Voxel reduction.

@@ -10,7 +10,7 @@ use super::key::KeyWriter;
 use super::Plan;
 use crate::cache::Digest;
 use crate::camera::Camera;
-use crate::manifest::output::{ColorAverage, PlyFormat, Reduce, VoxelPosition};
+use crate::manifest::output::{ColorAverage, PlyFormat, PointColor, Reduce, VoxelPosition};
 use crate::manifest::render::Pass;
 use crate::render::encode::{Encoding, NormalSpace, PngCompression};
 use crate::render::{DepthKind, RenderSettings, Shading, SplatShape, SplatSize};
@@ -156,15 +156,17 @@ pub enum Action {
         /// Scene frames, ascending.
         frames: Vec<usize>,
     },
-    /// Unreduced samples of `frame` for point output `output`. No deps.
+    /// Unreduced samples of `frame` for point output `output`. Deps: the prefiltered environment when its
+    /// colours are lit under a map ([`PointSettings::environment_dep`]).
     SampleFrame {
         /// The `[output.NAME]`.
         output: String,
         /// Scene frame.
         frame: usize,
     },
-    /// Frame `frame` of point output `output`. Deps: its [`Action::SampleFrame`] when it reduces, then the
-    /// sequence's [`Action::Bounds`] when it quantizes (`vox`).
+    /// Frame `frame` of point output `output`. Deps: its [`Action::SampleFrame`] when it reduces, else the
+    /// prefiltered environment when its colours are lit under a map; then the sequence's [`Action::Bounds`]
+    /// when it quantizes (`vox`).
     PointFrame {
         /// The `[output.NAME]`.
         output: String,
@@ -240,6 +242,8 @@ pub struct PointSettings {
     pub position: VoxelPosition,
     /// Colour averaging space.
     pub color_average: ColorAverage,
+    /// Albedo or lit colours.
+    pub color: crate::manifest::output::PointColor,
     /// Binary or ASCII PLY.
     pub format: PlyFormat,
     /// File name pattern with `{name}` substituted.
@@ -247,6 +251,11 @@ pub struct PointSettings {
 }
 
 impl PointSettings {
+    /// Whether its sample actions read the prefiltered environment (their first dep): lit colours under a map.
+    pub fn environment_dep(&self, r: &RenderSettings) -> bool {
+        self.color == PointColor::Lit && r.lighting.environment.map.is_some()
+    }
+
     /// Whether frames are reduced (so their unreduced samples are an action of their own).
     pub fn reduces(&self) -> bool {
         self.voxel.is_some() || self.vox.is_some()
@@ -344,14 +353,14 @@ impl Action {
                     w.digest("frame content", &cx.frame_keys[f]);
                 }
             }
-            Action::SampleFrame { output, frame } => samples(w, cx, &cx.points[output], *frame),
+            Action::SampleFrame { output, frame } => samples(w, cx, &cx.points[output], *frame, deps),
             Action::PointFrame { output, frame } => {
                 let s = &cx.points[output];
                 w.str("encoder", ENCODE_SALT);
                 if s.reduces() {
                     w.digest("samples", &deps[0]);
                 } else {
-                    samples(w, cx, s, *frame);
+                    samples(w, cx, s, *frame, deps);
                 }
                 reduction(w, s, if s.vox.is_some() { deps.last() } else { None });
             }
@@ -591,7 +600,8 @@ fn png_name(p: PngCompression) -> &'static str {
 }
 
 /// What shapes one frame's surface samples.
-fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize) {
+/// `deps` are the action's: the prefiltered environment first when [`PointSettings::environment_dep`] says so.
+fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize, deps: &[Digest]) {
     let frames = cx.frame_keys.len();
     w.str("sampler", SAMPLE_SALT);
     w.u64("seed", cx.seed);
@@ -608,6 +618,18 @@ fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize) {
     if s.motion && f + 1 < frames {
         w.digest("next frame content", &cx.frame_keys[f + 1]);
     }
+    // Lit colours read the lighting (and the file's lights at this frame); albedo ones keep their keys.
+    if s.color == PointColor::Lit {
+        w.str("color", "lit");
+        w.str("baking", crate::render::light::BAKE_SALT);
+        lighting_fields(w, &cx.render.lighting);
+        if let Some(lights) = &cx.frame_lights[f] {
+            w.digest("file lights", lights);
+        }
+        if s.environment_dep(&cx.render) {
+            w.digest("prefiltered environment", &deps[0]);
+        }
+    }
 }
 
 /// What shapes a frame's reduction and encoding (not its samples).
@@ -617,6 +639,7 @@ fn reduction(w: &mut dyn KeyWriter, s: &PointSettings, bounds: Option<&Digest>) 
         source: _,      // in the samples
         correspondence, // point ids are written only without a reduction
         motion: _,      // in the samples
+        color: _,       // in the samples
         voxel,
         vox,
         reduce,

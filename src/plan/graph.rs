@@ -153,12 +153,20 @@ impl<'a> Graph<'a> {
                 let frames: Vec<usize> = (0..plan.frames).collect();
                 self.add(Action::Bounds { frames }, format!("bounds {name}"), vec![])
             });
+            // Lit colours read the prefiltered environment: the first dep of whichever action samples.
+            let env: Vec<ActionId> = if s.environment_dep(&self.keying.render) {
+                vec![self.add(Action::Environment, "environment".into(), vec![])]
+            } else {
+                vec![]
+            };
             let mut frame_ids = Vec::with_capacity(plan.frames);
             for f in 0..plan.frames {
                 let mut inputs = Vec::new();
                 if s.reduces() {
                     let a = Action::SampleFrame { output: name.to_string(), frame: f };
-                    inputs.push(self.add(a, format!("samples {name}/{f}"), vec![]));
+                    inputs.push(self.add(a, format!("samples {name}/{f}"), env.clone()));
+                } else {
+                    inputs.extend(&env);
                 }
                 inputs.extend(bounds);
                 let a = Action::PointFrame { output: name.to_string(), frame: f };
@@ -371,6 +379,7 @@ fn point_settings(m: &Manifest, scene: &Scene, plan: &Plan, name: &str, out: &Ou
         reduce: out.reduce.unwrap_or_default(),
         position: out.position.unwrap_or_default(),
         color_average: out.color_average.unwrap_or_default(),
+        color: out.color.unwrap_or_default(),
         format: out.format.unwrap_or_default(),
         pattern: out.file_pattern(m.dataset.name()),
     })

@@ -151,8 +151,17 @@ pub fn draw(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Vec<Draw> {
     out
 }
 
+/// Colours a surface point from its position, unit normal (zero where unknown), linear albedo and emission:
+/// lit ("baked") point colours. Without one, a point's colour is its albedo.
+pub type Shader<'a> = &'a (dyn Fn(Vec3, Vec3, Vec3, Vec3) -> Vec3 + Sync);
+
 /// Evaluates `draws` on `scene` (the frame they were drawn on, or another frame of the same meshes).
 pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, Error> {
+    evaluate_shaded(scene, draws, None)
+}
+
+/// [`evaluate`], coloured by `shader` when given.
+pub fn evaluate_shaded(scene: &PosedScene, draws: &[Draw], shader: Option<Shader>) -> Result<Points, Error> {
     let fits =
         |d: &Draw| scene.primitives.get(d.prim as usize).is_some_and(|p| (d.first as usize + 2) < p.indices.len());
     if !draws.par_iter().all(fits) {
@@ -167,7 +176,7 @@ pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, Error> {
         .zip(draws.par_chunks(CHUNK))
         .for_each(|(((pos, nrm), col), d)| {
             for (j, d) in d.iter().enumerate() {
-                (pos[j], nrm[j], col[j]) = surface_point(scene, d);
+                (pos[j], nrm[j], col[j]) = surface_point(scene, d, shader);
             }
         });
     Ok(out)
@@ -175,30 +184,53 @@ pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, Error> {
 
 /// Every point of `scene`'s point primitives.
 pub fn points(scene: &PosedScene) -> Points {
+    points_shaded(scene, None)
+}
+
+/// [`points`], coloured by `shader` when given.
+pub fn points_shaded(scene: &PosedScene, shader: Option<Shader>) -> Points {
     let mut out = Points::default();
     for p in scene.primitives.iter().filter(|p| p.kind == PrimKind::Points) {
         for i in 0..p.positions.len() {
-            push_point(&mut out, scene, p, i);
+            push_point(&mut out, scene, p, i, shader);
         }
     }
     out
 }
 
-/// Appends point `i` of point primitive `p`: its position, normal (zero where unknown) and linear albedo.
+/// Appends point `i` of point primitive `p`: its position, normal (zero where unknown) and linear albedo, or
+/// its colour by `shader`.
 #[inline]
-fn push_point(out: &mut Points, scene: &PosedScene, p: &crate::scene::PosedPrimitive, i: usize) {
-    out.positions.push(p.positions[i].to_array());
-    out.normals.push(p.normals.get(i).copied().unwrap_or(Vec3::ZERO).to_array());
-    let c =
-        scene.materials[p.material as usize].albedo(&scene.textures, p.uvs.get(i).copied(), p.colors.get(i).copied());
-    out.colors.push(c.truncate().to_array());
+fn push_point(
+    out: &mut Points,
+    scene: &PosedScene,
+    p: &crate::scene::PosedPrimitive,
+    i: usize,
+    shader: Option<Shader>,
+) {
+    let (pos, n) = (p.positions[i], p.normals.get(i).copied().unwrap_or(Vec3::ZERO));
+    out.positions.push(pos.to_array());
+    out.normals.push(n.to_array());
+    let (m, uv) = (&scene.materials[p.material as usize], p.uvs.get(i).copied());
+    let c = m.albedo(&scene.textures, uv, p.colors.get(i).copied()).truncate();
+    let c = match shader {
+        Some(shade) => shade(pos, n, c, m.emission(&scene.textures, uv)),
+        None => c,
+    };
+    out.colors.push(c.to_array());
 }
 
 /// `n` area-uniform samples of `scene`'s triangles plus every point of its point primitives; `key` names the
 /// random stream (e.g. seed and frame).
 pub fn sample(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
-    let mut out = evaluate(scene, &draw(scene, n, key)).expect("BUG: draws index the scene they were drawn on");
-    out.extend(&points(scene));
+    sample_shaded(scene, n, key, None)
+}
+
+/// [`sample`], coloured by `shader` when given.
+pub fn sample_shaded(scene: &PosedScene, n: usize, key: &[&[u8]], shader: Option<Shader>) -> Points {
+    let draws = draw(scene, n, key);
+    let mut out = evaluate_shaded(scene, &draws, shader).expect("BUG: draws index the scene they were drawn on");
+    out.extend(&points_shaded(scene, shader));
     out
 }
 
@@ -232,16 +264,16 @@ pub fn sample_at_most(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Points {
                 break;
             }
             next.next();
-            push_point(&mut out, scene, p, i);
+            push_point(&mut out, scene, p, i, None);
         }
         index += p.positions.len();
     }
     out
 }
 
-/// Position, unit normal and linear colour of the surface point `d`.
+/// Position, unit normal and linear colour (albedo, or by `shader`) of the surface point `d`.
 #[inline]
-fn surface_point(scene: &PosedScene, d: &Draw) -> ([f32; 3], [f32; 3], [f32; 3]) {
+fn surface_point(scene: &PosedScene, d: &Draw, shader: Option<Shader>) -> ([f32; 3], [f32; 3], [f32; 3]) {
     let (p, b) = (&scene.primitives[d.prim as usize], d.bary);
     let idx = [0, 1, 2].map(|k| p.indices[(d.first + k) as usize] as usize);
     let lerp3 = |v: &[Vec3]| v[idx[0]] * b[0] + v[idx[1]] * b[1] + v[idx[2]] * b[2];
@@ -256,6 +288,11 @@ fn surface_point(scene: &PosedScene, d: &Draw) -> ([f32; 3], [f32; 3], [f32; 3])
         (p.uvs.len() == p.positions.len()).then(|| p.uvs[idx[0]] * b[0] + p.uvs[idx[1]] * b[1] + p.uvs[idx[2]] * b[2]);
     let vc: Option<Vec4> = (p.colors.len() == p.positions.len())
         .then(|| p.colors[idx[0]] * b[0] + p.colors[idx[1]] * b[1] + p.colors[idx[2]] * b[2]);
-    let c = scene.materials[p.material as usize].albedo(&scene.textures, uv, vc);
-    (pos.to_array(), n.to_array(), c.truncate().to_array())
+    let m = &scene.materials[p.material as usize];
+    let c = m.albedo(&scene.textures, uv, vc).truncate();
+    let c = match shader {
+        Some(shade) => shade(pos, n, c, m.emission(&scene.textures, uv)),
+        None => c,
+    };
+    (pos.to_array(), n.to_array(), c.to_array())
 }

@@ -395,6 +395,16 @@ impl Material {
         }
         c
     }
+
+    /// Emitted radiance (linear RGB) at a surface point: the emissive factor × its texture.
+    pub fn emission(&self, textures: &[Texture], uv: Option<Vec2>) -> Vec3 {
+        match (&self.emissive_texture, uv) {
+            (Some(r), Some(uv)) if self.emissive != Vec3::ZERO => {
+                textures.get(r.texture as usize).map_or(self.emissive, |t| self.emissive * t.sample(r, uv).truncate())
+            }
+            _ => self.emissive,
+        }
+    }
 }
 
 #[cfg(test)]

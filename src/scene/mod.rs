@@ -186,7 +186,7 @@ impl Scene {
         let global = transform::resolve(&g, UpAxis::Z, &stats)
             .map_err(|source| Error::Transform { table: "[transform]".into(), source })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
-        let file_lights = m.render.shading == crate::manifest::render::Shading::Pbr && m.render.gltf_lights;
+        let file_lights = m.render.gltf_lights && m.lit();
         let mut scene = Scene { sources, locals, global, frames, warnings, file_lights };
         scene.place_ground(&mut scratch, &mut posed)?;
         Ok(scene)

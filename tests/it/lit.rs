@@ -336,3 +336,48 @@ fn lighting_mistakes_are_named_with_their_place_and_fix() {
         assert!(shown.contains("m.toml:"), "names the file and line: {shown}");
     }
 }
+
+#[test]
+fn lit_point_colours_bake_the_lighting_and_its_shadows_and_are_keyed_by_it() {
+    use vvgen::plan::actions::Kind;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_hdr(&d.join("sky.hdr"), 64, 32);
+    // The floor sampled twice: its albedo (0.8 grey), and lit by the sun travelling toward +x, +y and the sky.
+    let outputs = "[output.flat]\nwriter = \"ply-sequence\"\ndir = \"flat\"\nsource = \"floor\"\npoints = 6000\n\
+                   [output.baked]\nwriter = \"ply-sequence\"\ndir = \"baked\"\nsource = \"floor\"\npoints = 6000\n\
+                   color = \"lit\"\n";
+    let dim = lit_manifest("")
+        .replace("map = \"sky.hdr\"", "map = \"sky.hdr\"\nstrength = 0.2")
+        .replace("intensity = 2.0", "intensity = 1.0");
+    let text = format!("{dim}{outputs}");
+    build_in(d, &text);
+    let read = |name: &str| {
+        let p = d.join(format!("out/{name}/m_0000.ply"));
+        vvgen::scene::ply::read(&std::fs::read(&p).unwrap()).unwrap()
+    };
+    let (flat, baked) = (read("flat"), read("baked"));
+    assert_eq!(flat.positions, baked.positions, "colour does not move samples");
+    let grey = vvgen::scene::material::linear_to_srgb8(0.8);
+    assert!(flat.colors.as_ref().unwrap().iter().all(|c| c[0] == grey));
+    let lit: Vec<u8> = baked.colors.as_ref().unwrap().iter().map(|c| c[0]).collect();
+    let mut sorted = lit.clone();
+    sorted.sort_unstable();
+    let median = sorted[sorted.len() / 2];
+    assert!((150..250).contains(&median), "the open floor is lit, not saturated: {median}");
+    // The man's shadow: samples far darker than the open floor, on the side the sun travels toward.
+    let dark: Vec<[f32; 3]> = baked
+        .positions
+        .iter()
+        .zip(&lit)
+        .filter(|(_, &c)| (c as u32) * 100 < median as u32 * 80)
+        .map(|(p, _)| *p)
+        .collect();
+    assert!(dark.len() > 20, "{} shadowed samples (median {median})", dark.len());
+    let mean = dark.iter().fold([0.0f32; 2], |a, p| [a[0] + p[0], a[1] + p[1]]).map(|v| v / dark.len() as f32);
+    assert!(mean[0] > 0.0 && mean[1] > 0.0, "the shadow falls toward +x, +y: {mean:?}");
+    // Moving the sun re-bakes the lit cloud (and re-renders the lit pass), never the albedo one.
+    let moved = build_in(d, &text.replace("[0.3, 0.2, -1]", "[-0.3, 0.2, -1]"));
+    assert_eq!(moved.ran(Kind::PointFrame), 2, "two frames of the baked output");
+    assert_eq!(moved.ran(Kind::RenderPass), 4);
+}

@@ -44,11 +44,17 @@ pub struct EnvLight {
     pub background: Option<Arc<EnvMap>>,
 }
 
+/// Version of baked point colours ([`FrameLight::bake`]): part of their keys.
+pub const BAKE_SALT: &str = "bake 1";
+
 /// Everything a frame's lit shading needs besides the camera.
 #[derive(Debug)]
 pub struct FrameLight {
     lights: Vec<(Light, Vec<ShadowMap>)>,
     env: EnvLight,
+    /// The environment's occlusion: directions over the sphere, each with its weight (the map's brightness there)
+    /// and a parallel shadow map from it. Empty when nothing casts shadows.
+    occlusion: Vec<(Vec3, f32, ShadowMap)>,
     /// Per primitive, per vertex: the fraction of the environment's light (weighted by where it comes from and
     /// by the vertex normal) that no caster blocks. Empty for point primitives.
     pub vertex_visibility: Vec<Vec<f32>>,
@@ -103,11 +109,57 @@ impl FrameLight {
                 ((*l).clone(), maps)
             })
             .collect();
-        let vertex_visibility = match bounds {
-            Some(b) => environment_visibility(scene, &env, b),
-            None => scene.primitives.iter().map(|p| vec![1.0; p.positions.len()]).collect(),
+        let occlusion = match bounds {
+            Some(b) => occlusion_maps(scene, &env, b),
+            None => Vec::new(),
         };
-        FrameLight { lights, env, vertex_visibility }
+        let mut light = FrameLight { lights, env, occlusion, vertex_visibility: Vec::new() };
+        light.vertex_visibility = scene
+            .primitives
+            .iter()
+            .map(|prim| match prim.kind {
+                PrimKind::Triangles => prim
+                    .positions
+                    .par_iter()
+                    .zip(prim.normals.par_iter())
+                    .map(|(&p, &n)| light.environment_visibility(p, n))
+                    .collect(),
+                PrimKind::Points => Vec::new(),
+            })
+            .collect();
+        light
+    }
+
+    /// The fraction of the environment's light (weighted by where it comes from and by the cosine to `n`) that
+    /// reaches `p` past the casters. The hemisphere `n` faces is the one that counts (a double-sided surface seen
+    /// from behind, such as the ground's underside, is shaded with its front's visibility).
+    pub fn environment_visibility(&self, p: Vec3, n: Vec3) -> f32 {
+        let (mut lit, mut all) = (0.0, 0.0);
+        for (d, w, m) in &self.occlusion {
+            let c = n.dot(*d) * w;
+            if c <= 0.0 {
+                continue;
+            }
+            all += c;
+            lit += c * m.visibility(p, n, 0.0);
+        }
+        if all > 0.0 {
+            lit / all
+        } else {
+            1.0
+        }
+    }
+
+    /// A view-independent ("baked") colour at world point `p` with unit normal `n`: the Lambertian surface of
+    /// colour `albedo` under every light, with their shadows, and the environment with its occlusion at `p`,
+    /// plus `emission`. What a `ply-sequence` with `color = "lit"` writes; a point without a normal keeps its
+    /// albedo.
+    pub fn bake(&self, p: Vec3, n: Vec3, albedo: Vec3, emission: Vec3) -> Vec3 {
+        if n == Vec3::ZERO {
+            return albedo + emission;
+        }
+        let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
+        self.shade(p, n, n, &s, 1.0, self.environment_visibility(p, n)) + emission
     }
 
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
@@ -184,48 +236,16 @@ fn spot_falloff(cos_angle: f32, cone: f32, blend: f32) -> f32 {
     a
 }
 
-/// The environment's visibility at every vertex: [`ENV_DIRECTIONS`] parallel shadow maps from directions over
-/// the sphere, each weighted by the environment's brightness there (so a bright sky above shadows more than a
-/// dark floor) and by the vertex normal's cosine to it.
-fn environment_visibility(scene: &PosedScene, env: &EnvLight, bounds: (Vec3, Vec3)) -> Vec<Vec<f32>> {
-    let dirs = sphere_directions(ENV_DIRECTIONS);
+/// The environment's occlusion maps: [`ENV_DIRECTIONS`] parallel shadow maps from directions over the sphere,
+/// each weighted by the environment's brightness there (so a bright sky above shadows more than a dark floor).
+fn occlusion_maps(scene: &PosedScene, env: &EnvLight, bounds: (Vec3, Vec3)) -> Vec<(Vec3, f32, ShadowMap)> {
     let roughest = env.prefiltered.levels.last();
-    let weights: Vec<f32> = dirs
-        .iter()
+    sphere_directions(ENV_DIRECTIONS)
+        .par_iter()
         .map(|&d| {
-            roughest.map_or(1.0, |m| m.radiance(env.rotation * d).dot(Vec3::new(0.2126, 0.7152, 0.0722))).max(1e-6)
-        })
-        .collect();
-    let maps: Vec<ShadowMap> = dirs.par_iter().map(|&d| ShadowMap::sun(scene, -d, bounds, ENV_MAP)).collect();
-    scene
-        .primitives
-        .iter()
-        .map(|prim| {
-            if prim.kind != PrimKind::Triangles {
-                return Vec::new();
-            }
-            prim.positions
-                .par_iter()
-                .zip(prim.normals.par_iter())
-                .map(|(&p, &n)| {
-                    let (mut lit, mut all) = (0.0, 0.0);
-                    // The hemisphere the vertex normal faces (a double-sided surface seen from behind, such as the
-                    // ground's underside, is shaded with its front's visibility).
-                    for ((d, w), m) in dirs.iter().zip(&weights).zip(&maps) {
-                        let c = n.dot(*d) * w;
-                        if c <= 0.0 {
-                            continue;
-                        }
-                        all += c;
-                        lit += c * m.visibility(p, n, 0.0);
-                    }
-                    if all > 0.0 {
-                        lit / all
-                    } else {
-                        1.0
-                    }
-                })
-                .collect()
+            let w =
+                roughest.map_or(1.0, |m| m.radiance(env.rotation * d).dot(Vec3::new(0.2126, 0.7152, 0.0722))).max(1e-6);
+            (d, w, ShadowMap::sun(scene, -d, bounds, ENV_MAP))
         })
         .collect()
 }
