@@ -389,8 +389,17 @@ fn flight_helmet_multi_mesh_textures() {
     }
     let a = gltf::load(&p, None).unwrap();
     assert_eq!(a.meshes.len(), 6);
-    // 15 images; the 5 metallic-roughness (ORM) ones also as linear copies, since data textures are not sRGB.
-    assert_eq!(a.textures.len(), 15 + 5);
+    // 15 images; the 5 metallic-roughness (ORM) and 5 normal ones also as linear copies, since data textures are
+    // not sRGB.
+    assert_eq!(a.textures.len(), 15 + 10);
+    for m in a.materials.iter().filter_map(|m| m.normal_texture) {
+        assert!(!a.textures[m.0.texture as usize].srgb, "normal textures are read linear");
+    }
+    // Every primitive of a normal-mapped material has a tangent per vertex (the file has none: MikkTSpace).
+    for p in a.meshes.iter().flatten().filter(|p| a.materials[p.material as usize].normal_texture.is_some()) {
+        assert_eq!(p.tangents.len(), p.positions.len());
+        assert!(p.tangents.iter().all(|t| t.w.abs() == 1.0 && (t.truncate().length() - 1.0).abs() < 1e-3));
+    }
     assert!(a.textures[15..].iter().all(|t| !t.srgb) && a.textures[..15].iter().all(|t| t.srgb));
     for m in &a.materials {
         if let Some(r) = m.metallic_roughness_texture {

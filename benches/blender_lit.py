@@ -1,0 +1,137 @@
+# Renders a lit vvgen D-NeRF dataset's cameras again in Blender Cycles, as the reference for lit rendering
+# (benches/lit_fidelity.sh runs it; benches/lit_metrics.py compares). Blender is a peer, never a test dependency.
+#
+#   blender -b -P benches/blender_lit.py -- --model MODEL.gl(b|tf) --dataset OUT/…_dnerf --out DIR \
+#       --sun DX,DY,DZ,STRENGTH,ANGLE_DEG --env MAP.exr,STRENGTH --plane W,D,Z,GREY [--no-sun] [--samples 256]
+#
+# The scene is the manifest's, built the way Blender users build it: the model through Blender's glTF importer,
+# placed by the dataset's `world_from_source`; a Sun lamp (Strength, Angle) whose −Z travels along DIR; the map
+# in an Environment Texture node at Background Strength; a Lambertian ground (Diffuse BSDF) that casts no shadow
+# (vvgen's plane receives only); Standard view transform, transparent film, no denoising. Frame f of the dataset
+# is Blender frame f (the importer puts t = 0 at frame 0).
+import argparse
+import json
+import os
+import sys
+
+import bpy
+import numpy as np
+from mathutils import Matrix, Vector
+
+if "bool" not in np.__dict__:  # Blender 3.4's glTF importer with numpy ≥ 1.24
+    np.bool = bool
+
+
+def floats(s):
+    return [float(v) for v in s.split(",")]
+
+
+def args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    p = argparse.ArgumentParser()
+    p.add_argument("--model", required=True)
+    p.add_argument("--dataset", required=True)
+    p.add_argument("--out", required=True)
+    p.add_argument("--sun", type=floats, required=True)
+    p.add_argument("--env", required=True)
+    p.add_argument("--plane", type=floats, required=True)
+    p.add_argument("--no-sun", action="store_true")
+    p.add_argument("--samples", type=int, default=256)
+    p.add_argument("--fps", type=float, default=24.0)
+    p.add_argument("--images", default="", help="split/view/frame,… (default: every image)")
+    return p.parse_args(argv)
+
+
+def main():
+    a = args()
+    meta = json.load(open(os.path.join(a.dataset, "vvgen", "dataset.json")))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps = int(round(a.fps))
+    bpy.ops.import_scene.gltf(filepath=a.model)
+    # glTF (x, y, z) arrives as Blender (x, -z, y); the dataset's matrix maps glTF coordinates to its world.
+    to_blender = Matrix(((1, 0, 0, 0), (0, 0, -1, 0), (0, 1, 0, 0), (0, 0, 0, 1)))
+    source = next(s for s in meta["sources"] if s["name"] != "ground")
+    root = bpy.data.objects.new("vvgen_world", None)
+    scene.collection.objects.link(root)
+    root.matrix_world = Matrix(source["world_from_source"]) @ to_blender.inverted()
+    for o in list(scene.objects):
+        if o.parent is None and o is not root:
+            o.parent = root
+
+    # The ground: Lambertian, receives shadows, casts none.
+    w, d, z, grey = a.plane
+    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 0.0, z))
+    plane = bpy.context.active_object
+    plane.scale = (w, d, 1.0)
+    plane.visible_shadow = False
+    mat = bpy.data.materials.new("ground")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (grey, grey, grey, 1.0)
+    diffuse.inputs["Roughness"].default_value = 0.0
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
+    plane.data.materials.append(mat)
+
+    if not a.no_sun:
+        dx, dy, dz, strength, angle = a.sun
+        sun = bpy.data.lights.new("sun", "SUN")
+        sun.energy = strength
+        sun.angle = angle * 3.141592653589793 / 180.0
+        obj = bpy.data.objects.new("sun", sun)
+        obj.rotation_euler = Vector((dx, dy, dz)).to_track_quat("-Z", "Y").to_euler()
+        scene.collection.objects.link(obj)
+
+    env_path, env_strength = a.env.split(",")
+    world = bpy.data.worlds.new("world")
+    scene.world = world
+    world.use_nodes = True
+    wn = world.node_tree
+    tex = wn.nodes.new("ShaderNodeTexEnvironment")
+    tex.image = bpy.data.images.load(os.path.abspath(env_path))
+    bg = wn.nodes["Background"]
+    bg.inputs["Strength"].default_value = float(env_strength)
+    wn.links.new(tex.outputs["Color"], bg.inputs["Color"])
+
+    cam = meta["camera"]
+    r = scene.render
+    r.engine = "CYCLES"
+    scene.cycles.samples = a.samples
+    scene.cycles.use_denoising = False
+    scene.cycles.device = "CPU"
+    r.resolution_x, r.resolution_y = cam["w"], cam["h"]
+    r.resolution_percentage = 100
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    r.dither_intensity = 0.0
+    r.film_transparent = True
+    r.image_settings.file_format = "PNG"
+    r.image_settings.color_mode = "RGBA"
+    data = bpy.data.cameras.new("vvgen_cam")
+    data.sensor_fit = "HORIZONTAL"
+    data.sensor_width = 36.0
+    data.lens = cam["fl_x"] * 36.0 / cam["w"]
+    data.shift_x = (cam["w"] / 2 - cam["cx"]) / cam["w"]
+    data.shift_y = (cam["cy"] - cam["h"] / 2) / cam["w"]
+    data.clip_start, data.clip_end = cam["near"], cam["far"]
+    obj = bpy.data.objects.new("vvgen_cam", data)
+    scene.collection.objects.link(obj)
+    scene.camera = obj
+
+    wanted = set(a.images.split(",")) if a.images else None
+    os.makedirs(a.out, exist_ok=True)
+    for im in meta["images"]:
+        name = f'{im["split"]}/{im["view"]}/{im["frame"]}'
+        if wanted is not None and name not in wanted:
+            continue
+        scene.frame_set(im["frame"])
+        obj.matrix_world = Matrix(im["c2w"])
+        r.filepath = os.path.join(a.out, im["files"]["rgba"])
+        bpy.ops.render.render(write_still=True)
+        print("rendered", name, flush=True)
+
+
+main()
