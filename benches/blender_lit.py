@@ -37,6 +37,7 @@ def args():
     p.add_argument("--plane", type=floats, required=True)
     p.add_argument("--no-sun", action="store_true")
     p.add_argument("--samples", type=int, default=256)
+    p.add_argument("--direct", action="store_true", help="direct light only (no bounces): a diagnostic")
     p.add_argument("--fps", type=float, default=24.0)
     p.add_argument("--images", default="", help="split/view/frame,… (default: every image)")
     return p.parse_args(argv)
@@ -102,6 +103,8 @@ def main():
     scene.cycles.samples = a.samples
     scene.cycles.use_denoising = False
     scene.cycles.device = "CPU"
+    if a.direct:
+        scene.cycles.max_bounces = 0
     r.resolution_x, r.resolution_y = cam["w"], cam["h"]
     r.resolution_percentage = 100
     scene.view_settings.view_transform = "Standard"

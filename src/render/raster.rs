@@ -399,7 +399,14 @@ pub struct SampleTile {
     pub normal: Vec<Vec3>,
     /// Object id + 1, 0 where empty.
     pub object: Vec<u32>,
+    /// Lit shading, deferred: the triangle at each sample ([`NO_TRI`] where none, or where a splat won) and its
+    /// perspective-correct barycentrics there. Empty unless the render is lit.
+    tri: Vec<u32>,
+    bary: Vec<[f32; 3]>,
 }
+
+/// No triangle at a sample (deferred lit shading).
+const NO_TRI: u32 = u32::MAX;
 
 impl SampleTile {
     /// An empty tile with room for `rect`.
@@ -413,9 +420,20 @@ impl SampleTile {
             depth: Vec::new(),
             normal: Vec::new(),
             object: Vec::new(),
+            tri: Vec::new(),
+            bary: Vec::new(),
         };
         t.reset(rect);
         t
+    }
+
+    /// Empties the deferred-shading buffers for the current rect (lit renders only).
+    fn reset_deferred(&mut self) {
+        let n = (self.w * self.h) as usize;
+        self.tri.clear();
+        self.tri.resize(n, NO_TRI);
+        self.bary.clear();
+        self.bary.resize(n, [0.0; 3]);
     }
 
     /// Empties the tile and moves it to `rect` (keeping its allocations).
@@ -454,6 +472,8 @@ pub struct Lit<'a> {
     pub c2w: Mat4,
     /// The camera centre.
     pub eye: Vec3,
+    /// Samples per pixel side: shading runs once per pixel and triangle.
+    pub per_side: i64,
 }
 
 /// A rectangle of samples.
@@ -495,6 +515,9 @@ pub fn raster_tile(
     let Rect { x0, y0, w, h } = rect;
     let (near, far) = (proj.near, proj.far);
     t.reset(rect);
+    if shade.lit.is_some() {
+        t.reset_deferred();
+    }
     for ti in tris.tile(tile) {
         let tri = tris.get(ti);
         let (bx0, by0) = (tri.bbox[0].max(x0), tri.bbox[1].max(y0));
@@ -515,9 +538,9 @@ pub fn raster_tile(
         let inv_area = 1.0 / tri.area as f32;
         let mat = &scene.materials[tri.material as usize];
         let tex = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
-        let lit = shade.lit.map(|l| (l, LitMaterial::of(mat, &scene.textures)));
-        // Only textured or lit shading reads the uv: unlit untextured surfaces skip interpolating it.
-        let wants_uv = tex.is_some() || lit.is_some();
+        let lit = shade.lit.is_some();
+        // Only a texture reads the uv here (lit shading interpolates its own, deferred).
+        let wants_uv = tex.is_some();
         for sy in by0..=by1 {
             let mut wgt = row;
             for i in 0..3 {
@@ -563,41 +586,22 @@ pub fn raster_tile(
                         nrm = -nrm;
                     }
                 }
+                if lit {
+                    // Deferred: shaded once per pixel and triangle when every triangle is drawn ([`shade_lit`]).
+                    t.color[i] = albedo.truncate().extend(1.0);
+                    t.depth[i] = z;
+                    t.normal[i] = nrm;
+                    t.object[i] = tri.object + 1;
+                    t.tri[i] = ti;
+                    t.bary[i] = k;
+                    continue;
+                }
                 let mut rgb = albedo.truncate();
                 if let Some((ambient, lights)) = &shade.lambert {
                     let sum: f32 = lights.iter().map(|(l, k)| k * nrm.dot(*l).max(0.0)).sum();
                     rgb *= ambient + sum;
                 }
-                let mut emission = mat.emissive;
-                if let Some((l, m)) = &lit {
-                    let (dx, dy) = footprint();
-                    let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
-                    // Back to the world: the sample's view-space point at depth z.
-                    let (sx, sy) =
-                        ((sx as f32 + 0.5 - proj.f[2]) / proj.f[0], (sy as f32 + 0.5 - proj.f[3]) / proj.f[1]);
-                    let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
-                    let v = (l.eye - p).normalize_or_zero();
-                    let mut surface =
-                        Surface { base: rgb, metallic: mat.metallic, roughness: mat.roughness, specular: mat.specular };
-                    if let Some(mr) = sample(m.metallic_roughness) {
-                        surface.roughness *= mr.y;
-                        surface.metallic *= mr.z;
-                    }
-                    let ao = m
-                        .occlusion
-                        .map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
-                    let vis = tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2];
-                    let tangent = || tri.tangent[0] * k[0] + tri.tangent[1] * k[1] + tri.tangent[2] * k[2];
-                    let n = match m.normal {
-                        Some((r, t, scale)) => {
-                            normal_mapped(nrm, tri.back, tangent(), t.sample_footprint(&r, uv, dx, dy), scale)
-                        }
-                        None => nrm,
-                    };
-                    rgb = l.light.shade(p, n, v, &surface, ao, vis);
-                    emission *= sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
-                }
-                rgb += emission;
+                rgb += mat.emissive;
                 t.color[i] = rgb.extend(1.0);
                 t.depth[i] = z;
                 t.normal[i] = nrm;
@@ -605,21 +609,102 @@ pub fn raster_tile(
             }
         }
     }
-    let Some((splats, layer)) = splats else { return };
-    for sy in y0..y0 + h {
-        let row = ((sy - layer.y0) * layer.w) as usize;
-        for sx in x0..x0 + w {
-            let (i, j) = (((sy - y0) * w + (sx - x0)) as usize, row + sx as usize);
-            if layer.depth[j] < t.depth[i] {
-                // Points carry their own colour: unlit.
-                let (color, normal, object) = splats.attributes(layer, j);
-                t.color[i] = color.truncate().extend(1.0);
-                t.depth[i] = layer.depth[j];
-                t.normal[i] = normal;
-                t.object[i] = object + 1;
+    if let Some((splats, layer)) = splats {
+        for sy in y0..y0 + h {
+            let row = ((sy - layer.y0) * layer.w) as usize;
+            for sx in x0..x0 + w {
+                let (i, j) = (((sy - y0) * w + (sx - x0)) as usize, row + sx as usize);
+                if layer.depth[j] < t.depth[i] {
+                    // Points carry their own colour: unlit.
+                    let (color, normal, object) = splats.attributes(layer, j);
+                    t.color[i] = color.truncate().extend(1.0);
+                    t.depth[i] = layer.depth[j];
+                    t.normal[i] = normal;
+                    t.object[i] = object + 1;
+                    if let Some(d) = t.tri.get_mut(i) {
+                        *d = NO_TRI;
+                    }
+                }
             }
         }
     }
+    if let Some(l) = &shade.lit {
+        shade_lit(scene, tris, l, rect, proj, t);
+    }
+}
+
+/// Lit shading of a drawn tile, deferred so that hidden surfaces cost nothing: once per pixel and triangle, at
+/// the pixel's first sample on that triangle, copied to its other samples there (lighting is smooth across a
+/// pixel; the albedo is filtered over the pixel's footprint already).
+fn shade_lit(scene: &PosedScene, tris: &Tris, l: &Lit, rect: Rect, proj: &Projection, t: &mut SampleTile) {
+    let Rect { x0, y0, w, h } = rect;
+    let k = l.per_side;
+    let mut done: [(u32, Vec4); 16] = [(NO_TRI, Vec4::ZERO); 16];
+    for py in 0..h / k {
+        for px in 0..w / k {
+            let mut n_done = 0;
+            for sy in 0..k {
+                for sx in 0..k {
+                    let (lx, ly) = (px * k + sx, py * k + sy);
+                    let i = (ly * w + lx) as usize;
+                    let id = t.tri[i];
+                    if id == NO_TRI {
+                        continue;
+                    }
+                    if let Some(&(_, c)) = done[..n_done].iter().find(|(d, _)| *d == id) {
+                        t.color[i] = c;
+                        continue;
+                    }
+                    let c = shade_sample(scene, tris.get(id), l, proj, (x0 + lx, y0 + ly), t, i);
+                    t.color[i] = c;
+                    if n_done < done.len() {
+                        done[n_done] = (id, c);
+                        n_done += 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Lit radiance at sample `i` of `t` (at sample coordinates `at`) on triangle `tri`.
+fn shade_sample(
+    scene: &PosedScene,
+    tri: &Tri,
+    l: &Lit,
+    proj: &Projection,
+    at: (i64, i64),
+    t: &SampleTile,
+    i: usize,
+) -> Vec4 {
+    let (k, z, nrm, albedo) = (t.bary[i], t.depth[i], t.normal[i], t.color[i].truncate());
+    let mat = &scene.materials[tri.material as usize];
+    let m = LitMaterial::of(mat, &scene.textures);
+    let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
+    // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
+    let (dx, dy) = ((tri.duv_step[0] - uv * tri.ds_step[0]) * z, (tri.duv_step[1] - uv * tri.ds_step[1]) * z);
+    let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
+    // Back to the world: the sample's view-space point at depth z.
+    let (sx, sy) = ((at.0 as f32 + 0.5 - proj.f[2]) / proj.f[0], (at.1 as f32 + 0.5 - proj.f[3]) / proj.f[1]);
+    let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
+    let v = (l.eye - p).normalize_or_zero();
+    let mut surface =
+        Surface { base: albedo, metallic: mat.metallic, roughness: mat.roughness, specular: mat.specular };
+    if let Some(mr) = sample(m.metallic_roughness) {
+        surface.roughness *= mr.y;
+        surface.metallic *= mr.z;
+    }
+    let ao = m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
+    let vis = tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2];
+    let n = match m.normal {
+        Some((r, tex, scale)) => {
+            let tangent = tri.tangent[0] * k[0] + tri.tangent[1] * k[1] + tri.tangent[2] * k[2];
+            normal_mapped(nrm, tri.back, tangent, tex.sample_footprint(&r, uv, dx, dy), scale)
+        }
+        None => nrm,
+    };
+    let emission = mat.emissive * sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
+    (l.light.shade(p, n, v, &surface, ao, vis) + emission).extend(1.0)
 }
 
 /// The camera's backward axis in world space (the head light's direction toward the light).

@@ -381,3 +381,35 @@ fn lit_point_colours_bake_the_lighting_and_its_shadows_and_are_keyed_by_it() {
     assert_eq!(moved.ran(Kind::PointFrame), 2, "two frames of the baked output");
     assert_eq!(moved.ran(Kind::RenderPass), 4);
 }
+
+#[test]
+fn a_ground_plane_lights_what_stands_on_it_from_below() {
+    // A sky of radiance 1 above the horizon, black below. Over a 0.8 ground, a white sphere's underside faces
+    // the ground, which reflects L = 0.8·π/π = 0.8: a face looking straight down receives E = π·0.8 and shows
+    // 0.8 (sRGB 231). Without the ground it faces the black half of the map.
+    let (w, h) = (64u32, 32u32);
+    let texels = (0..h).flat_map(|y| (0..w).map(move |_| Vec3::splat(if y < h / 2 { 1.0 } else { 0.0 }))).collect();
+    let sky = EnvMap { width: w, height: h, texels };
+    let plane = vvgen::manifest::source::Plane { size: [6.0, 6.0], color: [0.8; 3], z: None };
+    let mut scene = vvgen::scene::source::ground(&plane, 0.0);
+    let ball = sphere(0.4, Vec3::new(0.0, 0.0, 1.0), lambert(1.0));
+    let mut mats = (*scene.materials).clone();
+    mats.extend(ball.materials.iter().cloned());
+    let mut prim = ball.primitives[0].clone();
+    prim.material = 1;
+    prim.object = 1;
+    scene.primitives.push(prim);
+    scene.materials = Arc::new(mats);
+    // From low beside the ball, looking up at its underside: the point whose normal leans 15° off straight down.
+    let c = cam(96, 300.0, Camera::look_at(Vec3::new(2.0, 0.0, 0.35), Vec3::new(0.0, 0.0, 0.75), Vec3::Z));
+    let n = Vec3::new(15f32.to_radians().sin(), 0.0, -15f32.to_radians().cos());
+    let q = c.c2w.inverse().transform_point3((Vec3::new(0.0, 0.0, 1.0) + n * 0.4).as_dvec3());
+    let (x, y) = ((c.cx + c.fx * q.x / -q.z) as u32, (c.cy - c.fy * q.y / -q.z) as u32);
+    let grounded = rgb(&lit(&scene, &c, sky.clone(), 0.0, false, &[]), x, y);
+    let alone = ball;
+    let floating = rgb(&lit(&alone, &c, sky, 0.0, false, &[]), x, y);
+    assert_eq!((grounded[3], floating[3]), (255, 255), "the point is on the ball");
+    // π·0.8·(1 + cos 15°)/2 from the ground and a sliver of sky: about 0.8 linear.
+    assert!((215..=240).contains(&grounded[0]), "lit from the ground: {grounded:?}");
+    assert!(floating[0] < 90, "no ground, nothing from below: {floating:?}");
+}

@@ -15,7 +15,7 @@ pub const MAX_SIDE: u32 = 16384;
 pub const LEVELS: usize = 6;
 
 /// Version of the prefiltered data's bytes: bump when prefiltering changes.
-pub const SALT: &str = "environment 1";
+pub const SALT: &str = "environment 2";
 
 /// What can go wrong reading an environment map.
 #[derive(Debug, thiserror::Error)]
@@ -231,6 +231,9 @@ fn row_solid_angle(y: u32, h: u32) -> f32 {
 pub struct Prefiltered {
     /// Irradiance spherical harmonics (bands 0–2, cosine-convolved): E(n) = Σ sh[i]·Yᵢ(n).
     pub sh: [Vec3; 9],
+    /// The same for the sky alone (the map above the horizon, black below): what a point above a ground plane
+    /// receives from the map, the ground hiding the rest.
+    pub sky: [Vec3; 9],
     /// Radiance convolved with the GGX lobe of roughness `i / (LEVELS − 1)`, level i.
     pub levels: Vec<EnvMap>,
 }
@@ -269,33 +272,40 @@ pub fn prefilter(map: &EnvMap) -> Prefiltered {
     // SUB sub-rows with their exact band areas (the midpoint rule over whole rows leaves a residue in the
     // higher bands: a uniform map would light a sideways face 0.03 % darker than an upward one).
     const SUB: u32 = 4;
-    let rows: Vec<[Vec3; 9]> = (0..map.height)
+    // The sky's own SH keeps the sub-rows above the horizon (t < ½ is z > 0).
+    let rows: Vec<([Vec3; 9], [Vec3; 9])> = (0..map.height)
         .into_par_iter()
         .map(|y| {
-            let mut acc = [Vec3::ZERO; 9];
+            let (mut acc, mut sky) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9]);
             for k in 0..SUB {
                 let (rows, sub) = (map.height * SUB, y * SUB + k);
                 let dw = row_solid_angle(sub, rows) * 2.0 * PI / map.width as f32;
                 let t = (sub as f32 + 0.5) / rows as f32;
+                let above = t < 0.5;
                 for x in 0..map.width {
                     let d = uv_to_dir(Vec2::new((x as f32 + 0.5) / map.width as f32, t));
                     let l = map.texels[(y * map.width + x) as usize] * dw;
-                    for (a, b) in acc.iter_mut().zip(sh_basis(d)) {
+                    for ((a, s), b) in acc.iter_mut().zip(sky.iter_mut()).zip(sh_basis(d)) {
                         *a += l * b;
+                        if above {
+                            *s += l * b;
+                        }
                     }
                 }
             }
-            acc
+            (acc, sky)
         })
         .collect();
-    let mut sh = [Vec3::ZERO; 9];
-    for r in &rows {
-        for (s, v) in sh.iter_mut().zip(r) {
+    let (mut sh, mut sky) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9]);
+    for (r, q) in &rows {
+        for ((s, v), (k, w)) in sh.iter_mut().zip(r).zip(sky.iter_mut().zip(q)) {
             *s += *v;
+            *k += *w;
         }
     }
-    for (s, b) in sh.iter_mut().zip(BAND) {
+    for ((s, k), b) in sh.iter_mut().zip(sky.iter_mut()).zip(BAND) {
         *s *= b;
+        *k *= b;
     }
     // A pyramid of the map to read the lobes from (filtered importance sampling: wide, unlikely samples read
     // coarse levels, so few samples suffice without speckle from a small bright sun).
@@ -325,7 +335,7 @@ pub fn prefilter(map: &EnvMap) -> Prefiltered {
             EnvMap { width: w, height: h, texels }
         })
         .collect();
-    Prefiltered { sh, levels }
+    Prefiltered { sh, sky, levels }
 }
 
 /// The pyramid level nearest `width` texels across (not finer).
@@ -373,6 +383,13 @@ impl Prefiltered {
         e.max(Vec3::ZERO)
     }
 
+    /// Irradiance on a surface of unit normal `n` (map frame) from the sky alone (see [`Prefiltered::sky`]).
+    #[inline]
+    pub fn sky_irradiance(&self, n: Vec3) -> Vec3 {
+        let e = self.sky.iter().zip(sh_basis(n)).fold(Vec3::ZERO, |e, (c, y)| e + *c * y);
+        e.max(Vec3::ZERO)
+    }
+
     /// GGX-prefiltered radiance around direction `r` for perceptual `roughness`.
     #[inline]
     pub fn specular(&self, r: Vec3, roughness: f32) -> Vec3 {
@@ -386,8 +403,8 @@ impl Prefiltered {
     /// The bytes of the cache's blob: SH, then each level's size and texels, little-endian f32.
     pub fn encode(&self) -> Vec<u8> {
         let mut out = Vec::new();
-        out.extend_from_slice(b"VVENV1\0\0");
-        for c in &self.sh {
+        out.extend_from_slice(b"VVENV2\0\0");
+        for c in self.sh.iter().chain(&self.sky) {
             for v in c.to_array() {
                 out.extend_from_slice(&v.to_le_bytes());
             }
@@ -408,11 +425,11 @@ impl Prefiltered {
     /// Reads [`Prefiltered::encode`]'s bytes; a damaged blob is an error, not a panic.
     pub fn decode(bytes: &[u8]) -> Result<Prefiltered, Error> {
         let mut r = Reader { bytes, at: 0 };
-        if r.take(8)? != b"VVENV1\0\0" {
+        if r.take(8)? != b"VVENV2\0\0" {
             return Err(Error::Damaged("bad magic"));
         }
-        let mut sh = [Vec3::ZERO; 9];
-        for c in &mut sh {
+        let (mut sh, mut sky) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9]);
+        for c in sh.iter_mut().chain(sky.iter_mut()) {
             *c = r.vec3()?;
         }
         let n = r.u32()? as usize;
@@ -435,7 +452,7 @@ impl Prefiltered {
         if r.at != bytes.len() {
             return Err(Error::Damaged("trailing bytes"));
         }
-        Ok(Prefiltered { sh, levels })
+        Ok(Prefiltered { sh, sky, levels })
     }
 }
 

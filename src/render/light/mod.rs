@@ -52,12 +52,43 @@ pub const BAKE_SALT: &str = "bake 1";
 pub struct FrameLight {
     lights: Vec<(Light, Vec<ShadowMap>)>,
     env: EnvLight,
+    /// The ground plane, when the scene has one: its height and the radiance it reflects (see [`Ground`]).
+    ground: Option<Ground>,
     /// The environment's occlusion: directions over the sphere, each with its weight (the map's brightness there)
     /// and a parallel shadow map from it. Empty when nothing casts shadows.
     occlusion: Vec<(Vec3, f32, ShadowMap)>,
     /// Per primitive, per vertex: the fraction of the environment's light (weighted by where it comes from and
     /// by the vertex normal) that no caster blocks. Empty for point primitives.
     pub vertex_visibility: Vec<Vec<f32>>,
+}
+
+/// A ground plane's first bounce: a receiving-only diffuse plane (the `plane` source) stands in for the map
+/// below the horizon, as it does in a path tracer. Points above it receive the sky from the map and, from below,
+/// the plane's outgoing radiance (its albedo under the sky and the suns, unshadowed), as from an infinite plane:
+/// E(n) = π·L·(1 − n_z)/2. Point and spot lights do not enter the bounce.
+#[derive(Debug, Clone, Copy)]
+struct Ground {
+    z: f32,
+    radiance: Vec3,
+}
+
+impl Ground {
+    /// The scene's ground: the first triangles whose material casts no shadow (only the plane source's does).
+    fn find(scene: &PosedScene, lights: &[&Light], env: &EnvLight) -> Option<Ground> {
+        let prim = scene.primitives.iter().find(|p| {
+            p.kind == PrimKind::Triangles
+                && !p.positions.is_empty()
+                && scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows)
+        })?;
+        let albedo = scene.materials[prim.material as usize].base_color.truncate();
+        let mut e = env.prefiltered.sky_irradiance(Vec3::Z) * env.strength;
+        for l in lights {
+            if let LightKind::Sun { direction, .. } = l.kind {
+                e += l.color * (l.intensity * (-direction.z).max(0.0));
+            }
+        }
+        Some(Ground { z: prim.positions[0].z, radiance: albedo * e / PI })
+    }
 }
 
 /// Bounds of the geometry that casts shadows.
@@ -113,7 +144,8 @@ impl FrameLight {
             Some(b) => occlusion_maps(scene, &env, b),
             None => Vec::new(),
         };
-        let mut light = FrameLight { lights, env, occlusion, vertex_visibility: Vec::new() };
+        let ground = Ground::find(scene, &all, &env);
+        let mut light = FrameLight { lights, env, ground, occlusion, vertex_visibility: Vec::new() };
         light.vertex_visibility = scene
             .primitives
             .iter()
@@ -201,9 +233,17 @@ impl FrameLight {
         let ab = brdf::dfg(nv, s.roughness);
         let w = s.specular_weight();
         let spec_f = (s.f0() * ab.x + Vec3::splat(ab.y)) * w;
-        let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (e.prefiltered.irradiance(e.rotation * n) / PI);
-        let specular = spec_f * e.prefiltered.specular(e.rotation * r, s.roughness);
-        out + (diffuse + specular) * (e.strength * ao * env_vis)
+        let irradiance = match self.ground {
+            // On or above the ground (within a millimetre: the plane itself sees the sky alone): the sky from the
+            // map, the ground's bounce from below.
+            Some(g) if p.z >= g.z - 1e-3 => {
+                e.prefiltered.sky_irradiance(e.rotation * n) * e.strength + g.radiance * (PI * 0.5 * (1.0 - n.z))
+            }
+            _ => e.prefiltered.irradiance(e.rotation * n) * e.strength,
+        };
+        let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (irradiance / PI);
+        let specular = spec_f * e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength;
+        out + (diffuse + specular) * (ao * env_vis)
     }
 
     /// The visible background's radiance along world direction `d`, when the environment is visible.
