@@ -13,6 +13,7 @@ import argparse
 import json
 import os
 import sys
+import time
 
 import bpy
 import numpy as np
@@ -38,6 +39,7 @@ def args():
     p.add_argument("--no-sun", action="store_true")
     p.add_argument("--samples", type=int, default=256)
     p.add_argument("--direct", action="store_true", help="direct light only (no bounces): a diagnostic")
+    p.add_argument("--engine", default="cycles", choices=["cycles", "eevee"], help="eevee: for timing")
     p.add_argument("--fps", type=float, default=24.0)
     p.add_argument("--images", default="", help="split/view/frame,… (default: every image)")
     return p.parse_args(argv)
@@ -99,8 +101,11 @@ def main():
 
     cam = meta["camera"]
     r = scene.render
-    r.engine = "CYCLES"
+    r.engine = "CYCLES" if a.engine == "cycles" else "BLENDER_EEVEE"
     scene.cycles.samples = a.samples
+    scene.eevee.taa_render_samples = a.samples
+    scene.eevee.use_soft_shadows = True
+    scene.eevee.use_gtao = True
     scene.cycles.use_denoising = False
     scene.cycles.device = "CPU"
     if a.direct:
@@ -133,8 +138,9 @@ def main():
         scene.frame_set(im["frame"])
         obj.matrix_world = Matrix(im["c2w"])
         r.filepath = os.path.join(a.out, im["files"]["rgba"])
+        t0 = time.perf_counter()
         bpy.ops.render.render(write_still=True)
-        print("rendered", name, flush=True)
+        print(f"rendered {name} in {time.perf_counter() - t0:.3f} s", flush=True)
 
 
 main()

@@ -336,9 +336,9 @@ fn log2(x: f32) -> f32 {
 }
 
 /// `x.floor() as i64` without the libm call baseline x86-64 makes of `floor` (no SSE4.1 `roundss`); this is in
-/// the innermost loop of texturing. Saturates like `as` for huge values.
+/// the innermost loops of texturing and of shadow and environment lookups. Saturates like `as` for huge values.
 #[inline]
-fn floor(x: f32) -> i64 {
+pub fn floor(x: f32) -> i64 {
     let t = x as i64;
     // Saturating: below -2^63, `t` is already i64::MIN and must stay there.
     t.saturating_sub(i64::from((t as f32) > x))

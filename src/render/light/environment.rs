@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
+use crate::scene::material::floor;
+
 /// Largest map side read (a 16k map is 1.6 GB of f32 texels; environment maps are 1k–8k wide).
 pub const MAX_SIDE: u32 = 16384;
 
@@ -183,9 +185,8 @@ impl EnvMap {
         let (w, h) = (self.width as i64, self.height as i64);
         let fx = uv.x * w as f32 - 0.5;
         let fy = (uv.y * h as f32 - 0.5).clamp(0.0, (h - 1) as f32);
-        let (x0, y0) = (fx.floor(), fy.floor());
-        let (tx, ty) = (fx - x0, fy - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
+        let (x0, y0) = (floor(fx), floor(fy));
+        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
         let at = |x: i64, y: i64| self.texels[(y.clamp(0, h - 1) * w + x.rem_euclid(w)) as usize];
         let top = at(x0, y0).lerp(at(x0 + 1, y0), tx);
         let bottom = at(x0, y0 + 1).lerp(at(x0 + 1, y0 + 1), tx);

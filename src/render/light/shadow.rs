@@ -6,6 +6,7 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
+use crate::scene::material::floor;
 use crate::scene::{PosedScene, PrimKind};
 
 /// How a map projects.
@@ -184,7 +185,7 @@ impl ShadowMap {
         let search = widest.clamp(1.0, 24.0);
         let (mut sum, mut count) = (0.0, 0);
         for o in grid(search) {
-            let d = self.at((q.x + o.x).floor() as i64, (q.y + o.y).floor() as i64);
+            let d = self.at(floor(q.x + o.x), floor(q.y + o.y));
             if d < recv {
                 sum += d;
                 count += 1;
@@ -215,9 +216,8 @@ impl ShadowMap {
     #[inline]
     fn pcf(&self, q: Vec3, recv: f32) -> f32 {
         let (fx, fy) = (q.x - 0.5, q.y - 0.5);
-        let (x0, y0) = (fx.floor(), fy.floor());
-        let (tx, ty) = (fx - x0, fy - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
+        let (x0, y0) = (floor(fx), floor(fy));
+        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
         let lit = |x: i64, y: i64| if self.at(x, y) < recv { 0.0 } else { 1.0 };
         let top = lit(x0, y0) + (lit(x0 + 1, y0) - lit(x0, y0)) * tx;
         let bottom = lit(x0, y0 + 1) + (lit(x0 + 1, y0 + 1) - lit(x0, y0 + 1)) * tx;

@@ -4,14 +4,15 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use base64::Engine as _;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::mesh::Mode;
 
 use super::accessor::{read_f32, read_u32};
 use super::anim::{Animation, Channel, Interp, Sampler, Target};
+use super::materials::{linear_data_textures, material};
+use super::uri::fetch_uri;
 use crate::scene::light::{FileLight, GltfLightKind};
-use crate::scene::material::{AlphaMode, Material, Texture, TextureRef, Wrap};
+use crate::scene::material::{Material, Texture};
 use crate::scene::posed::PrimKind;
 
 /// Extensions vvgen understands; a file that *requires* any other is refused.
@@ -405,138 +406,6 @@ fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
         other => other,
     };
     parsed.map_err(|e| e.to_string())
-}
-
-/// Reads a buffer or image URI: `data:` (base64) or a file relative to the glTF that stays inside its folder.
-fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
-    if let Some(rest) = uri.strip_prefix("data:") {
-        let (meta, data) = rest.split_once(',').ok_or("malformed data: URI")?;
-        if !meta.ends_with(";base64") {
-            return Err("data: URI is not base64".into());
-        }
-        return base64::engine::general_purpose::STANDARD
-            .decode(data.trim())
-            .map_err(|e| format!("bad base64 in data: URI: {e}"));
-    }
-    let decoded = percent_decode(uri);
-    let rel = Path::new(&decoded);
-    if rel.is_absolute() || decoded.contains("://") {
-        return Err(format!("URI `{uri}` points outside the glTF's folder"));
-    }
-    // Containment is judged on the resolved paths: `sub/../x.bin` stays inside, a symlink out of the folder
-    // does not.
-    let full = dir.join(rel);
-    let (inside, target) = (std::fs::canonicalize(dir), std::fs::canonicalize(&full));
-    match (inside, target) {
-        (Ok(inside), Ok(target)) if target.starts_with(&inside) => {}
-        (Ok(_), Ok(_)) => return Err(format!("URI `{uri}` points outside the glTF's folder")),
-        (_, Err(e)) => return Err(format!("cannot read `{}`: {e}", full.display())),
-        (Err(e), _) => return Err(format!("cannot read the folder `{}`: {e}", dir.display())),
-    }
-    std::fs::read(&full).map_err(|e| format!("cannot read `{}`: {e}", full.display()))
-}
-
-fn percent_decode(s: &str) -> String {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let Some(v) = std::str::from_utf8(&b[i + 1..i + 3]).ok().and_then(|h| u8::from_str_radix(h, 16).ok()) {
-                out.push(v);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(b[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
-
-fn material(m: &gltf::Material<'_>) -> Material {
-    let pbr = m.pbr_metallic_roughness();
-    let [r, g, b, a] = pbr.base_color_factor();
-    let strength = m.emissive_strength().unwrap_or(1.0);
-    Material {
-        base_color: Vec4::new(r, g, b, a),
-        base_color_texture: pbr
-            .base_color_texture()
-            .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
-        alpha_mode: match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
-            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
-        },
-        alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
-        double_sided: m.double_sided(),
-        emissive: Vec3::from(m.emissive_factor()) * strength,
-        emissive_texture: m.emissive_texture().map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
-        metallic: pbr.metallic_factor(),
-        roughness: pbr.roughness_factor(),
-        metallic_roughness_texture: pbr
-            .metallic_roughness_texture()
-            .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
-        occlusion_texture: m
-            .occlusion_texture()
-            .map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.strength())),
-        normal_texture: m.normal_texture().map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.scale())),
-        specular: 1.0,
-        casts_shadows: true,
-    }
-}
-
-/// A material's use of `texture`, with its sampler and `KHR_texture_transform`.
-fn texture_ref(
-    texture: &gltf::Texture<'_>,
-    tex_coord: u32,
-    transform: Option<gltf::texture::TextureTransform<'_>>,
-) -> TextureRef {
-    let s = texture.sampler();
-    let wrap = |w: gltf::texture::WrappingMode| match w {
-        gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
-        gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
-        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
-    };
-    let (mut tex_coord, mut map) = (tex_coord, None);
-    if let Some(t) = transform {
-        // uv' = T · R · S · uv, with R rotating by -rotation as the extension specifies.
-        let (sn, cs) = t.rotation().sin_cos();
-        let [sx, sy] = t.scale();
-        map = Some([Vec2::new(cs * sx, -sn * sx), Vec2::new(sn * sy, cs * sy), Vec2::from(t.offset())]);
-        if let Some(tc) = t.tex_coord() {
-            tex_coord = tc;
-        }
-    }
-    TextureRef {
-        texture: texture.index() as u32,
-        tex_coord,
-        wrap_s: wrap(s.wrap_s()),
-        wrap_t: wrap(s.wrap_t()),
-        nearest: s.mag_filter() == Some(gltf::texture::MagFilter::Nearest),
-        transform: map,
-    }
-}
-
-/// Gives every data texture (metallic-roughness, occlusion) a linear copy of its image: textures are decoded as
-/// sRGB colour, and a data texture read through the sRGB curve would be wrong. An image used both ways is copied.
-fn linear_data_textures(materials: &mut [Material], textures: &mut Vec<Texture>) {
-    let mut linear: std::collections::BTreeMap<u32, u32> = std::collections::BTreeMap::new();
-    for m in materials.iter_mut() {
-        for (r, srgb) in m.texture_refs_mut() {
-            if srgb {
-                continue;
-            }
-            if let Some(&copy) = linear.get(&r.texture) {
-                r.texture = copy;
-                continue;
-            }
-            let Some(t) = textures.get(r.texture as usize) else { continue };
-            textures.push(Texture::new(t.width, t.height, t.rgba.clone(), false));
-            linear.insert(r.texture, textures.len() as u32 - 1);
-            r.texture = textures.len() as u32 - 1;
-        }
-    }
 }
 
 fn vec3s(v: Vec<f32>) -> Vec<Vec3> {

@@ -3,8 +3,10 @@
 mod accessor;
 pub mod anim;
 pub mod load;
+mod materials;
 pub mod pose;
 mod tangents;
+mod uri;
 
 pub use load::{load, load_slice, GltfAsset};
 pub use pose::PoseScratch;

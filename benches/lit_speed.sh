@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Lit rendering speed (issue 16): CesiumMan on a ground plane at 800², 4 samples, a sun with 3° soft shadows and
+# the sunset map; 4 frames × 16 views, RGBA only, cold builds (fresh cache), lit and unlit alternating; then
+# Blender 3.4 Eevee and Cycles (16 samples) on two of the same cameras in the same run, per image.
+#
+#   benches/lit_speed.sh [WORK_DIR] [ROUNDS]
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/.." && pwd)
+work=${1:-/tmp/vvgen-lit-speed}
+rounds=${2:-2}
+mkdir -p "$work"
+(cd "$repo" && cargo build --release --quiet)
+vvgen=$repo/target/release/vvgen
+map=$repo/tests/data/hdri/sunset.exr
+man=$repo/tests/data/gltf/CesiumMan/CesiumMan.glb
+manifest() { # shading
+    local lit=""
+    if [ "$1" = pbr ]; then
+        lit="[environment]
+map = \"$map\"
+strength = 0.6
+[light.sun]
+kind = \"sun\"
+direction = [0.45, 0.35, -0.82]
+intensity = 2.5
+angle_deg = 3"
+    fi
+    cat <<TOML
+[dataset]
+name = "speed"
+out = "out-$1"
+cache = "cache-$1"
+preview = false
+[source.man]
+gltf = "$man"
+frames = { count = 4, fps = 24 }
+[source.ground]
+plane = { size = [3.0, 3.0], color = [0.5, 0.5, 0.5], z = -1.2 }
+[transform]
+up = "y"
+fit = { height = 2.4 }
+center = "bbox"
+[render]
+resolution = [800, 800]
+samples = 4
+shading = "$1"
+$lit
+[rig.hemi]
+kind = "hemisphere"
+[split.train]
+rig = "hemi"
+views = 16
+[output.d]
+writer = "dnerf"
+TOML
+}
+for s in pbr unlit; do manifest $s > "$work/$s.toml"; done
+for r in $(seq "$rounds"); do
+    for s in pbr unlit; do
+        rm -rf "$work/cache-$s" "$work/out-$s"
+        t0=$(date +%s.%N)
+        (cd "$work" && "$vvgen" build $s.toml > /dev/null 2>&1)
+        t1=$(date +%s.%N)
+        echo "vvgen $s: 64 images cold in $(echo "$t1 - $t0" | bc) s: $(echo "($t1 - $t0) * 1000 / 64" | bc) ms per image"
+    done
+done
+for engine in eevee cycles; do
+    blender -b -P "$repo/benches/blender_lit.py" -- --model "$man" --dataset "$work/out-pbr/speed_dnerf" \
+        --out "$work/$engine" --sun 0.45,0.35,-0.82,2.5,3 --env "$map,0.6" --plane 3,3,-1.2,0.5 --samples 16 \
+        --engine $engine --images train/0/0,train/1/0 2>&1 | grep -E "^rendered" | sed "s/^/$engine-16: /"
+done

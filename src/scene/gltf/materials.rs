@@ -1,0 +1,91 @@
+//! glTF materials as vvgen's: the metallic-roughness model's factors and textures, with their samplers and
+//! `KHR_texture_transform`; data textures (metallic-roughness, occlusion, normal) get linear copies.
+
+use glam::{Vec2, Vec3, Vec4};
+
+use crate::scene::material::{AlphaMode, Material, Texture, TextureRef, Wrap};
+
+pub(super) fn material(m: &gltf::Material<'_>) -> Material {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, a] = pbr.base_color_factor();
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    Material {
+        base_color: Vec4::new(r, g, b, a),
+        base_color_texture: pbr
+            .base_color_texture()
+            .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
+        alpha_mode: match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
+        double_sided: m.double_sided(),
+        emissive: Vec3::from(m.emissive_factor()) * strength,
+        emissive_texture: m.emissive_texture().map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
+        metallic: pbr.metallic_factor(),
+        roughness: pbr.roughness_factor(),
+        metallic_roughness_texture: pbr
+            .metallic_roughness_texture()
+            .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
+        occlusion_texture: m
+            .occlusion_texture()
+            .map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.strength())),
+        normal_texture: m.normal_texture().map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.scale())),
+        specular: 1.0,
+        casts_shadows: true,
+    }
+}
+
+/// A material's use of `texture`, with its sampler and `KHR_texture_transform`.
+fn texture_ref(
+    texture: &gltf::Texture<'_>,
+    tex_coord: u32,
+    transform: Option<gltf::texture::TextureTransform<'_>>,
+) -> TextureRef {
+    let s = texture.sampler();
+    let wrap = |w: gltf::texture::WrappingMode| match w {
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+    };
+    let (mut tex_coord, mut map) = (tex_coord, None);
+    if let Some(t) = transform {
+        // uv' = T · R · S · uv, with R rotating by -rotation as the extension specifies.
+        let (sn, cs) = t.rotation().sin_cos();
+        let [sx, sy] = t.scale();
+        map = Some([Vec2::new(cs * sx, -sn * sx), Vec2::new(sn * sy, cs * sy), Vec2::from(t.offset())]);
+        if let Some(tc) = t.tex_coord() {
+            tex_coord = tc;
+        }
+    }
+    TextureRef {
+        texture: texture.index() as u32,
+        tex_coord,
+        wrap_s: wrap(s.wrap_s()),
+        wrap_t: wrap(s.wrap_t()),
+        nearest: s.mag_filter() == Some(gltf::texture::MagFilter::Nearest),
+        transform: map,
+    }
+}
+
+/// Gives every data texture (metallic-roughness, occlusion) a linear copy of its image: textures are decoded as
+/// sRGB colour, and a data texture read through the sRGB curve would be wrong. An image used both ways is copied.
+pub(super) fn linear_data_textures(materials: &mut [Material], textures: &mut Vec<Texture>) {
+    let mut linear: std::collections::BTreeMap<u32, u32> = std::collections::BTreeMap::new();
+    for m in materials.iter_mut() {
+        for (r, srgb) in m.texture_refs_mut() {
+            if srgb {
+                continue;
+            }
+            if let Some(&copy) = linear.get(&r.texture) {
+                r.texture = copy;
+                continue;
+            }
+            let Some(t) = textures.get(r.texture as usize) else { continue };
+            textures.push(Texture::new(t.width, t.height, t.rgba.clone(), false));
+            linear.insert(r.texture, textures.len() as u32 - 1);
+            r.texture = textures.len() as u32 - 1;
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! A glTF's buffer and image URIs: `data:` (base64), or files beside the glTF that stay inside its folder.
+
+use std::path::Path;
+
+use base64::Engine as _;
+
+/// Reads a buffer or image URI: `data:` (base64) or a file relative to the glTF that stays inside its folder.
+pub(super) fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (meta, data) = rest.split_once(',').ok_or("malformed data: URI")?;
+        if !meta.ends_with(";base64") {
+            return Err("data: URI is not base64".into());
+        }
+        return base64::engine::general_purpose::STANDARD
+            .decode(data.trim())
+            .map_err(|e| format!("bad base64 in data: URI: {e}"));
+    }
+    let decoded = percent_decode(uri);
+    let rel = Path::new(&decoded);
+    if rel.is_absolute() || decoded.contains("://") {
+        return Err(format!("URI `{uri}` points outside the glTF's folder"));
+    }
+    // Containment is judged on the resolved paths: `sub/../x.bin` stays inside, a symlink out of the folder
+    // does not.
+    let full = dir.join(rel);
+    let (inside, target) = (std::fs::canonicalize(dir), std::fs::canonicalize(&full));
+    match (inside, target) {
+        (Ok(inside), Ok(target)) if target.starts_with(&inside) => {}
+        (Ok(_), Ok(_)) => return Err(format!("URI `{uri}` points outside the glTF's folder")),
+        (_, Err(e)) => return Err(format!("cannot read `{}`: {e}", full.display())),
+        (Err(e), _) => return Err(format!("cannot read the folder `{}`: {e}", dir.display())),
+    }
+    std::fs::read(&full).map_err(|e| format!("cannot read `{}`: {e}", full.display()))
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let Some(v) = std::str::from_utf8(&b[i + 1..i + 3]).ok().and_then(|h| u8::from_str_radix(h, 16).ok()) {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
