@@ -39,6 +39,7 @@ def args():
     p.add_argument("--no-sun", action="store_true")
     p.add_argument("--samples", type=int, default=256)
     p.add_argument("--direct", action="store_true", help="direct light only (no bounces): a diagnostic")
+    p.add_argument("--seed", type=int, default=0, help="Cycles' noise seed (two seeds give the reference's noise floor)")
     p.add_argument("--engine", default="cycles", choices=["cycles", "eevee"], help="eevee: for timing")
     p.add_argument("--fps", type=float, default=24.0)
     p.add_argument("--images", default="", help="split/view/frame,… (default: every image)")
@@ -103,6 +104,7 @@ def main():
     r = scene.render
     r.engine = "CYCLES" if a.engine == "cycles" else "BLENDER_EEVEE"
     scene.cycles.samples = a.samples
+    scene.cycles.seed = a.seed
     scene.eevee.taa_render_samples = a.samples
     scene.eevee.use_soft_shadows = True
     scene.eevee.use_gtao = True
