@@ -17,6 +17,9 @@ use crate::render::{DepthKind, RenderSettings, Shading, SplatShape, SplatSize};
 
 /// Version of the renderer's output: bump when a change moves rendered bytes.
 pub const RENDER_SALT: &str = "render 6";
+/// Version of lit shading (what only `pbr` renders and lit point colours read): bump when a change moves lit
+/// bytes only, so that unlit datasets keep their keys.
+pub const LIT_SALT: &str = "lit 2";
 /// Version of the point sampler's output.
 pub const SAMPLE_SALT: &str = "sample 2";
 /// How a cloud of a given size picks among a point cloud's own points (at most its share, keyed).
@@ -538,6 +541,7 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
 fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     use crate::render::light::{Light, LightKind};
     let crate::render::Lighting { lights, environment } = l;
+    w.str("lit shading", LIT_SALT);
     for Light { kind, color, intensity, shadows } in lights {
         let v = |a: glam::Vec3| [a.x as f64, a.y as f64, a.z as f64];
         match *kind {

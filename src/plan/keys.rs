@@ -66,6 +66,11 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     });
                     let geometry = posed.geometry_digest();
                     let mut parts: Vec<&[u8]> = vec![geometry.as_bytes(), m.as_bytes()];
+                    // Alpha BLEND surfaces have been composited in depth order since the renderer's "render 6"
+                    // (drawn as MASK before): frames with them re-render; others keep their keys.
+                    if posed.materials.iter().any(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend) {
+                        parts.push(b"alpha blend composited");
+                    }
                     // Tangents (posed for normal textures) are read by lit shading only.
                     let tangents = if lit { posed.tangents_digest() } else { None };
                     if let Some(t) = &tangents {

@@ -359,6 +359,8 @@ fn resolve(
         for px in 0..pw {
             let i = (py * out.width + x0 + px) as usize;
             let (mut sum, mut covered, mut depth, mut normal) = (Vec4::ZERO, 0u32, 0f32, Vec3::ZERO);
+            // Transparent (BLEND) samples have alpha under 1: their colours weigh by it.
+            let mut weighted = Vec3::ZERO;
             for sy in 0..k {
                 let row = ((py * k + sy) * st.w + px * k) as usize;
                 for j in row..row + k as usize {
@@ -368,6 +370,7 @@ fn resolve(
                     ids[covered as usize] = st.object[j];
                     covered += 1;
                     sum += st.color[j];
+                    weighted += st.color[j].truncate() * st.color[j].w;
                     depth += st.depth[j];
                     normal += st.normal[j];
                 }
@@ -378,10 +381,22 @@ fn resolve(
                 out.rgba[i * 4..i * 4 + 4].copy_from_slice(&px);
                 continue;
             }
-            let alpha = covered as f32 / total as f32;
-            let mut rgb = sum.truncate() / covered as f32;
-            // covered·255/total rounded half up, in integers.
-            let coverage = ((covered * 510 + total) / (2 * total)) as u8;
+            let (mut alpha, mut rgb, mut coverage);
+            if sum.w == covered as f32 {
+                // Opaque samples only (the sum of their alphas is exact).
+                alpha = covered as f32 / total as f32;
+                rgb = sum.truncate() / covered as f32;
+                // covered·255/total rounded half up, in integers.
+                coverage = ((covered * 510 + total) / (2 * total)) as u8;
+            } else {
+                alpha = sum.w / total as f32;
+                rgb = if sum.w > 0.0 { weighted / sum.w } else { Vec3::ZERO };
+                coverage = (alpha * 255.0 + 0.5) as u8;
+            }
+            if coverage == 0 {
+                // Nothing shows: a fully transparent surface over the background.
+                (alpha, rgb, coverage) = (0.0, Vec3::ZERO, 0);
+            }
             let mut a8 = coverage;
             if let Some(env) = env {
                 // The environment shows where the surface does not cover the pixel.

@@ -23,5 +23,6 @@ mod scene;
 mod schema;
 mod slurm;
 mod transform;
+mod transparency;
 mod video;
 mod writers;

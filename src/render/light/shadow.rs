@@ -177,8 +177,9 @@ impl ShadowMap {
         let q = self.project(p + n * (NORMAL_BIAS * texel));
         let bias = DEPTH_BIAS * self.texel_world(q.z);
         let recv = q.z - bias;
+        let slope = self.receiver_slope(n);
         if size <= 0.0 {
-            return self.pcf(q, recv);
+            return self.pcf(q, recv, slope);
         }
         // Blocker search over the widest penumbra this receiver could have.
         let widest = self.penumbra(recv, 0.0, size) / self.texel_world(q.z);
@@ -186,7 +187,7 @@ impl ShadowMap {
         let (mut sum, mut count) = (0.0, 0);
         for o in grid(search) {
             let d = self.at(floor(q.x + o.x), floor(q.y + o.y));
-            if d < recv {
+            if d < recv + slope.dot(o) {
                 sum += d;
                 count += 1;
             }
@@ -197,11 +198,24 @@ impl ShadowMap {
         let blocker = sum / count as f32;
         let radius = self.penumbra(recv, blocker, size) / self.texel_world(q.z) * 0.5;
         if radius <= 1.0 {
-            return self.pcf(q, recv);
+            return self.pcf(q, recv, slope);
         }
         let radius = radius.min(24.0);
-        let lit: f32 = grid(radius).map(|o| self.pcf(Vec3::new(q.x + o.x, q.y + o.y, q.z), recv)).sum();
+        let lit: f32 =
+            grid(radius).map(|o| self.pcf(Vec3::new(q.x + o.x, q.y + o.y, q.z), recv + slope.dot(o), slope)).sum();
         lit / 16.0
+    }
+
+    /// How the depth of the receiver's plane (normal `n`) changes per texel across an orthographic map: taps away
+    /// from the receiver compare against its plane there, not its depth at the centre, so a wide filter does not
+    /// shadow a surface with itself (a sphere's limb, a tilted plane). Clamped near grazing; zero for
+    /// perspective maps, whose filters stay narrow.
+    fn receiver_slope(&self, n: Vec3) -> Vec2 {
+        let Projection::Ortho { scale, .. } = self.projection else { return Vec2::ZERO };
+        let nl = self.view.transform_vector3(n);
+        let max = 4.0 / scale;
+        let nz = if nl.z.abs() < 1e-3 { 1e-3f32.copysign(nl.z) } else { nl.z };
+        (Vec2::new(nl.x, nl.y) / (nz * scale)).clamp(Vec2::splat(-max), Vec2::splat(max))
     }
 
     /// Width in world units of the penumbra at receiver depth `recv` behind a blocker at `blocker`.
@@ -212,13 +226,21 @@ impl ShadowMap {
         }
     }
 
-    /// 2×2 bilinear percentage-closer lookup at light-space `q` against receiver depth `recv`.
+    /// 2×2 bilinear percentage-closer lookup at light-space `q` against the receiver's depth `recv` there and its
+    /// plane's `slope` per texel.
     #[inline]
-    fn pcf(&self, q: Vec3, recv: f32) -> f32 {
+    fn pcf(&self, q: Vec3, recv: f32, slope: Vec2) -> f32 {
         let (fx, fy) = (q.x - 0.5, q.y - 0.5);
         let (x0, y0) = (floor(fx), floor(fy));
         let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
-        let lit = |x: i64, y: i64| if self.at(x, y) < recv { 0.0 } else { 1.0 };
+        let lit = |x: i64, y: i64| {
+            let at_texel = recv + slope.dot(Vec2::new(x as f32 + 0.5 - q.x, y as f32 + 0.5 - q.y));
+            if self.at(x, y) < at_texel {
+                0.0
+            } else {
+                1.0
+            }
+        };
         let top = lit(x0, y0) + (lit(x0 + 1, y0) - lit(x0, y0)) * tx;
         let bottom = lit(x0, y0 + 1) + (lit(x0 + 1, y0 + 1) - lit(x0, y0 + 1)) * tx;
         top + (bottom - top) * ty

@@ -31,7 +31,8 @@ pub(super) fn shade_tile(scene: &PosedScene, tris: &Tris, l: &Lit, rect: Rect, p
                         t.color[i] = c;
                         continue;
                     }
-                    let c = shade_sample(scene, tris.get(id), l, proj, (x0 + lx, y0 + ly), t, i);
+                    let at = Sample { at: (x0 + lx, y0 + ly), bary: t.bary[i], z: t.depth[i], normal: t.normal[i] };
+                    let c = shade_sample(scene, tris.get(id), l, proj, at, t.color[i].truncate()).extend(1.0);
                     t.color[i] = c;
                     if n_done < done.len() {
                         done[n_done] = (id, c);
@@ -43,17 +44,19 @@ pub(super) fn shade_tile(scene: &PosedScene, tris: &Tris, l: &Lit, rect: Rect, p
     }
 }
 
-/// Lit radiance at sample `i` of `t` (at sample coordinates `at`) on triangle `tri`.
-fn shade_sample(
-    scene: &PosedScene,
-    tri: &Tri,
-    l: &Lit,
-    proj: &Projection,
-    at: (i64, i64),
-    t: &SampleTile,
-    i: usize,
-) -> Vec4 {
-    let (k, z, nrm, albedo) = (t.bary[i], t.depth[i], t.normal[i], t.color[i].truncate());
+/// Where a triangle covers a sample: the sample's coordinates, the perspective-correct barycentrics there, the
+/// view depth and the interpolated normal (toward the eye).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Sample {
+    pub at: (i64, i64),
+    pub bary: [f32; 3],
+    pub z: f32,
+    pub normal: Vec3,
+}
+
+/// Lit radiance of triangle `tri` of albedo `albedo` at sample `s`.
+pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projection, s: Sample, albedo: Vec3) -> Vec3 {
+    let Sample { at, bary: k, z, normal: nrm } = s;
     let mat = &scene.materials[tri.material as usize];
     let m = LitMaterial::of(mat, &scene.textures);
     let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
@@ -80,7 +83,7 @@ fn shade_sample(
         None => nrm,
     };
     let emission = mat.emissive * sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
-    (l.light.shade(p, n, v, &surface, ao, vis) + emission).extend(1.0)
+    l.light.shade(p, n, v, &surface, ao, vis) + emission
 }
 
 /// A material's textures that lit shading reads, resolved once per triangle.

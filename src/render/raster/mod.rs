@@ -404,6 +404,22 @@ pub struct SampleTile {
     /// perspective-correct barycentrics there. Empty unless the render is lit.
     tri: Vec<u32>,
     bary: Vec<[f32; 3]>,
+    /// Fragments of alpha BLEND surfaces, composited over the opaque samples once every triangle is drawn.
+    blend: Vec<Fragment>,
+}
+
+/// A sample of a BLEND surface: where, how far, in what order it was drawn, and what it shows.
+#[derive(Debug, Clone, Copy)]
+struct Fragment {
+    /// Sample index in the tile.
+    i: u32,
+    /// Triangle id (scene order), for equal depths.
+    tri: u32,
+    z: f32,
+    /// Straight linear RGB and alpha.
+    color: Vec4,
+    normal: Vec3,
+    object: u32,
 }
 
 /// No triangle at a sample (deferred lit shading).
@@ -423,6 +439,7 @@ impl SampleTile {
             object: Vec::new(),
             tri: Vec::new(),
             bary: Vec::new(),
+            blend: Vec::new(),
         };
         t.reset(rect);
         t
@@ -449,6 +466,7 @@ impl SampleTile {
         self.normal.resize(n, Vec3::ZERO);
         self.object.clear();
         self.object.resize(n, 0);
+        self.blend.clear();
     }
 }
 
@@ -574,10 +592,10 @@ pub fn raster_tile(
                     let (dx, dy) = footprint();
                     albedo *= texture.sample_footprint(&r, uv, dx, dy);
                 }
+                let blend = mat.alpha_mode == AlphaMode::Blend;
                 match mat.alpha_mode {
                     AlphaMode::Mask if albedo.w < mat.alpha_cutoff => continue,
-                    // BLEND is drawn like MASK at 0.5: a documented approximation (no sorted transparency).
-                    AlphaMode::Blend if albedo.w < 0.5 => continue,
+                    AlphaMode::Blend if albedo.w <= 0.0 => continue,
                     _ => {}
                 }
                 let mut nrm = Vec3::ZERO;
@@ -586,6 +604,19 @@ pub fn raster_tile(
                     if tri.back {
                         nrm = -nrm;
                     }
+                }
+                if blend {
+                    // Shaded now (it may show through others), composited in depth order when the tile is drawn.
+                    let rgb = match &shade.lit {
+                        Some(l) => {
+                            let s = lit::Sample { at: (sx, sy), bary: k, z, normal: nrm };
+                            lit::shade_sample(scene, tri, l, proj, s, albedo.truncate())
+                        }
+                        None => shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive,
+                    };
+                    let color = rgb.extend(albedo.w.min(1.0));
+                    t.blend.push(Fragment { i: i as u32, tri: ti, z, color, normal: nrm, object: tri.object });
+                    continue;
                 }
                 if lit {
                     // Deferred: shaded once per pixel and triangle when every triangle is drawn ([`lit`]).
@@ -597,12 +628,7 @@ pub fn raster_tile(
                     t.bary[i] = k;
                     continue;
                 }
-                let mut rgb = albedo.truncate();
-                if let Some((ambient, lights)) = &shade.lambert {
-                    let sum: f32 = lights.iter().map(|(l, k)| k * nrm.dot(*l).max(0.0)).sum();
-                    rgb *= ambient + sum;
-                }
-                rgb += mat.emissive;
+                let rgb = shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive;
                 t.color[i] = rgb.extend(1.0);
                 t.depth[i] = z;
                 t.normal[i] = nrm;
@@ -632,6 +658,48 @@ pub fn raster_tile(
     if let Some(l) = &shade.lit {
         lit::shade_tile(scene, tris, l, rect, proj, t);
     }
+    composite_blend(t);
+}
+
+/// Unlit or Lambert colour of albedo `albedo` with normal `nrm`.
+#[inline]
+fn shade_unlit(shade: &Shade, albedo: Vec3, nrm: Vec3) -> Vec3 {
+    match &shade.lambert {
+        Some((ambient, lights)) => {
+            let sum: f32 = lights.iter().map(|(l, k)| k * nrm.dot(*l).max(0.0)).sum();
+            albedo * (ambient + sum)
+        }
+        None => albedo,
+    }
+}
+
+/// Composites the tile's BLEND fragments over what is drawn, per sample from the farthest to the nearest (equal
+/// depths in scene order), each "over" the result so far, in premultiplied linear light; fragments behind the
+/// opaque surface are hidden. A sample that only transparent surfaces cover takes the nearest one's depth,
+/// normal and object. The sort makes the result independent of the order tiles or threads produced them.
+fn composite_blend(t: &mut SampleTile) {
+    if t.blend.is_empty() {
+        return;
+    }
+    let mut blend = std::mem::take(&mut t.blend);
+    blend.sort_by(|a, b| a.i.cmp(&b.i).then(b.z.total_cmp(&a.z)).then(a.tri.cmp(&b.tri)));
+    for f in &blend {
+        let i = f.i as usize;
+        if f.z >= t.depth[i] && t.object[i] != 0 && t.color[i].w >= 1.0 {
+            continue; // behind the opaque surface
+        }
+        let (dst, a) = (t.color[i], f.color.w);
+        let premult = f.color.truncate() * a + dst.truncate() * dst.w * (1.0 - a);
+        let alpha = a + dst.w * (1.0 - a);
+        t.color[i] = if alpha > 0.0 { (premult / alpha).extend(alpha) } else { Vec4::ZERO };
+        if t.object[i] == 0 || f.z < t.depth[i] && t.color[i].w < 1.0 {
+            t.depth[i] = f.z;
+            t.normal[i] = f.normal;
+            t.object[i] = f.object + 1;
+        }
+    }
+    blend.clear();
+    t.blend = blend;
 }
 
 /// The camera's backward axis in world space (the head light's direction toward the light).
