@@ -42,6 +42,10 @@ impl Surface {
         if nl <= 0.0 {
             return Vec3::ZERO;
         }
+        if self.specular_weight() == 0.0 {
+            // No specular layer (the ground): Lambert, as the full expression gives with f = 0.
+            return self.diffuse() / PI * nl;
+        }
         let nv = n.dot(v).max(1e-4);
         let h = (v + l).normalize_or_zero();
         let (nh, vh) = (n.dot(h).max(0.0), v.dot(h).max(0.0));

@@ -232,11 +232,14 @@ impl FrameLight {
         }
         // Environment: irradiance for the diffuse layer, the split sum for the specular one.
         let e = &self.env;
-        let nv = n.dot(v).max(1e-4);
-        let r = 2.0 * n.dot(v) * n - v;
-        let ab = brdf::dfg(nv, s.roughness);
+        // A purely diffuse surface (the ground) reads no specular lobe: skip its lookups, which would add zero.
         let w = s.specular_weight();
-        let spec_f = (s.f0() * ab.x + Vec3::splat(ab.y)) * w;
+        let spec_f = if w > 0.0 {
+            let ab = brdf::dfg(n.dot(v).max(1e-4), s.roughness);
+            (s.f0() * ab.x + Vec3::splat(ab.y)) * w
+        } else {
+            Vec3::ZERO
+        };
         let irradiance = match self.ground {
             // On or above the ground (within a millimetre: the plane itself sees the sky alone): the sky from the
             // map, the ground's bounce from below.
@@ -246,7 +249,12 @@ impl FrameLight {
             _ => e.prefiltered.irradiance(e.rotation * n) * e.strength,
         };
         let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (irradiance / PI);
-        let specular = spec_f * e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength;
+        let specular = if w > 0.0 {
+            let r = 2.0 * n.dot(v) * n - v;
+            spec_f * e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength
+        } else {
+            Vec3::ZERO
+        };
         out + (diffuse + specular) * (ao * env_vis)
     }
 
