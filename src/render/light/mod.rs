@@ -251,7 +251,14 @@ impl FrameLight {
         let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (irradiance / PI);
         let specular = if w > 0.0 {
             let r = 2.0 * n.dot(v) * n - v;
-            spec_f * e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength
+            let mut l = e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength;
+            // Above a ground, reflections below the horizon see the ground, not the map's lower half: blended
+            // in over a band that widens with roughness (the lobe straddles the horizon).
+            if let Some(g) = self.ground.filter(|g| p.z >= g.z - 1e-3 && r.z < 0.0) {
+                let x = (-r.z / (0.05 + s.roughness)).min(1.0);
+                l = l.lerp(g.radiance, x * x * (3.0 - 2.0 * x));
+            }
+            spec_f * l
         } else {
             Vec3::ZERO
         };
