@@ -137,7 +137,7 @@ fn write_posed_ply(posed: &crate::scene::PosedScene, path: &Path) -> anyhow::Res
     let (mut pos, mut nrm, mut col, mut tris) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for p in &posed.primitives {
         let base = pos.len() as u32;
-        let mat = &posed.materials[p.material as usize];
+        let mat = posed.material(p.material);
         for v in 0..p.positions.len() {
             pos.push(p.positions[v].to_array());
             nrm.push(p.normals[v].to_array());

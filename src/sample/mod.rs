@@ -211,7 +211,7 @@ fn push_point(
     let (pos, n) = (p.positions[i], p.normals.get(i).copied().unwrap_or(Vec3::ZERO));
     out.positions.push(pos.to_array());
     out.normals.push(n.to_array());
-    let (m, uv) = (&scene.materials[p.material as usize], p.uvs.get(i).copied());
+    let (m, uv) = (scene.material(p.material), p.uvs.get(i).copied());
     let c = m.albedo(&scene.textures, uv, p.colors.get(i).copied()).truncate();
     let c = match shader {
         Some(shade) => shade(pos, n, c, m.emission(&scene.textures, uv)),
@@ -288,7 +288,7 @@ fn surface_point(scene: &PosedScene, d: &Draw, shader: Option<Shader>) -> ([f32;
         (p.uvs.len() == p.positions.len()).then(|| p.uvs[idx[0]] * b[0] + p.uvs[idx[1]] * b[1] + p.uvs[idx[2]] * b[2]);
     let vc: Option<Vec4> = (p.colors.len() == p.positions.len())
         .then(|| p.colors[idx[0]] * b[0] + p.colors[idx[1]] * b[1] + p.colors[idx[2]] * b[2]);
-    let m = &scene.materials[p.material as usize];
+    let m = scene.material(p.material);
     let c = m.albedo(&scene.textures, uv, vc).truncate();
     let c = match shader {
         Some(shade) => shade(pos, n, c, m.emission(&scene.textures, uv)),

@@ -82,6 +82,14 @@ impl PosedScene {
         }
     }
 
+    /// The material of primitive material index `i`: the default material when `i` is out of range (the loaders
+    /// never give one; a hand-built scene might, and drawing it must not panic).
+    #[inline]
+    pub fn material(&self, i: u32) -> &Material {
+        static DEFAULT: std::sync::LazyLock<Material> = std::sync::LazyLock::new(Material::default);
+        self.materials.get(i as usize).unwrap_or(&DEFAULT)
+    }
+
     /// Axis-aligned bounds of every position, or `None` when empty.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut it = self.primitives.iter().flat_map(|p| p.positions.iter());

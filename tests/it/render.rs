@@ -561,3 +561,24 @@ fn vox10_cubes_leave_no_holes_with_the_default_footprint() {
         assert!(holes_true > seen / 100, "{what}: the fixture has sub-pixel splats ({holes_true} holes)");
     }
 }
+
+#[test]
+fn a_primitive_naming_a_missing_material_draws_with_the_default_one() {
+    // The loaders never produce it; a scene built by hand might, and rendering must not panic.
+    let mut sq = mesh(
+        vec![
+            Vec3::new(-0.5, -0.5, 0.0),
+            Vec3::new(0.5, -0.5, 0.0),
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(-0.5, 0.5, 0.0),
+        ],
+        vec![0, 1, 2, 0, 2, 3],
+        Material::default(),
+    );
+    sq.primitives[0].material = 7;
+    let c = cam(16, 16, 20.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
+    for shading in [vvgen::render::Shading::Unlit, vvgen::render::Shading::Pbr] {
+        let f = render(&sq, &c, &RenderSettings { shading, ..Default::default() });
+        assert_eq!(alpha(&f, 8, 8), 255);
+    }
+}

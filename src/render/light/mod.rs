@@ -84,7 +84,7 @@ impl Ground {
                 && !p.positions.is_empty()
                 && scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows)
         })?;
-        let albedo = scene.materials[prim.material as usize].base_color.truncate();
+        let albedo = scene.material(prim.material).base_color.truncate();
         let mut e = env.prefiltered.sky_irradiance(Vec3::Z) * env.strength;
         for l in lights {
             if let LightKind::Sun { direction, .. } = l.kind {

@@ -57,7 +57,7 @@ pub(super) struct Sample {
 /// Lit radiance of triangle `tri` of albedo `albedo` at sample `s`.
 pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projection, s: Sample, albedo: Vec3) -> Vec3 {
     let Sample { at, bary: k, z, normal: nrm } = s;
-    let mat = &scene.materials[tri.material as usize];
+    let mat = scene.material(tri.material);
     let m = LitMaterial::of(mat, &scene.textures);
     let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
     // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.

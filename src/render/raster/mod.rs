@@ -555,7 +555,7 @@ pub fn raster_tile(
         let (px0, py0) = (bx0 * SUBPIXEL + SUBPIXEL / 2, by0 * SUBPIXEL + SUBPIXEL / 2);
         let mut row: [i64; 3] = e.map(|(a, b)| edge(x[a], y[a], x[b], y[b], px0, py0));
         let inv_area = 1.0 / tri.area as f32;
-        let mat = &scene.materials[tri.material as usize];
+        let mat = scene.material(tri.material);
         let tex = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
         let lit = shade.lit.is_some();
         // Only a texture reads the uv here (lit shading interpolates its own, deferred).
