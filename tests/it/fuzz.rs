@@ -144,7 +144,22 @@ fn fuzz_ply_reading_and_rendering() {
 
 #[test]
 fn fuzz_gltf_loading_posing_and_rendering() {
-    let seeds = seeds("gltf", &["gltf", "glb"]);
+    let mut seeds = seeds("gltf", &["gltf", "glb"]);
+    // Files the tests make: lights (KHR_lights_punctual, animated) and a normal texture with and without TANGENT.
+    let made = [
+        ("lights.gltf", crate::gltf_lights::floor_with_lights(683.0, 50.0, None)),
+        (
+            "spot.gltf",
+            crate::gltf_lights::floor_with_lights(
+                1.0,
+                1.0,
+                Some(r#"{"type": "spot", "spot": {"outerConeAngle": 0.5}}"#),
+            ),
+        ),
+        ("normal.gltf", crate::normal_maps::quad_gltf(glam::Vec3::new(0.3, 0.2, 0.9), 1.0, false)),
+        ("tangent.gltf", crate::normal_maps::quad_gltf(glam::Vec3::new(0.3, 0.2, 0.9), 0.5, true)),
+    ];
+    seeds.extend(made.into_iter().map(|(name, json)| (PathBuf::from(name), json.into_bytes())));
     fuzz("gltf", &seeds, 2, |path, bytes| {
         let Ok(asset) = gltf::load_slice(bytes, path, None) else { return };
         let clips: Vec<usize> = (0..asset.animations.len()).collect();

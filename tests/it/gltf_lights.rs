@@ -9,7 +9,7 @@ use crate::common::{load, tree};
 /// A 2 × 2 m floor (glTF Y up) with a sun of `lux` pointing straight down and, when `point_cd` is not zero, a point
 /// light of that many candela 1 m above the floor, animated from x = 0.6 at t = 0 s to x = −0.6 at t = 1 s.
 /// `spot` replaces the point light's definition with a spot's JSON when given.
-fn floor_with_lights(lux: f32, point_cd: f32, spot: Option<&str>) -> String {
+pub(crate) fn floor_with_lights(lux: f32, point_cd: f32, spot: Option<&str>) -> String {
     use base64::Engine;
     let mut buf: Vec<u8> = Vec::new();
     let mut put = |v: &[f32]| v.iter().for_each(|c| buf.extend(c.to_le_bytes()));

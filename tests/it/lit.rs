@@ -199,7 +199,25 @@ fn the_visible_background_is_blenders_equirectangular_mapping() {
 
 #[test]
 fn lit_renders_are_the_same_bytes_whatever_the_thread_count() {
-    let scene = ground_and_caster();
+    let mut scene = ground_and_caster();
+    // A transparent (BLEND) sphere beside the caster: its fragments are sorted per sample, not by thread.
+    let glass = sphere(
+        0.3,
+        Vec3::new(0.8, -0.6, 0.6),
+        Material {
+            base_color: Vec4::new(0.2, 0.5, 1.0, 0.4),
+            alpha_mode: vvgen::scene::material::AlphaMode::Blend,
+            double_sided: true,
+            ..Material::default()
+        },
+    );
+    let mut mats = (*scene.materials).clone();
+    let mut prim = glass.primitives[0].clone();
+    prim.material = mats.len() as u32;
+    prim.object = 2;
+    mats.push(glass.materials[0].clone());
+    scene.primitives.push(prim);
+    scene.materials = Arc::new(mats);
     let c = cam(96, 120.0, Camera::look_at(Vec3::new(3.0, -4.0, 3.0), Vec3::new(0.0, 0.0, 0.5), Vec3::Z));
     let sun = Light {
         kind: LightKind::Sun { direction: Vec3::new(0.5, 0.3, -1.0).normalize(), angle: 0.05 },

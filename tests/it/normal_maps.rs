@@ -9,10 +9,23 @@ use vvgen::render::light::{FrameLight, Light, LightKind};
 use vvgen::render::{render_lit, Camera, Environment, RenderSettings, Shading};
 use vvgen::scene::PosedScene;
 
+/// [`quad_gltf`] loaded and posed at rest.
+fn quad(n: Vec3, scale: f32, tangents: bool) -> PosedScene {
+    let json = quad_gltf(n, scale, tangents);
+    let asset = vvgen::scene::gltf::load_slice(json.as_bytes(), std::path::Path::new("quad.gltf"), None).unwrap();
+    let mut posed = PosedScene {
+        materials: Arc::new(asset.materials.clone()),
+        textures: Arc::clone(&asset.textures),
+        ..Default::default()
+    };
+    asset.pose(&[], 0.0, Mat4::IDENTITY, &mut Default::default(), &mut posed);
+    posed
+}
+
 /// A 2 × 2 m quad in the XY plane facing +Z, u along +x and v growing toward −y (glTF: v = 0 is the top of the
 /// image, here +y), with a uniform normal texture whose texel encodes the tangent-space normal `n` and `scale`;
 /// with the explicit `TANGENT` (1, 0, 0, 1) when `tangents`.
-fn quad(n: Vec3, scale: f32, tangents: bool) -> PosedScene {
+pub(crate) fn quad_gltf(n: Vec3, scale: f32, tangents: bool) -> String {
     use base64::Engine;
     let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
     let texel = (n.normalize() * 0.5 + 0.5).to_array().map(|c| (c * 255.0).round() as u8);
@@ -29,7 +42,7 @@ fn quad(n: Vec3, scale: f32, tangents: bool) -> PosedScene {
         buf.extend(i.to_le_bytes()); // 12
     }
     let tangent = if tangents { r#", "TANGENT": 3"# } else { "" };
-    let json = format!(
+    format!(
         r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
   "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2{tangent}}}, "indices": 4, "material": 0}}]}}],
   "materials": [{{"normalTexture": {{"index": 0, "scale": {scale}}}, "pbrMetallicRoughness": {{"metallicFactor": 0, "roughnessFactor": 1}}}}],
@@ -47,15 +60,7 @@ fn quad(n: Vec3, scale: f32, tangents: bool) -> PosedScene {
         b64(&png),
         buf.len(),
         b64(&buf)
-    );
-    let asset = vvgen::scene::gltf::load_slice(json.as_bytes(), std::path::Path::new("quad.gltf"), None).unwrap();
-    let mut posed = PosedScene {
-        materials: Arc::new(asset.materials.clone()),
-        textures: Arc::clone(&asset.textures),
-        ..Default::default()
-    };
-    asset.pose(&[], 0.0, Mat4::IDENTITY, &mut Default::default(), &mut posed);
-    posed
+    )
 }
 
 /// The centre pixel's red channel, from straight above, under a hard sun arriving from `from` (toward the light)
