@@ -6,7 +6,7 @@ use glam::{Vec3, Vec4};
 
 use super::{Lit, Projection, Rect, SampleTile, Tri, Tris, NO_TRI};
 use crate::render::light::Surface;
-use crate::scene::material::{Material, Texture, TextureRef};
+use crate::scene::material::{AlphaMode, Material, Texture, TextureRef};
 use crate::scene::PosedScene;
 
 /// Lit shading of a drawn tile, deferred so that hidden surfaces cost nothing: once per pixel and triangle, at
@@ -67,6 +67,14 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     let (sx, sy) = ((at.0 as f32 + 0.5 - proj.f[2]) / proj.f[0], (at.1 as f32 + 0.5 - proj.f[3]) / proj.f[1]);
     let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
     let v = (l.eye - p).normalize_or_zero();
+    // An opaque surface's base colour texture is read here, once per pixel and triangle (see `raster_tile`).
+    let mut albedo = albedo;
+    if mat.alpha_mode == AlphaMode::Opaque {
+        let base = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
+        if let Some(t) = sample(base) {
+            albedo *= t.truncate();
+        }
+    }
     let mut surface =
         Surface { base: albedo, metallic: mat.metallic, roughness: mat.roughness, specular: mat.specular };
     if let Some(mr) = sample(m.metallic_roughness) {

@@ -331,8 +331,14 @@ pub fn raster_tile(
         let mut row: [i64; 3] = e.map(|(a, b)| edge(x[a], y[a], x[b], y[b], px0, py0));
         let inv_area = 1.0 / tri.area as f32;
         let mat = scene.material(tri.material);
-        let tex = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
         let lit = shade.lit.is_some();
+        // Lit opaque surfaces read their base colour texture when shaded, once per pixel and triangle: every
+        // sample but the shaded one would read it for nothing. Alpha-tested and blended ones need it per sample.
+        let deferred_texture = lit && mat.alpha_mode == AlphaMode::Opaque;
+        let tex = mat
+            .base_color_texture
+            .filter(|_| !deferred_texture)
+            .and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
         // Only a texture reads the uv here (lit shading interpolates its own, deferred).
         let wants_uv = tex.is_some();
         for sy in by0..=by1 {
