@@ -178,12 +178,18 @@ fn samples(
     let scene_err = |source| Error::Scene { action: label.to_string(), source };
     let content = |source| Error::Sample { action: label.to_string(), source };
     let mut poser = Poser::default();
-    // Lit colours: the whole frame's lighting (every source casts shadows, whichever is sampled).
+    let posed = pose(x, s, f, &mut poser).map_err(scene_err)?.clone();
+    super::check_posed(&posed, label)?;
+    // Lit colours: the whole frame's lighting (every source casts shadows, whichever is sampled); the sampled
+    // scene is the whole frame unless the output names one source.
     let light = match s.color {
         PointColor::Lit => {
             let env_id = s.environment_dep(&g.keying.render).then(|| node.deps[0]);
             let env = super::render::environment_light(g, x, blobs, env_id, false)?;
-            let whole = x.scene.pose(f, &mut poser).map_err(scene_err)?;
+            let whole = match s.source {
+                Some(_) => x.scene.pose(f, &mut poser).map_err(scene_err)?,
+                None => &posed,
+            };
             Some(FrameLight::prepare(whole, &g.keying.render.lighting.lights, env))
         }
         PointColor::Albedo => None,
@@ -191,8 +197,6 @@ fn samples(
     let bake =
         light.as_ref().map(|l| move |p: Vec3, n: Vec3, albedo: Vec3, emission: Vec3| l.bake(p, n, albedo, emission));
     let shader: Option<sample::Shader> = bake.as_ref().map(|b| b as sample::Shader);
-    let posed = pose(x, s, f, &mut poser).map_err(scene_err)?.clone();
-    super::check_posed(&posed, label)?;
     let Some(d) = draws.filter(|_| s.correspondence) else {
         let key: [&[u8]; 3] = [b"sequence", &seed, &(f as u64).to_le_bytes()];
         return Ok((sample::sample_shaded(&posed, s.points as usize, &key, shader), None));

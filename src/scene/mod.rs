@@ -317,8 +317,9 @@ fn gather(
     Ok(())
 }
 
-/// Concatenates several sources' posed scenes, renumbering materials, textures and objects.
-fn merge(parts: &[PosedScene], out: &mut PosedScene) {
+/// Concatenates several posed scenes (sources, or parts a caller builds) into `out`, in order, renumbering
+/// materials, textures and objects; lights are kept as they are.
+pub fn merge(parts: &[PosedScene], out: &mut PosedScene) {
     let mut materials = Vec::new();
     let mut textures = Vec::new();
     out.primitives.clear();

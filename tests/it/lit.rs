@@ -97,15 +97,13 @@ fn a_white_lambertian_sphere_in_a_white_furnace_renders_white() {
 fn ground_and_caster() -> PosedScene {
     let plane = vvgen::manifest::source::Plane { size: [4.0, 4.0], color: [0.8; 3], z: None };
     let ground = vvgen::scene::source::ground(&plane, 0.0);
-    let caster = sphere(0.4, Vec3::new(0.0, 0.0, 1.0), lambert(0.5));
-    let mut scene = ground.clone();
-    let mut mats = (*ground.materials).clone();
-    mats.extend(caster.materials.iter().cloned());
-    let mut prim = caster.primitives[0].clone();
-    prim.material = 1;
-    prim.object = 1;
-    scene.primitives.push(prim);
-    scene.materials = Arc::new(mats);
+    merged(&[ground, sphere(0.4, Vec3::new(0.0, 0.0, 1.0), lambert(0.5))])
+}
+
+/// `parts` as one scene, in this order (objects 0, 1, …).
+fn merged(parts: &[PosedScene]) -> PosedScene {
+    let mut scene = PosedScene::default();
+    vvgen::scene::merge(parts, &mut scene);
     scene
 }
 
@@ -199,7 +197,6 @@ fn the_visible_background_is_blenders_equirectangular_mapping() {
 
 #[test]
 fn lit_renders_are_the_same_bytes_whatever_the_thread_count() {
-    let mut scene = ground_and_caster();
     // A transparent (BLEND) sphere beside the caster: its fragments are sorted per sample, not by thread.
     let glass = sphere(
         0.3,
@@ -211,13 +208,7 @@ fn lit_renders_are_the_same_bytes_whatever_the_thread_count() {
             ..Material::default()
         },
     );
-    let mut mats = (*scene.materials).clone();
-    let mut prim = glass.primitives[0].clone();
-    prim.material = mats.len() as u32;
-    prim.object = 2;
-    mats.push(glass.materials[0].clone());
-    scene.primitives.push(prim);
-    scene.materials = Arc::new(mats);
+    let scene = merged(&[ground_and_caster(), glass]);
     let c = cam(96, 120.0, Camera::look_at(Vec3::new(3.0, -4.0, 3.0), Vec3::new(0.0, 0.0, 0.5), Vec3::Z));
     let sun = Light {
         kind: LightKind::Sun { direction: Vec3::new(0.5, 0.3, -1.0).normalize(), angle: 0.05 },
@@ -409,15 +400,8 @@ fn a_ground_plane_lights_what_stands_on_it_from_below() {
     let texels = (0..h).flat_map(|y| (0..w).map(move |_| Vec3::splat(if y < h / 2 { 1.0 } else { 0.0 }))).collect();
     let sky = EnvMap { width: w, height: h, texels };
     let plane = vvgen::manifest::source::Plane { size: [6.0, 6.0], color: [0.8; 3], z: None };
-    let mut scene = vvgen::scene::source::ground(&plane, 0.0);
     let ball = sphere(0.4, Vec3::new(0.0, 0.0, 1.0), lambert(1.0));
-    let mut mats = (*scene.materials).clone();
-    mats.extend(ball.materials.iter().cloned());
-    let mut prim = ball.primitives[0].clone();
-    prim.material = 1;
-    prim.object = 1;
-    scene.primitives.push(prim);
-    scene.materials = Arc::new(mats);
+    let scene = merged(&[vvgen::scene::source::ground(&plane, 0.0), ball.clone()]);
     // From low beside the ball, looking up at its underside: the point whose normal leans 15° off straight down.
     let c = cam(96, 300.0, Camera::look_at(Vec3::new(2.0, 0.0, 0.35), Vec3::new(0.0, 0.0, 0.75), Vec3::Z));
     let n = Vec3::new(15f32.to_radians().sin(), 0.0, -15f32.to_radians().cos());

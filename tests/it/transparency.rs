@@ -17,18 +17,10 @@ fn square(r: f32, z: f32, c: Vec4, blend: bool) -> PosedScene {
     PosedScene::single(PrimKind::Triangles, p, vec![Vec3::Z; 4], Vec::new(), vec![0, 1, 2, 0, 2, 3], m)
 }
 
-/// `parts` as one scene, in this order.
+/// `parts` as one scene, in this order (objects 0, 1, …).
 fn scene(parts: &[PosedScene]) -> PosedScene {
     let mut out = PosedScene::default();
-    let mut materials = Vec::new();
-    for (k, p) in parts.iter().enumerate() {
-        let mut prim = p.primitives[0].clone();
-        prim.material = materials.len() as u32;
-        prim.object = k as u32;
-        materials.push(p.materials[0].clone());
-        out.primitives.push(prim);
-    }
-    out.materials = std::sync::Arc::new(materials);
+    vvgen::scene::merge(parts, &mut out);
     out
 }
 
