@@ -112,13 +112,13 @@ impl FileLight {
         color: [f32; 3],
         intensity: f32,
         kind: GltfLightKind,
-    ) -> Result<FileLight, String> {
-        let label = name.map_or_else(|| "a light".to_string(), |n| format!("light `{n}`"));
+    ) -> Result<FileLight, FileLightError> {
+        let light = || name.map_or_else(|| "a light".to_string(), |n| format!("light `{n}`"));
         if !(intensity >= 0.0 && intensity.is_finite()) {
-            return Err(format!("{label} has intensity {intensity} (it must be 0 or more)"));
+            return Err(FileLightError::Intensity { light: light(), intensity });
         }
         if color.iter().any(|c| !(*c >= 0.0 && c.is_finite())) {
-            return Err(format!("{label} has colour {color:?} (components must be 0 or more)"));
+            return Err(FileLightError::Color { light: light(), color });
         }
         let watts = intensity * 4.0 * PI / LUMENS_PER_WATT;
         let (position, direction) = (Vec3::ZERO, Vec3::NEG_Z);
@@ -129,10 +129,7 @@ impl FileLight {
             GltfLightKind::Point => (LightKind::Point { position, radius: BLENDER_LIGHT_RADIUS }, watts),
             GltfLightKind::Spot { inner, outer } => {
                 if !(outer > 0.0 && outer <= PI / 2.0 + 1e-6 && inner >= 0.0 && inner < outer) {
-                    return Err(format!(
-                        "{label} has cone angles inner {inner}, outer {outer} (the extension requires \
-                         0 ≤ inner < outer ≤ π/2)"
-                    ));
+                    return Err(FileLightError::Cone { light: light(), inner, outer });
                 }
                 let kind = LightKind::Spot {
                     position,
@@ -154,6 +151,38 @@ impl FileLight {
     pub fn place(&self, world: Mat4) -> Light {
         self.light.transformed(world)
     }
+}
+
+/// A `KHR_lights_punctual` light with values the extension forbids (`light` names it: "light `NAME`", or "a
+/// light" when it has no name).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FileLightError {
+    /// A negative or non-finite intensity.
+    #[error("{light} has intensity {intensity} (it must be 0 or more)")]
+    Intensity {
+        /// The light.
+        light: String,
+        /// Its intensity.
+        intensity: f32,
+    },
+    /// A negative or non-finite colour component.
+    #[error("{light} has colour {color:?} (components must be 0 or more)")]
+    Color {
+        /// The light.
+        light: String,
+        /// Its colour.
+        color: [f32; 3],
+    },
+    /// Spot cone angles outside 0 ≤ inner < outer ≤ π/2.
+    #[error("{light} has cone angles inner {inner}, outer {outer} (the extension requires 0 ≤ inner < outer ≤ π/2)")]
+    Cone {
+        /// The light.
+        light: String,
+        /// `innerConeAngle`.
+        inner: f32,
+        /// `outerConeAngle`.
+        outer: f32,
+    },
 }
 
 /// The three kinds of `KHR_lights_punctual` light.
@@ -191,7 +220,7 @@ mod tests {
             k => panic!("{k:?}"),
         }
         let bad = FileLight::from_gltf(Some("x"), [1.0; 3], 1.0, GltfLightKind::Spot { inner: 0.5, outer: 0.4 });
-        assert!(bad.unwrap_err().contains("light `x`"));
+        assert!(bad.unwrap_err().to_string().contains("light `x`"));
         assert!(FileLight::from_gltf(None, [1.0; 3], -1.0, GltfLightKind::Point).is_err());
     }
 
