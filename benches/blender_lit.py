@@ -13,14 +13,12 @@ import argparse
 import json
 import os
 import sys
-import time
 
 import bpy
-import numpy as np
-from mathutils import Matrix, Vector
+from mathutils import Vector
 
-if "bool" not in np.__dict__:  # Blender 3.4's glTF importer with numpy ≥ 1.24
-    np.bool = bool
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_dataset  # noqa: E402  (Blender's Python: the folder is put on the path first)
 
 
 def floats(s):
@@ -49,19 +47,7 @@ def args():
 def main():
     a = args()
     meta = json.load(open(os.path.join(a.dataset, "vvgen", "dataset.json")))
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.fps = int(round(a.fps))
-    bpy.ops.import_scene.gltf(filepath=a.model)
-    # glTF (x, y, z) arrives as Blender (x, -z, y); the dataset's matrix maps glTF coordinates to its world.
-    to_blender = Matrix(((1, 0, 0, 0), (0, 0, -1, 0), (0, 1, 0, 0), (0, 0, 0, 1)))
-    source = next(s for s in meta["sources"] if s["name"] != "ground")
-    root = bpy.data.objects.new("vvgen_world", None)
-    scene.collection.objects.link(root)
-    root.matrix_world = Matrix(source["world_from_source"]) @ to_blender.inverted()
-    for o in list(scene.objects):
-        if o.parent is None and o is not root:
-            o.parent = root
+    scene = blender_dataset.import_model(a.model, meta, a.fps)
 
     # The ground: Lambertian, receives shadows, casts none.
     w, d, z, grey = a.plane
@@ -100,9 +86,8 @@ def main():
     bg.inputs["Strength"].default_value = float(env_strength)
     wn.links.new(tex.outputs["Color"], bg.inputs["Color"])
 
-    cam = meta["camera"]
-    r = scene.render
-    r.engine = "CYCLES" if a.engine == "cycles" else "BLENDER_EEVEE"
+    blender_dataset.film(scene, meta["camera"])
+    scene.render.engine = "CYCLES" if a.engine == "cycles" else "BLENDER_EEVEE"
     scene.cycles.samples = a.samples
     scene.cycles.seed = a.seed
     scene.eevee.taa_render_samples = a.samples
@@ -112,37 +97,7 @@ def main():
     scene.cycles.device = "CPU"
     if a.direct:
         scene.cycles.max_bounces = 0
-    r.resolution_x, r.resolution_y = cam["w"], cam["h"]
-    r.resolution_percentage = 100
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    r.dither_intensity = 0.0
-    r.film_transparent = True
-    r.image_settings.file_format = "PNG"
-    r.image_settings.color_mode = "RGBA"
-    data = bpy.data.cameras.new("vvgen_cam")
-    data.sensor_fit = "HORIZONTAL"
-    data.sensor_width = 36.0
-    data.lens = cam["fl_x"] * 36.0 / cam["w"]
-    data.shift_x = (cam["w"] / 2 - cam["cx"]) / cam["w"]
-    data.shift_y = (cam["cy"] - cam["h"] / 2) / cam["w"]
-    data.clip_start, data.clip_end = cam["near"], cam["far"]
-    obj = bpy.data.objects.new("vvgen_cam", data)
-    scene.collection.objects.link(obj)
-    scene.camera = obj
-
-    wanted = set(a.images.split(",")) if a.images else None
-    os.makedirs(a.out, exist_ok=True)
-    for im in meta["images"]:
-        name = f'{im["split"]}/{im["view"]}/{im["frame"]}'
-        if wanted is not None and name not in wanted:
-            continue
-        scene.frame_set(im["frame"])
-        obj.matrix_world = Matrix(im["c2w"])
-        r.filepath = os.path.join(a.out, im["files"]["rgba"])
-        t0 = time.perf_counter()
-        bpy.ops.render.render(write_still=True)
-        print(f"rendered {name} in {time.perf_counter() - t0:.3f} s", flush=True)
+    blender_dataset.render_images(scene, meta, a.out, a.images)
 
 
 main()
