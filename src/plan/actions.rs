@@ -16,10 +16,10 @@ use crate::render::encode::{Encoding, NormalSpace, PngCompression};
 use crate::render::{DepthKind, RenderSettings, Shading, SplatShape, SplatSize};
 
 /// Version of the renderer's output: bump when a change moves rendered bytes.
-pub const RENDER_SALT: &str = "render 6";
+pub const RENDER_SALT: &str = "render 7";
 /// Version of lit shading (what only `pbr` renders and lit point colours read): bump when a change moves lit
 /// bytes only, so that unlit datasets keep their keys.
-pub const LIT_SALT: &str = "lit 3";
+pub const LIT_SALT: &str = "lit 4";
 /// Version of the point sampler's output.
 pub const SAMPLE_SALT: &str = "sample 2";
 /// How a cloud of a given size picks among a point cloud's own points (at most its share, keyed).

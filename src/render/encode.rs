@@ -94,8 +94,41 @@ pub fn f32_exr(channels: &[(&str, &[f32])], w: u32, h: u32, c: PngCompression) -
     buf.into_inner()
 }
 
+/// Depth `d` in metres as whole millimetres, rounded half away from zero and clamped to u16 (NaN → 0):
+/// `(d · 1000).round()` exactly, without the libm call `round` is on baseline x86-64 (it was 5 % of a
+/// textured build, once per pixel).
+#[inline]
+fn millimetres(d: f32) -> u16 {
+    let x = d * 1000.0;
+    if x.is_nan() || x <= 0.0 {
+        return 0;
+    }
+    if x >= 65535.0 {
+        return 65535;
+    }
+    // x − ⌊x⌋ is exact in floating point, so the half-way test is too.
+    let i = x as u32;
+    (i + u32::from(x - i as f32 >= 0.5)) as u16
+}
+
 /// 16-bit single-channel PNG of depth in millimetres (0 = no depth; clamped at 65.535 m).
 pub fn depth_mm_png(depth: &[f32], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
-    let mm: Vec<u16> = depth.iter().map(|d| (d * 1000.0).round().clamp(0.0, 65535.0) as u16).collect();
+    let mm: Vec<u16> = depth.iter().map(|d| millimetres(*d)).collect();
     gray16_png(&mm, w, h, c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::millimetres;
+
+    #[test]
+    fn millimetres_round_as_libm_does() {
+        // Every 61st f32 from 0 to past the clamp (half-way cases included by the special values below).
+        let top = 70.0f32.to_bits();
+        let specials = [0.0005f32, 0.0015, 0.0025, 65.5345, 65.5355, 1e9, -1.0, -0.0, f32::NAN, f32::INFINITY];
+        for d in (0..top).step_by(61).map(f32::from_bits).chain(specials) {
+            let want = (d * 1000.0).round().clamp(0.0, 65535.0) as u16;
+            assert_eq!(millimetres(d), want, "{d}");
+        }
+    }
 }

@@ -229,13 +229,9 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
             };
             (s.ambient, lights)
         }),
-        lit: light.map(|light| raster::Lit {
-            light,
-            c2w: cam.c2w.as_mat4(),
-            eye: cam.c2w.w_axis.truncate().as_vec3(),
-            per_side: k,
-        }),
+        lit: light.map(|light| raster::Lit { light, c2w: cam.c2w.as_mat4(), eye: cam.c2w.w_axis.truncate().as_vec3() }),
         normals: s.shading != Shading::Unlit || s.buffers.normal,
+        per_side: k,
     };
     let n = (w * h) as usize;
     let b = s.buffers;

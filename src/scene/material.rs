@@ -21,6 +21,15 @@ pub struct Texture {
     mips: OnceLock<Vec<Texture>>,
 }
 
+/// A mip level to read: trilinear between `level` and the next, by `t` in [0, 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lod {
+    /// The finer level (0 is the texture itself).
+    pub level: usize,
+    /// The weight of the coarser one.
+    pub t: f32,
+}
+
 /// Texture wrap mode (glTF sampler).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Wrap {
@@ -167,6 +176,9 @@ pub fn linear_to_srgb(c: f32) -> f32 {
 static SRGB8_TO_LINEAR: LazyLock<[f32; 256]> =
     LazyLock::new(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)));
 
+/// Byte → [0, 1] (`v / 255`), tabulated: texel reads divide no more.
+static UNORM8: LazyLock<[f32; 256]> = LazyLock::new(|| std::array::from_fn(|i| i as f32 / 255.0));
+
 /// Linear values where the sRGB byte code steps up: code k+1 starts at `linear(k + 0.5)`; entry 255 is +∞.
 static SRGB8_STEPS: LazyLock<[f32; 256]> = LazyLock::new(|| {
     std::array::from_fn(|k| if k < 255 { srgb_to_linear((k as f32 + 0.5) / 255.0) } else { f32::INFINITY })
@@ -246,12 +258,9 @@ impl Texture {
     pub fn texel(&self, x: u32, y: u32) -> Vec4 {
         let i = ((y * self.width + x) * 4) as usize;
         let t = &self.rgba[i..i + 4];
-        if self.srgb {
-            let lut: &[f32; 256] = &SRGB8_TO_LINEAR;
-            Vec4::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize], t[3] as f32 / 255.0)
-        } else {
-            Vec4::new(t[0] as f32, t[1] as f32, t[2] as f32, t[3] as f32) / 255.0
-        }
+        let unorm: &[f32; 256] = &UNORM8;
+        let lut: &[f32; 256] = if self.srgb { &SRGB8_TO_LINEAR } else { unorm };
+        Vec4::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize], unorm[t[3] as usize])
     }
 
     /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light,
@@ -260,42 +269,62 @@ impl Texture {
         self.filter(r, r.map(uv))
     }
 
-    /// Samples with a screen footprint: `duv_dx`, `duv_dy` are the uv's derivatives along one sample step. When a
-    /// step spans more than one texel the lookup is trilinear between the two mip levels around
-    /// `log2(texels per step)` (OpenGL's isotropic level choice); magnified and `nearest` lookups read level 0.
+    /// Samples with a screen footprint: `duv_dx`, `duv_dy` are the uv's derivatives across the footprint (a
+    /// pixel, or a sample for per-sample lookups). When it covers more than one texel the lookup is trilinear
+    /// between the two mip levels around log2 of its size in texels ([`Texture::lod`]); magnified and `nearest`
+    /// lookups read level 0.
     pub fn sample_footprint(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec4 {
-        let uv = r.map(uv);
+        self.sample_lod(r, uv, self.lod(r, duv_dx, duv_dy))
+    }
+
+    /// The mip level [`Texture::sample_footprint`] reads for a footprint, to share between lookups of about
+    /// the same footprint (the samples of a pixel).
+    pub fn lod(&self, r: &TextureRef, duv_dx: Vec2, duv_dy: Vec2) -> Lod {
         let (dx, dy) = match &r.transform {
             Some([x, y, _]) => (*x * duv_dx.x + *y * duv_dx.y, *x * duv_dy.x + *y * duv_dy.y),
             None => (duv_dx, duv_dy),
         };
         let size = Vec2::new(self.width as f32, self.height as f32);
-        let rho2 = (dx * size).length_squared().max((dy * size).length_squared());
+        // The footprint's area in texels: the level where it covers one texel, as if it were square (the
+        // geometric mean of its axes). OpenGL's isotropic rule takes the longer axis instead, which blurs
+        // oblique surfaces; this one matched Blender's (anisotropic) texturing more closely (benches/fidelity.py).
+        // A sliver's area says little of its length: the anisotropy is capped at 16 (the square's side is at
+        // least a quarter of the longer axis), so an edge-on surface still reads a coarse enough level.
+        let (a, b) = (dx * size, dy * size);
+        let rho2 = (a.x * b.y - a.y * b.x).abs().max(a.length_squared().max(b.length_squared()) / 16.0);
         // Magnified, degenerate (NaN from a sliver) or nearest: level 0.
         if r.nearest || rho2.is_nan() || rho2 <= 1.0 {
-            return self.filter(r, uv);
+            return Lod { level: 0, t: 0.0 };
         }
         let lod = 0.5 * log2(rho2);
+        let base = lod.floor();
+        Lod { level: base as usize, t: lod - base }
+    }
+
+    /// Samples at `uv` at mip level `lod` (see [`Texture::sample_footprint`]).
+    pub fn sample_lod(&self, r: &TextureRef, uv: Vec2, lod: Lod) -> Vec4 {
+        let uv = r.map(uv);
+        if lod.level == 0 && lod.t == 0.0 {
+            return self.filter(r, uv);
+        }
         let mips = self.mips();
         // Level i is the texture itself for 0, else mips[i − 1]; past the 1×1 level (or for a 1×1 texture,
         // which has no mips) the coarsest level answers alone.
         let level = |i: usize| if i == 0 { self } else { &mips[i - 1] };
-        let base = lod.floor();
-        let i = (base as usize).min(mips.len());
-        let t = lod - base;
+        let i = lod.level.min(mips.len());
         let a = level(i).filter(r, uv);
-        if t == 0.0 || i == mips.len() {
+        if lod.t == 0.0 || i == mips.len() {
             return a;
         }
-        a.lerp(level(i + 1).filter(r, uv), t)
+        a.lerp(level(i + 1).filter(r, uv), lod.t)
     }
 
     /// Bilinear (or nearest) lookup of already transformed `uv` in this level.
     fn filter(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
-        let (w, h) = (self.width as f32, self.height as f32);
         if self.width == 0 || self.height == 0 {
             return Vec4::ONE;
         }
+        let (w, h) = (self.width as f32, self.height as f32);
         if r.nearest {
             let x = wrap(r.wrap_s, floor(uv.x * w), self.width);
             let y = wrap(r.wrap_t, floor(uv.y * h), self.height);
@@ -444,10 +473,28 @@ mod tests {
         let one = Texture::new(1, 1, vec![255, 0, 0, 255], true);
         let two = Texture::new(2, 2, [[255, 255, 255, 255], [0, 0, 0, 255]].repeat(2).concat(), true);
         for d in [1.5, 1000.0] {
-            let step = Vec2::new(d, 0.0);
-            assert_eq!(one.sample_footprint(&r, Vec2::splat(0.3), step, Vec2::ZERO), Vec4::new(1.0, 0.0, 0.0, 1.0));
-            let grey = two.sample_footprint(&r, Vec2::splat(0.3), step, Vec2::ZERO);
+            let (dx, dy) = (Vec2::new(d, 0.0), Vec2::new(0.0, d));
+            assert_eq!(one.sample_footprint(&r, Vec2::splat(0.3), dx, dy), Vec4::new(1.0, 0.0, 0.0, 1.0));
+            let grey = two.sample_footprint(&r, Vec2::splat(0.3), dx, dy);
             assert!(grey.x > 0.2 && grey.x < 0.8, "{grey}");
         }
+    }
+
+    #[test]
+    fn the_level_is_the_footprints_area_with_anisotropy_capped_at_16() {
+        let r = TextureRef::new(0);
+        let t = Texture::new(256, 256, vec![0; 256 * 256 * 4], true);
+        let texels = |x: f32| x / 256.0;
+        let lod = |dx: Vec2, dy: Vec2| t.lod(&r, dx.map(texels), dy.map(texels));
+        // A square of 4 texels a side: level 2, exactly.
+        assert_eq!(lod(Vec2::new(4.0, 0.0), Vec2::new(0.0, 4.0)), Lod { level: 2, t: 0.0 });
+        // 16 × 1 texels has the area of a 4-texel square, rotated or not (the longer axis alone would say 4).
+        assert_eq!(lod(Vec2::new(16.0, 0.0), Vec2::new(0.0, 1.0)), Lod { level: 2, t: 0.0 });
+        let l = lod(Vec2::new(16.0, 16.0) / 2f32.sqrt(), Vec2::new(-1.0, 1.0) / 2f32.sqrt());
+        assert!(l.level == 2 && l.t < 1e-5 || l.level == 1 && l.t > 1.0 - 1e-5, "{l:?}");
+        // A sliver 64 texels long and 0 wide reads as a square of 16 (64 / 4): level 4.
+        assert_eq!(lod(Vec2::new(64.0, 0.0), Vec2::ZERO), Lod { level: 4, t: 0.0 });
+        // Magnified: level 0.
+        assert_eq!(lod(Vec2::new(0.5, 0.0), Vec2::new(0.0, 0.5)), Lod { level: 0, t: 0.0 });
     }
 }

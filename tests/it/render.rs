@@ -423,8 +423,19 @@ mod splats {
 }
 
 /// The unit square z = 0 (uv = (x + ½, ½ − y), glTF's top-left origin) with a `size`² texture whose texel
-/// (i, j) is `texel(i, j)`, seen from (0, 0, 2) with focal `f` on a 64² image.
+/// (i, j) is `texel(i, j)`, seen from (0, 0, 2) with focal `f` on a 64² image, one sample per pixel.
 fn textured_square(size: u32, texel: impl Fn(u32, u32) -> [u8; 3], nearest: bool, f: f64) -> vvgen::render::Frame {
+    textured_square_at(size, texel, nearest, f, 1)
+}
+
+/// [`textured_square`] at `samples` samples per pixel.
+fn textured_square_at(
+    size: u32,
+    texel: impl Fn(u32, u32) -> [u8; 3],
+    nearest: bool,
+    f: f64,
+    samples: u32,
+) -> vvgen::render::Frame {
     let positions = vec![
         Vec3::new(-0.5, -0.5, 0.0),
         Vec3::new(0.5, -0.5, 0.0),
@@ -444,7 +455,68 @@ fn textured_square(size: u32, texel: impl Fn(u32, u32) -> [u8; 3], nearest: bool
     scene.primitives[0].uvs = Arc::new(uvs);
     scene.textures = Arc::new(vec![Texture::new(size, size, rgba, true)]);
     let c = cam(64, 64, f, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
-    render(&scene, &c, &RenderSettings::default())
+    render(&scene, &c, &RenderSettings { samples, ..RenderSettings::default() })
+}
+
+#[test]
+fn an_untextured_surface_in_front_of_a_textured_one_hides_it() {
+    // The textured triangle is drawn first and textured after every triangle of the tile (once per pixel); the
+    // plain green one drawn after it, in front, must keep its own colour, not be textured as the hidden one.
+    let red = |_: u32, _: u32| [255, 0, 0];
+    let back = {
+        let positions = vec![Vec3::new(-0.5, -0.5, 0.0), Vec3::new(0.5, -0.5, 0.0), Vec3::new(0.5, 0.5, 0.0)];
+        let tex = TextureRef::new(0);
+        let mut m = mesh(positions, vec![0, 1, 2], Material { base_color_texture: Some(tex), ..Material::default() });
+        m.primitives[0].uvs = Arc::new(vec![Vec2::ZERO, Vec2::X, Vec2::ONE]);
+        m.textures = Arc::new(vec![Texture::new(
+            2,
+            2,
+            (0..4)
+                .flat_map(|_| {
+                    let [r, g, b] = red(0, 0);
+                    [r, g, b, 255]
+                })
+                .collect(),
+            true,
+        )]);
+        m
+    };
+    let front = mesh(
+        vec![Vec3::new(-0.2, -0.2, 0.5), Vec3::new(0.2, -0.2, 0.5), Vec3::new(0.2, 0.2, 0.5)],
+        vec![0, 1, 2],
+        Material { base_color: Vec4::new(0.0, 1.0, 0.0, 1.0), ..Material::default() },
+    );
+    let mut scene = PosedScene::default();
+    vvgen::scene::merge(&[back, front], &mut scene);
+    let c = cam(64, 64, 60.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
+    let f = render(&scene, &c, &RenderSettings { samples: 4, ..RenderSettings::default() });
+    // Both triangles are the half x > y of their squares: on screen, x + y > 64. The back one spans pixels
+    // 17..47, the front one 24..40.
+    let at = |x: u32, y: u32| &f.rgba[((y * 64 + x) * 4) as usize..][..4];
+    assert_eq!(at(36, 34), [0, 255, 0, 255], "the front square");
+    assert_eq!(at(44, 40), [255, 0, 0, 255], "the back square where the front one does not reach");
+}
+
+#[test]
+fn multisampled_pixels_are_textured_once_at_their_centre() {
+    // One texel per pixel, pixel centres on texel centres, 4 samples per pixel: a pixel inside one triangle is
+    // textured once, at its centre, over its own footprint (level 0), so it shows its texel exactly. Reading at
+    // one of its samples (a quarter pixel off) or at each sample with a bilinear filter would mix in the
+    // neighbours of a black/white checker.
+    let checker = |i: u32, j: u32| [if (i + j).is_multiple_of(2) { 255 } else { 0 }; 3];
+    let f = textured_square_at(50, checker, false, 100.0, 4);
+    let mut checked = 0;
+    for y in 8..56u32 {
+        for x in 8..56u32 {
+            if x == y || x + y == 63 {
+                continue; // on the diagonal the two triangles share the pixel: each is read at its own centroid
+            }
+            let expect = if (x + y) % 2 == 0 { 255 } else { 0 };
+            assert_eq!(f.rgba[((y * 64 + x) * 4) as usize], expect, "pixel ({x}, {y})");
+            checked += 1;
+        }
+    }
+    assert!(checked > 2000);
 }
 
 #[test]

@@ -37,7 +37,9 @@ pub(super) fn composite(t: &mut SampleTile) {
         if f.z >= t.depth[i] && t.object[i] != 0 && t.color[i].w >= 1.0 {
             continue; // behind the opaque surface
         }
-        let (dst, a) = (t.color[i], f.color.w);
+        // Nothing drawn yet: the colour buffer holds an earlier tile's value.
+        let dst = if t.object[i] == 0 { Vec4::ZERO } else { t.color[i] };
+        let a = f.color.w;
         let premult = f.color.truncate() * a + dst.truncate() * dst.w * (1.0 - a);
         let alpha = a + dst.w * (1.0 - a);
         t.color[i] = if alpha > 0.0 { (premult / alpha).extend(alpha) } else { Vec4::ZERO };

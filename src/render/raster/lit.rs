@@ -1,70 +1,64 @@
-//! Deferred lit (`pbr`) shading of a drawn tile: once per pixel and triangle, after every triangle of the tile
-//! is drawn, so hidden samples cost nothing. Reads what [`super::raster_tile`] left per sample (triangle,
-//! barycentrics, depth, interpolated normal, albedo).
+//! Lit (`pbr`) shading: of a drawn tile, deferred, once per pixel and triangle at the centroid of the
+//! triangle's samples there ([`super::deferred`]), from what [`super::raster_tile`] left per sample (triangle,
+//! barycentrics, depth, albedo); and of single samples (blended surfaces).
 
-use glam::{Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
-use super::{Lit, Projection, Rect, SampleTile, Tri, Tris, NO_TRI};
+use super::deferred::{for_each_share, uv_footprint};
+use super::{Lit, Projection, Rect, SampleTile, Tri, Tris};
 use crate::render::light::Surface;
 use crate::scene::material::{AlphaMode, Material, Texture, TextureRef};
 use crate::scene::PosedScene;
 
-/// Lit shading of a drawn tile, deferred so that hidden surfaces cost nothing: once per pixel and triangle, at
-/// the pixel's first sample on that triangle, copied to its other samples there (lighting is smooth across a
-/// pixel; the albedo is filtered over the pixel's footprint already).
-pub(super) fn shade_tile(scene: &PosedScene, tris: &Tris, l: &Lit, rect: Rect, proj: &Projection, t: &mut SampleTile) {
-    let Rect { x0, y0, w, h } = rect;
-    let k = l.per_side;
-    let mut done: [(u32, Vec4); 16] = [(NO_TRI, Vec4::ZERO); 16];
-    for py in 0..h / k {
-        for px in 0..w / k {
-            let mut n_done = 0;
-            for sy in 0..k {
-                for sx in 0..k {
-                    let (lx, ly) = (px * k + sx, py * k + sy);
-                    let i = (ly * w + lx) as usize;
-                    let id = t.tri[i];
-                    if id == NO_TRI {
-                        continue;
-                    }
-                    if let Some(&(_, c)) = done[..n_done].iter().find(|(d, _)| *d == id) {
-                        t.color[i] = c;
-                        continue;
-                    }
-                    let at = Sample { at: (x0 + lx, y0 + ly), bary: t.bary[i], z: t.depth[i], normal: t.normal[i] };
-                    let c = shade_sample(scene, tris.get(id), l, proj, at, t.color[i].truncate()).extend(1.0);
-                    t.color[i] = c;
-                    if n_done < done.len() {
-                        done[n_done] = (id, c);
-                        n_done += 1;
-                    }
-                }
-            }
+/// Lit shading of a drawn tile's deferred samples: once per pixel and triangle, at the centroid of its samples
+/// there, with their mean albedo, and copied to each of them (lighting is smooth across a pixel; textures are
+/// filtered over the pixel's footprint).
+pub(super) fn shade_tile(
+    scene: &PosedScene,
+    tris: &Tris,
+    l: &Lit,
+    k: i64,
+    rect: Rect,
+    proj: &Projection,
+    t: &mut SampleTile,
+) {
+    for_each_share(t, rect.x0, rect.y0, k, |s, t| {
+        let tri = tris.get(s.id);
+        let albedo = s.samples[..s.n].iter().map(|&i| t.color[i as usize].truncate()).sum::<Vec3>() / s.n as f32;
+        let mut normal =
+            (tri.normal[0] * s.bary[0] + tri.normal[1] * s.bary[1] + tri.normal[2] * s.bary[2]).normalize_or_zero();
+        if tri.back {
+            normal = -normal;
         }
-    }
+        let at = Sample { at: s.at, bary: s.bary, z: s.z, normal, footprint: k as f32 };
+        let c = shade_sample(scene, tri, l, proj, at, albedo).extend(1.0);
+        for &i in &s.samples[..s.n] {
+            t.color[i as usize] = c;
+        }
+    });
 }
 
-/// Where a triangle covers a sample: the sample's coordinates, the perspective-correct barycentrics there, the
-/// view depth and the interpolated normal (toward the eye).
+/// Where a triangle is shaded: the point's sample coordinates (continuous: a sample's centre is at +0.5), the
+/// perspective-correct barycentrics there, the view depth, the interpolated normal (toward the eye) and the
+/// footprint of the shading in samples (textures are filtered over it).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Sample {
-    pub at: (i64, i64),
+    pub at: Vec2,
     pub bary: [f32; 3],
     pub z: f32,
     pub normal: Vec3,
+    pub footprint: f32,
 }
 
 /// Lit radiance of triangle `tri` of albedo `albedo` at sample `s`.
 pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projection, s: Sample, albedo: Vec3) -> Vec3 {
-    let Sample { at, bary: k, z, normal: nrm } = s;
+    let Sample { at, bary: k, z, normal: nrm, footprint } = s;
     let mat = scene.material(tri.material);
     let m = LitMaterial::of(mat, &scene.textures);
-    let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
-    // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
-    let (dx, dy) = ((tri.duv_step[0] - uv * tri.ds_step[0]) * z, (tri.duv_step[1] - uv * tri.ds_step[1]) * z);
+    let (uv, dx, dy) = uv_footprint(tri, k, z, footprint);
     let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
-    // Back to the world: the sample's view-space point at depth z.
-    let (sx, sy) = ((at.0 as f32 + 0.5 - proj.f[2]) / proj.f[0], (at.1 as f32 + 0.5 - proj.f[3]) / proj.f[1]);
+    // Back to the world: the point's view-space position at depth z.
+    let (sx, sy) = ((at.x - proj.f[2]) / proj.f[0], (at.y - proj.f[3]) / proj.f[1]);
     let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
     let v = (l.eye - p).normalize_or_zero();
     // An opaque surface's base colour texture is read here, once per pixel and triangle (see `raster_tile`).

@@ -6,6 +6,7 @@
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
 mod blend;
+mod deferred;
 mod lit;
 mod setup;
 
@@ -181,11 +182,11 @@ pub struct SampleTile {
     pub w: i64,
     /// Height in samples.
     pub h: i64,
-    /// Linear RGB and alpha of the surface at each sample.
+    /// Linear RGB and alpha of the surface at each sample (meaningful where `object` is not 0).
     pub color: Vec<Vec4>,
     /// View depth (planar), +∞ where empty.
     pub depth: Vec<f32>,
-    /// World-space unit normal.
+    /// World-space unit normal (meaningful where `object` is not 0).
     pub normal: Vec<Vec3>,
     /// Object id + 1, 0 where empty.
     pub object: Vec<u32>,
@@ -220,24 +221,24 @@ impl SampleTile {
         t
     }
 
-    /// Empties the deferred-shading buffers for the current rect (lit renders only).
+    /// Empties the deferred-shading buffers for the current rect (barycentrics are written with the triangle
+    /// and read only where one is, so they keep whatever they hold).
     fn reset_deferred(&mut self) {
         let n = (self.w * self.h) as usize;
         self.tri.clear();
         self.tri.resize(n, NO_TRI);
-        self.bary.clear();
         self.bary.resize(n, [0.0; 3]);
     }
 
-    /// Empties the tile and moves it to `rect` (keeping its allocations).
+    /// Empties the tile and moves it to `rect` (keeping its allocations). Only the depth and the object ids
+    /// are cleared: colour and normal are written wherever an object id is, and read nowhere else (this
+    /// clearing was 5 % of a textured render).
     pub fn reset(&mut self, rect: Rect) {
         let n = (rect.w * rect.h) as usize;
         (self.x0, self.y0, self.w, self.h) = (rect.x0, rect.y0, rect.w, rect.h);
-        self.color.clear();
         self.color.resize(n, Vec4::ZERO);
         self.depth.clear();
         self.depth.resize(n, f32::INFINITY);
-        self.normal.clear();
         self.normal.resize(n, Vec3::ZERO);
         self.object.clear();
         self.object.resize(n, 0);
@@ -255,6 +256,8 @@ pub struct Shade<'a> {
     /// Whether anything reads the normals (Lambert, lit shading or the normal pass): if not, they are not
     /// interpolated.
     pub normals: bool,
+    /// Samples per pixel side: deferred shading runs once per pixel and triangle.
+    pub per_side: i64,
 }
 
 /// What lit shading needs of the view: the frame's lighting and how to go from a sample back to the world.
@@ -266,8 +269,6 @@ pub struct Lit<'a> {
     pub c2w: Mat4,
     /// The camera centre.
     pub eye: Vec3,
-    /// Samples per pixel side: shading runs once per pixel and triangle.
-    pub per_side: i64,
 }
 
 /// A rectangle of samples.
@@ -309,7 +310,12 @@ pub fn raster_tile(
     let Rect { x0, y0, w, h } = rect;
     let (near, far) = (proj.near, proj.far);
     t.reset(rect);
-    if shade.lit.is_some() {
+    let lit = shade.lit.is_some();
+    // Opaque textured surfaces are textured once per pixel and triangle ([`deferred`]), and lit ones are shaded
+    // so; the samples they win keep their triangle and barycentrics until every triangle is drawn.
+    let deferring =
+        lit || scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Opaque && m.base_color_texture.is_some());
+    if deferring {
         t.reset_deferred();
     }
     for ti in tris.tile(tile) {
@@ -331,10 +337,11 @@ pub fn raster_tile(
         let mut row: [i64; 3] = e.map(|(a, b)| edge(x[a], y[a], x[b], y[b], px0, py0));
         let inv_area = 1.0 / tri.area as f32;
         let mat = scene.material(tri.material);
-        let lit = shade.lit.is_some();
-        // Lit opaque surfaces read their base colour texture when shaded, once per pixel and triangle: every
-        // sample but the shaded one would read it for nothing. Alpha-tested and blended ones need it per sample.
-        let deferred_texture = lit && mat.alpha_mode == AlphaMode::Opaque;
+        // Opaque surfaces read their base colour texture when shaded, once per pixel and triangle: every sample
+        // but the shaded one would read it for nothing. Alpha-tested and blended ones need it per sample.
+        let deferred_texture = mat.alpha_mode == AlphaMode::Opaque && (lit || mat.base_color_texture.is_some());
+        // Lit surfaces are all shaded deferred (blended ones excepted, below).
+        let deferred = lit || deferred_texture;
         let tex = mat
             .base_color_texture
             .filter(|_| !deferred_texture)
@@ -390,7 +397,8 @@ pub fn raster_tile(
                     // Shaded now (it may show through others), composited in depth order when the tile is drawn.
                     let rgb = match &shade.lit {
                         Some(l) => {
-                            let s = lit::Sample { at: (sx, sy), bary: k, z, normal: nrm };
+                            let at = Vec2::new(sx as f32 + 0.5, sy as f32 + 0.5);
+                            let s = lit::Sample { at, bary: k, z, normal: nrm, footprint: 1.0 };
                             lit::shade_sample(scene, tri, l, proj, s, albedo.truncate())
                         }
                         None => shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive,
@@ -399,8 +407,8 @@ pub fn raster_tile(
                     t.blend.push(blend::Fragment { i: i as u32, tri: ti, z, color, normal: nrm, object: tri.object });
                     continue;
                 }
-                if lit {
-                    // Deferred: shaded once per pixel and triangle when every triangle is drawn ([`lit`]).
+                if deferred {
+                    // Shaded once per pixel and triangle when every triangle is drawn ([`lit`], [`deferred`]).
                     t.color[i] = albedo.truncate().extend(1.0);
                     t.depth[i] = z;
                     t.normal[i] = nrm;
@@ -414,6 +422,10 @@ pub fn raster_tile(
                 t.depth[i] = z;
                 t.normal[i] = nrm;
                 t.object[i] = tri.object + 1;
+                if deferring {
+                    // Shaded already: a deferred surface this one hides must not shade it again.
+                    t.tri[i] = NO_TRI;
+                }
             }
         }
     }
@@ -437,7 +449,9 @@ pub fn raster_tile(
         }
     }
     if let Some(l) = &shade.lit {
-        lit::shade_tile(scene, tris, l, rect, proj, t);
+        lit::shade_tile(scene, tris, l, shade.per_side, rect, proj, t);
+    } else if deferring {
+        deferred::texture_tile(scene, tris, shade, rect.x0, rect.y0, t);
     }
     blend::composite(t);
 }

@@ -1,0 +1,122 @@
+//! Deferred shading of a drawn tile, once per pixel and triangle: what the triangle's samples in a pixel share
+//! (texture lookups, lit shading) is evaluated once, at the centroid of those samples, after every triangle of
+//! the tile is drawn, so that hidden samples cost nothing. This is how a GPU shades under multisampling
+//! (centroid interpolation); what varies per sample (coverage, depth, vertex colour, a Lambert normal) stays
+//! per sample.
+//!
+//! The centroid matters: shading at one of the samples would shift every texture by up to half a sample toward
+//! that sample, which shows as blur and misregistration against a reference renderer. Fully covered pixels are
+//! shaded at their centre.
+
+use glam::Vec2;
+
+use super::{SampleTile, Shade, Tri, Tris, NO_TRI};
+use crate::scene::material::AlphaMode;
+use crate::scene::PosedScene;
+
+/// One triangle's share of one pixel: the samples it won there and its attributes at their centroid.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Share {
+    /// The triangle's id.
+    pub id: u32,
+    /// Indices of its samples in the tile buffer (the first `n`).
+    pub samples: [u32; 16],
+    pub n: usize,
+    /// The centroid in sample coordinates (continuous: a sample's centre is at +0.5).
+    pub at: Vec2,
+    /// Perspective-correct barycentrics at the centroid (the mean of the samples' own).
+    pub bary: [f32; 3],
+    /// View depth at the centroid (the mean of the samples').
+    pub z: f32,
+}
+
+/// Calls `f` for every triangle's share of every pixel of the tile, pixels in row order and, within a pixel,
+/// triangles in the order of their first sample (so the result never depends on anything but the tile).
+/// `k` is the number of samples along a pixel side (at most 4).
+pub(super) fn for_each_share(t: &mut SampleTile, x0: i64, y0: i64, k: i64, mut f: impl FnMut(&Share, &mut SampleTile)) {
+    let (w, k) = (t.w as usize, k as usize);
+    let n = k * k;
+    // Each sample slot's offset within its pixel, from its top-left sample.
+    let offset: [Vec2; 16] = std::array::from_fn(|j| Vec2::new((j % k) as f32, (j / k) as f32));
+    let mut share = Share { id: NO_TRI, samples: [0; 16], n: 0, at: Vec2::ZERO, bary: [0.0; 3], z: 0.0 };
+    let (mut index, mut ids) = ([0u32; 16], [NO_TRI; 16]);
+    for py in 0..t.h as usize / k {
+        for px in 0..w / k {
+            let first = py * k * w + px * k;
+            let mut j = 0;
+            for row in (0..k).map(|sy| first + sy * w) {
+                for i in row..row + k {
+                    (index[j], ids[j]) = (i as u32, t.tri[i]);
+                    j += 1;
+                }
+            }
+            let corner = Vec2::new(x0 as f32 + (px * k) as f32, y0 as f32 + (py * k) as f32) + 0.5;
+            // Each triangle in the order of its first sample; its samples are taken out of `ids` as it is.
+            for a in 0..n {
+                let id = ids[a];
+                if id == NO_TRI {
+                    continue;
+                }
+                let (mut at, mut bary, mut z) = (Vec2::ZERO, [0.0f32; 3], 0.0);
+                share.n = 0;
+                for b in a..n {
+                    if ids[b] != id {
+                        continue;
+                    }
+                    ids[b] = NO_TRI;
+                    let i = index[b] as usize;
+                    share.samples[share.n] = index[b];
+                    share.n += 1;
+                    at += offset[b];
+                    let v = t.bary[i];
+                    (bary[0], bary[1], bary[2]) = (bary[0] + v[0], bary[1] + v[1], bary[2] + v[2]);
+                    z += t.depth[i];
+                }
+                let inv = 1.0 / share.n as f32;
+                share.id = id;
+                share.at = corner + at * inv;
+                share.bary = bary.map(|b| b * inv);
+                share.z = z * inv;
+                f(&share, t);
+            }
+        }
+    }
+}
+
+/// The uv of `tri` at barycentrics `k` and its derivatives along one pixel (`scale` samples) in x and y at
+/// depth `z`: d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
+#[inline]
+pub(super) fn uv_footprint(tri: &Tri, k: [f32; 3], z: f32, scale: f32) -> (Vec2, Vec2, Vec2) {
+    let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
+    let dx = (tri.duv_step[0] - uv * tri.ds_step[0]) * (z * scale);
+    let dy = (tri.duv_step[1] - uv * tri.ds_step[1]) * (z * scale);
+    (uv, dx, dy)
+}
+
+/// Unlit (or Lambert) shading of the deferred samples of a drawn tile: opaque surfaces with a base colour
+/// texture read it once per pixel and triangle, over the pixel's footprint; each sample then multiplies its
+/// own albedo (base colour × vertex colour, left by [`super::raster_tile`]) and is shaded with its own normal.
+pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i64, y0: i64, t: &mut SampleTile) {
+    let k = shade.per_side;
+    for_each_share(t, x0, y0, k, |s, t| {
+        let tri = tris.get(s.id);
+        let mat = scene.material(tri.material);
+        debug_assert_eq!(mat.alpha_mode, AlphaMode::Opaque);
+        let Some((r, tex)) =
+            mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)))
+        else {
+            for &i in &s.samples[..s.n] {
+                let i = i as usize;
+                t.color[i] = (super::shade_unlit(shade, t.color[i].truncate(), t.normal[i]) + mat.emissive).extend(1.0);
+            }
+            return;
+        };
+        let (uv, dx, dy) = uv_footprint(tri, s.bary, s.z, k as f32);
+        let texel = tex.sample_footprint(&r, uv, dx, dy);
+        for &i in &s.samples[..s.n] {
+            let i = i as usize;
+            let albedo = t.color[i].truncate() * texel.truncate();
+            t.color[i] = (super::shade_unlit(shade, albedo, t.normal[i]) + mat.emissive).extend(1.0);
+        }
+    });
+}
