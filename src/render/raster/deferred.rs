@@ -51,6 +51,24 @@ pub(super) fn for_each_share(t: &mut SampleTile, x0: i64, y0: i64, k: i64, mut f
                 }
             }
             let corner = Vec2::new(x0 as f32 + (px * k) as f32, y0 as f32 + (py * k) as f32) + 0.5;
+            let id = ids[0];
+            if id != NO_TRI && ids[1..n].iter().all(|&d| d == id) {
+                // Inside one triangle (most covered pixels): its centroid is the pixel's centre.
+                let (mut bary, mut z) = ([0.0f32; 3], 0.0);
+                for &i in &index[..n] {
+                    let v = t.bary[i as usize];
+                    (bary[0], bary[1], bary[2]) = (bary[0] + v[0], bary[1] + v[1], bary[2] + v[2]);
+                    z += t.depth[i as usize];
+                }
+                let inv = 1.0 / n as f32;
+                share.samples[..n].copy_from_slice(&index[..n]);
+                (share.id, share.n) = (id, n);
+                share.at = corner + Vec2::splat((k - 1) as f32 * 0.5);
+                share.bary = bary.map(|b| b * inv);
+                share.z = z * inv;
+                f(&share, t);
+                continue;
+            }
             // Each triangle in the order of its first sample; its samples are taken out of `ids` as it is.
             for a in 0..n {
                 let id = ids[a];
