@@ -23,11 +23,11 @@ pub struct Texture {
 
 /// A mip level to read: trilinear between `level` and the next, by `t` in [0, 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lod {
+struct Lod {
     /// The finer level (0 is the texture itself).
-    pub level: usize,
+    level: usize,
     /// The weight of the coarser one.
-    pub t: f32,
+    t: f32,
 }
 
 /// Texture wrap mode (glTF sampler).
@@ -274,12 +274,25 @@ impl Texture {
     /// between the two mip levels around log2 of its size in texels ([`Texture::lod`]); magnified and `nearest`
     /// lookups read level 0.
     pub fn sample_footprint(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec4 {
-        self.sample_lod(r, uv, self.lod(r, duv_dx, duv_dy))
+        let lod = self.lod(r, duv_dx, duv_dy);
+        let uv = r.map(uv);
+        if lod.level == 0 && lod.t == 0.0 {
+            return self.filter(r, uv);
+        }
+        let mips = self.mips();
+        // Level i is the texture itself for 0, else mips[i − 1]; past the 1×1 level (or for a 1×1 texture,
+        // which has no mips) the coarsest level answers alone.
+        let level = |i: usize| if i == 0 { self } else { &mips[i - 1] };
+        let i = lod.level.min(mips.len());
+        let a = level(i).filter(r, uv);
+        if lod.t == 0.0 || i == mips.len() {
+            return a;
+        }
+        a.lerp(level(i + 1).filter(r, uv), lod.t)
     }
 
-    /// The mip level [`Texture::sample_footprint`] reads for a footprint, to share between lookups of about
-    /// the same footprint (the samples of a pixel).
-    pub fn lod(&self, r: &TextureRef, duv_dx: Vec2, duv_dy: Vec2) -> Lod {
+    /// The mip level [`Texture::sample_footprint`] reads for a footprint.
+    fn lod(&self, r: &TextureRef, duv_dx: Vec2, duv_dy: Vec2) -> Lod {
         let (dx, dy) = match &r.transform {
             Some([x, y, _]) => (*x * duv_dx.x + *y * duv_dx.y, *x * duv_dy.x + *y * duv_dy.y),
             None => (duv_dx, duv_dy),
@@ -299,24 +312,6 @@ impl Texture {
         let lod = 0.5 * log2(rho2);
         let base = lod.floor();
         Lod { level: base as usize, t: lod - base }
-    }
-
-    /// Samples at `uv` at mip level `lod` (see [`Texture::sample_footprint`]).
-    pub fn sample_lod(&self, r: &TextureRef, uv: Vec2, lod: Lod) -> Vec4 {
-        let uv = r.map(uv);
-        if lod.level == 0 && lod.t == 0.0 {
-            return self.filter(r, uv);
-        }
-        let mips = self.mips();
-        // Level i is the texture itself for 0, else mips[i − 1]; past the 1×1 level (or for a 1×1 texture,
-        // which has no mips) the coarsest level answers alone.
-        let level = |i: usize| if i == 0 { self } else { &mips[i - 1] };
-        let i = lod.level.min(mips.len());
-        let a = level(i).filter(r, uv);
-        if lod.t == 0.0 || i == mips.len() {
-            return a;
-        }
-        a.lerp(level(i + 1).filter(r, uv), lod.t)
     }
 
     /// Bilinear (or nearest) lookup of already transformed `uv` in this level.

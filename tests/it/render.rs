@@ -28,6 +28,12 @@ fn mesh(positions: Vec<Vec3>, indices: Vec<u32>, material: Material) -> PosedSce
     }
 }
 
+/// The unit square z = 0, centred on the origin, as two triangles.
+fn unit_square(material: Material) -> PosedScene {
+    let corners = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)];
+    mesh(corners.map(|(x, y)| Vec3::new(x, y, 0.0)).to_vec(), vec![0, 1, 2, 0, 2, 3], material)
+}
+
 fn cam(w: u32, h: u32, f: f64, c2w: DMat4) -> Camera {
     Camera { width: w, height: h, fx: f, fy: f, cx: w as f64 / 2.0, cy: h as f64 / 2.0, near: 0.1, far: 100.0, c2w }
 }
@@ -43,16 +49,7 @@ fn alpha(f: &vvgen::render::Frame, x: u32, y: u32) -> u8 {
 
 #[test]
 fn unit_square_covers_the_predicted_pixels_at_the_right_depth() {
-    let sq = mesh(
-        vec![
-            Vec3::new(-0.5, -0.5, 0.0),
-            Vec3::new(0.5, -0.5, 0.0),
-            Vec3::new(0.5, 0.5, 0.0),
-            Vec3::new(-0.5, 0.5, 0.0),
-        ],
-        vec![0, 1, 2, 0, 2, 3],
-        Material::default(),
-    );
+    let sq = unit_square(Material::default());
     let c = cam(64, 64, 100.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
     let f = render(&sq, &c, &RenderSettings::default());
     // Edges at 32 ± 25 = 7 and 57: pixel centres 7.5 … 56.5 are inside.
@@ -436,22 +433,15 @@ fn textured_square_at(
     f: f64,
     samples: u32,
 ) -> vvgen::render::Frame {
-    let positions = vec![
-        Vec3::new(-0.5, -0.5, 0.0),
-        Vec3::new(0.5, -0.5, 0.0),
-        Vec3::new(0.5, 0.5, 0.0),
-        Vec3::new(-0.5, 0.5, 0.0),
-    ];
-    let uvs = positions.iter().map(|p| Vec2::new(p.x + 0.5, 0.5 - p.y)).collect();
+    let tex = TextureRef { nearest, ..TextureRef::new(0) };
+    let mut scene = unit_square(Material { base_color_texture: Some(tex), ..Material::default() });
+    let uvs = scene.primitives[0].positions.iter().map(|p| Vec2::new(p.x + 0.5, 0.5 - p.y)).collect();
     let rgba = (0..size * size)
         .flat_map(|k| {
             let [r, g, b] = texel(k % size, k / size);
             [r, g, b, 255]
         })
         .collect();
-    let tex = TextureRef { nearest, ..TextureRef::new(0) };
-    let mut scene =
-        mesh(positions, vec![0, 1, 2, 0, 2, 3], Material { base_color_texture: Some(tex), ..Material::default() });
     scene.primitives[0].uvs = Arc::new(uvs);
     scene.textures = Arc::new(vec![Texture::new(size, size, rgba, true)]);
     let c = cam(64, 64, f, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
@@ -637,16 +627,7 @@ fn vox10_cubes_leave_no_holes_with_the_default_footprint() {
 #[test]
 fn a_primitive_naming_a_missing_material_draws_with_the_default_one() {
     // The loaders never produce it; a scene built by hand might, and rendering must not panic.
-    let mut sq = mesh(
-        vec![
-            Vec3::new(-0.5, -0.5, 0.0),
-            Vec3::new(0.5, -0.5, 0.0),
-            Vec3::new(0.5, 0.5, 0.0),
-            Vec3::new(-0.5, 0.5, 0.0),
-        ],
-        vec![0, 1, 2, 0, 2, 3],
-        Material::default(),
-    );
+    let mut sq = unit_square(Material::default());
     sq.primitives[0].material = 7;
     let c = cam(16, 16, 20.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
     for shading in [vvgen::render::Shading::Unlit, vvgen::render::Shading::Pbr] {

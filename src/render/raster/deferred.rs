@@ -8,9 +8,9 @@
 //! that sample, which shows as blur and misregistration against a reference renderer. Fully covered pixels are
 //! shaded at their centre.
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
-use super::{SampleTile, Shade, Tri, Tris, NO_TRI};
+use super::{SampleTile, Shade, Tris, NO_TRI};
 use crate::scene::material::AlphaMode;
 use crate::scene::PosedScene;
 
@@ -53,62 +53,45 @@ pub(super) fn for_each_share(t: &mut SampleTile, x0: i64, y0: i64, k: i64, mut f
             let corner = Vec2::new(x0 as f32 + (px * k) as f32, y0 as f32 + (py * k) as f32) + 0.5;
             let id = ids[0];
             if id != NO_TRI && ids[1..n].iter().all(|&d| d == id) {
-                // Inside one triangle (most covered pixels): its centroid is the pixel's centre.
-                let (mut bary, mut z) = ([0.0f32; 3], 0.0);
-                for &i in &index[..n] {
-                    let v = t.bary[i as usize];
-                    (bary[0], bary[1], bary[2]) = (bary[0] + v[0], bary[1] + v[1], bary[2] + v[2]);
-                    z += t.depth[i as usize];
-                }
-                let inv = 1.0 / n as f32;
-                share.samples[..n].copy_from_slice(&index[..n]);
-                (share.id, share.n) = (id, n);
-                share.at = corner + Vec2::splat((k - 1) as f32 * 0.5);
-                share.bary = bary.map(|b| b * inv);
-                share.z = z * inv;
+                // Inside one triangle (most covered pixels): no sorting out.
+                gather(&mut share, t, id, corner, (0..n).map(|b| (index[b], offset[b])));
                 f(&share, t);
                 continue;
             }
-            // Each triangle in the order of its first sample; its samples are taken out of `ids` as it is.
+            // Each triangle in the order of its first sample; its samples are taken out of `ids` once gathered.
             for a in 0..n {
                 let id = ids[a];
                 if id == NO_TRI {
                     continue;
                 }
-                let (mut at, mut bary, mut z) = (Vec2::ZERO, [0.0f32; 3], 0.0);
-                share.n = 0;
-                for b in a..n {
-                    if ids[b] != id {
-                        continue;
-                    }
-                    ids[b] = NO_TRI;
-                    let i = index[b] as usize;
-                    share.samples[share.n] = index[b];
-                    share.n += 1;
-                    at += offset[b];
-                    let v = t.bary[i];
-                    (bary[0], bary[1], bary[2]) = (bary[0] + v[0], bary[1] + v[1], bary[2] + v[2]);
-                    z += t.depth[i];
-                }
-                let inv = 1.0 / share.n as f32;
-                share.id = id;
-                share.at = corner + at * inv;
-                share.bary = bary.map(|b| b * inv);
-                share.z = z * inv;
+                let mine = (a..n).filter(|&b| ids[b] == id).map(|b| (index[b], offset[b]));
+                gather(&mut share, t, id, corner, mine);
+                ids[a..n].iter_mut().filter(|d| **d == id).for_each(|d| *d = NO_TRI);
                 f(&share, t);
             }
         }
     }
 }
 
-/// The uv of `tri` at barycentrics `k` and its derivatives along one pixel (`scale` samples) in x and y at
-/// depth `z`: d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
+/// Fills `share` with triangle `id`'s samples (tile index and offset from the pixel's top-left sample, whose
+/// centre is `corner`), their centroid and their mean barycentrics and depth.
 #[inline]
-pub(super) fn uv_footprint(tri: &Tri, k: [f32; 3], z: f32, scale: f32) -> (Vec2, Vec2, Vec2) {
-    let uv = tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2];
-    let dx = (tri.duv_step[0] - uv * tri.ds_step[0]) * (z * scale);
-    let dy = (tri.duv_step[1] - uv * tri.ds_step[1]) * (z * scale);
-    (uv, dx, dy)
+fn gather(share: &mut Share, t: &SampleTile, id: u32, corner: Vec2, samples: impl Iterator<Item = (u32, Vec2)>) {
+    let (mut at, mut bary, mut z) = (Vec2::ZERO, [0.0f32; 3], 0.0);
+    share.n = 0;
+    for (i, off) in samples {
+        share.samples[share.n] = i;
+        share.n += 1;
+        at += off;
+        let v = t.bary[i as usize];
+        (bary[0], bary[1], bary[2]) = (bary[0] + v[0], bary[1] + v[1], bary[2] + v[2]);
+        z += t.depth[i as usize];
+    }
+    let inv = 1.0 / share.n as f32;
+    share.id = id;
+    share.at = corner + at * inv;
+    share.bary = bary.map(|b| b * inv);
+    share.z = z * inv;
 }
 
 /// Unlit (or Lambert) shading of the deferred samples of a drawn tile: opaque surfaces with a base colour
@@ -120,20 +103,17 @@ pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i
         let tri = tris.get(s.id);
         let mat = scene.material(tri.material);
         debug_assert_eq!(mat.alpha_mode, AlphaMode::Opaque);
-        let Some((r, tex)) =
-            mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)))
-        else {
-            for &i in &s.samples[..s.n] {
-                let i = i as usize;
-                t.color[i] = (super::shade_unlit(shade, t.color[i].truncate(), t.normal[i]) + mat.emissive).extend(1.0);
+        // A texture the scene does not have (never from the loaders) reads as white.
+        let texel = match mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t))) {
+            Some((r, tex)) => {
+                let (uv, dx, dy) = tri.uv_footprint(s.bary, s.z, k as f32);
+                tex.sample_footprint(&r, uv, dx, dy).truncate()
             }
-            return;
+            None => Vec3::ONE,
         };
-        let (uv, dx, dy) = uv_footprint(tri, s.bary, s.z, k as f32);
-        let texel = tex.sample_footprint(&r, uv, dx, dy);
         for &i in &s.samples[..s.n] {
             let i = i as usize;
-            let albedo = t.color[i].truncate() * texel.truncate();
+            let albedo = t.color[i].truncate() * texel;
             t.color[i] = (super::shade_unlit(shade, albedo, t.normal[i]) + mat.emissive).extend(1.0);
         }
     });

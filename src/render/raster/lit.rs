@@ -4,7 +4,7 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::deferred::{for_each_share, uv_footprint};
+use super::deferred::for_each_share;
 use super::{Lit, Projection, Rect, SampleTile, Tri, Tris};
 use crate::render::light::Surface;
 use crate::scene::material::{AlphaMode, Material, Texture, TextureRef};
@@ -25,12 +25,7 @@ pub(super) fn shade_tile(
     for_each_share(t, rect.x0, rect.y0, k, |s, t| {
         let tri = tris.get(s.id);
         let albedo = s.samples[..s.n].iter().map(|&i| t.color[i as usize].truncate()).sum::<Vec3>() / s.n as f32;
-        let mut normal =
-            (tri.normal[0] * s.bary[0] + tri.normal[1] * s.bary[1] + tri.normal[2] * s.bary[2]).normalize_or_zero();
-        if tri.back {
-            normal = -normal;
-        }
-        let at = Sample { at: s.at, bary: s.bary, z: s.z, normal, footprint: k as f32 };
+        let at = Sample { at: s.at, bary: s.bary, z: s.z, normal: tri.normal_at(s.bary), footprint: k as f32 };
         let c = shade_sample(scene, tri, l, proj, at, albedo).extend(1.0);
         for &i in &s.samples[..s.n] {
             t.color[i as usize] = c;
@@ -55,7 +50,7 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     let Sample { at, bary: k, z, normal: nrm, footprint } = s;
     let mat = scene.material(tri.material);
     let m = LitMaterial::of(mat, &scene.textures);
-    let (uv, dx, dy) = uv_footprint(tri, k, z, footprint);
+    let (uv, dx, dy) = tri.uv_footprint(k, z, footprint);
     let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
     // Back to the world: the point's view-space position at depth z.
     let (sx, sy) = ((at.x - proj.f[2]) / proj.f[0], (at.y - proj.f[3]) / proj.f[1]);

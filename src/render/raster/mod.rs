@@ -82,6 +82,30 @@ pub struct Tri {
     back: bool,
 }
 
+impl Tri {
+    /// The interpolated unit normal at perspective-correct barycentrics `k`, toward the eye (flipped on a back
+    /// face).
+    #[inline]
+    fn normal_at(&self, k: [f32; 3]) -> Vec3 {
+        let n = (self.normal[0] * k[0] + self.normal[1] * k[1] + self.normal[2] * k[2]).normalize_or_zero();
+        if self.back {
+            -n
+        } else {
+            n
+        }
+    }
+
+    /// The uv at barycentrics `k` and its derivatives across `scale` sample steps in x and y at view depth
+    /// `z`: d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
+    #[inline]
+    fn uv_footprint(&self, k: [f32; 3], z: f32, scale: f32) -> (Vec2, Vec2, Vec2) {
+        let uv = self.uv[0] * k[0] + self.uv[1] * k[1] + self.uv[2] * k[2];
+        let dx = (self.duv_step[0] - uv * self.ds_step[0]) * (z * scale);
+        let dy = (self.duv_step[1] - uv * self.ds_step[1]) * (z * scale);
+        (uv, dx, dy)
+    }
+}
+
 /// Projection constants in sample space.
 #[derive(Debug, Clone, Copy)]
 pub struct Projection {
@@ -346,8 +370,6 @@ pub fn raster_tile(
             .base_color_texture
             .filter(|_| !deferred_texture)
             .and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
-        // Only a texture reads the uv here (lit shading interpolates its own, deferred).
-        let wants_uv = tex.is_some();
         for sy in by0..=by1 {
             let mut wgt = row;
             for i in 0..3 {
@@ -372,12 +394,8 @@ pub fn raster_tile(
                 let k = [pb[0] * z, pb[1] * z, pb[2] * z];
                 let vc = tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2];
                 let mut albedo = mat.base_color * vc;
-                let uv = if wants_uv { tri.uv[0] * k[0] + tri.uv[1] * k[1] + tri.uv[2] * k[2] } else { Vec2::ZERO };
-                // d(uv)/dstep = (d(Σ pᵢ·uvᵢ) − uv·d(Σ pᵢ)) / Σ pᵢ, with pᵢ = bᵢ/zᵢ.
-                let footprint =
-                    || ((tri.duv_step[0] - uv * tri.ds_step[0]) * z, (tri.duv_step[1] - uv * tri.ds_step[1]) * z);
                 if let Some((r, texture)) = tex {
-                    let (dx, dy) = footprint();
+                    let (uv, dx, dy) = tri.uv_footprint(k, z, 1.0);
                     albedo *= texture.sample_footprint(&r, uv, dx, dy);
                 }
                 let blend = mat.alpha_mode == AlphaMode::Blend;
@@ -386,13 +404,7 @@ pub fn raster_tile(
                     AlphaMode::Blend if albedo.w <= 0.0 => continue,
                     _ => {}
                 }
-                let mut nrm = Vec3::ZERO;
-                if shade.normals {
-                    nrm = (tri.normal[0] * k[0] + tri.normal[1] * k[1] + tri.normal[2] * k[2]).normalize_or_zero();
-                    if tri.back {
-                        nrm = -nrm;
-                    }
-                }
+                let nrm = if shade.normals { tri.normal_at(k) } else { Vec3::ZERO };
                 if blend {
                     // Shaded now (it may show through others), composited in depth order when the tile is drawn.
                     let rgb = match &shade.lit {
