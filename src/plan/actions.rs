@@ -322,6 +322,7 @@ impl Action {
                 w.digest("rgba", &deps[0]);
                 w.f64s("background", &background.map(f64::from));
                 w.str("png compression", png_name(cx.encoding.png));
+                w.str("png encoder", crate::render::encode::PNG_SALT);
             }
             Action::Video { split: _, view: _ } => {
                 // The frames enter through their composites' keys; which camera they are does not matter.
@@ -579,6 +580,7 @@ fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
 fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
     let Encoding { png, normal_space, depth_exr, normal_exr } = e;
     w.str("png compression", png_name(*png));
+    w.str("png encoder", crate::render::encode::PNG_SALT);
     match pass {
         Pass::Depth => w.bool("exr", *depth_exr),
         Pass::Normal => {

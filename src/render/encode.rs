@@ -36,33 +36,45 @@ pub struct Encoding {
     pub normal_exr: bool,
 }
 
-fn encoder(buf: &mut Vec<u8>, c: PngCompression) -> PngEncoder<&mut Vec<u8>> {
-    let ct = match c {
-        PngCompression::Fast => CompressionType::Fast,
-        PngCompression::Default => CompressionType::Default,
-        PngCompression::Best => CompressionType::Best,
+/// Version of the PNG encodings (deflate effort and row filters per [`PngCompression`]): every action that
+/// writes a PNG keys it, since a change here moves the files' bytes (not their pixels).
+pub const PNG_SALT: &str = "png 2: fast filters up (colour) and paeth (grey)";
+
+/// The encoder for `c`. `Fast` writes one row filter instead of trying all five per row (adaptive): on
+/// seed-scale renders (800², 10 % covered) Up encodes RGBA in 0.60 ms instead of 1.35 ms for 5 % larger files,
+/// and Paeth 16-bit depth in 1.05 ms instead of 1.23 ms at the same size (Up there: 0.84 ms, 15 % larger).
+/// `Default` and `Best` favour size and keep the adaptive choice.
+fn encoder(buf: &mut Vec<u8>, c: PngCompression, colour: bool) -> PngEncoder<&mut Vec<u8>> {
+    let (ct, filter) = match c {
+        PngCompression::Fast => (CompressionType::Fast, if colour { FilterType::Up } else { FilterType::Paeth }),
+        PngCompression::Default => (CompressionType::Default, FilterType::Adaptive),
+        PngCompression::Best => (CompressionType::Best, FilterType::Adaptive),
     };
-    PngEncoder::new_with_quality(buf, ct, FilterType::Adaptive)
+    PngEncoder::new_with_quality(buf, ct, filter)
 }
 
 /// RGBA8 PNG.
 pub fn rgba_png(rgba: &[u8], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
     let mut buf = Vec::new();
-    encoder(&mut buf, c).write_image(rgba, w, h, ExtendedColorType::Rgba8).expect("BUG: buffer size matches the image");
+    encoder(&mut buf, c, true)
+        .write_image(rgba, w, h, ExtendedColorType::Rgba8)
+        .expect("BUG: buffer size matches the image");
     buf
 }
 
 /// 8-bit single-channel PNG (masks).
 pub fn gray8_png(v: &[u8], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
     let mut buf = Vec::new();
-    encoder(&mut buf, c).write_image(v, w, h, ExtendedColorType::L8).expect("BUG: buffer size matches the image");
+    encoder(&mut buf, c, false)
+        .write_image(v, w, h, ExtendedColorType::L8)
+        .expect("BUG: buffer size matches the image");
     buf
 }
 
 /// 16-bit single-channel PNG (instance ids).
 pub fn gray16_png(v: &[u16], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
     let mut buf = Vec::new();
-    encoder(&mut buf, c)
+    encoder(&mut buf, c, false)
         .write_image(bytemuck::cast_slice(v), w, h, ExtendedColorType::L16)
         .expect("BUG: buffer size matches the image");
     buf
@@ -71,7 +83,9 @@ pub fn gray16_png(v: &[u16], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
 /// RGB8 PNG (normals, images composited on a background).
 pub fn rgb_png(rgb: &[u8], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
     let mut buf = Vec::new();
-    encoder(&mut buf, c).write_image(rgb, w, h, ExtendedColorType::Rgb8).expect("BUG: buffer size matches the image");
+    encoder(&mut buf, c, true)
+        .write_image(rgb, w, h, ExtendedColorType::Rgb8)
+        .expect("BUG: buffer size matches the image");
     buf
 }
 
@@ -120,6 +134,25 @@ pub fn depth_mm_png(depth: &[f32], w: u32, h: u32, c: PngCompression) -> Vec<u8>
 #[cfg(test)]
 mod tests {
     use super::millimetres;
+
+    #[test]
+    fn every_compression_decodes_to_the_pixels_it_was_given() {
+        use super::{gray16_png, gray8_png, rgb_png, rgba_png, PngCompression};
+        // An odd size and bytes that vary in every direction, so each row filter has something to predict.
+        let (w, h) = (37u32, 23u32);
+        let bytes = |n: u32| -> Vec<u8> { (0..n).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8).collect() };
+        let depth: Vec<u16> = (0..w * h).map(|i| (i * 977 % 65_521) as u16).collect();
+        for c in [PngCompression::Fast, PngCompression::Default, PngCompression::Best] {
+            let decode = |png: Vec<u8>| image::load_from_memory_with_format(&png, image::ImageFormat::Png).unwrap();
+            let rgba = bytes(w * h * 4);
+            assert_eq!(decode(rgba_png(&rgba, w, h, c)).into_rgba8().into_raw(), rgba, "{c:?}");
+            let rgb = bytes(w * h * 3);
+            assert_eq!(decode(rgb_png(&rgb, w, h, c)).into_rgb8().into_raw(), rgb, "{c:?}");
+            let grey = bytes(w * h);
+            assert_eq!(decode(gray8_png(&grey, w, h, c)).into_luma8().into_raw(), grey, "{c:?}");
+            assert_eq!(decode(gray16_png(&depth, w, h, c)).into_luma16().into_raw(), depth, "{c:?}");
+        }
+    }
 
     #[test]
     fn millimetres_round_as_libm_does() {

@@ -258,9 +258,15 @@ impl Texture {
     pub fn texel(&self, x: u32, y: u32) -> Vec4 {
         let i = ((y * self.width + x) * 4) as usize;
         let t = &self.rgba[i..i + 4];
-        let unorm: &[f32; 256] = &UNORM8;
-        let lut: &[f32; 256] = if self.srgb { &SRGB8_TO_LINEAR } else { unorm };
+        let (unorm, lut) = self.luts();
         Vec4::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize], unorm[t[3] as usize])
+    }
+
+    /// The decoding tables of alpha and of the colour channels (sRGB or not).
+    #[inline]
+    fn luts(&self) -> (&'static [f32; 256], &'static [f32; 256]) {
+        let unorm: &'static [f32; 256] = &UNORM8;
+        (unorm, if self.srgb { &SRGB8_TO_LINEAR } else { unorm })
     }
 
     /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light,
@@ -330,10 +336,18 @@ impl Texture {
         let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
         // (Compared without adding: a huge or corrupt uv saturates x0 at i64::MAX, where x0 + 1 would overflow.)
         if x0 >= 0 && y0 >= 0 && x0 < self.width as i64 - 1 && y0 < self.height as i64 - 1 {
-            // All four texels inside (almost every lookup): no wrapping.
-            let (x, y) = (x0 as u32, y0 as u32);
-            let top = self.texel(x, y).lerp(self.texel(x + 1, y), tx);
-            let bottom = self.texel(x, y + 1).lerp(self.texel(x + 1, y + 1), tx);
+            // All four texels inside (almost every lookup): no wrapping, and each row's two texels are one
+            // 8-byte read decoded through tables resolved once (this is the texturing loop's innermost step).
+            let (unorm, lut) = self.luts();
+            let row = self.width as usize * 4;
+            let i = y0 as usize * row + x0 as usize * 4;
+            let decode =
+                |t: &[u8]| Vec4::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize], unorm[t[3] as usize]);
+            let (Some(a), Some(b)) = (self.rgba.get(i..i + 8), self.rgba.get(i + row..i + row + 8)) else {
+                unreachable!("BUG: both texel rows are inside the texture")
+            };
+            let top = decode(&a[..4]).lerp(decode(&a[4..]), tx);
+            let bottom = decode(&b[..4]).lerp(decode(&b[4..]), tx);
             return top.lerp(bottom, ty);
         }
         let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0.saturating_add(1), self.width)];
