@@ -321,8 +321,7 @@ impl Action {
                 w.str("encoder", ENCODE_SALT);
                 w.digest("rgba", &deps[0]);
                 w.f64s("background", &background.map(f64::from));
-                w.str("png compression", png_name(cx.encoding.png));
-                w.str("png encoder", crate::render::encode::PNG_SALT);
+                png(w, cx.encoding.png);
             }
             Action::Video { split: _, view: _ } => {
                 // The frames enter through their composites' keys; which camera they are does not matter.
@@ -372,6 +371,7 @@ impl Action {
                 let sp = &cx.plan.splits[*split];
                 let layout = crate::preview::sheet::layout(cx.plan, *split);
                 w.str("preview", crate::preview::SALT);
+                png(w, PngCompression::Fast);
                 w.str("dataset", &cx.dataset);
                 w.str("split", &sp.name);
                 w.u64("images in split", sp.images.len() as u64);
@@ -393,6 +393,7 @@ impl Action {
             }
             Action::PreviewRig { splits } => {
                 w.str("preview", crate::preview::SALT);
+                png(w, PngCompression::Fast);
                 w.str("dataset", &cx.dataset);
                 w.digest("bounds", &deps[0]);
                 w.digest("subject samples", &deps[1]);
@@ -411,6 +412,7 @@ impl Action {
             }
             Action::PreviewStrip { output } => {
                 w.str("preview", crate::preview::SALT);
+                png(w, PngCompression::Fast);
                 w.str("dataset", &cx.dataset);
                 w.str("output", output);
                 for (f, d) in crate::preview::point_frames(cx.plan.frames).iter().zip(deps) {
@@ -578,9 +580,8 @@ fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
 }
 
 fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
-    let Encoding { png, normal_space, depth_exr, normal_exr } = e;
-    w.str("png compression", png_name(*png));
-    w.str("png encoder", crate::render::encode::PNG_SALT);
+    let Encoding { png: compression, normal_space, depth_exr, normal_exr } = e;
+    png(w, *compression);
     match pass {
         Pass::Depth => w.bool("exr", *depth_exr),
         Pass::Normal => {
@@ -595,6 +596,13 @@ fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {
         }
         Pass::Rgba | Pass::Mask | Pass::Instance | Pass::Albedo => {}
     }
+}
+
+/// What shapes a PNG's bytes besides its pixels: the compression asked for and the encoder's version. Every
+/// action that writes a PNG keys it (previews always write `fast`).
+fn png(w: &mut dyn KeyWriter, compression: PngCompression) {
+    w.str("png compression", png_name(compression));
+    w.str("png encoder", crate::render::encode::PNG_SALT);
 }
 
 fn png_name(p: PngCompression) -> &'static str {

@@ -257,16 +257,14 @@ impl Texture {
     #[inline]
     pub fn texel(&self, x: u32, y: u32) -> Vec4 {
         let i = ((y * self.width + x) * 4) as usize;
-        let t = &self.rgba[i..i + 4];
-        let (unorm, lut) = self.luts();
-        Vec4::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize], unorm[t[3] as usize])
+        self.tables().decode(&self.rgba[i..i + 4])
     }
 
-    /// The decoding tables of alpha and of the colour channels (sRGB or not).
+    /// The tables that decode this texture's bytes (looked up once per bilinear lookup, not per texel).
     #[inline]
-    fn luts(&self) -> (&'static [f32; 256], &'static [f32; 256]) {
+    fn tables(&self) -> Tables {
         let unorm: &'static [f32; 256] = &UNORM8;
-        (unorm, if self.srgb { &SRGB8_TO_LINEAR } else { unorm })
+        Tables { unorm, colour: if self.srgb { &SRGB8_TO_LINEAR } else { unorm } }
     }
 
     /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light,
@@ -337,17 +335,13 @@ impl Texture {
         // (Compared without adding: a huge or corrupt uv saturates x0 at i64::MAX, where x0 + 1 would overflow.)
         if x0 >= 0 && y0 >= 0 && x0 < self.width as i64 - 1 && y0 < self.height as i64 - 1 {
             // All four texels inside (almost every lookup): no wrapping, and each row's two texels are one
-            // 8-byte read decoded through tables resolved once (this is the texturing loop's innermost step).
-            let (unorm, lut) = self.luts();
+            // 8-byte read decoded through tables looked up once (this is the texturing loop's innermost step).
+            let d = self.tables();
             let row = self.width as usize * 4;
             let i = y0 as usize * row + x0 as usize * 4;
-            let decode =
-                |t: &[u8]| Vec4::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize], unorm[t[3] as usize]);
-            let (Some(a), Some(b)) = (self.rgba.get(i..i + 8), self.rgba.get(i + row..i + row + 8)) else {
-                unreachable!("BUG: both texel rows are inside the texture")
-            };
-            let top = decode(&a[..4]).lerp(decode(&a[4..]), tx);
-            let bottom = decode(&b[..4]).lerp(decode(&b[4..]), tx);
+            let (a, b) = (&self.rgba[i..i + 8], &self.rgba[i + row..i + row + 8]);
+            let top = d.decode(&a[..4]).lerp(d.decode(&a[4..]), tx);
+            let bottom = d.decode(&b[..4]).lerp(d.decode(&b[4..]), tx);
             return top.lerp(bottom, ty);
         }
         let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0.saturating_add(1), self.width)];
@@ -355,6 +349,23 @@ impl Texture {
         let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), tx);
         let bottom = self.texel(xs[0], ys[1]).lerp(self.texel(xs[1], ys[1]), tx);
         top.lerp(bottom, ty)
+    }
+}
+
+/// The tables that turn a texel's bytes into linear floats: alpha is always `v / 255`, colour is sRGB-decoded
+/// for colour textures.
+#[derive(Clone, Copy)]
+struct Tables {
+    unorm: &'static [f32; 256],
+    colour: &'static [f32; 256],
+}
+
+impl Tables {
+    /// Linear RGBA of one texel's four bytes.
+    #[inline]
+    fn decode(self, t: &[u8]) -> Vec4 {
+        let c = self.colour;
+        Vec4::new(c[t[0] as usize], c[t[1] as usize], c[t[2] as usize], self.unorm[t[3] as usize])
     }
 }
 
