@@ -2,9 +2,10 @@
 //! peers' 100k-triangle vertex-coloured torus (head-lit), and an 800k-point frame drawn as true 3D cubes.
 //! Views: 20 cameras at radius 4 on the upper hemisphere, `camera_angle_y` 0.6911 (pyrender's bench setup).
 //!
-//! Run: `cargo bench --bench render [-- OUT_DIR]`. The point clouds are left in OUT_DIR (default
-//! `target/bench-data`) as `pc_100k.ply` and `pc_800k.ply`, so pyrender can draw the same points in the same
-//! run (`benches/peers.sh render …`).
+//! Run: `cargo bench --bench render [-- OUT_DIR] [--only cesium|torus|points] [--points N] [--case TEXT]` (the
+//! last three run one group, one cloud size, or the point cases whose label contains TEXT, for profiling). The
+//! point clouds are left in OUT_DIR (default `target/bench-data`) as `pc_100k.ply` and `pc_800k.ply`, so
+//! pyrender can draw the same points in the same run (`benches/peers.sh render …`).
 
 use std::f32::consts::{PI, TAU};
 use std::path::PathBuf;
@@ -145,11 +146,20 @@ fn main() {
     // As the `vvgen` binary does.
     vvgen::alloc::retain_freed_memory();
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let out: PathBuf =
-        args.iter().find(|a| !a.starts_with('-')).map(PathBuf::from).unwrap_or("target/bench-data".into());
+    // The output directory is the first argument that is neither a flag nor a flag's value.
+    let out: PathBuf = args
+        .iter()
+        .enumerate()
+        .find(|(i, a)| !a.starts_with('-') && (*i == 0 || !args[i - 1].starts_with("--")))
+        .map(|(_, a)| PathBuf::from(a))
+        .unwrap_or("target/bench-data".into());
     // `--only cesium|torus|points` runs one group (for profiling).
     let only = args.iter().position(|a| a == "--only").and_then(|i| args.get(i + 1)).cloned();
     let run = |group: &str| only.as_deref().is_none_or(|o| o == group);
+    // `--case TEXT` runs only the point cases whose label contains TEXT, and `--points N` only the N-point cloud.
+    let value = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
+    let case = value("--case");
+    let points: Option<usize> = value("--points").and_then(|v| v.parse().ok());
     std::fs::create_dir_all(&out).unwrap();
     println!("threads: {}, {RES}×{RES}, RGBA PNG (fast) included", rayon::current_num_threads());
 
@@ -184,7 +194,10 @@ fn main() {
         line("samples = 1", per_image(&torus, &cams, &lit, 3));
     }
 
-    for (n, name) in [(100_000usize, "pc_100k.ply"), (800_000, "pc_800k.ply")].into_iter().filter(|_| run("points")) {
+    for (n, name) in [(100_000usize, "pc_100k.ply"), (800_000, "pc_800k.ply")]
+        .into_iter()
+        .filter(|&(n, _)| run("points") && points.is_none_or(|p| p == n))
+    {
         let (p, c) = cloud(n, n as u64);
         let pos: Vec<[f32; 3]> = p.iter().map(|v| v.to_array()).collect();
         let col: Vec<[u8; 3]> = c.iter().map(|v| [0, 1, 2].map(|k| (v[k] * 255.0).round() as u8)).collect();
@@ -202,7 +215,10 @@ fn main() {
             ("cubes, edge 1 cm", SplatShape::Cube, SplatSize::World(0.01), 1.0),
             ("surfels, diameter 4 mm", SplatShape::Surfel, SplatSize::World(0.004), 1.0),
             ("squares, 1 px", SplatShape::Square, SplatSize::Pixels(1.0), 1.0),
-        ] {
+        ]
+        .into_iter()
+        .filter(|(label, ..)| case.as_deref().is_none_or(|c| label.contains(c)))
+        {
             let s = RenderSettings { splat: SplatSettings { shape, size, min_px }, ..Default::default() };
             line(label, per_image(&pts, &cams, &s, 3));
         }
