@@ -153,11 +153,11 @@ fn main() {
         .find(|(i, a)| !a.starts_with('-') && (*i == 0 || !args[i - 1].starts_with("--")))
         .map(|(_, a)| PathBuf::from(a))
         .unwrap_or("target/bench-data".into());
+    let value = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
     // `--only cesium|torus|points` runs one group (for profiling).
-    let only = args.iter().position(|a| a == "--only").and_then(|i| args.get(i + 1)).cloned();
+    let only = value("--only");
     let run = |group: &str| only.as_deref().is_none_or(|o| o == group);
     // `--case TEXT` runs only the point cases whose label contains TEXT, and `--points N` only the N-point cloud.
-    let value = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
     let case = value("--case");
     let points: Option<usize> = value("--points").and_then(|v| v.parse().ok());
     std::fs::create_dir_all(&out).unwrap();

@@ -277,6 +277,13 @@ fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -
 }
 
 impl Splat {
+    /// Whether the sample centre (fixed point) is inside the splat as a disk (a square covers its bounding box).
+    #[inline]
+    fn disk_covers(&self, px: i64, py: i64) -> bool {
+        let (dx, dy, r) = (px - self.x as i64, py - self.y as i64, self.rx as i64);
+        dx * dx + dy * dy < r * r
+    }
+
     /// Inclusive bounding box, within a `size` sample grid, of the samples whose centres lie in
     /// [x − rx, x + rx) × [y − ry, y + ry): exactly a square's samples (half-open, so that squares one size apart
     /// tile without double hits), and those a disk may cover (empty when min > max).
@@ -320,10 +327,16 @@ impl<'a> Splats<'a> {
         let (s, i) = self.source(layer.point(j));
         let color = s.base * s.prim.colors.get(i).copied().unwrap_or(Vec4::ONE);
         let normal = match FACES.get(layer.face[j] as usize) {
-            Some(face) if self.cube.is_some() && !self.surfel => *face,
+            Some(face) if self.face_normals() => *face,
             _ => s.prim.normals.get(i).copied().unwrap_or(Vec3::ZERO),
         };
         (color, normal, s.prim.object)
+    }
+
+    /// Whether a shown sample's normal is its cube face's rather than its point's.
+    #[inline]
+    fn face_normals(&self) -> bool {
+        self.cube.is_some() && !self.surfel
     }
 
     /// The unit normal of point `i`, when it has one.
@@ -331,14 +344,6 @@ impl<'a> Splats<'a> {
     fn normal_of(&self, i: u32) -> Option<Vec3> {
         let (s, i) = self.source(i);
         s.prim.normals.get(i).and_then(|n| n.try_normalize())
-    }
-
-    /// Whether the sample centre (fixed point) is covered by a disk splat (a square covers its bounding box: see
-    /// [`Splat::bbox`]).
-    #[inline]
-    fn covers(&self, sp: &Splat, px: i64, py: i64) -> bool {
-        let (dx, dy, r) = (px - sp.x as i64, py - sp.y as i64, sp.rx as i64);
-        dx * dx + dy * dy < r * r
     }
 
     /// Draws band `band` (sample rows from `band · band_rows`) into `layer`: per sample, the nearest splat and its
@@ -389,7 +394,7 @@ impl<'a> Splats<'a> {
                 let row = ((sy - y0) * w) as usize;
                 for sx in b[0]..=b[2] {
                     let i = row + sx as usize;
-                    if disk && !self.covers(sp, sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2) {
+                    if disk && !sp.disk_covers(sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2) {
                         continue;
                     }
                     if k < layer.key[i] {
@@ -409,7 +414,7 @@ impl<'a> Splats<'a> {
     pub fn prefetch(&self, layer: &Layer, j: usize) {
         let (s, i) = self.source(layer.point(j));
         prefetch(s.prim.colors.get(i));
-        if self.cube.is_none() || self.surfel {
+        if !self.face_normals() {
             prefetch(s.prim.normals.get(i));
         }
     }
@@ -426,7 +431,7 @@ fn key(z: f32, point: u32) -> u64 {
 }
 
 /// The key of a sample no splat covers: depth +∞.
-const EMPTY: u64 = (0x7f80_0000u64 << 32) | u32::MAX as u64;
+const EMPTY: u64 = ((f32::INFINITY.to_bits() as u64) << 32) | u32::MAX as u64;
 
 /// A hint that `v` will be read soon (nothing where there is no such instruction).
 #[inline]

@@ -442,31 +442,24 @@ pub fn raster_tile(
         }
     }
     if let Some((splats, layer)) = splats {
+        // The tile's samples as (index in the tile, index in the band's layer).
+        let rows = (y0..y0 + h).map(|sy| ((sy - y0) * w - x0, (sy - layer.y0) * layer.w));
+        let samples = rows.flat_map(|(ti, li)| (x0..x0 + w).map(move |sx| ((ti + sx) as usize, (li + sx) as usize)));
         // The samples a splat wins read its point's colour: ask for them all first (see [`Splats::prefetch`]).
-        for sy in y0..y0 + h {
-            let row = ((sy - layer.y0) * layer.w) as usize;
-            for sx in x0..x0 + w {
-                let (i, j) = (((sy - y0) * w + (sx - x0)) as usize, row + sx as usize);
-                if layer.depth(j) < t.depth[i] {
-                    splats.prefetch(layer, j);
-                }
-            }
+        for (_, j) in samples.clone().filter(|&(i, j)| layer.depth(j) < t.depth[i]) {
+            splats.prefetch(layer, j);
         }
-        for sy in y0..y0 + h {
-            let row = ((sy - layer.y0) * layer.w) as usize;
-            for sx in x0..x0 + w {
-                let (i, j) = (((sy - y0) * w + (sx - x0)) as usize, row + sx as usize);
-                let z = layer.depth(j);
-                if z < t.depth[i] {
-                    // Points carry their own colour: unlit.
-                    let (color, normal, object) = splats.attributes(layer, j);
-                    t.color[i] = color.truncate().extend(1.0);
-                    t.depth[i] = z;
-                    t.normal[i] = normal;
-                    t.object[i] = object + 1;
-                    if let Some(d) = t.tri.get_mut(i) {
-                        *d = NO_TRI;
-                    }
+        for (i, j) in samples {
+            let z = layer.depth(j);
+            if z < t.depth[i] {
+                // Points carry their own colour: unlit.
+                let (color, normal, object) = splats.attributes(layer, j);
+                t.color[i] = color.truncate().extend(1.0);
+                t.depth[i] = z;
+                t.normal[i] = normal;
+                t.object[i] = object + 1;
+                if let Some(d) = t.tri.get_mut(i) {
+                    *d = NO_TRI;
                 }
             }
         }
