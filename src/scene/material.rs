@@ -313,9 +313,10 @@ impl Texture {
         if r.nearest || rho2.is_nan() || rho2 <= 1.0 {
             return Lod { level: 0, t: 0.0 };
         }
+        // rho2 > 1, so 0 ≤ lod ≤ 64 (at rho2 = +∞), and its floor is the truncation (no libm `floorf` call).
         let lod = 0.5 * log2(rho2);
-        let base = lod.floor();
-        Lod { level: base as usize, t: lod - base }
+        let level = lod as u32;
+        Lod { level: level as usize, t: lod - level as f32 }
     }
 
     /// Bilinear (or nearest) lookup of already transformed `uv` in this level.
@@ -330,20 +331,24 @@ impl Texture {
             return self.texel(x, y);
         }
         let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
-        let (x0, y0) = (floor(fx), floor(fy));
-        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
-        // (Compared without adding: a huge or corrupt uv saturates x0 at i64::MAX, where x0 + 1 would overflow.)
-        if x0 >= 0 && y0 >= 0 && x0 < self.width as i64 - 1 && y0 < self.height as i64 - 1 {
-            // All four texels inside (almost every lookup): no wrapping, and each row's two texels are one
-            // 8-byte read decoded through tables looked up once (this is the texturing loop's innermost step).
+        // All four texels inside (almost every lookup): `floor(fx)` is in 0..width − 1 exactly when `fx` is in
+        // [0, width − 1) (NaN is in neither), and there the floor is the truncation. No wrapping, and each row's
+        // two texels are one 8-byte read decoded through tables looked up once (this is the texturing loop's
+        // innermost step).
+        if fx >= 0.0 && fy >= 0.0 && fx < (self.width - 1) as f32 && fy < (self.height - 1) as f32 {
+            let (x0, y0) = (fx as u32, fy as u32);
+            let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
             let d = self.tables();
             let row = self.width as usize * 4;
             let i = y0 as usize * row + x0 as usize * 4;
-            let (a, b) = (&self.rgba[i..i + 8], &self.rgba[i + row..i + row + 8]);
-            let top = d.decode(&a[..4]).lerp(d.decode(&a[4..]), tx);
-            let bottom = d.decode(&b[..4]).lerp(d.decode(&b[4..]), tx);
+            let texels = &self.rgba[i..i + row + 8];
+            let (a, b) = (&texels[..8], &texels[row..]);
+            let top = d.decode(&a[..4]).lerp(d.decode(&a[4..8]), tx);
+            let bottom = d.decode(&b[..4]).lerp(d.decode(&b[4..8]), tx);
             return top.lerp(bottom, ty);
         }
+        let (x0, y0) = (floor(fx), floor(fy));
+        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
         let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0.saturating_add(1), self.width)];
         let ys = [wrap(r.wrap_t, y0, self.height), wrap(r.wrap_t, y0.saturating_add(1), self.height)];
         let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), tx);
