@@ -76,7 +76,16 @@ pub fn gray8_png(v: &[u8], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
 
 /// 16-bit single-channel PNG (instance ids).
 pub fn gray16_png(v: &[u16], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
-    let be: Vec<u8> = v.iter().flat_map(|v| v.to_be_bytes()).collect();
+    gray16(v.iter().copied(), w, h, c)
+}
+
+/// 16-bit single-channel PNG of `samples` (row-major, top row first), written big-endian as PNG stores them,
+/// straight from the iterator (a loop the compiler vectorizes where the samples are computed).
+fn gray16(samples: impl ExactSizeIterator<Item = u16>, w: u32, h: u32, c: PngCompression) -> Vec<u8> {
+    let mut be = vec![0u8; samples.len() * 2];
+    for (out, v) in be.chunks_exact_mut(2).zip(samples) {
+        out.copy_from_slice(&v.to_be_bytes());
+    }
     png(&be, w, h, png::ColorType::Grayscale, png::BitDepth::Sixteen, c)
 }
 
@@ -125,11 +134,7 @@ fn millimetres(d: f32) -> u16 {
 
 /// 16-bit single-channel PNG of depth in millimetres (0 = no depth; clamped at 65.535 m).
 pub fn depth_mm_png(depth: &[f32], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
-    let mut be = vec![0u8; depth.len() * 2];
-    for (out, d) in be.chunks_exact_mut(2).zip(depth) {
-        out.copy_from_slice(&millimetres(*d).to_be_bytes());
-    }
-    png(&be, w, h, png::ColorType::Grayscale, png::BitDepth::Sixteen, c)
+    gray16(depth.iter().map(|d| millimetres(*d)), w, h, c)
 }
 
 #[cfg(test)]
