@@ -24,8 +24,8 @@ impl<V: Copy + Default> Binned<V> {
         let mut start = vec![0u32; cells + 1];
         for t in items {
             let [x0, y0, x1, y1] = rect(t);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
+            for y in y0..y1 + 1 {
+                for x in x0..x1 + 1 {
                     start[y * across + x + 1] += 1;
                 }
             }
@@ -37,8 +37,8 @@ impl<V: Copy + Default> Binned<V> {
         let mut out = vec![V::default(); start[cells] as usize];
         for (i, t) in items.iter().enumerate() {
             let [x0, y0, x1, y1] = rect(t);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
+            for y in y0..y1 + 1 {
+                for x in x0..x1 + 1 {
                     let c = y * across + x;
                     out[next[c] as usize] = value(i, t);
                     next[c] += 1;

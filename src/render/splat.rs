@@ -4,14 +4,15 @@
 //!
 //! An 800k-point frame is dominated by per-point overhead and cache misses, so:
 //! - a splat is a small record carrying what drawing needs; colour, normal and object are read from its
-//!   primitive only for the samples that end up showing it;
+//!   primitive only for the samples that end up showing it. Most splats of a dense cloud are [`Flat`] (one depth
+//!   over a square, 24 bytes); only cubes and surfels drawn at their own size are [`Solid`] (ray-tested);
 //! - binning happens inside the parallel setup: each chunk of points sorts its splats by band of tile rows (a
-//!   stable counting sort into a few sequential streams), and a band walks the chunks' slices in chunk order,
-//!   which is the scene's whatever the thread count;
+//!   counting sort into a few sequential streams);
 //! - a band's splats are drawn on their own into a [`Layer`] (nearest splat per sample, first in scene order among
 //!   equals, as one integer [`key`] per sample), which each tile then merges behind its triangles: the same result
 //!   as drawing the splats after the triangles, since "first nearest" of a sequence is the first nearest of its
-//!   head and of the rest;
+//!   head and of the rest. A sample keeps the smallest key and keys are unique, so the layer does not depend on
+//!   the order splats are drawn in: not on the thread count, nor on flat and solid splats being drawn apart;
 //! - a tile asks for the colours of all the points it will show before reading any ([`Splats::prefetch`]): a
 //!   cloud's points land on the image in no spatial order, and those reads are the merge's cache misses.
 //!
@@ -68,29 +69,48 @@ impl Default for SplatSettings {
     }
 }
 
-/// A screen-space splat in fixed-point sample coordinates: centre, half width and height, a depth and its point.
+/// A splat of one depth over a screen-aligned square (or disk) of samples, in fixed-point sample coordinates:
+/// squares and disks, and cubes and surfels below the minimum footprint. The common splat of a dense cloud, so it
+/// is kept small (24 bytes): setup writes it, binning copies it and a band reads it, once per point per image.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Splat {
+struct Flat {
+    x: i32,
+    y: i32,
+    /// Half width and height.
+    r: i32,
+    /// [`WHOLE`] for a square or disk drawn at its own size; [`CLAMPED`] for one drawn as a square of the minimum
+    /// footprint (and a small surfel); for a cube below it, the face it shows (an index into [`FACES`]).
+    small: u8,
+    /// Depth and point as one [`key`].
+    key: u64,
+}
+
+/// A cube or surfel drawn at its own size, by a ray test per covered sample: centre, half width and height of its
+/// screen box (fixed point), the nearest depth any of its samples can have (the near side of its view-space
+/// bounding box, which lets a sample already holding something nearer skip the ray test), and its point.
+#[derive(Debug, Clone, Copy, Default)]
+struct Solid {
     x: i32,
     y: i32,
     rx: i32,
     ry: i32,
-    /// View depth of a square or disk; for a cube, the nearest depth any of its samples can have (the near side of
-    /// its view-space bounding box), which lets a sample already holding something nearer skip the ray test.
     z: f32,
     /// The point's index over the scene's point primitives, in order.
     point: u32,
-    /// For cubes, the centre relative to the eye: carried here, since reading it back from the positions
-    /// misses the cache once per splat when a cloud's order is not spatial.
+    /// The centre relative to the eye: carried here, since reading it back from the positions misses the cache
+    /// once per splat when a cloud's order is not spatial.
     centre: Vec3,
-    /// [`WHOLE`] for a splat drawn at its own size; [`CLAMPED`] for a square or disk drawn as a square of the
-    /// minimum footprint; for a cube below it, drawn as a square, the face it shows (an index into [`FACES`]).
-    small: u8,
 }
 
-/// [`Splat::small`] of a splat drawn at its own size.
+/// What [`project`] makes of a point.
+enum Projected {
+    Flat(Flat),
+    Solid(Solid),
+}
+
+/// [`Flat::small`] of a square or disk drawn at its own size.
 const WHOLE: u8 = u8::MAX;
-/// [`Splat::small`] of a square or disk drawn as a square of the minimum footprint.
+/// [`Flat::small`] of a square or disk drawn as a square of the minimum footprint.
 const CLAMPED: u8 = u8::MAX - 1;
 
 /// One point primitive, as splats read it.
@@ -107,8 +127,10 @@ struct Source<'a> {
 #[derive(Debug)]
 pub struct Splats<'a> {
     sources: Vec<Source<'a>>,
-    /// Each setup chunk's splats, binned by band.
-    bins: Vec<Binned<Splat>>,
+    /// Each setup chunk's flat splats, binned by band.
+    flat: Vec<Binned<Flat>>,
+    /// Each setup chunk's solid splats, binned by band.
+    solid: Vec<Binned<Solid>>,
     /// Half the edge of a cube splat, or the radius of a surfel (`None`: squares or disks).
     cube: Option<f32>,
     /// The solid splats are surfels, not cubes.
@@ -147,7 +169,8 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     };
     let mut out = Splats {
         sources: Vec::new(),
-        bins: Vec::new(),
+        flat: Vec::new(),
+        solid: Vec::new(),
         cube: matches!(s.shape, Shape::Cube | Shape::Surfel).then(|| half(s.size)),
         surfel: s.shape == Shape::Surfel,
         disk: s.shape == Shape::Disk,
@@ -172,30 +195,47 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     };
     let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
     let mut first = 0u32;
+    let size = p.size;
+    // Each sample row's band, looked up: a 64-bit division per row, twice per splat for counting and twice
+    // for placing it, was a tenth of the setup.
+    let band_of: Vec<u32> = (0..size.1).map(|y| (y / band_rows) as u32).collect();
+    let band = |(y0, y1): (i64, i64)| [0, band_of[y0 as usize] as usize, 0, band_of[y1 as usize] as usize];
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
         out.sources.push(Source { first, prim, base });
-        let bins: Vec<Binned<Splat>> = prim
+        let bins: Vec<(Binned<Flat>, Binned<Solid>)> = prim
             .positions
             .par_chunks(SETUP_CHUNK)
             .enumerate()
-            .map_init(Vec::new, |scratch, (c, chunk)| {
-                // Each splat with its first and last band, computed once for the count and the scatter.
-                scratch.clear();
-                let offset = first + (c * SETUP_CHUNK) as u32;
-                let normals = prim.normals.get(c * SETUP_CHUNK..).unwrap_or_default();
-                for (j, pos) in chunk.iter().enumerate() {
-                    let normal = normals.get(j).copied().unwrap_or(Vec3::ZERO);
-                    if let Some(sp) = project(*pos, normal, p, &foot, offset + j as u32) {
-                        let (y0, y1) = sp.rows(p.size);
-                        scratch.push((sp, (y0 / band_rows) as u16, (y1 / band_rows) as u16));
+            .map_init(
+                || (Vec::new(), Vec::new()),
+                |(flat, solid), (c, chunk)| {
+                    flat.clear();
+                    solid.clear();
+                    let offset = first + (c * SETUP_CHUNK) as u32;
+                    // Only a surfel reads its normal here (its tilt): a cloud's normals are as large as its
+                    // positions.
+                    let normals =
+                        if foot.surfel { prim.normals.get(c * SETUP_CHUNK..).unwrap_or_default() } else { &[] };
+                    for (j, pos) in chunk.iter().enumerate() {
+                        let normal = normals.get(j).copied().unwrap_or(Vec3::ZERO);
+                        match project(*pos, normal, p, &foot, offset + j as u32) {
+                            Some(Projected::Flat(sp)) => flat.push(sp),
+                            Some(Projected::Solid(sp)) => solid.push(sp),
+                            None => {}
+                        }
                     }
-                }
-                // A splat overlapping two bands is in each.
-                Binned::sort(scratch, 1, bands, |&(_, b0, b1)| [0, b0 as usize, 0, b1 as usize], |_, &(sp, ..)| sp)
-            })
+                    // A splat overlapping two bands is in each.
+                    (
+                        Binned::sort(flat, 1, bands, |sp| band(sp.rows(size)), |_, sp| *sp),
+                        Binned::sort(solid, 1, bands, |sp| band(sp.rows(size)), |_, sp| *sp),
+                    )
+                },
+            )
             .collect();
-        out.bins.extend(bins);
+        let (flat, solid): (Vec<_>, Vec<_>) = bins.into_iter().unzip();
+        out.flat.extend(flat);
+        out.solid.extend(solid);
         first += prim.positions.len() as u32;
     }
     out
@@ -203,7 +243,7 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
 
 /// The splat of point `point` at world `pos`, or `None` when it is clipped or falls outside the image.
 #[inline]
-fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Splat> {
+fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Projected> {
     let [fx, fy, cx, cy] = p.f;
     let lim = (p.size.0.max(p.size.1) + 2) as f32;
     let v = p.w2c.transform_point3(pos);
@@ -213,7 +253,7 @@ fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -
     }
     let iz = 1.0 / z;
     let fixed = |v: f32| snap(v.clamp(-lim, lim) as f64) as i32;
-    let sp = match (s.cube, s.size) {
+    match (s.cube, s.size) {
         (Some(h), _) => {
             // The near plane would cut the cube: drop it (cubes are voxel-sized).
             if z - h * 3f32.sqrt() < p.near {
@@ -251,13 +291,20 @@ fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -
                 // (A surfel's square is as wide as its ellipse's minor axis; a cube's as its screen box.)
                 let width = if s.surfel { h * fx * iz * tilt } else { wx.min(wy) };
                 let r = fixed(s.min_half.max(width)) + 1;
-                let sp = Splat { x, y, rx: r, ry: r, z: near_z, point, centre, small: face };
-                let b = sp.bbox(p.size);
-                return (sp.rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp);
+                return Flat { x, y, r, small: face, key: key(near_z, point) }.visible(p.size);
             }
             // One fixed-point unit more on each side, for the rounding of centre and half size.
             let (rx, ry) = (fixed(wx) + 1, fixed(wy) + 1);
-            Splat { x, y, rx, ry, z: near_z, point, centre, small: WHOLE }
+            let b = bbox(x, y, rx, ry, p.size);
+            (rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(Projected::Solid(Solid {
+                x,
+                y,
+                rx,
+                ry,
+                z: near_z,
+                point,
+                centre,
+            }))
         }
         (None, size) => {
             let half = match size {
@@ -269,34 +316,31 @@ fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -
             let clamped = half < s.min_half;
             let r = if clamped { fixed(s.min_half) + 1 } else { fixed(half.min(lim)) };
             let (x, y) = (fixed(cx + fx * v.x * iz), fixed(cy - fy * v.y * iz));
-            Splat { x, y, rx: r, ry: r, z, point, centre: Vec3::ZERO, small: if clamped { CLAMPED } else { WHOLE } }
+            Flat { x, y, r, small: if clamped { CLAMPED } else { WHOLE }, key: key(z, point) }.visible(p.size)
         }
-    };
-    let b = sp.bbox(p.size);
-    (sp.rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(sp)
+    }
 }
 
-impl Splat {
+impl Flat {
     /// Whether the sample centre (fixed point) is inside the splat as a disk (a square covers its bounding box).
     #[inline]
     fn disk_covers(&self, px: i64, py: i64) -> bool {
-        let (dx, dy, r) = (px - self.x as i64, py - self.y as i64, self.rx as i64);
+        let (dx, dy, r) = (px - self.x as i64, py - self.y as i64, self.r as i64);
         dx * dx + dy * dy < r * r
     }
 
-    /// Inclusive bounding box, within a `size` sample grid, of the samples whose centres lie in
-    /// [x − rx, x + rx) × [y − ry, y + ry): exactly a square's samples (half-open, so that squares one size apart
-    /// tile without double hits), and those a disk may cover (empty when min > max).
+    /// The splat, when it covers a sample of the `size` sample grid.
     #[inline]
-    fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
-        let (x, y, rx, ry) = (self.x as i64, self.y as i64, self.rx as i64, self.ry as i64);
-        // Sample s has its centre at s·S + S/2: the first centre ≥ a and the last centre < b.
-        let first = |a: i64| -(SUBPIXEL / 2 - a).div_euclid(SUBPIXEL);
-        let last = |b: i64| (b - 1 - SUBPIXEL / 2).div_euclid(SUBPIXEL);
-        [first(x - rx).max(0), first(y - ry).max(0), last(x + rx).min(size.0 - 1), last(y + ry).min(size.1 - 1)]
+    fn visible(self, size: (i64, i64)) -> Option<Projected> {
+        let b = self.bbox(size);
+        (self.r > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(Projected::Flat(self))
     }
 
-    /// First and last sample row of the bounding box.
+    #[inline]
+    fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
+        bbox(self.x, self.y, self.r, self.r, size)
+    }
+
     #[inline]
     fn rows(&self, size: (i64, i64)) -> (i64, i64) {
         let b = self.bbox(size);
@@ -304,10 +348,45 @@ impl Splat {
     }
 }
 
+impl Solid {
+    #[inline]
+    fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
+        bbox(self.x, self.y, self.rx, self.ry, size)
+    }
+
+    #[inline]
+    fn rows(&self, size: (i64, i64)) -> (i64, i64) {
+        let b = self.bbox(size);
+        (b[1], b[3])
+    }
+}
+
+/// Inclusive bounding box, within a `size` sample grid, of the samples whose centres lie in
+/// [x − rx, x + rx) × [y − ry, y + ry) (fixed point): exactly a square's samples (half-open, so that squares one
+/// size apart tile without double hits), and those a disk or a solid may cover (empty when min > max).
+#[inline]
+fn bbox(x: i32, y: i32, rx: i32, ry: i32, size: (i64, i64)) -> [i64; 4] {
+    let (x, y, rx, ry) = (x as i64, y as i64, rx as i64, ry as i64);
+    // Sample s has its centre at s·S + S/2: the first centre ≥ a and the last centre < b. (An arithmetic shift
+    // is the floor of a division by S, as `div_euclid` is, in one instruction; this runs several times per splat.)
+    const _: () = assert!(1 << SUBPIXEL_BITS == SUBPIXEL);
+    let first = |a: i64| -((SUBPIXEL / 2 - a) >> SUBPIXEL_BITS);
+    let last = |b: i64| (b - 1 - SUBPIXEL / 2) >> SUBPIXEL_BITS;
+    [first(x - rx).max(0), first(y - ry).max(0), last(x + rx).min(size.0 - 1), last(y + ry).min(size.1 - 1)]
+}
+
+/// log₂ [`SUBPIXEL`].
+const SUBPIXEL_BITS: u32 = SUBPIXEL.trailing_zeros();
+
 impl<'a> Splats<'a> {
-    /// Band `b`'s splats, in scene order.
-    fn band(&self, b: usize) -> impl Iterator<Item = &Splat> {
-        self.bins.iter().flat_map(move |bin| bin.cell(b))
+    /// Band `b`'s flat splats.
+    fn flat(&self, b: usize) -> impl Iterator<Item = &Flat> {
+        self.flat.iter().flat_map(move |bin| bin.cell(b))
+    }
+
+    /// Band `b`'s solid splats.
+    fn solid(&self, b: usize) -> impl Iterator<Item = &Solid> {
+        self.solid.iter().flat_map(move |bin| bin.cell(b))
     }
 
     /// The primitive and index within it of point `i`.
@@ -349,23 +428,26 @@ impl<'a> Splats<'a> {
     /// Draws band `band` (sample rows from `band · band_rows`) into `layer`: per sample, the nearest splat and its
     /// depth, the first in scene order among equals. Returns whether any sample was written.
     pub fn draw_band(&self, band: usize, p: &Projection, layer: &mut Layer) -> bool {
-        if self.band(band).next().is_none() {
+        let (mut solid, mut flat) = (self.solid(band).peekable(), self.flat(band).peekable());
+        if solid.peek().is_none() && flat.peek().is_none() {
             return false;
         }
         let y0 = band as i64 * self.band_rows;
         let (w, h) = (p.size.0, self.band_rows.min(p.size.1 - y0));
         layer.reset(y0, w, h);
-        let rays = self.cube.map(|half| (Rays::new(p, 0, y0, w, h), half));
         let mut any = false;
-        for sp in self.band(band) {
-            let b = sp.bbox(p.size);
-            let (by0, by1) = (b[1].max(y0), b[3].min(y0 + h - 1));
-            if let (Some((rays, half)), WHOLE) = (&rays, sp.small) {
+        // Keys are unique (a point is drawn once per sample) and a sample keeps the smallest, so the order in which
+        // splats are drawn, solid or flat, does not change the layer.
+        if let (Some(half), Some(_)) = (self.cube, solid.peek()) {
+            let rays = Rays::new(p, 0, y0, w, h);
+            for sp in solid {
+                let b = sp.bbox(p.size);
+                let (by0, by1) = (b[1].max(y0), b[3].min(y0 + h - 1));
                 // A surfel's plane; without a normal, it faces the eye.
                 let n = if self.surfel { self.normal_of(sp.point).unwrap_or(sp.centre) } else { Vec3::ZERO };
                 let nearest = key(sp.z, sp.point);
-                for sy in by0..=by1 {
-                    for sx in b[0]..=b[2] {
+                for sy in by0..by1 + 1 {
+                    for sx in b[0]..b[2] + 1 {
                         let i = ((sy - y0) * w + sx) as usize;
                         // No part of the cube is nearer than `sp.z`: a sample already holding something at
                         // least that near cannot change (dense clouds overdraw many times), so skip its ray test.
@@ -373,9 +455,9 @@ impl<'a> Splats<'a> {
                             continue;
                         }
                         let hit = if self.surfel {
-                            rays.disk_hit(i, sp.centre, n, *half).map(|z| (z, CLAMPED))
+                            rays.disk_hit(i, sp.centre, n, half).map(|z| (z, CLAMPED))
                         } else {
-                            rays.hit(i, sp.centre, *half)
+                            rays.hit(i, sp.centre, half)
                         };
                         if let Some((z, face)) = hit {
                             if z >= p.near && z <= p.far && key(z, sp.point) < layer.key[i] {
@@ -385,20 +467,23 @@ impl<'a> Splats<'a> {
                         }
                     }
                 }
-                continue;
             }
-            // Squares and disks, and splats below the minimum footprint (squares; cubes showing one face). The
-            // bounding box is exactly a square's samples; a disk tests each.
-            let (k, disk) = (key(sp.z, sp.point), self.disk && sp.small == WHOLE);
-            for sy in by0..=by1 {
+        }
+        // Squares and disks, and splats below the minimum footprint (squares; cubes showing one face). The
+        // bounding box is exactly a square's samples; a disk tests each.
+        for sp in flat {
+            let b = sp.bbox(p.size);
+            let (by0, by1) = (b[1].max(y0), b[3].min(y0 + h - 1));
+            let disk = self.disk && sp.small == WHOLE;
+            for sy in by0..by1 + 1 {
                 let row = ((sy - y0) * w) as usize;
-                for sx in b[0]..=b[2] {
+                for sx in b[0]..b[2] + 1 {
                     let i = row + sx as usize;
                     if disk && !sp.disk_covers(sx * SUBPIXEL + SUBPIXEL / 2, sy * SUBPIXEL + SUBPIXEL / 2) {
                         continue;
                     }
-                    if k < layer.key[i] {
-                        (layer.key[i], layer.face[i]) = (k, sp.small);
+                    if sp.key < layer.key[i] {
+                        (layer.key[i], layer.face[i]) = (sp.key, sp.small);
                         any = true;
                     }
                 }
