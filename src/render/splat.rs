@@ -295,16 +295,7 @@ fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -
             }
             // One fixed-point unit more on each side, for the rounding of centre and half size.
             let (rx, ry) = (fixed(wx) + 1, fixed(wy) + 1);
-            let b = bbox(x, y, rx, ry, p.size);
-            (rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(Projected::Solid(Solid {
-                x,
-                y,
-                rx,
-                ry,
-                z: near_z,
-                point,
-                centre,
-            }))
+            Solid { x, y, rx, ry, z: near_z, point, centre }.visible(p.size)
         }
         (None, size) => {
             let half = match size {
@@ -336,11 +327,13 @@ impl Flat {
         (self.r > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(Projected::Flat(self))
     }
 
+    /// The samples it may cover ([`bbox`]).
     #[inline]
     fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
         bbox(self.x, self.y, self.r, self.r, size)
     }
 
+    /// First and last sample row of its bounding box.
     #[inline]
     fn rows(&self, size: (i64, i64)) -> (i64, i64) {
         let b = self.bbox(size);
@@ -349,11 +342,20 @@ impl Flat {
 }
 
 impl Solid {
+    /// The splat, when its screen box holds a sample of the `size` sample grid.
+    #[inline]
+    fn visible(self, size: (i64, i64)) -> Option<Projected> {
+        let b = self.bbox(size);
+        (self.rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(Projected::Solid(self))
+    }
+
+    /// The samples its screen box holds ([`bbox`]).
     #[inline]
     fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
         bbox(self.x, self.y, self.rx, self.ry, size)
     }
 
+    /// First and last sample row of its bounding box.
     #[inline]
     fn rows(&self, size: (i64, i64)) -> (i64, i64) {
         let b = self.bbox(size);
