@@ -319,18 +319,21 @@ impl Flat {
         let (dx, dy, r) = (px - self.x as i64, py - self.y as i64, self.r as i64);
         dx * dx + dy * dy < r * r
     }
+}
 
-    /// The splat, when it covers a sample of the `size` sample grid.
-    #[inline]
-    fn visible(self, size: (i64, i64)) -> Option<Projected> {
-        let b = self.bbox(size);
-        (self.r > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(Projected::Flat(self))
-    }
+/// A splat's screen box: centre and half extents in fixed point, and what follows from them.
+trait ScreenBox: Copy {
+    /// Centre x and y, half width and height.
+    fn half_box(&self) -> [i32; 4];
+
+    /// What [`project`] makes of it.
+    fn projected(self) -> Projected;
 
     /// The samples it may cover ([`bbox`]).
     #[inline]
     fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
-        bbox(self.x, self.y, self.r, self.r, size)
+        let [x, y, rx, ry] = self.half_box();
+        bbox(x, y, rx, ry, size)
     }
 
     /// First and last sample row of its bounding box.
@@ -339,27 +342,36 @@ impl Flat {
         let b = self.bbox(size);
         (b[1], b[3])
     }
-}
 
-impl Solid {
-    /// The splat, when its screen box holds a sample of the `size` sample grid.
+    /// The splat, when its box holds a sample of the `size` sample grid.
     #[inline]
     fn visible(self, size: (i64, i64)) -> Option<Projected> {
         let b = self.bbox(size);
-        (self.rx > 0 && b[0] <= b[2] && b[1] <= b[3]).then_some(Projected::Solid(self))
+        (self.half_box()[2] > 0 && b[0] <= b[2] && b[1] <= b[3]).then(|| self.projected())
+    }
+}
+
+impl ScreenBox for Flat {
+    #[inline]
+    fn half_box(&self) -> [i32; 4] {
+        [self.x, self.y, self.r, self.r]
     }
 
-    /// The samples its screen box holds ([`bbox`]).
     #[inline]
-    fn bbox(&self, size: (i64, i64)) -> [i64; 4] {
-        bbox(self.x, self.y, self.rx, self.ry, size)
+    fn projected(self) -> Projected {
+        Projected::Flat(self)
+    }
+}
+
+impl ScreenBox for Solid {
+    #[inline]
+    fn half_box(&self) -> [i32; 4] {
+        [self.x, self.y, self.rx, self.ry]
     }
 
-    /// First and last sample row of its bounding box.
     #[inline]
-    fn rows(&self, size: (i64, i64)) -> (i64, i64) {
-        let b = self.bbox(size);
-        (b[1], b[3])
+    fn projected(self) -> Projected {
+        Projected::Solid(self)
     }
 }
 
