@@ -331,30 +331,13 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
     }
 }
 
-/// Cells along each side of the ground plane: the environment's shadowing is evaluated per vertex, so the plane is
-/// tessellated finely enough for a subject's contact shadow to show (about 3 cm cells on a 4 m plane).
-const GROUND_CELLS: u32 = 128;
-
-/// The ground plane's geometry at height `z`, in world space: a double-sided diffuse grid facing +Z that
-/// receives shadows and casts none.
+/// The ground plane's geometry at height `z`, in world space: a double-sided diffuse rectangle facing +Z (two
+/// triangles) that receives shadows and casts none. Lit shading reads the environment's visibility over it from
+/// a grid (`render::light`), not from its vertices.
 pub fn ground(p: &crate::manifest::source::Plane, z: f32) -> PosedScene {
-    let n = GROUND_CELLS;
-    let [w, d] = p.size.map(|v| v as f32);
-    let mut positions = Vec::with_capacity(((n + 1) * (n + 1)) as usize);
-    for j in 0..=n {
-        for i in 0..=n {
-            let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
-            positions.push(Vec3::new((u - 0.5) * w, (v - 0.5) * d, z));
-        }
-    }
-    let mut indices = Vec::with_capacity((n * n * 6) as usize);
-    for j in 0..n {
-        for i in 0..n {
-            let a = j * (n + 1) + i;
-            let (b, c, e) = (a + 1, a + n + 2, a + n + 1);
-            indices.extend_from_slice(&[a, b, c, a, c, e]);
-        }
-    }
+    let [w, d] = p.size.map(|v| v as f32 * 0.5);
+    let positions = vec![Vec3::new(-w, -d, z), Vec3::new(w, -d, z), Vec3::new(w, d, z), Vec3::new(-w, d, z)];
+    let indices = vec![0, 1, 2, 0, 2, 3];
     let normals = vec![Vec3::Z; positions.len()];
     let c = p.color.map(|v| v as f32);
     let material = Material {

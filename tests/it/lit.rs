@@ -415,3 +415,26 @@ fn a_ground_plane_lights_what_stands_on_it_from_below() {
     assert!((215..=240).contains(&grounded[0]), "lit from the ground: {grounded:?}");
     assert!(floating[0] < 90, "no ground, nothing from below: {floating:?}");
 }
+
+#[test]
+fn the_ground_darkens_under_a_caster_in_the_environments_light_alone() {
+    // The plane is two triangles; its occlusion is a grid over it. Under a uniform sky, the ground beside a ball
+    // hovering 0.6 m over it sees about a tenth of its sky hidden (a 20° disk 60° up), far away none.
+    let scene = ground_and_caster();
+    let c = cam(128, 110.0, Camera::look_at(Vec3::new(0.0, -0.01, 6.0), Vec3::ZERO, Vec3::Y));
+    let f = lit(&scene, &c, uniform(1.0), 0.0, false, &[]);
+    let project = |p: Vec3| {
+        let q = c.c2w.inverse().transform_point3(p.as_dvec3());
+        ((c.cx + c.fx * q.x / -q.z) as u32, (c.cy - c.fy * q.y / -q.z) as u32)
+    };
+    let (nx, ny) = project(Vec3::new(0.6, 0.0, 0.0));
+    let (fx, fy) = project(Vec3::new(-1.8, -1.8, 0.0));
+    let (near, far) = (rgb(&f, nx, ny), rgb(&f, fx, fy));
+    // Far from it: the ground's albedo 0.8 under radiance 1, 0.8 linear.
+    let open = vvgen::scene::material::linear_to_srgb8(0.8);
+    assert!(far[0].abs_diff(open) <= 2, "{far:?} vs {open}");
+    assert!(near[0] + 6 < far[0] && near[0] > far[0] - 40, "{near:?} vs {far:?}");
+    // Smooth across the grid: neighbouring pixels along the shadow's falloff differ by little.
+    let row: Vec<u8> = (nx..nx + 12).map(|x| rgb(&f, x, ny)[0]).collect();
+    assert!(row.windows(2).all(|w| w[0].abs_diff(w[1]) <= 3), "{row:?}");
+}

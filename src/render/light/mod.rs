@@ -64,6 +64,45 @@ pub struct FrameLight {
     /// Per primitive, per vertex: the fraction of the environment's light (weighted by where it comes from and
     /// by the vertex normal) that no caster blocks. Empty for point primitives.
     pub vertex_visibility: Vec<Vec<f32>>,
+    /// The same fraction over each ground plane, on a grid (see [`PlaneVisibility`]).
+    planes: Vec<PlaneVisibility>,
+}
+
+/// Cells along each side of a ground plane's visibility grid: about 3 cm on a 4 m plane, fine enough for a
+/// subject's contact shadow to show.
+const PLANE_CELLS: usize = 128;
+
+/// The environment's visibility over a ground plane (the `plane` source: two triangles, receiving, casting
+/// nothing), sampled on a grid of [`PLANE_CELLS`]² cells over its extent and read bilinearly. A plane's
+/// vertices are only its corners, so it cannot carry its occlusion per vertex as other surfaces do; a grid
+/// costs the same to prepare as a finely tessellated plane did and nothing to rasterize.
+#[derive(Debug)]
+struct PlaneVisibility {
+    /// The plane's material (only a plane source's triangles cast no shadow, and each has its own material).
+    material: u32,
+    /// Corner of the grid (x, y) and the size of one cell.
+    lo: glam::Vec2,
+    cell: glam::Vec2,
+    /// (PLANE_CELLS + 1)² values, rows along +y.
+    vis: Vec<f32>,
+}
+
+impl PlaneVisibility {
+    /// The visibility at world (x, y), bilinear between grid points, held at the edges.
+    #[inline]
+    fn at(&self, x: f32, y: f32) -> f32 {
+        let n = PLANE_CELLS;
+        let u = ((x - self.lo.x) / self.cell.x).clamp(0.0, n as f32);
+        let v = ((y - self.lo.y) / self.cell.y).clamp(0.0, n as f32);
+        let (i, j) = ((u as usize).min(n - 1), (v as usize).min(n - 1));
+        let (tu, tv) = (u - i as f32, v - j as f32);
+        let row = |j: usize| {
+            let a = self.vis[j * (n + 1) + i];
+            a + (self.vis[j * (n + 1) + i + 1] - a) * tu
+        };
+        let (a, b) = (row(j), row(j + 1));
+        a + (b - a) * tv
+    }
 }
 
 /// A ground plane's first bounce: a receiving-only diffuse plane (the `plane` source) stands in for the map
@@ -149,7 +188,8 @@ impl FrameLight {
             None => Vec::new(),
         };
         let ground = Ground::find(scene, &all, &env);
-        let mut light = FrameLight { lights, env, ground, occlusion, vertex_visibility: Vec::new() };
+        let mut light =
+            FrameLight { lights, env, ground, occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
         light.vertex_visibility = scene
             .primitives
             .iter()
@@ -163,7 +203,38 @@ impl FrameLight {
                 PrimKind::Points => Vec::new(),
             })
             .collect();
+        light.planes = scene
+            .primitives
+            .iter()
+            .filter(|p| p.kind == PrimKind::Triangles && !p.positions.is_empty())
+            .filter(|p| scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows))
+            .map(|prim| light.plane_visibility(prim.material, &prim.positions))
+            .collect();
         light
+    }
+
+    /// The environment's visibility over the plane through `corners` (horizontal, facing +Z).
+    fn plane_visibility(&self, material: u32, corners: &[Vec3]) -> PlaneVisibility {
+        let lo = corners.iter().fold(Vec3::INFINITY, |a, &p| a.min(p));
+        let hi = corners.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
+        let n = PLANE_CELLS;
+        let cell = (hi - lo).truncate().max(glam::Vec2::splat(1e-6)) / n as f32;
+        let vis = (0..(n + 1) * (n + 1))
+            .into_par_iter()
+            .map(|k| {
+                let (i, j) = (k % (n + 1), k / (n + 1));
+                let p = Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z);
+                self.environment_visibility(p, Vec3::Z)
+            })
+            .collect();
+        PlaneVisibility { material, lo: lo.truncate(), cell, vis }
+    }
+
+    /// The environment's visibility at world point `p` of a surface of material `material`, when that is a
+    /// ground plane's (whose visibility is a grid, not per vertex).
+    #[inline]
+    pub fn plane_visibility_at(&self, material: u32, p: Vec3) -> Option<f32> {
+        self.planes.iter().find(|g| g.material == material).map(|g| g.at(p.x, p.y))
     }
 
     /// The fraction of the environment's light (weighted by where it comes from and by the cosine to `n`) that

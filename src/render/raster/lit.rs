@@ -71,7 +71,10 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
         surface.metallic *= mr.z;
     }
     let ao = m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
-    let vis = tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2];
+    let vis = match l.light.plane_visibility_at(tri.material, p) {
+        Some(v) => v,
+        None => tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2],
+    };
     let n = match m.normal {
         Some((r, tex, scale)) => {
             let tangent = tri.tangent[0] * k[0] + tri.tangent[1] * k[1] + tri.tangent[2] * k[2];
