@@ -256,19 +256,25 @@ impl ShadowMap {
         // than the receiver's plane anywhere in it: fully shadowed, as the taps would find (the inside of a
         // shadow, read in four texels instead of eighty). The inner blocker taps lie in that region, so the
         // search finds blockers; a hair of margin keeps the bound on the safe side of rounding.
-        let widest_filter = (0.5 * widest).min(24.0).max(1.0) + 1.0;
+        let widest_filter = (0.5 * widest).clamp(1.0, 24.0) + 1.0;
         let reach = (slope.x.abs() + slope.y.abs()) * widest_filter;
         let (x0, y0) = (floor(q.x - widest_filter), floor(q.y - widest_filter));
         let (x1, y1) = (floor(q.x + widest_filter), floor(q.y + widest_filter));
         if self.region_max(x0, y0, x1, y1) < recv - reach - 1e-5 * (1.0 + recv.abs()) {
             return 0.0;
         }
+        // The blocker search: a 4 × 4 grid of taps over ±`search`, the rows and columns of which are found once.
+        let a = axis(search);
+        let (xs, ys) = (a.map(|o| floor(q.x + o)), a.map(|o| floor(q.y + o)));
+        let inside = self.holds(xs[0], ys[0], xs[3], ys[3]);
         let (mut sum, mut count) = (0.0, 0);
-        for o in grid(search) {
-            let d = self.at(floor(q.x + o.x), floor(q.y + o.y));
-            if d < recv + slope.dot(o) {
-                sum += d;
-                count += 1;
+        for j in 0..4 {
+            for i in 0..4 {
+                let d = if inside { self.texel(xs[i], ys[j]) } else { self.at(xs[i], ys[j]) };
+                if d < recv + (slope.x * a[i] + slope.y * a[j]) {
+                    sum += d;
+                    count += 1;
+                }
             }
         }
         if count == 0 {
@@ -279,10 +285,46 @@ impl ShadowMap {
         if radius <= 1.0 {
             return self.pcf(q, recv, slope);
         }
-        let radius = radius.min(24.0);
-        let lit: f32 =
-            grid(radius).map(|o| self.pcf(Vec3::new(q.x + o.x, q.y + o.y, q.z), recv + slope.dot(o), slope)).sum();
+        // The filter: a bilinear percentage-closer lookup (see [`ShadowMap::pcf`]) at each of a 4 × 4 grid over
+        // ±`radius`, against the receiver's plane there; each column's and row's texels, weights and plane
+        // offsets are found once.
+        let r = axis(radius.min(24.0));
+        let cols = r.map(|o| PcfAxis::new(q.x + o, slope.x));
+        let rows = r.map(|o| PcfAxis::new(q.y + o, slope.y));
+        let inside = self.holds(cols[0].texel, rows[0].texel, cols[3].texel + 1, rows[3].texel + 1);
+        let mut lit = 0.0;
+        for (j, row) in rows.iter().enumerate() {
+            for (i, col) in cols.iter().enumerate() {
+                let recv = recv + (slope.x * r[i] + slope.y * r[j]);
+                let tap = |dx: usize, dy: usize| {
+                    let (x, y) = (col.texel + dx as i64, row.texel + dy as i64);
+                    let d = if inside { self.texel(x, y) } else { self.at(x, y) };
+                    if d < recv + (col.plane[dx] + row.plane[dy]) {
+                        0.0
+                    } else {
+                        1.0
+                    }
+                };
+                let (l00, l10, l01, l11) = (tap(0, 0), tap(1, 0), tap(0, 1), tap(1, 1));
+                let top = l00 + (l10 - l00) * col.weight;
+                let bottom = l01 + (l11 - l01) * col.weight;
+                lit += top + (bottom - top) * row.weight;
+            }
+        }
         lit / 16.0
+    }
+
+    /// Whether texels `x0..=x1` × `y0..=y1` all lie in the map.
+    #[inline]
+    fn holds(&self, x0: i64, y0: i64, x1: i64, y1: i64) -> bool {
+        let n = self.size as i64;
+        x0 >= 0 && y0 >= 0 && x1 < n && y1 < n
+    }
+
+    /// Nearest caster depth at texel (x, y), which lies in the map.
+    #[inline]
+    fn texel(&self, x: i64, y: i64) -> f32 {
+        self.depth[(y * self.size as i64 + x) as usize]
     }
 
     /// How the depth of the receiver's plane (normal `n`) changes per texel across an orthographic map: taps away
@@ -346,9 +388,28 @@ fn pyramid(base: &[f32], side: usize, init: f32, fold: fn(f32, f32) -> f32) -> V
     levels
 }
 
-/// A 4×4 grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's taps.
-fn grid(radius: f32) -> impl Iterator<Item = Vec2> {
-    (0..16).map(move |k| Vec2::new((k % 4) as f32 - 1.5, (k / 4) as f32 - 1.5) * (radius / 1.5))
+/// One axis of a 4 × 4 grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's taps
+/// are the grid's points (x from this, y from this).
+fn axis(radius: f32) -> [f32; 4] {
+    std::array::from_fn(|i| (i as f32 - 1.5) * (radius / 1.5))
+}
+
+/// One axis of a bilinear percentage-closer lookup at light-space coordinate `c`: the lower of the two texels
+/// read, the upper one's weight, and the receiver plane's offset (`slope` per texel) at the two texels' centres.
+struct PcfAxis {
+    texel: i64,
+    weight: f32,
+    plane: [f32; 2],
+}
+
+impl PcfAxis {
+    #[inline]
+    fn new(c: f32, slope: f32) -> PcfAxis {
+        let f = c - 0.5;
+        let texel = floor(f);
+        let plane = [slope * (texel as f32 + 0.5 - c), slope * ((texel + 1) as f32 + 0.5 - c)];
+        PcfAxis { texel, weight: f - texel as f32, plane }
+    }
 }
 
 /// The six 90° faces of a point light's cube, as directions.
