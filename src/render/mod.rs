@@ -230,7 +230,7 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
             (s.ambient, lights)
         }),
         lit: light.map(|light| raster::Lit { light, c2w: cam.c2w.as_mat4(), eye: cam.c2w.w_axis.truncate().as_vec3() }),
-        normals: s.shading != Shading::Unlit || s.buffers.normal,
+        normals: s.shading == Shading::Lambert || s.buffers.normal,
         per_side: k,
     };
     let n = (w * h) as usize;

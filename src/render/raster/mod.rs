@@ -277,7 +277,7 @@ pub struct Shade<'a> {
     pub lambert: Option<(f32, Vec<(Vec3, f32)>)>,
     /// Lit (`pbr`) shading, when asked.
     pub lit: Option<Lit<'a>>,
-    /// Whether anything reads the normals (Lambert, lit shading or the normal pass): if not, they are not
+    /// Whether anything reads the normals per sample (Lambert or the normal pass): if not, they are not
     /// interpolated.
     pub normals: bool,
     /// Samples per pixel side: deferred shading runs once per pixel and triangle.
@@ -404,7 +404,9 @@ pub fn raster_tile(
                     AlphaMode::Blend if albedo.w <= 0.0 => continue,
                     _ => {}
                 }
-                let nrm = if shade.normals { tri.normal_at(k) } else { Vec3::ZERO };
+                // Lit shading interpolates its own normal where it shades (deferred), but a blended sample is
+                // shaded here.
+                let nrm = if shade.normals || (blend && lit) { tri.normal_at(k) } else { Vec3::ZERO };
                 if blend {
                     // Shaded now (it may show through others), composited in depth order when the tile is drawn.
                     let rgb = match &shade.lit {
