@@ -164,29 +164,33 @@ impl FrameLight {
     pub fn prepare(scene: &PosedScene, lights: &[Light], env: EnvLight) -> FrameLight {
         let bounds = caster_bounds(scene);
         let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
-        let lights = all
-            .par_iter()
-            .map(|l| {
-                let maps = match (l.shadows, bounds) {
-                    (true, Some(b)) => match l.kind {
-                        LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP)],
-                        LightKind::Spot { position, direction, cone, .. } => {
-                            vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP)]
-                        }
-                        LightKind::Point { position, .. } => shadow::CUBE
-                            .iter()
-                            .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP))
-                            .collect(),
-                    },
-                    _ => Vec::new(),
-                };
-                ((*l).clone(), maps)
-            })
-            .collect();
-        let occlusion = match bounds {
+        // The lights' maps and the environment's are made side by side (a single sun's 2048² map would otherwise
+        // keep one core busy while the other waits).
+        let light_maps = || {
+            all.par_iter()
+                .map(|l| {
+                    let maps = match (l.shadows, bounds) {
+                        (true, Some(b)) => match l.kind {
+                            LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP)],
+                            LightKind::Spot { position, direction, cone, .. } => {
+                                vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP)]
+                            }
+                            LightKind::Point { position, .. } => shadow::CUBE
+                                .iter()
+                                .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP))
+                                .collect(),
+                        },
+                        _ => Vec::new(),
+                    };
+                    ((*l).clone(), maps)
+                })
+                .collect()
+        };
+        let env_maps = || match bounds {
             Some(b) => occlusion_maps(scene, &env, b),
             None => Vec::new(),
         };
+        let (lights, occlusion) = rayon::join(light_maps, env_maps);
         let ground = Ground::find(scene, &all, &env);
         let mut light =
             FrameLight { lights, env, ground, occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };

@@ -97,8 +97,7 @@ impl ShadowMap {
 
     /// Builds [`ShadowMap::mins`] and [`ShadowMap::maxs`] (sides halving, rounded up, down to one texel).
     fn build_pyramids(&mut self) {
-        self.mins = pyramid(&self.depth, self.size as usize, f32::INFINITY, f32::min);
-        self.maxs = pyramid(&self.depth, self.size as usize, f32::NEG_INFINITY, f32::max);
+        (self.mins, self.maxs) = pyramids(&self.depth, self.size as usize);
     }
 
     /// The nearest depth over texels `x0..=x1` × `y0..=y1` (clamped to the map; +∞ outside it), in at most four
@@ -368,24 +367,35 @@ impl ShadowMap {
     }
 }
 
-/// A pyramid over the `side`² values `base`: each level halves the side (rounded up) and folds each 2 × 2 block of
-/// the level below, down to one value.
-fn pyramid(base: &[f32], side: usize, init: f32, fold: fn(f32, f32) -> f32) -> Vec<Vec<f32>> {
-    let (mut side, mut levels) = (side, Vec::<Vec<f32>>::new());
+/// The min and max pyramids over the `side`² depths `base` (never NaN): each level halves the side (rounded up)
+/// and folds each 2 × 2 block of the level below (an odd last row or column alone), down to one value.
+fn pyramids(base: &[f32], side: usize) -> (Vec<Vec<f32>>, Vec<Vec<f32>>) {
+    let (mut side, mut mins, mut maxs) = (side, Vec::<Vec<f32>>::new(), Vec::<Vec<f32>>::new());
     while side > 1 {
         let next = side.div_ceil(2);
-        let prev = levels.last().map_or(base, |l| l);
-        let mut m = vec![init; next * next];
-        for y in 0..side {
-            for x in 0..side {
-                let v = &mut m[(y / 2) * next + x / 2];
-                *v = fold(*v, prev[y * side + x]);
+        let (lo, hi) = (mins.last().map_or(base, |l| l), maxs.last().map_or(base, |l| l));
+        let (mut m, mut n) = (Vec::with_capacity(next * next), Vec::with_capacity(next * next));
+        for y in (0..side).step_by(2) {
+            let rows = if y + 1 < side { [y, y + 1] } else { [y, y] };
+            for x in (0..side).step_by(2) {
+                let cols = if x + 1 < side { [x, x + 1] } else { [x, x] };
+                let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
+                for r in rows {
+                    for c in cols {
+                        let (u, v) = (lo[r * side + c], hi[r * side + c]);
+                        a = if u < a { u } else { a };
+                        b = if v > b { v } else { b };
+                    }
+                }
+                m.push(a);
+                n.push(b);
             }
         }
-        levels.push(m);
+        mins.push(m);
+        maxs.push(n);
         side = next;
     }
-    levels
+    (mins, maxs)
 }
 
 /// One axis of a 4 × 4 grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's taps
@@ -472,6 +482,27 @@ mod tests {
         // A soft sun blurs the edge: half-lit right under it.
         let edge = m.visibility(Vec3::new(0.5, 0.0, 0.0), Vec3::Z, 0.05);
         assert!(edge > 0.2 && edge < 0.8, "{edge}");
+    }
+
+    #[test]
+    fn each_pyramid_level_folds_the_blocks_below_odd_sides_included() {
+        let side = 5;
+        let base: Vec<f32> = (0..side * side).map(|i| ((i * 7919) % 23) as f32).collect();
+        let (mins, maxs) = pyramids(&base, side);
+        assert_eq!(mins.iter().map(Vec::len).collect::<Vec<_>>(), [9, 4, 1]);
+        // Level l's block (bx, by) folds the base texels (x, y) with x >> l == bx and y >> l == by.
+        for (l, (m, n)) in mins.iter().zip(&maxs).enumerate() {
+            let next = (side as f32 / (2 << l) as f32).ceil() as usize;
+            for b in 0..m.len() {
+                let (bx, by) = (b % next, b / next);
+                let block: Vec<f32> = (0..side * side)
+                    .filter(|i| (i % side) >> (l + 1) == bx && (i / side) >> (l + 1) == by)
+                    .map(|i| base[i])
+                    .collect();
+                assert_eq!(m[b], block.iter().copied().fold(f32::INFINITY, f32::min), "level {} block {b}", l + 1);
+                assert_eq!(n[b], block.iter().copied().fold(f32::NEG_INFINITY, f32::max), "level {} block {b}", l + 1);
+            }
+        }
     }
 
     #[test]
