@@ -116,13 +116,9 @@ struct Ground {
 }
 
 impl Ground {
-    /// The scene's ground: the first triangles whose material casts no shadow (only the plane source's does).
+    /// The scene's ground: the first of its [`ground_planes`].
     fn find(scene: &PosedScene, lights: &[&Light], env: &EnvLight) -> Option<Ground> {
-        let prim = scene.primitives.iter().find(|p| {
-            p.kind == PrimKind::Triangles
-                && !p.positions.is_empty()
-                && scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows)
-        })?;
+        let prim = ground_planes(scene).next()?;
         let albedo = scene.material(prim.material).base_color.truncate();
         let mut e = env.prefiltered.sky_irradiance(Vec3::Z) * env.strength;
         for l in lights {
@@ -132,6 +128,15 @@ impl Ground {
         }
         Some(Ground { z: prim.positions[0].z, radiance: albedo * e / PI })
     }
+}
+
+/// The scene's ground planes: triangles whose material casts no shadow (only a plane source's does).
+fn ground_planes(scene: &PosedScene) -> impl Iterator<Item = &crate::scene::PosedPrimitive> {
+    scene.primitives.iter().filter(|p| {
+        p.kind == PrimKind::Triangles
+            && !p.positions.is_empty()
+            && scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows)
+    })
 }
 
 /// Bounds of the geometry that casts shadows.
@@ -207,13 +212,8 @@ impl FrameLight {
                 PrimKind::Points => Vec::new(),
             })
             .collect();
-        light.planes = scene
-            .primitives
-            .iter()
-            .filter(|p| p.kind == PrimKind::Triangles && !p.positions.is_empty())
-            .filter(|p| scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows))
-            .map(|prim| light.plane_visibility(prim.material, &prim.positions))
-            .collect();
+        light.planes =
+            ground_planes(scene).map(|prim| light.plane_visibility(prim.material, &prim.positions)).collect();
         light
     }
 

@@ -294,20 +294,7 @@ impl ShadowMap {
         let mut lit = 0.0;
         for (j, row) in rows.iter().enumerate() {
             for (i, col) in cols.iter().enumerate() {
-                let recv = recv + (slope.x * r[i] + slope.y * r[j]);
-                let tap = |dx: usize, dy: usize| {
-                    let (x, y) = (col.texel + dx as i64, row.texel + dy as i64);
-                    let d = if inside { self.texel(x, y) } else { self.at(x, y) };
-                    if d < recv + (col.plane[dx] + row.plane[dy]) {
-                        0.0
-                    } else {
-                        1.0
-                    }
-                };
-                let (l00, l10, l01, l11) = (tap(0, 0), tap(1, 0), tap(0, 1), tap(1, 1));
-                let top = l00 + (l10 - l00) * col.weight;
-                let bottom = l01 + (l11 - l01) * col.weight;
-                lit += top + (bottom - top) * row.weight;
+                lit += self.pcf_at(col, row, recv + (slope.x * r[i] + slope.y * r[j]), inside);
             }
         }
         lit / 16.0
@@ -350,20 +337,27 @@ impl ShadowMap {
     /// plane's `slope` per texel.
     #[inline]
     fn pcf(&self, q: Vec3, recv: f32, slope: Vec2) -> f32 {
-        let (fx, fy) = (q.x - 0.5, q.y - 0.5);
-        let (x0, y0) = (floor(fx), floor(fy));
-        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
-        let lit = |x: i64, y: i64| {
-            let at_texel = recv + slope.dot(Vec2::new(x as f32 + 0.5 - q.x, y as f32 + 0.5 - q.y));
-            if self.at(x, y) < at_texel {
+        let (col, row) = (PcfAxis::new(q.x, slope.x), PcfAxis::new(q.y, slope.y));
+        self.pcf_at(&col, &row, recv, self.holds(col.texel, row.texel, col.texel + 1, row.texel + 1))
+    }
+
+    /// The bilinear percentage-closer lookup of one column and row against the receiver's depth `recv` at their
+    /// point; `inside` when its four texels lie in the map.
+    #[inline]
+    fn pcf_at(&self, col: &PcfAxis, row: &PcfAxis, recv: f32, inside: bool) -> f32 {
+        let tap = |dx: usize, dy: usize| {
+            let (x, y) = (col.texel + dx as i64, row.texel + dy as i64);
+            let d = if inside { self.texel(x, y) } else { self.at(x, y) };
+            if d < recv + (col.plane[dx] + row.plane[dy]) {
                 0.0
             } else {
                 1.0
             }
         };
-        let top = lit(x0, y0) + (lit(x0 + 1, y0) - lit(x0, y0)) * tx;
-        let bottom = lit(x0, y0 + 1) + (lit(x0 + 1, y0 + 1) - lit(x0, y0 + 1)) * tx;
-        top + (bottom - top) * ty
+        let (l00, l10, l01, l11) = (tap(0, 0), tap(1, 0), tap(0, 1), tap(1, 1));
+        let top = l00 + (l10 - l00) * col.weight;
+        let bottom = l01 + (l11 - l01) * col.weight;
+        top + (bottom - top) * row.weight
     }
 }
 
@@ -405,7 +399,8 @@ fn axis(radius: f32) -> [f32; 4] {
 }
 
 /// One axis of a bilinear percentage-closer lookup at light-space coordinate `c`: the lower of the two texels
-/// read, the upper one's weight, and the receiver plane's offset (`slope` per texel) at the two texels' centres.
+/// read, the upper one's weight, and the receiver plane's offset (`slope` per texel) at the two texels' centres
+/// from `c`.
 struct PcfAxis {
     texel: i64,
     weight: f32,
