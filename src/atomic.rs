@@ -60,20 +60,55 @@ pub fn clean_dead_debris(dir: &Path) {
 
 /// Writes `bytes` to `dest` atomically, creating parent directories.
 pub fn write(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    stage(dest, bytes)?.commit()
+}
+
+/// A file written under a temporary name beside its destination, not yet synced nor renamed: the first half of
+/// [`write`], whose second half, [`Staged::commit`], may run later on another thread (a build's renders do not
+/// wait on the disk). Dropped uncommitted, the temporary is removed.
+#[derive(Debug)]
+pub struct Staged {
+    file: fs::File,
+    tmp: PathBuf,
+    dest: PathBuf,
+    committed: bool,
+}
+
+/// Writes `bytes` to a new temporary file beside `dest` (creating parent directories), to be committed.
+pub fn stage(dest: &Path, bytes: &[u8]) -> std::io::Result<Staged> {
     if let Some(parent) = dest.parent() {
         fs::create_dir_all(parent)?;
     }
     let tmp = temp_path(dest);
-    let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        fs::rename(&tmp, dest)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
+    let file = fs::File::create(&tmp)?;
+    // From here on, dropping `staged` (on a write error too) removes the temporary.
+    let mut staged = Staged { file, tmp, dest: dest.to_path_buf(), committed: false };
+    staged.file.write_all(bytes)?;
+    Ok(staged)
+}
+
+impl Staged {
+    /// Where the file goes.
+    pub fn dest(&self) -> &Path {
+        &self.dest
     }
-    result
+
+    /// Syncs the file's bytes to disk, then renames it over its destination: after a power cut the destination
+    /// holds the old file or the whole new one.
+    pub fn commit(mut self) -> std::io::Result<()> {
+        self.file.sync_all()?;
+        fs::rename(&self.tmp, &self.dest)?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 /// Places a copy of the file `src` at `dest` atomically: a hard link when the file system allows, else a copy.

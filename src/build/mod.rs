@@ -321,9 +321,12 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         }
     }
     let environment = m.environment.as_ref().and_then(|e| e.map()).map(|f| m.resolve(f));
-    let inputs = Inputs { scene: &p.scene, store: &p.store, stat: &p.stat, environment: environment.as_deref() };
-    let outcome = execute::run(&g, &inputs, look, opts.shard, &|c, w| progress.started(c, w), &|n| progress.ran(n))
-        .map_err(|source| Error::Execute { manifest: m.path.clone(), source: Box::new(source) })?;
+    let outcome = crate::cache::Committer::scope(&p.stat, |commit| {
+        let inputs =
+            Inputs { scene: &p.scene, store: &p.store, stat: &p.stat, environment: environment.as_deref(), commit };
+        execute::run(&g, &inputs, look, opts.shard, &|c, w| progress.started(c, w), &|n| progress.ran(n))
+    })
+    .map_err(|source| Error::Execute { manifest: m.path.clone(), source: Box::new(source) })?;
     let (images, hits, renders) = image_counts(&g, &outcome);
     let mut warnings = p.scene.warnings.clone();
     warnings.extend(p.plan.warnings.iter().cloned());

@@ -2,13 +2,15 @@
 //! (`objects/ab/cdef…`). Execution puts blobs here; export materializes them into dataset directories by hard link
 //! (or copy). Identical bytes are stored once, whichever split, output or manifest produced them.
 
+pub mod commit;
 pub mod gc;
 pub mod stat;
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use crate::atomic;
+use crate::atomic::{self, Staged};
+pub use commit::Committer;
 pub use stat::StatCache;
 
 /// What can go wrong in the cache.
@@ -37,6 +39,10 @@ pub enum Error {
         /// What is wrong with it.
         why: String,
     },
+    /// A result was not stored because an earlier one could not be committed (that failure is the one to
+    /// report; see [`Committer`]).
+    #[error("not stored: an earlier result could not be committed to the cache")]
+    Stopped,
 }
 
 impl Error {
@@ -113,13 +119,25 @@ impl Store {
 
     /// Stores `bytes` (atomically; an intact blob already present is not rewritten) and returns its digest.
     pub fn put(&self, bytes: &[u8], stat: &StatCache) -> Result<Digest, Error> {
-        let d = Digest::of(bytes);
-        let p = self.object_path(&d);
-        if !stat.holds(&p, &d) {
-            atomic::write(&p, bytes).map_err(|e| Error::io(&p, e))?;
+        let (d, staged) = self.stage(bytes, stat)?;
+        if let Some(f) = staged {
+            let p = f.dest().to_path_buf();
+            f.commit().map_err(|e| Error::io(&p, e))?;
             stat.record(&p, d);
         }
         Ok(d)
+    }
+
+    /// The first half of [`Store::put`]: `bytes` written beside their place, for a [`Committer`] to sync and
+    /// rename (`None` when an intact copy is in place already).
+    pub fn stage(&self, bytes: &[u8], stat: &StatCache) -> Result<(Digest, Option<Staged>), Error> {
+        let d = Digest::of(bytes);
+        let p = self.object_path(&d);
+        if stat.holds(&p, &d) {
+            return Ok((d, None));
+        }
+        let staged = atomic::stage(&p, bytes).map_err(|e| Error::io(&p, e))?;
+        Ok((d, Some(staged)))
     }
 
     /// Reads blob `d`, verifying its digest.
@@ -182,10 +200,10 @@ impl Store {
         Some(fields.map(|(k, v)| (k.to_string(), v.to_string())).collect())
     }
 
-    /// Records that the action `key` produced `blobs` (after the blobs are stored), with the fields it was
-    /// keyed by (what `plan --explain` compares a later key against). One atomic write: a record is whole or
-    /// absent.
-    pub fn record_action(&self, key: &Digest, blobs: &[Digest], fields: &[(String, String)]) -> Result<(), Error> {
+    /// Writes the record that the action `key` produced `blobs`, with the fields it was keyed by (what
+    /// `plan --explain` compares a later key against), beside its place, to be committed after the blobs (a
+    /// [`Committer`]): a record is whole or absent, and names only blobs in place.
+    pub fn stage_action(&self, key: &Digest, blobs: &[Digest], fields: &[(String, String)]) -> Result<Staged, Error> {
         let mut text = format!("{ACTION_MAGIC}\n");
         for d in blobs {
             text.push_str(&format!("blob {}\n", d.hex()));
@@ -196,7 +214,7 @@ impl Store {
             text.push_str(&format!("field {k}\t{v}\n"));
         }
         let p = self.action_path(key);
-        atomic::write(&p, text.as_bytes()).map_err(|e| Error::io(&p, e))
+        atomic::stage(&p, text.as_bytes()).map_err(|e| Error::io(&p, e))
     }
 
     /// The blobs of task `key` when it ran before and they are all intact.

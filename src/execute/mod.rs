@@ -210,16 +210,24 @@ pub(crate) struct Inputs<'a> {
     pub stat: &'a StatCache,
     /// The `[environment] map`, when there is one.
     pub environment: Option<&'a std::path::Path>,
+    /// Where results go to be synced and renamed into the store, off the workers' threads.
+    pub commit: &'a cache::Committer,
 }
 
 impl Inputs<'_> {
-    /// Stores `bytes` as the result of node `id` and records the action with the fields it is keyed by.
+    /// Stores `outputs` as the result of node `id` and records the action with the fields it is keyed by: both
+    /// are written here and committed (synced, renamed into place, the record last) by [`Inputs::commit`].
     fn store(&self, g: &Graph, id: ActionId, outputs: &[Vec<u8>]) -> Result<Vec<Digest>, Error> {
         let n = g.node(id);
         let cache_err = |source| Error::Cache { action: n.label.clone(), source };
-        let blobs = outputs.iter().map(|b| self.store.put(b, self.stat)).collect::<Result<Vec<_>, _>>();
-        let blobs = blobs.map_err(cache_err)?;
-        self.store.record_action(&n.key, &blobs, &g.explain(id)).map_err(cache_err)?;
+        let (mut blobs, mut staged) = (Vec::with_capacity(outputs.len()), Vec::new());
+        for b in outputs {
+            let (d, s) = self.store.stage(b, self.stat).map_err(cache_err)?;
+            blobs.push(d);
+            staged.extend(s.map(|s| (d, s)));
+        }
+        let record = self.store.stage_action(&n.key, &blobs, &g.explain(id)).map_err(cache_err)?;
+        self.commit.submit(&n.label, staged, record).map_err(cache_err)?;
         Ok(blobs)
     }
 
@@ -333,15 +341,19 @@ pub(crate) fn run(
             continue;
         }
         let t = std::time::Instant::now();
-        let made: Made = match kind {
-            Kind::Environment => render::environment(g, x, &ids, &tick)?,
-            Kind::RenderPass => render::passes(g, x, &blobs, &ids, &tick)?,
-            Kind::Composite => render::composites(g, x, &blobs, &ids, &tick)?,
-            Kind::Video => video::videos(g, x, &blobs, &ids, &tick)?,
-            Kind::PreviewSheet | Kind::PreviewRig | Kind::PreviewStrip => preview::run(g, x, &blobs, &ids, &tick)?,
+        let made: Result<Made, Error> = match kind {
+            Kind::Environment => render::environment(g, x, &ids, &tick),
+            Kind::RenderPass => render::passes(g, x, &blobs, &ids, &tick),
+            Kind::Composite => render::composites(g, x, &blobs, &ids, &tick),
+            Kind::Video => video::videos(g, x, &blobs, &ids, &tick),
+            Kind::PreviewSheet | Kind::PreviewRig | Kind::PreviewStrip => preview::run(g, x, &blobs, &ids, &tick),
             Kind::WriteOutput => unreachable!("outputs are not cached actions"),
-            _ => points::run(g, x, &blobs, &ids, &tick)?,
+            _ => points::run(g, x, &blobs, &ids, &tick),
         };
+        // The next kinds read these results: every commit must be done. A failed commit is the cause to report
+        // (the actions after it stopped with `Stopped`).
+        x.commit.flush().map_err(|(action, source)| Error::Cache { action, source })?;
+        let made = made?;
         for (id, b) in made {
             blobs[id.0 as usize] = Some(b);
         }
