@@ -13,6 +13,7 @@
 //! [`Store::stage_action`]: super::Store::stage_action
 //! [`Store::hit`]: super::Store::hit
 
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Condvar, Mutex};
@@ -123,22 +124,25 @@ impl Committer {
                 continue;
             }
             let Job { label, blobs, record } = job;
-            let mut result = Ok(());
-            for (d, f) in blobs {
-                let dest = f.dest().to_path_buf();
-                result = f.commit().map(|()| stat.record(&dest, d)).map_err(|e| Error::io(&dest, e));
-                if result.is_err() {
-                    break;
-                }
-            }
-            // The record goes in only after all its blobs (dropped uncommitted otherwise).
-            let result = result.and_then(|()| {
-                let dest = record.dest().to_path_buf();
-                record.commit().map_err(|e| Error::io(&dest, e))
-            });
+            // A panic here must still settle the job, or `flush` would wait for it forever.
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| commit(blobs, record, stat)))
+                .unwrap_or_else(|_| {
+                    Err(Error::io(Path::new("cache"), std::io::Error::other("the committer panicked")))
+                });
             self.settle(result.err().map(|e| (label, e)));
         }
     }
+}
+
+/// Commits one action's blobs, then (only if they all went in) its record.
+fn commit(blobs: Vec<(Digest, Staged)>, record: Staged, stat: &StatCache) -> Result<(), Error> {
+    for (d, f) in blobs {
+        let dest = f.dest().to_path_buf();
+        f.commit().map_err(|e| Error::io(&dest, e))?;
+        stat.record(&dest, d);
+    }
+    let dest = record.dest().to_path_buf();
+    record.commit().map_err(|e| Error::io(&dest, e))
 }
 
 #[cfg(test)]
