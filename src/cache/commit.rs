@@ -13,12 +13,10 @@
 //! [`Store::stage_action`]: super::Store::stage_action
 //! [`Store::hit`]: super::Store::hit
 
-use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Condvar, Mutex};
 
-use super::{Digest, Error, StatCache};
+use super::{commit, place, Digest, Error, StatCache};
 use crate::atomic::Staged;
 
 /// Commits waiting at most: enough to ride out a slow sync, few enough to bound the open temporaries (three
@@ -37,14 +35,15 @@ pub struct Committer {
     tx: Mutex<Option<SyncSender<Job>>>,
     progress: Mutex<Progress>,
     settled: Condvar,
-    failed: AtomicBool,
 }
 
-/// Commits handed over and finished, and the first failure (with the action's label).
+/// Commits handed over and finished, whether one failed, and the first failure (with the action's label) until
+/// `flush` reports it.
 #[derive(Default)]
 struct Progress {
     sent: u64,
     done: u64,
+    failed: bool,
     error: Option<(String, Error)>,
 }
 
@@ -54,12 +53,8 @@ impl Committer {
     /// handed over after the last flush is committed, but its failure is not reported.
     pub fn scope<R>(stat: &StatCache, f: impl FnOnce(&Committer) -> R) -> R {
         let (tx, rx) = sync_channel(QUEUE);
-        let c = Committer {
-            tx: Mutex::new(Some(tx)),
-            progress: Mutex::new(Progress::default()),
-            settled: Condvar::new(),
-            failed: AtomicBool::new(false),
-        };
+        let c =
+            Committer { tx: Mutex::new(Some(tx)), progress: Mutex::new(Progress::default()), settled: Condvar::new() };
         /// Closes the queue, which ends the thread once it has drained, however `f` ends (a panic too: the
         /// scope would otherwise wait for the thread forever).
         struct Close<'a>(&'a Committer);
@@ -78,15 +73,17 @@ impl Committer {
     /// Hands over the staged `blobs` of the action `label` and its `record`, to be committed in that order.
     /// Fails (and drops the files) when an earlier commit failed: the build stops.
     pub fn submit(&self, label: &str, blobs: Vec<(Digest, Staged)>, record: Staged) -> Result<(), Error> {
-        if self.failed.load(Ordering::Relaxed) {
-            return Err(Error::Stopped);
+        {
+            let mut p = self.lock();
+            if p.failed {
+                return Err(Error::Stopped);
+            }
+            p.sent += 1;
         }
         let tx = self.tx.lock().unwrap_or_else(|p| p.into_inner()).clone();
-        let Some(tx) = tx else { return Err(Error::Stopped) };
-        self.progress.lock().unwrap_or_else(|p| p.into_inner()).sent += 1;
-        if tx.send(Job { label: label.to_string(), blobs, record }).is_err() {
-            // The thread is gone (it only ends with the scope): count the job as settled.
-            self.settle(None);
+        if tx.is_none_or(|tx| tx.send(Job { label: label.to_string(), blobs, record }).is_err()) {
+            // The queue is closed, or the thread is gone: the job is settled here.
+            self.settle(Some((label.to_string(), Error::Stopped)));
             return Err(Error::Stopped);
         }
         Ok(())
@@ -94,7 +91,7 @@ impl Committer {
 
     /// Waits until every commit handed over so far is done; the first failure, with its action's label.
     pub fn flush(&self) -> Result<(), (String, Error)> {
-        let mut p = self.progress.lock().unwrap_or_else(|p| p.into_inner());
+        let mut p = self.lock();
         while p.done < p.sent {
             p = self.settled.wait(p).unwrap_or_else(|p| p.into_inner());
         }
@@ -104,12 +101,17 @@ impl Committer {
         }
     }
 
+    /// The progress (a panicking holder cannot leave it inconsistent: every update is one field at a time).
+    fn lock(&self) -> std::sync::MutexGuard<'_, Progress> {
+        self.progress.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
     /// Marks one job finished, with its failure if it failed (the first failure is kept).
     fn settle(&self, error: Option<(String, Error)>) {
-        let mut p = self.progress.lock().unwrap_or_else(|p| p.into_inner());
+        let mut p = self.lock();
         p.done += 1;
         if let Some(e) = error {
-            self.failed.store(true, Ordering::Relaxed);
+            p.failed = true;
             p.error.get_or_insert(e);
         }
         self.settled.notify_all();
@@ -118,31 +120,34 @@ impl Committer {
     /// The committer thread: commits jobs in the order they came until the queue closes. After a failure, the
     /// jobs still coming are dropped (their temporaries removed), not committed.
     fn work(&self, rx: Receiver<Job>, stat: &StatCache) {
-        for job in rx {
-            if self.failed.load(Ordering::Relaxed) {
+        let mut panicked = None;
+        for Job { label, blobs, record } in rx {
+            if self.lock().failed {
                 self.settle(None);
                 continue;
             }
-            let Job { label, blobs, record } = job;
-            // A panic here must still settle the job, or `flush` would wait for it forever.
-            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| commit(blobs, record, stat)))
-                .unwrap_or_else(|_| {
-                    Err(Error::io(Path::new("cache"), std::io::Error::other("the committer panicked")))
-                });
-            self.settle(result.err().map(|e| (label, e)));
+            // A panic (a bug) settles its job as a failure and the queue drains, or `flush` would wait forever;
+            // it is raised when the queue closes, and the scope raises it again when `f` returns.
+            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| commit_action(blobs, record, stat))) {
+                Ok(result) => self.settle(result.err().map(|e| (label, e))),
+                Err(panic) => {
+                    self.settle(Some((label, Error::Stopped)));
+                    panicked.get_or_insert(panic);
+                }
+            }
+        }
+        if let Some(panic) = panicked {
+            std::panic::resume_unwind(panic);
         }
     }
 }
 
 /// Commits one action's blobs, then (only if they all went in) its record.
-fn commit(blobs: Vec<(Digest, Staged)>, record: Staged, stat: &StatCache) -> Result<(), Error> {
+fn commit_action(blobs: Vec<(Digest, Staged)>, record: Staged, stat: &StatCache) -> Result<(), Error> {
     for (d, f) in blobs {
-        let dest = f.dest().to_path_buf();
-        f.commit().map_err(|e| Error::io(&dest, e))?;
-        stat.record(&dest, d);
+        place(d, f, stat)?;
     }
-    let dest = record.dest().to_path_buf();
-    record.commit().map_err(|e| Error::io(&dest, e))
+    commit(record)
 }
 
 #[cfg(test)]
@@ -150,12 +155,24 @@ mod tests {
     use super::*;
     use crate::cache::Store;
 
+    /// A store in a fresh directory, with its stat cache.
+    fn fixture() -> (tempfile::TempDir, Store, StatCache) {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let stat = StatCache::load(&dir.path().join("stat"));
+        (dir, store, stat)
+    }
+
+    /// Temporary files left anywhere under `dir`.
+    fn debris(dir: &tempfile::TempDir) -> usize {
+        let mut files = Vec::new();
+        crate::cache::gc::walk(dir.path(), &mut files);
+        files.iter().filter(|(p, ..)| p.to_string_lossy().contains(crate::atomic::TMP_PREFIX)).count()
+    }
+
     #[test]
     fn records_follow_their_blobs_and_flush_waits_for_both() {
-        let dir = std::env::temp_dir().join(format!("vvgen-commit-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let store = Store::open(&dir).unwrap();
-        let stat = StatCache::load(&dir.join("stat"));
+        let (dir, store, stat) = fixture();
         let key = crate::cache::key("test", &[b"a"]);
         let d = Committer::scope(&stat, |c| {
             let (d, staged) = store.stage(b"blob bytes", &stat).unwrap();
@@ -169,18 +186,12 @@ mod tests {
         assert_eq!(store.hit(&key, &stat), Some(vec![d]));
         assert!(stat.holds(&store.object_path(&d), &d));
         assert_eq!(store.get(&d).unwrap(), b"blob bytes");
-        // No temporaries are left.
-        let debris = walk(&dir).into_iter().filter(|p| p.to_string_lossy().contains(crate::atomic::TMP_PREFIX));
-        assert_eq!(debris.count(), 0);
-        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(debris(&dir), 0);
     }
 
     #[test]
     fn a_failed_commit_is_reported_by_flush_and_stops_later_submissions() {
-        let dir = std::env::temp_dir().join(format!("vvgen-commit-fail-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let store = Store::open(&dir).unwrap();
-        let stat = StatCache::load(&dir.join("stat"));
+        let (dir, store, stat) = fixture();
         let key = crate::cache::key("test", &[b"b"]);
         Committer::scope(&stat, |c| {
             let (d, staged) = store.stage(b"other bytes", &stat).unwrap();
@@ -198,21 +209,6 @@ mod tests {
         });
         // The failed action has no record, and the dropped files left no temporaries.
         assert!(store.action(&key).is_none());
-        let debris = walk(&dir).into_iter().filter(|p| p.to_string_lossy().contains(crate::atomic::TMP_PREFIX));
-        assert_eq!(debris.count(), 0);
-        let _ = std::fs::remove_dir_all(&dir);
-    }
-
-    fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
-        let mut out = Vec::new();
-        for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                out.extend(walk(&p));
-            } else {
-                out.push(p);
-            }
-        }
-        out
+        assert_eq!(debris(&dir), 0);
     }
 }

@@ -23,7 +23,8 @@ pub struct Collected {
     pub left: u64,
 }
 
-fn walk(dir: &Path, out: &mut Vec<(PathBuf, u64, SystemTime)>) {
+/// Every file under `dir`, with its size and modification time.
+pub(super) fn walk(dir: &Path, out: &mut Vec<(PathBuf, u64, SystemTime)>) {
     let Ok(entries) = fs::read_dir(dir) else { return };
     for e in entries.flatten() {
         let Ok(m) = e.metadata() else { continue };

@@ -92,6 +92,20 @@ pub fn key(kind: &str, parts: &[&[u8]]) -> Digest {
     Digest(*h.finalize().as_bytes())
 }
 
+/// Commits a staged file (sync, then rename into place), naming it in the error.
+fn commit(f: Staged) -> Result<(), Error> {
+    let dest = f.dest().to_path_buf();
+    f.commit().map_err(|e| Error::io(&dest, e))
+}
+
+/// Commits the staged blob `d` and notes it in the stat cache (so this build does not hash it again).
+fn place(d: Digest, f: Staged, stat: &StatCache) -> Result<(), Error> {
+    let dest = f.dest().to_path_buf();
+    commit(f)?;
+    stat.record(&dest, d);
+    Ok(())
+}
+
 /// A cache directory.
 #[derive(Debug, Clone)]
 pub struct Store {
@@ -121,9 +135,7 @@ impl Store {
     pub fn put(&self, bytes: &[u8], stat: &StatCache) -> Result<Digest, Error> {
         let (d, staged) = self.stage(bytes, stat)?;
         if let Some(f) = staged {
-            let p = f.dest().to_path_buf();
-            f.commit().map_err(|e| Error::io(&p, e))?;
-            stat.record(&p, d);
+            place(d, f, stat)?;
         }
         Ok(d)
     }
