@@ -54,7 +54,7 @@ pub const BAKE_SALT: &str = "bake 1";
 /// Everything a frame's lit shading needs besides the camera.
 #[derive(Debug)]
 pub struct FrameLight {
-    lights: Vec<(Light, Vec<ShadowMap>)>,
+    lights: Vec<Lamp>,
     env: EnvLight,
     /// The ground plane, when the scene has one: its height and the radiance it reflects (see [`Ground`]).
     ground: Option<Ground>,
@@ -66,6 +66,50 @@ pub struct FrameLight {
     pub vertex_visibility: Vec<Vec<f32>>,
     /// The same fraction over each ground plane, on a grid (see [`PlaneVisibility`]).
     planes: Vec<PlaneVisibility>,
+}
+
+/// A light as a frame's shading reads it.
+#[derive(Debug)]
+struct Lamp {
+    light: Light,
+    /// Its shadow maps: none (no shadows), one (sun, spot) or a cube's six (point).
+    maps: Vec<ShadowMap>,
+    /// Its size as [`ShadowMap::visibility`] reads it: a sun's angular radius as a tangent, else its radius.
+    size: f32,
+}
+
+impl Lamp {
+    /// The unit direction toward the light from `p`, and the radiance it brings there per unit of its colour ×
+    /// intensity (before shadows).
+    #[inline]
+    fn incidence(&self, p: Vec3) -> (Vec3, f32) {
+        match self.light.kind {
+            LightKind::Sun { direction, .. } => (-direction, 1.0),
+            LightKind::Point { position, .. } => {
+                let d = position - p;
+                let d2 = d.length_squared().max(1e-8);
+                (d / d2.sqrt(), 1.0 / (4.0 * PI * d2))
+            }
+            LightKind::Spot { position, direction, cone, blend, .. } => {
+                let d = position - p;
+                let d2 = d.length_squared().max(1e-8);
+                let l = d / d2.sqrt();
+                (l, spot_falloff(-l.dot(direction), cone, blend) / (4.0 * PI * d2))
+            }
+        }
+    }
+
+    /// The fraction of the light reaching `p` (unit normal `n`) past its shadow casters.
+    #[inline]
+    fn visibility(&self, p: Vec3, n: Vec3) -> f32 {
+        match (self.light.kind, self.maps.len()) {
+            (_, 0) => 1.0,
+            (LightKind::Point { position, .. }, 6) => {
+                self.maps[shadow::cube_face(p - position)].visibility(p, n, self.size)
+            }
+            _ => self.maps[0].visibility(p, n, self.size),
+        }
+    }
 }
 
 /// Cells along each side of a ground plane's visibility grid: about 3 cm on a 4 m plane, fine enough for a
@@ -85,6 +129,8 @@ struct PlaneVisibility {
     cell: glam::Vec2,
     /// (PLANE_CELLS + 1)² values, rows along +y.
     vis: Vec<f32>,
+    /// The environment's irradiance on the plane's top face (before its visibility): the same everywhere on it.
+    sky: Vec3,
 }
 
 impl PlaneVisibility {
@@ -187,7 +233,11 @@ impl FrameLight {
                         },
                         _ => Vec::new(),
                     };
-                    ((*l).clone(), maps)
+                    let size = match l.kind {
+                        LightKind::Sun { angle, .. } => (0.5 * angle).tan(),
+                        LightKind::Point { radius, .. } | LightKind::Spot { radius, .. } => radius,
+                    };
+                    Lamp { light: (*l).clone(), maps, size }
                 })
                 .collect()
         };
@@ -231,7 +281,7 @@ impl FrameLight {
                 self.environment_visibility(p, Vec3::Z)
             })
             .collect();
-        PlaneVisibility { material, lo: lo.truncate(), cell, vis }
+        PlaneVisibility { material, lo: lo.truncate(), cell, vis, sky: self.irradiance(lo, Vec3::Z) }
     }
 
     /// The environment's visibility at world point `p` of a surface of material `material`, when that is a
@@ -278,32 +328,14 @@ impl FrameLight {
     /// visibility `env_vis` (interpolated from the vertices).
     pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, env_vis: f32) -> Vec3 {
         let mut out = Vec3::ZERO;
-        for (light, maps) in &self.lights {
-            let (l, radiance, size) = match light.kind {
-                LightKind::Sun { direction, angle } => (-direction, Vec3::ONE, (0.5 * angle).tan()),
-                LightKind::Point { position, radius } => {
-                    let d = position - p;
-                    let d2 = d.length_squared().max(1e-8);
-                    (d / d2.sqrt(), Vec3::splat(1.0 / (4.0 * PI * d2)), radius)
-                }
-                LightKind::Spot { position, direction, cone, blend, radius } => {
-                    let d = position - p;
-                    let d2 = d.length_squared().max(1e-8);
-                    let l = d / d2.sqrt();
-                    let falloff = spot_falloff(-l.dot(direction), cone, blend);
-                    (l, Vec3::splat(falloff / (4.0 * PI * d2)), radius)
-                }
-            };
+        for lamp in &self.lights {
+            let (l, radiance) = lamp.incidence(p);
             let f = s.eval(n, v, l);
-            if f == Vec3::ZERO || radiance == Vec3::ZERO {
+            if f == Vec3::ZERO || radiance == 0.0 {
                 continue;
             }
-            let vis = match (light.kind, maps.len()) {
-                (_, 0) => 1.0,
-                (LightKind::Point { position, .. }, 6) => maps[shadow::cube_face(p - position)].visibility(p, n, size),
-                _ => maps[0].visibility(p, n, size),
-            };
-            out += f * radiance * light.color * (light.intensity * vis);
+            let light = &lamp.light;
+            out += f * light.color * (radiance * light.intensity * lamp.visibility(p, n));
         }
         // Environment: irradiance for the diffuse layer, the split sum for the specular one.
         let e = &self.env;
@@ -315,14 +347,7 @@ impl FrameLight {
         } else {
             Vec3::ZERO
         };
-        let irradiance = match self.ground {
-            // On or above the ground (within a millimetre: the plane itself sees the sky alone): the sky from the
-            // map, the ground's bounce from below.
-            Some(g) if p.z >= g.z - 1e-3 => {
-                e.prefiltered.sky_irradiance(e.rotation * n) * e.strength + g.radiance * (PI * 0.5 * (1.0 - n.z))
-            }
-            _ => e.prefiltered.irradiance(e.rotation * n) * e.strength,
-        };
+        let irradiance = self.irradiance(p, n);
         let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (irradiance / PI);
         let specular = if w > 0.0 {
             let r = 2.0 * n.dot(v) * n - v;
@@ -338,6 +363,39 @@ impl FrameLight {
             Vec3::ZERO
         };
         out + (diffuse + specular) * (ao * env_vis)
+    }
+
+    /// The environment's irradiance at world point `p` on a surface of unit normal `n`, before occlusion.
+    #[inline]
+    fn irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
+        let e = &self.env;
+        match self.ground {
+            // On or above the ground (within a millimetre: the plane itself sees the sky alone): the sky from the
+            // map, the ground's bounce from below.
+            Some(g) if p.z >= g.z - 1e-3 => {
+                e.prefiltered.sky_irradiance(e.rotation * n) * e.strength + g.radiance * (PI * 0.5 * (1.0 - n.z))
+            }
+            _ => e.prefiltered.irradiance(e.rotation * n) * e.strength,
+        }
+    }
+
+    /// [`FrameLight::shade`] of the top face (normal +Z) of ground plane material `material`, when it is one,
+    /// at world point `p`, for a Lambertian surface of colour `albedo` (no specular layer, no occlusion
+    /// texture): what a `plane` source is. Such a face looks the same from every view, and all but its shadows
+    /// and occlusion is the same everywhere on it, so the environment's share was found once per frame.
+    #[inline]
+    pub fn shade_ground(&self, material: u32, p: Vec3, albedo: Vec3) -> Option<Vec3> {
+        let g = self.planes.iter().find(|g| g.material == material)?;
+        let mut e = g.sky * g.at(p.x, p.y);
+        for lamp in &self.lights {
+            let (l, radiance) = lamp.incidence(p);
+            if l.z <= 0.0 || radiance == 0.0 {
+                continue;
+            }
+            let light = &lamp.light;
+            e += light.color * (radiance * light.intensity * lamp.visibility(p, Vec3::Z) * l.z);
+        }
+        Some(albedo * e / PI)
     }
 
     /// The visible background's radiance along world direction `d`, when the environment is visible.
@@ -396,6 +454,46 @@ impl Surface {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_grounds_shortcut_shades_as_the_full_model_does_in_and_out_of_shadow() {
+        // A ground plane and a square caster over it, under a soft oblique sun, a point light and the studio map.
+        let plane = crate::manifest::source::Plane { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
+        let h = 0.3;
+        let caster = PosedScene::single(
+            PrimKind::Triangles,
+            vec![Vec3::new(-h, -h, 1.0), Vec3::new(h, -h, 1.0), Vec3::new(h, h, 1.0), Vec3::new(-h, h, 1.0)],
+            vec![Vec3::Z; 4],
+            Vec::new(),
+            vec![0, 1, 2, 0, 2, 3],
+            crate::scene::material::Material::default(),
+        );
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0), caster], &mut scene);
+        let light = |kind| Light { kind, color: Vec3::new(1.0, 0.9, 0.8), intensity: 3.0, shadows: true };
+        let lights = [
+            light(LightKind::Sun { direction: Vec3::new(0.3, 0.2, -1.0).normalize(), angle: 0.05 }),
+            light(LightKind::Point { position: Vec3::new(-1.0, 0.5, 2.0), radius: 0.1 }),
+        ];
+        let frame = FrameLight::prepare(&scene, &lights, crate::render::Environment::default().studio());
+        let ground = scene.primitives[0].material;
+        let albedo = Vec3::new(0.7, 0.6, 0.5);
+        let lambert = Surface { base: albedo, metallic: 0.0, roughness: 0.5, specular: 0.0 };
+        let (mut shadowed, mut open) = (0, 0);
+        for i in 0..400 {
+            let p = Vec3::new(-1.9 + (i % 20) as f32 * 0.2, -1.9 + (i / 20) as f32 * 0.2, 0.0);
+            let vis = frame.plane_visibility_at(ground, p).expect("the plane's material is a ground's");
+            let full = frame.shade(p, Vec3::Z, Vec3::new(0.2, -0.4, 0.9).normalize(), &lambert, 1.0, vis);
+            let fast = frame.shade_ground(ground, p, albedo).expect("a ground");
+            assert!((full - fast).abs().max_element() <= 1e-5 * (1.0 + full.max_element()), "{p}: {full} vs {fast}");
+            let sun = frame.lights[0].visibility(p, Vec3::Z);
+            (shadowed, open) = (shadowed + (sun == 0.0) as u32, open + (sun == 1.0) as u32);
+        }
+        // Both sides of the sun's shadow were compared.
+        assert!(shadowed > 0 && open > 300, "{shadowed} in shadow, {open} open");
+        // Only a ground plane's material takes the shortcut.
+        assert!(frame.shade_ground(scene.primitives[1].material, Vec3::ZERO, albedo).is_none());
+    }
 
     #[test]
     fn blenders_spot_is_its_point_light_times_the_cosine_inside_the_cone() {

@@ -55,6 +55,11 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     // Back to the world: the point's view-space position at depth z.
     let (sx, sy) = ((at.x - proj.f[2]) / proj.f[0], (at.y - proj.f[3]) / proj.f[1]);
     let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
+    if !tri.back && plain(mat) {
+        if let Some(c) = l.light.shade_ground(tri.material, p, albedo) {
+            return c + mat.emissive;
+        }
+    }
     let v = (l.eye - p).normalize_or_zero();
     // An opaque surface's base colour texture is read here, once per pixel and triangle (see `raster_tile`).
     let mut albedo = albedo;
@@ -84,6 +89,18 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     };
     let emission = mat.emissive * sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
     l.light.shade(p, n, v, &surface, ao, vis) + emission
+}
+
+/// Whether a material is Lambertian and untextured, as a `plane` source's is: the top face of a ground plane of
+/// it is shaded by [`crate::render::light::FrameLight::shade_ground`].
+fn plain(m: &Material) -> bool {
+    m.base_color_texture.is_none()
+        && m.metallic_roughness_texture.is_none()
+        && m.occlusion_texture.is_none()
+        && m.emissive_texture.is_none()
+        && m.normal_texture.is_none()
+        && m.metallic == 0.0
+        && m.specular == 0.0
 }
 
 /// A material's textures that lit shading reads, resolved once per triangle.
