@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Lit rendering against Blender 3.4 Cycles (issue 16's fidelity bar): CesiumMan and FlightHelmet on a ground
 # plane under a sun and Blender's "sunset" map, the same cameras in both, Standard view transform, Cycles at
-# 256 samples without denoising as the reference. Prints silhouette IoU, PSNR, SSIM and shadow IoU per image
-# (benches/lit_metrics.py). Blender is a peer, never a test dependency.
+# 256 samples without denoising as the reference (its pixel filter Blender's default, Blackman-Harris 1.5 px), and
+# vvgen with the same filter (FILTER=box compares vvgen's default instead). Prints silhouette IoU, PSNR, SSIM and
+# shadow IoU per image (benches/lit_metrics.py). Blender is a peer, never a test dependency.
 #
 #   benches/lit_fidelity.sh [WORK_DIR]      (default /tmp/vvgen-lit-fidelity)
 #
@@ -14,6 +15,7 @@ work=${1:-/tmp/vvgen-lit-fidelity}
 py=${PYTHON:-python3}
 helmet=${FLIGHT_HELMET:-$repo/../shared/assets/gltf/FlightHelmet/FlightHelmet.gltf}
 samples=${CYCLES_SAMPLES:-256}
+filter=${FILTER:-blackman-harris}
 mkdir -p "$work"
 (cd "$repo" && cargo build --release --quiet)
 vvgen=$repo/target/release/vvgen
@@ -48,6 +50,7 @@ center = "bbox"
 [render]
 resolution = [400, 400]
 samples = 4
+filter = "$filter"
 shading = "pbr"
 passes = ["rgba", "depth"]
 [environment]
@@ -81,7 +84,7 @@ for model in cesium helmet; do
             --out "$dir/cycles" --sun "$sun_dir,$sun_strength,$sun_angle" --env "$map,$env_strength" \
             --plane "3,3,$plane_z,$grey" --samples "$samples" "${flags[@]}" 2>&1 | grep -E "^rendered|Error" || true
     done
-    echo "$model (vvgen 4 samples vs Cycles $samples samples)"
+    echo "$model (vvgen 4 samples, $filter filter, vs Cycles $samples samples)"
     "$py" "$repo/benches/lit_metrics.py" "$work/$model-sun/out/$model-sun_dnerf" "$work/$model-env/out/$model-env_dnerf" \
         "$work/$model-sun/cycles" "$work/$model-env/cycles" --plane-z "$plane_z" \
         --sun "$sun_dir,$sun_strength" --grey "$grey"

@@ -46,6 +46,13 @@ pub struct Render {
     #[serde(default = "one")]
     #[schemars(with = "u32")]
     pub(super) samples: Spanned<u32>,
+    /// Pixel filter of the colour passes: `"box"` (default: a pixel is the mean of its samples) or
+    /// `"blackman-harris"` (Cycles' default, soft as Blender's renders).
+    #[serde(default)]
+    pub filter: PixelFilter,
+    /// The Blackman-Harris filter's width in pixels, Blender's Film ▸ Pixel Filter ▸ Width (default 1.5).
+    #[schemars(with = "Option<f64>")]
+    pub(super) filter_width: Option<Spanned<f64>>,
     /// `"unlit"` (albedo), `"lambert"` or `"pbr"` (lit by `[light.NAME]` and `[environment]`).
     #[serde(default)]
     pub shading: Shading,
@@ -107,6 +114,8 @@ impl Default for Render {
             near: None,
             far: None,
             samples: one(),
+            filter: PixelFilter::default(),
+            filter_width: None,
             shading: Shading::default(),
             background: None,
             passes: default_passes(),
@@ -133,6 +142,20 @@ pub enum Shading {
     /// glTF metallic-roughness materials under `[light.NAME]`s and the `[environment]`, with shadows.
     Pbr,
 }
+
+/// Pixel filter.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum PixelFilter {
+    /// The mean of the pixel's own samples.
+    #[default]
+    Box,
+    /// Cycles' Blackman-Harris filter over ±`filter_width` pixels.
+    BlackmanHarris,
+}
+
+/// Cycles' default pixel filter width.
+pub const DEFAULT_FILTER_WIDTH: f64 = 1.5;
 
 /// Background of the RGBA pass.
 #[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
@@ -295,6 +318,12 @@ impl Render {
         };
         render::RenderSettings {
             samples: *self.samples.get_ref(),
+            filter: match self.filter {
+                PixelFilter::Box => render::PixelFilter::Box,
+                PixelFilter::BlackmanHarris => render::PixelFilter::BlackmanHarris {
+                    width: self.filter_width.as_ref().map_or(DEFAULT_FILTER_WIDTH, |w| *w.get_ref()) as f32,
+                },
+            },
             shading: match self.shading {
                 Shading::Unlit => render::Shading::Unlit,
                 Shading::Lambert => render::Shading::Lambert,
@@ -414,6 +443,24 @@ impl Render {
                 )
                 .with_help("use 1, 4, 9 or 16"),
             );
+        }
+        if let Some(fw) = &self.filter_width {
+            let v = *fw.get_ref();
+            let max = render::filter::MAX_WIDTH as f64;
+            if self.filter != PixelFilter::BlackmanHarris {
+                diags.push(
+                    Diagnostic::error("`filter_width` is the width of the Blackman-Harris filter", Some(fw.span()))
+                        .with_help("add filter = \"blackman-harris\", or remove `filter_width`"),
+                );
+            } else if !(v > 0.0 && v <= max) {
+                diags.push(
+                    Diagnostic::error(
+                        format!("filter_width = {v} is not a width in (0, {max}] pixels"),
+                        Some(fw.span()),
+                    )
+                    .with_help("Blender's default is 1.5"),
+                );
+            }
         }
         let (near, far) = (self.near.unwrap_or(0.05), self.far.unwrap_or(1000.0));
         if !(near > 0.0 && far > near) {

@@ -13,7 +13,7 @@ use crate::camera::Camera;
 use crate::manifest::output::{ColorAverage, PlyFormat, PointColor, Reduce, VoxelPosition};
 use crate::manifest::render::Pass;
 use crate::render::encode::{Encoding, NormalSpace, PngCompression};
-use crate::render::{DepthKind, RenderSettings, Shading, SplatShape, SplatSize};
+use crate::render::{DepthKind, PixelFilter, RenderSettings, Shading, SplatShape, SplatSize};
 
 /// Version of the renderer's output: bump when a change moves rendered bytes.
 pub const RENDER_SALT: &str = "render 7";
@@ -479,7 +479,7 @@ fn camera(w: &mut dyn KeyWriter, c: &Camera) {
 
 /// The render settings that shape `pass`: geometry settings shape every pass, colour settings only RGBA.
 fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
-    let RenderSettings { samples, shading, lights, ambient, lighting, background, depth, splat, buffers } = s;
+    let RenderSettings { samples, filter, shading, lights, ambient, lighting, background, depth, splat, buffers } = s;
     // Which auxiliary buffers are filled never changes the bytes of a pass (it only skips unused work).
     let _ = buffers;
     w.u64("samples", *samples as u64);
@@ -502,9 +502,19 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
         SplatSize::World(v) => w.f64("splat size (world)", *v as f64),
         SplatSize::Pixels(v) => w.f64("splat size (px)", *v as f64),
     }
-    let background = |w: &mut dyn KeyWriter| match background {
-        Some(c) => w.f64s("background", &[c.x as f64, c.y as f64, c.z as f64]),
-        None => w.str("background", "transparent"),
+    // The colour passes' background and pixel filter (a box is what every pass had before filters: not keyed).
+    let background = |w: &mut dyn KeyWriter| {
+        match background {
+            Some(c) => w.f64s("background", &[c.x as f64, c.y as f64, c.z as f64]),
+            None => w.str("background", "transparent"),
+        }
+        match filter {
+            PixelFilter::Box => {}
+            PixelFilter::BlackmanHarris { width } => {
+                w.str("pixel filter", "blackman-harris");
+                w.f64("pixel filter width", *width as f64);
+            }
+        }
     };
     match pass {
         Pass::Rgba => {

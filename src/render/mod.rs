@@ -5,6 +5,7 @@
 
 pub mod bin;
 pub mod encode;
+pub mod filter;
 pub mod light;
 pub mod raster;
 pub mod splat;
@@ -13,6 +14,7 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use crate::camera::Camera;
+pub use filter::PixelFilter;
 pub use splat::{Shape as SplatShape, Size as SplatSize, SplatSettings};
 
 use crate::scene::material::linear_to_srgb8;
@@ -112,6 +114,8 @@ pub enum DepthKind {
 pub struct RenderSettings {
     /// Samples per pixel: 1, 4, 9 or 16 (a k×k grid).
     pub samples: u32,
+    /// How a pixel's colour gathers its samples and its neighbours' (RGBA only; the other buffers are per pixel).
+    pub filter: PixelFilter,
     /// Unlit or Lambert.
     pub shading: Shading,
     /// Lambert lights: direction the light travels, intensity. Empty: a head light.
@@ -152,6 +156,7 @@ impl Default for RenderSettings {
     fn default() -> Self {
         RenderSettings {
             samples: 1,
+            filter: PixelFilter::Box,
             shading: Shading::Unlit,
             lights: Vec::new(),
             ambient: 0.3,
@@ -171,7 +176,7 @@ pub struct Frame {
     pub width: u32,
     /// Height.
     pub height: u32,
-    /// sRGB RGBA8, straight alpha, rows top first.
+    /// sRGB RGBA8, straight alpha (the coverage, spread by the pixel filter when it is not a box), rows top first.
     pub rgba: Vec<u8>,
     /// Depth in scene units (planar or ray, per the settings); 0 where less than half the pixel is covered.
     /// Empty unless [`Buffers::depth`].
@@ -244,16 +249,22 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
         object: if b.object { vec![0; n] } else { Vec::new() },
         coverage: vec![0; n],
     };
+    // A filter wider than the pixel reads its neighbours, which other bands resolve: the bands leave linear
+    // premultiplied colour, filtered once they are all done.
+    let kernel = s.filter.kernel(k as u32);
+    let mut linear = if kernel.is_some() { vec![Vec4::ZERO; n] } else { Vec::new() };
     // One task per band of TILE rows: its tiles run in order through one reused sample buffer and resolve
     // straight into the band's rows of the frame (no per-tile allocation, no copy afterwards). Buffers not
     // asked for give every band an empty slice.
     let band = (TILE * w) as usize;
+    let mut lin = linear.chunks_mut(band);
     let (mut rgba, mut depth) = (f.rgba.chunks_mut(band * 4), f.depth.chunks_mut(band));
     let (mut normal, mut object) = (f.normal.chunks_mut(band), f.object.chunks_mut(band));
     let mut coverage = f.coverage.chunks_mut(band);
     let bands: Vec<Pixels> = (0..th)
         .map(|_| Pixels {
             rgba: rgba.next().expect("BUG: one chunk per band"),
+            linear: lin.next().unwrap_or_default(),
             depth: depth.next().unwrap_or_default(),
             normal: normal.next().unwrap_or_default(),
             object: object.next().unwrap_or_default(),
@@ -276,7 +287,16 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
             if tris.tile_is_empty(ti) && !has_splats {
                 // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
                 // the other buffers start zeroed.
-                if let Some(env) = &env_bg {
+                if !out.linear.is_empty() {
+                    // Filtered: the background in linear light (transparent stays zero).
+                    let bg = s.background.map(|c| c.extend(1.0));
+                    for py in 0..ph {
+                        for px in 0..pw {
+                            let c = env_bg.as_ref().map(|env| env.at(x0 + px, ty * TILE + py).extend(1.0)).or(bg);
+                            out.linear[(py * w + x0 + px) as usize] = c.unwrap_or(Vec4::ZERO);
+                        }
+                    }
+                } else if let Some(env) = &env_bg {
                     for py in 0..ph {
                         for px in 0..pw {
                             let i = ((py * w + x0 + px) * 4) as usize;
@@ -299,12 +319,17 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
             resolve(st, k, s, cam, x0, env_bg.as_ref(), &mut out);
         }
     });
+    if let Some(kernel) = kernel {
+        filter::apply(&kernel, &linear, w as usize, h as usize, &mut f.rgba);
+    }
     f
 }
 
 /// One band of the frame's buffers (rows `TILE·band ..`), written by [`resolve`].
 struct Pixels<'a> {
     rgba: &'a mut [u8],
+    /// Linear premultiplied colour instead of `rgba`, when a pixel filter follows (else empty).
+    linear: &'a mut [Vec4],
     depth: &'a mut [f32],
     normal: &'a mut [Vec3],
     object: &'a mut [u32],
@@ -373,6 +398,11 @@ fn resolve(
             }
             if covered == 0 {
                 // The other buffers start zeroed.
+                if !out.linear.is_empty() {
+                    let bg = env.map(|env| env.at(x0 + px, y0 + py)).or(s.background);
+                    out.linear[i] = bg.map_or(Vec4::ZERO, |c| c.extend(1.0));
+                    continue;
+                }
                 let px = env.map_or(empty, |env| env.pixel(x0 + px, y0 + py));
                 out.rgba[i * 4..i * 4 + 4].copy_from_slice(&px);
                 continue;
@@ -397,17 +427,21 @@ fn resolve(
             if let Some(env) = env {
                 // The environment shows where the surface does not cover the pixel.
                 rgb = rgb * alpha + env.at(x0 + px, y0 + py) * (1.0 - alpha);
-                a8 = 255;
+                (a8, alpha) = (255, 1.0);
             } else if let Some(bg) = s.background {
                 rgb = rgb * alpha + bg * (1.0 - alpha);
-                a8 = 255;
+                (a8, alpha) = (255, 1.0);
             }
-            out.rgba[i * 4..i * 4 + 4].copy_from_slice(&[
-                linear_to_srgb8(rgb.x),
-                linear_to_srgb8(rgb.y),
-                linear_to_srgb8(rgb.z),
-                a8,
-            ]);
+            if !out.linear.is_empty() {
+                out.linear[i] = (rgb * alpha).extend(alpha);
+            } else {
+                out.rgba[i * 4..i * 4 + 4].copy_from_slice(&[
+                    linear_to_srgb8(rgb.x),
+                    linear_to_srgb8(rgb.y),
+                    linear_to_srgb8(rgb.z),
+                    a8,
+                ]);
+            }
             out.coverage[i] = coverage;
             if !out.object.is_empty() {
                 out.object[i] = majority_id(&ids[..covered as usize]);

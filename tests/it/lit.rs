@@ -308,6 +308,31 @@ fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
     assert_eq!((remapped.ran(Kind::RenderPass), remapped.ran(Kind::Environment)), (4, 1));
 }
 
+/// A pixel filter keys the colour passes alone: switching to Cycles' filter re-renders `rgba` and `albedo`,
+/// not depth, and prefilters nothing again.
+#[test]
+fn a_pixel_filter_re_renders_the_colour_passes_only() {
+    use vvgen::plan::actions::Kind;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_hdr(&d.join("sky.hdr"), 64, 32);
+    let text = lit_manifest("");
+    build_in(d, &text);
+    let read = |f: &str| std::fs::read(d.join("out/m_dnerf").join(f)).unwrap();
+    let (rgba, depth) = (read("train/r_0000.png"), read("depth/train/r_0000.png"));
+    let soft = text.replace("samples = 4\n", "samples = 4\nfilter = \"blackman-harris\"\n");
+    let r = build_in(d, &soft);
+    // Four images: their rgba and albedo.
+    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (8, 0));
+    assert_ne!(read("train/r_0000.png"), rgba);
+    assert_eq!(read("depth/train/r_0000.png"), depth);
+    // Its width is part of the key too; the box again is the first build's, still cached.
+    let wider = soft.replace("filter = \"blackman-harris\"\n", "filter = \"blackman-harris\"\nfilter_width = 2.5\n");
+    assert_eq!(build_in(d, &wider).ran(Kind::RenderPass), 8);
+    assert!(build_in(d, &text).ran(Kind::RenderPass) == 0);
+    assert_eq!(read("train/r_0000.png"), rgba);
+}
+
 #[test]
 fn lighting_mistakes_are_named_with_their_place_and_fix() {
     let dir = tempfile::tempdir().unwrap();

@@ -305,9 +305,17 @@ fn zero_and_absurd_counts() {
         ("count = 10, fps = 24", "count = 0, fps = 24", "count = 0: the frame range is empty"),
         ("end = 1002", "end = 999", "empty frame range"),
         ("samples = 9", "samples = 5", "samples = 5 is not a square supersampling count"),
+        (
+            "samples = 9",
+            "samples = 9\nfilter = \"blackman-harris\"\nfilter_width = 0",
+            "filter_width = 0 is not a width",
+        ),
+        ("samples = 9", "samples = 9\nfilter_width = 2.0", "`filter_width` is the width of the Blackman-Harris"),
     ] {
         let text = full_manifest().replace(from, to);
-        let line = text.lines().position(|l| l.contains(to)).unwrap() + 1;
+        // The error points at the last line replaced.
+        let last = to.lines().last().unwrap();
+        let line = text.lines().position(|l| l.contains(last)).unwrap() + 1;
         let l = lines(&errors(&text));
         assert!(l.iter().any(|(n, m, _)| *n == line && m.contains(expect)), "{to}: {l:?}");
     }

@@ -25,7 +25,7 @@ pub(super) fn shade_tile(
     for_each_share(t, rect.x0, rect.y0, k, |s, t| {
         let tri = tris.get(s.id);
         let albedo = s.samples[..s.n].iter().map(|&i| t.color[i as usize].truncate()).sum::<Vec3>() / s.n as f32;
-        let at = Sample { at: s.at, bary: s.bary, z: s.z, normal: tri.normal_at(s.bary), footprint: k as f32 };
+        let at = Sample { at: s.at, bary: s.bary, z: s.z, footprint: k as f32 };
         let c = shade_sample(scene, tri, l, proj, at, albedo).extend(1.0);
         for &i in &s.samples[..s.n] {
             t.color[i as usize] = c;
@@ -34,24 +34,20 @@ pub(super) fn shade_tile(
 }
 
 /// Where a triangle is shaded: the point's sample coordinates (continuous: a sample's centre is at +0.5), the
-/// perspective-correct barycentrics there, the view depth, the interpolated normal (toward the eye) and the
-/// footprint of the shading in samples (textures are filtered over it).
+/// perspective-correct barycentrics there, the view depth and the footprint of the shading in samples (textures
+/// are filtered over it).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Sample {
     pub at: Vec2,
     pub bary: [f32; 3],
     pub z: f32,
-    pub normal: Vec3,
     pub footprint: f32,
 }
 
 /// Lit radiance of triangle `tri` of albedo `albedo` at sample `s`.
 pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projection, s: Sample, albedo: Vec3) -> Vec3 {
-    let Sample { at, bary: k, z, normal: nrm, footprint } = s;
+    let Sample { at, bary: k, z, footprint } = s;
     let mat = scene.material(tri.material);
-    let m = LitMaterial::of(mat, &scene.textures);
-    let (uv, dx, dy) = tri.uv_footprint(k, z, footprint);
-    let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
     // Back to the world: the point's view-space position at depth z.
     let (sx, sy) = ((at.x - proj.f[2]) / proj.f[0], (at.y - proj.f[3]) / proj.f[1]);
     let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
@@ -60,6 +56,10 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
             return c + mat.emissive;
         }
     }
+    let nrm = tri.normal_at(k);
+    let m = LitMaterial::of(mat, &scene.textures);
+    let (uv, dx, dy) = tri.uv_footprint(k, z, footprint);
+    let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
     let v = (l.eye - p).normalize_or_zero();
     // An opaque surface's base colour texture is read here, once per pixel and triangle (see `raster_tile`).
     let mut albedo = albedo;

@@ -412,7 +412,7 @@ pub fn raster_tile(
                     let rgb = match &shade.lit {
                         Some(l) => {
                             let at = Vec2::new(sx as f32 + 0.5, sy as f32 + 0.5);
-                            let s = lit::Sample { at, bary: k, z, normal: nrm, footprint: 1.0 };
+                            let s = lit::Sample { at, bary: k, z, footprint: 1.0 };
                             lit::shade_sample(scene, tri, l, proj, s, albedo.truncate())
                         }
                         None => shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive,
