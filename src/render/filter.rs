@@ -71,42 +71,63 @@ fn blackman_harris(x: f64, width: f64) -> f64 {
     0.35875 - 0.48829 * v.cos() + 0.14128 * (2.0 * v).cos() - 0.01168 * (3.0 * v).cos()
 }
 
-/// Filters `image` (`w` × `h` pixels, linear premultiplied RGBA, rows top first) with `kernel` along rows then
-/// columns, and writes sRGB straight-alpha RGBA8 into `rgba`. Taps past the image's edge are left out and the
-/// rest renormalized (there is nothing rendered there).
-pub fn apply(kernel: &[f32], image: &[Vec4], w: usize, h: usize, rgba: &mut [u8]) {
+/// Filters `image` (`w` × `h` pixels, linear premultiplied RGBA, rows top first) with `kernel` along rows (in
+/// place) then columns, and writes sRGB straight-alpha RGBA8 into `rgba`. Taps past the image's edge are left
+/// out and the rest renormalized (there is nothing rendered there). Only the span of each row that anything
+/// covers, widened by the kernel, is filtered: most of a dataset image is transparent.
+pub fn apply(kernel: &[f32], image: &mut [Vec4], w: usize, h: usize, rgba: &mut [u8]) {
     let r = kernel.len() / 2;
-    let tap = |i: usize, n: usize, read: &dyn Fn(usize) -> Vec4| {
-        let (lo, hi) = (i.saturating_sub(r), (i + r).min(n - 1));
-        let (mut sum, mut weight) = (Vec4::ZERO, 0.0);
-        for j in lo..=hi {
-            let c = kernel[j + r - i];
-            sum += read(j) * c;
-            weight += c;
-        }
-        sum / weight
-    };
-    let mut rows = vec![Vec4::ZERO; w * h];
-    rows.par_chunks_mut(w).enumerate().for_each(|(y, out)| {
-        let row = &image[y * w..(y + 1) * w];
-        for (x, o) in out.iter_mut().enumerate() {
-            *o = tap(x, w, &|j| row[j]);
-        }
-    });
+    // Each row's covered span [first, last + 1) before filtering, then widened by the kernel.
+    let spans: Vec<(usize, usize)> = image
+        .par_chunks_mut(w)
+        .map(|row| {
+            let Some(first) = row.iter().position(|c| *c != Vec4::ZERO) else { return (0, 0) };
+            let last = row.iter().rposition(|c| *c != Vec4::ZERO).unwrap_or(first);
+            let (lo, hi) = (first.saturating_sub(r), (last + r + 1).min(w));
+            let filtered: Vec<Vec4> = (lo..hi).map(|x| convolve(kernel, x, w, |j| row[j])).collect();
+            row[lo..hi].copy_from_slice(&filtered);
+            (lo, hi)
+        })
+        .collect();
+    let image = &*image;
     rgba.par_chunks_mut(w * 4).enumerate().for_each(|(y, out)| {
-        for x in 0..w {
-            let c = tap(y, h, &|j| rows[j * w + x]);
-            let a = c.w.clamp(0.0, 1.0);
-            let a8 = (a * 255.0 + 0.5) as u8;
-            let px = if a8 == 0 {
-                [0; 4]
-            } else {
-                let rgb = c.truncate() / c.w;
-                [linear_to_srgb8(rgb.x), linear_to_srgb8(rgb.y), linear_to_srgb8(rgb.z), a8]
-            };
-            out[x * 4..x * 4 + 4].copy_from_slice(&px);
+        // The columns any row within reach covers.
+        let near = &spans[y.saturating_sub(r)..(y + r + 1).min(h)];
+        let lo = near.iter().filter(|s| s.1 > s.0).map(|s| s.0).min().unwrap_or(0);
+        let hi = near.iter().map(|s| s.1).max().unwrap_or(0);
+        for x in lo..hi {
+            let c = convolve(kernel, y, h, |j| image[j * w + x]);
+            let a8 = (c.w.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+            if a8 == 0 {
+                continue;
+            }
+            let rgb = c.truncate() / c.w;
+            out[x * 4..x * 4 + 4].copy_from_slice(&[
+                linear_to_srgb8(rgb.x),
+                linear_to_srgb8(rgb.y),
+                linear_to_srgb8(rgb.z),
+                a8,
+            ]);
         }
     });
+}
+
+/// `kernel` (offsets −r..=r) at position `i` of a line of `n` values read by `read`, renormalized where the
+/// line ends within reach.
+#[inline]
+fn convolve(kernel: &[f32], i: usize, n: usize, read: impl Fn(usize) -> Vec4) -> Vec4 {
+    let r = kernel.len() / 2;
+    if i >= r && i + r < n {
+        return kernel.iter().enumerate().fold(Vec4::ZERO, |sum, (t, &c)| sum + read(i + t - r) * c);
+    }
+    let (lo, hi) = (i.saturating_sub(r), (i + r).min(n - 1));
+    let (mut sum, mut weight) = (Vec4::ZERO, 0.0);
+    for j in lo..=hi {
+        let c = kernel[j + r - i];
+        sum += read(j) * c;
+        weight += c;
+    }
+    sum / weight
 }
 
 #[cfg(test)]
@@ -158,12 +179,13 @@ mod tests {
         let (w, h) = (9, 5);
         let grey = Vec4::new(0.2, 0.2, 0.2, 1.0);
         let mut out = vec![0; w * h * 4];
-        apply(&kern, &vec![grey; w * h], w, h, &mut out);
+        apply(&kern, &mut vec![grey; w * h], w, h, &mut out);
         assert!(out.chunks(4).all(|p| p == [124, 124, 124, 255]), "{:?}", &out[..8]);
         // An opaque half beside a transparent one: alpha ramps over the pixels next to the edge, and colour
         // (straight) stays the surface's where anything covers.
-        let image: Vec<Vec4> = (0..w * h).map(|i| if i % w < 4 { grey } else { Vec4::ZERO }).collect();
-        apply(&kern, &image, w, h, &mut out);
+        let mut image: Vec<Vec4> = (0..w * h).map(|i| if i % w < 4 { grey } else { Vec4::ZERO }).collect();
+        let mut out = vec![0; w * h * 4];
+        apply(&kern, &mut image, w, h, &mut out);
         let alpha: Vec<u8> = (0..w).map(|x| out[x * 4 + 3]).collect();
         assert_eq!(alpha[..3], [255, 255, 255]);
         assert!(alpha[3] < 255 && alpha[3] > 200 && alpha[4] > 0 && alpha[4] < 55, "{alpha:?}");

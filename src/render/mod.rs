@@ -320,7 +320,7 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
         }
     });
     if let Some(kernel) = kernel {
-        filter::apply(&kernel, &linear, w as usize, h as usize, &mut f.rgba);
+        filter::apply(&kernel, &mut linear, w as usize, h as usize, &mut f.rgba);
     }
     f
 }
