@@ -300,6 +300,33 @@ impl ShadowMap {
         lit / 16.0
     }
 
+    /// Whether [`ShadowMap::visibility`] is sure to answer exactly 1 (its first test: no caster anywhere near)
+    /// for every receiver with unit normal `n` in the box spanned by `corners`, under a light of `size` (> 0).
+    /// Conservative: `false` when unsure, always for perspective maps and hard shadows. A ground plane asks it
+    /// once per cell of a grid, so its open cells skip the lookup per pixel.
+    pub fn open_over(&self, corners: &[Vec3], n: Vec3, size: f32) -> bool {
+        if size <= 0.0 || !matches!(self.projection, Projection::Ortho { .. }) || corners.is_empty() {
+            return false;
+        }
+        // Parallel light: the lookup's point (normal offset included) is an affine function of the receiver, so
+        // the box's corners bound it; the texel size is the same everywhere.
+        let texel = self.texel_world(0.0);
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for &c in corners {
+            let q = self.project(c + n * (NORMAL_BIAS * texel));
+            (lo, hi) = (lo.min(q), hi.max(q));
+        }
+        let recv = hi.z - DEPTH_BIAS * texel;
+        // The widest search any receiver in the box makes (it grows with the receiver's depth), the farthest its
+        // plane reaches, and a texel and a hair of margin against rounding.
+        let search = (self.penumbra(recv, 0.0, size) / texel).clamp(1.0, 24.0);
+        let slope = self.receiver_slope(n);
+        let reach = (slope.x.abs() + slope.y.abs()) * search;
+        let (x0, y0) = (floor(lo.x - search) - 1, floor(lo.y - search) - 1);
+        let (x1, y1) = (floor(hi.x + search) + 1, floor(hi.y + search) + 1);
+        self.region_min(x0, y0, x1, y1) >= recv + reach + 1e-4 * (1.0 + recv.abs())
+    }
+
     /// Whether texels `x0..=x1` × `y0..=y1` all lie in the map.
     #[inline]
     fn holds(&self, x0: i64, y0: i64, x1: i64, y1: i64) -> bool {
