@@ -2,7 +2,7 @@
 # (benches/lit_fidelity.sh runs it; benches/lit_metrics.py compares). Blender is a peer, never a test dependency.
 #
 #   blender -b -P benches/blender_lit.py -- --model MODEL.gl(b|tf) --dataset OUT/…_dnerf --out DIR \
-#       --sun DX,DY,DZ,STRENGTH,ANGLE_DEG --env MAP.exr,STRENGTH --plane W,D,Z,GREY [--no-sun] [--samples 256]
+#       --sun DX,DY,DZ,STRENGTH,ANGLE_DEG --env MAP.exr,STRENGTH [--plane W,D,Z,GREY] [--no-sun] [--samples 256]
 #
 # The scene is the manifest's, built the way Blender users build it: the model through Blender's glTF importer,
 # placed by the dataset's `world_from_source`; a Sun lamp (Strength, Angle) whose −Z travels along DIR; the map
@@ -33,7 +33,7 @@ def args():
     p.add_argument("--out", required=True)
     p.add_argument("--sun", type=floats, required=True)
     p.add_argument("--env", required=True)
-    p.add_argument("--plane", type=floats, required=True)
+    p.add_argument("--plane", type=floats, default=None, help="W,D,Z,GREY (default: no ground)")
     p.add_argument("--no-sun", action="store_true")
     p.add_argument("--samples", type=int, default=256)
     p.add_argument("--direct", action="store_true", help="direct light only (no bounces): a diagnostic")
@@ -44,13 +44,9 @@ def args():
     return p.parse_args(argv)
 
 
-def main():
-    a = args()
-    meta = json.load(open(os.path.join(a.dataset, "vvgen", "dataset.json")))
-    scene = blender_dataset.import_model(a.model, meta, a.fps)
-
-    # The ground: Lambertian, receives shadows, casts none.
-    w, d, z, grey = a.plane
+def ground(spec):
+    """The ground: Lambertian, receives shadows, casts none."""
+    w, d, z, grey = spec
     bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 0.0, z))
     plane = bpy.context.active_object
     plane.scale = (w, d, 1.0)
@@ -65,6 +61,15 @@ def main():
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
     plane.data.materials.append(mat)
+
+
+def main():
+    a = args()
+    meta = json.load(open(os.path.join(a.dataset, "vvgen", "dataset.json")))
+    scene = blender_dataset.import_model(a.model, meta, a.fps)
+
+    if a.plane:
+        ground(a.plane)
 
     if not a.no_sun:
         dx, dy, dz, strength, angle = a.sun

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Lit rendering speed (issue 16): CesiumMan on a ground plane at 800², 4 samples, a sun with 3° soft shadows and
-# the sunset map; 4 frames × 16 views, RGBA only, cold builds (fresh cache), lit and unlit alternating; then
-# Blender 3.4 Eevee and Cycles (16 samples) on two of the same cameras in the same run, per image.
+# Lit rendering speed (issue 16): CesiumMan at 800², 4 samples, a sun with 3° soft shadows and the sunset map;
+# 4 frames × 16 views, RGBA only, cold builds (fresh cache, environment prefiltering included). Three scenes,
+# alternating: lit on a ground plane (`pbr`, the lit example's scene), lit alone (`alone`: the issue's scene,
+# the man shadowing himself), unlit on the ground (`unlit`); then Blender 3.4 Eevee and Cycles (16 samples) on
+# two of the same cameras with and without the ground, in the same run, per image.
 #
 #   benches/lit_speed.sh [WORK_DIR] [ROUNDS]
 set -euo pipefail
@@ -13,9 +15,12 @@ mkdir -p "$work"
 vvgen=$repo/target/release/vvgen
 map=$repo/tests/data/hdri/sunset.exr
 man=$repo/tests/data/gltf/CesiumMan/CesiumMan.glb
-manifest() { # shading
-    local lit=""
-    if [ "$1" = pbr ]; then
+manifest() { # name: pbr | alone | unlit
+    local lit="" shading=pbr ground="[source.ground]
+plane = { size = [3.0, 3.0], color = [0.5, 0.5, 0.5], z = -1.2 }"
+    [ "$1" = unlit ] && shading=unlit
+    [ "$1" = alone ] && ground=""
+    if [ "$shading" = pbr ]; then
         lit="[environment]
 map = \"$map\"
 strength = 0.6
@@ -34,8 +39,7 @@ preview = false
 [source.man]
 gltf = "$man"
 frames = { count = 4, fps = 24 }
-[source.ground]
-plane = { size = [3.0, 3.0], color = [0.5, 0.5, 0.5], z = -1.2 }
+$ground
 [transform]
 up = "y"
 fit = { height = 2.4 }
@@ -43,7 +47,7 @@ center = "bbox"
 [render]
 resolution = [800, 800]
 samples = 4
-shading = "$1"
+shading = "$shading"
 $lit
 [rig.hemi]
 kind = "hemisphere"
@@ -54,9 +58,9 @@ views = 16
 writer = "dnerf"
 TOML
 }
-for s in pbr unlit; do manifest $s > "$work/$s.toml"; done
+for s in pbr alone unlit; do manifest $s > "$work/$s.toml"; done
 for r in $(seq "$rounds"); do
-    for s in pbr unlit; do
+    for s in pbr alone unlit; do
         rm -rf "$work/cache-$s" "$work/out-$s"
         t0=$(date +%s.%N)
         (cd "$work" && "$vvgen" build $s.toml > /dev/null 2>&1)
@@ -65,7 +69,11 @@ for r in $(seq "$rounds"); do
     done
 done
 for engine in eevee cycles; do
-    blender -b -P "$repo/benches/blender_lit.py" -- --model "$man" --dataset "$work/out-pbr/speed_dnerf" \
-        --out "$work/$engine" --sun 0.45,0.35,-0.82,2.5,3 --env "$map,0.6" --plane 3,3,-1.2,0.5 --samples 16 \
-        --engine $engine --images train/0/0,train/1/0 2>&1 | grep -E "^rendered" | sed "s/^/$engine-16: /"
+    for scene in pbr alone; do
+        ground=()
+        [ $scene = pbr ] && ground=(--plane 3,3,-1.2,0.5)
+        blender -b -P "$repo/benches/blender_lit.py" -- --model "$man" --dataset "$work/out-$scene/speed_dnerf" \
+            --out "$work/$engine-$scene" --sun 0.45,0.35,-0.82,2.5,3 --env "$map,0.6" "${ground[@]}" --samples 16 \
+            --engine $engine --images train/0/0,train/1/0 2>&1 | grep -E "^rendered" | sed "s/^/$engine-16 $scene: /"
+    done
 done
