@@ -135,8 +135,12 @@ impl PosedScene {
     /// blake3 of everything in the materials and textures, lit-only fields included: what a `pbr` render reads.
     pub fn lit_material_digest(&self) -> blake3::Hash {
         let mut h = blake3::Hasher::new();
-        h.update(b"vvgen.materials.lit.v1");
-        h.update(format!("{:?}", self.materials).as_bytes());
+        h.update(b"vvgen.materials.lit.v2");
+        let mut bytes = Vec::new();
+        for m in self.materials.iter() {
+            canonical::material(m, &mut bytes);
+        }
+        h.update(&bytes);
         for t in self.textures.iter() {
             h.update(&t.width.to_le_bytes());
             h.update(&t.height.to_le_bytes());
@@ -164,8 +168,12 @@ impl PosedScene {
     /// blake3 of the lights the sources bring, as placed at this frame (empty input when there are none).
     pub fn lights_digest(&self) -> blake3::Hash {
         let mut h = blake3::Hasher::new();
-        h.update(b"vvgen.posed.lights.v1");
-        h.update(format!("{:?}", self.lights).as_bytes());
+        h.update(b"vvgen.posed.lights.v2");
+        let mut bytes = Vec::new();
+        for l in &self.lights {
+            canonical::light(l, &mut bytes);
+        }
+        h.update(&bytes);
         h.finalize()
     }
 
@@ -224,6 +232,207 @@ mod legacy {
                 alpha_cutoff: x.alpha_cutoff,
                 double_sided: x.double_sided,
                 emissive: x.emissive,
+            }
+        }
+    }
+}
+
+/// The bytes lit keys hash for materials and lights: every field, in declaration order, numbers little-endian,
+/// enums by their variant's index, an absent option as 0 and a present one as 1 then its value. Each value is
+/// taken apart field by field, so a field added to these types does not compile until it is keyed here, and a
+/// change in a dependency's `Debug` text cannot move a key.
+mod canonical {
+    use glam::Vec3;
+
+    use crate::scene::light::{Light, LightKind};
+    use crate::scene::material::{Material, TextureRef};
+
+    fn f32s(out: &mut Vec<u8>, v: &[f32]) {
+        for x in v {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+
+    fn vec3(out: &mut Vec<u8>, v: Vec3) {
+        f32s(out, &v.to_array());
+    }
+
+    fn texture(out: &mut Vec<u8>, t: &Option<TextureRef>) {
+        let Some(TextureRef { texture, tex_coord, wrap_s, wrap_t, nearest, transform }) = t else {
+            out.push(0);
+            return;
+        };
+        out.push(1);
+        out.extend_from_slice(&texture.to_le_bytes());
+        out.extend_from_slice(&tex_coord.to_le_bytes());
+        out.extend_from_slice(&[*wrap_s as u8, *wrap_t as u8, *nearest as u8]);
+        match transform {
+            Some(m) => {
+                out.push(1);
+                for c in m {
+                    f32s(out, &c.to_array());
+                }
+            }
+            None => out.push(0),
+        }
+    }
+
+    /// A texture with a factor (occlusion strength, normal scale).
+    fn scaled(out: &mut Vec<u8>, t: &Option<(TextureRef, f32)>) {
+        texture(out, &t.map(|(r, _)| r));
+        if let Some((_, k)) = t {
+            f32s(out, &[*k]);
+        }
+    }
+
+    pub(super) fn material(m: &Material, out: &mut Vec<u8>) {
+        let Material {
+            base_color,
+            base_color_texture,
+            alpha_mode,
+            alpha_cutoff,
+            double_sided,
+            emissive,
+            emissive_texture,
+            metallic,
+            roughness,
+            metallic_roughness_texture,
+            occlusion_texture,
+            normal_texture,
+            specular,
+            casts_shadows,
+        } = m;
+        f32s(out, &base_color.to_array());
+        texture(out, base_color_texture);
+        out.push(*alpha_mode as u8);
+        f32s(out, &[*alpha_cutoff]);
+        out.push(*double_sided as u8);
+        vec3(out, *emissive);
+        texture(out, emissive_texture);
+        f32s(out, &[*metallic, *roughness]);
+        texture(out, metallic_roughness_texture);
+        scaled(out, occlusion_texture);
+        scaled(out, normal_texture);
+        f32s(out, &[*specular]);
+        out.push(*casts_shadows as u8);
+    }
+
+    pub(super) fn light(l: &Light, out: &mut Vec<u8>) {
+        let Light { kind, color, intensity, shadows } = l;
+        match *kind {
+            LightKind::Sun { direction, angle } => {
+                out.push(0);
+                vec3(out, direction);
+                f32s(out, &[angle]);
+            }
+            LightKind::Point { position, radius } => {
+                out.push(1);
+                vec3(out, position);
+                f32s(out, &[radius]);
+            }
+            LightKind::Spot { position, direction, cone, blend, radius } => {
+                out.push(2);
+                vec3(out, position);
+                vec3(out, direction);
+                f32s(out, &[cone, blend, radius]);
+            }
+        }
+        vec3(out, *color);
+        f32s(out, &[*intensity]);
+        out.push(*shadows as u8);
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use glam::{Vec2, Vec4};
+
+        use super::*;
+        use crate::scene::material::{AlphaMode, Wrap};
+
+        fn bytes(m: &Material) -> Vec<u8> {
+            let mut out = Vec::new();
+            material(m, &mut out);
+            out
+        }
+
+        #[test]
+        fn every_field_of_a_material_and_a_light_moves_its_bytes() {
+            let base = Material { base_color_texture: Some(TextureRef::new(0)), ..Material::default() };
+            let t = TextureRef::new(0);
+            let changed: Vec<Material> = vec![
+                Material { base_color: Vec4::new(1.0, 0.5, 1.0, 1.0), ..base.clone() },
+                Material { base_color_texture: None, ..base.clone() },
+                Material { base_color_texture: Some(TextureRef { texture: 1, ..t }), ..base.clone() },
+                Material { base_color_texture: Some(TextureRef { tex_coord: 1, ..t }), ..base.clone() },
+                Material { base_color_texture: Some(TextureRef { wrap_s: Wrap::Clamp, ..t }), ..base.clone() },
+                Material { base_color_texture: Some(TextureRef { wrap_t: Wrap::Mirror, ..t }), ..base.clone() },
+                Material { base_color_texture: Some(TextureRef { nearest: true, ..t }), ..base.clone() },
+                Material {
+                    base_color_texture: Some(TextureRef { transform: Some([Vec2::X, Vec2::Y, Vec2::ZERO]), ..t }),
+                    ..base.clone()
+                },
+                Material { alpha_mode: AlphaMode::Blend, ..base.clone() },
+                Material { alpha_cutoff: 0.25, ..base.clone() },
+                Material { double_sided: true, ..base.clone() },
+                Material { emissive: Vec3::X, ..base.clone() },
+                Material { emissive_texture: Some(t), ..base.clone() },
+                Material { metallic: 1.0, ..base.clone() },
+                Material { roughness: 0.1, ..base.clone() },
+                Material { metallic_roughness_texture: Some(t), ..base.clone() },
+                Material { occlusion_texture: Some((t, 1.0)), ..base.clone() },
+                Material { normal_texture: Some((t, 1.0)), ..base.clone() },
+                Material { normal_texture: Some((t, 0.5)), ..base.clone() },
+                Material { specular: 0.0, ..base.clone() },
+                Material { casts_shadows: false, ..base.clone() },
+            ];
+            let mut seen = vec![bytes(&base)];
+            for m in &changed {
+                let b = bytes(m);
+                assert!(!seen.contains(&b), "{m:?}");
+                seen.push(b);
+            }
+            let sun = Light {
+                kind: LightKind::Sun { direction: -Vec3::Z, angle: 0.0 },
+                color: Vec3::ONE,
+                intensity: 1.0,
+                shadows: true,
+            };
+            let lights = [
+                sun.clone(),
+                Light { kind: LightKind::Sun { direction: -Vec3::Z, angle: 0.1 }, ..sun.clone() },
+                Light { kind: LightKind::Sun { direction: -Vec3::Y, angle: 0.0 }, ..sun.clone() },
+                Light { kind: LightKind::Point { position: Vec3::ZERO, radius: 0.0 }, ..sun.clone() },
+                Light { kind: LightKind::Point { position: Vec3::ZERO, radius: 0.1 }, ..sun.clone() },
+                Light {
+                    kind: LightKind::Spot {
+                        position: Vec3::ZERO,
+                        direction: -Vec3::Z,
+                        cone: 1.0,
+                        blend: 0.1,
+                        radius: 0.0,
+                    },
+                    ..sun.clone()
+                },
+                Light {
+                    kind: LightKind::Spot {
+                        position: Vec3::ZERO,
+                        direction: -Vec3::Z,
+                        cone: 1.0,
+                        blend: 0.2,
+                        radius: 0.0,
+                    },
+                    ..sun.clone()
+                },
+                Light { color: Vec3::X, ..sun.clone() },
+                Light { intensity: 2.0, ..sun.clone() },
+                Light { shadows: false, ..sun.clone() },
+            ];
+            let mut seen: Vec<Vec<u8>> = Vec::new();
+            for l in &lights {
+                let mut b = Vec::new();
+                light(l, &mut b);
+                assert!(!seen.contains(&b), "{l:?}");
+                seen.push(b);
             }
         }
     }
