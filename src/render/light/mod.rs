@@ -305,9 +305,9 @@ impl FrameLight {
                         let a = Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z) - margin;
                         let b =
                             Vec3::new(lo.x + cell.x * (i + 1) as f32, lo.y + cell.y * (j + 1) as f32, lo.z) + margin;
-                        let corners: Vec<Vec3> = (0..8)
-                            .map(|c| Vec3::new([a.x, b.x][c & 1], [a.y, b.y][(c >> 1) & 1], [a.z, b.z][c >> 2]))
-                            .collect();
+                        let corners: [Vec3; 8] = std::array::from_fn(|c| {
+                            Vec3::new([a.x, b.x][c & 1], [a.y, b.y][(c >> 1) & 1], [a.z, b.z][c >> 2])
+                        });
                         map.open_over(&corners, Vec3::Z, lamp.size)
                     })
                     .collect(),
