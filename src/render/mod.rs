@@ -288,12 +288,10 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
                 // Nothing reaches this tile (most of a dataset image): only an opaque background is written,
                 // the other buffers start zeroed.
                 if !out.linear.is_empty() {
-                    // Filtered: the background in linear light (transparent stays zero).
-                    let bg = s.background.map(|c| c.extend(1.0));
                     for py in 0..ph {
                         for px in 0..pw {
-                            let c = env_bg.as_ref().map(|env| env.at(x0 + px, ty * TILE + py).extend(1.0)).or(bg);
-                            out.linear[(py * w + x0 + px) as usize] = c.unwrap_or(Vec4::ZERO);
+                            out.linear[(py * w + x0 + px) as usize] =
+                                empty_linear(s, env_bg.as_ref(), x0 + px, ty * TILE + py);
                         }
                     }
                 } else if let Some(env) = &env_bg {
@@ -399,8 +397,7 @@ fn resolve(
             if covered == 0 {
                 // The other buffers start zeroed.
                 if !out.linear.is_empty() {
-                    let bg = env.map(|env| env.at(x0 + px, y0 + py)).or(s.background);
-                    out.linear[i] = bg.map_or(Vec4::ZERO, |c| c.extend(1.0));
+                    out.linear[i] = empty_linear(s, env, x0 + px, y0 + py);
                     continue;
                 }
                 let px = env.map_or(empty, |env| env.pixel(x0 + px, y0 + py));
@@ -467,6 +464,12 @@ fn resolve(
 /// The RGBA8 of a pixel nothing covers: the opaque background, or `None` when it is transparent.
 fn empty_pixel(s: &RenderSettings) -> Option<[u8; 4]> {
     s.background.map(|bg| [linear_to_srgb8(bg.x), linear_to_srgb8(bg.y), linear_to_srgb8(bg.z), 255])
+}
+
+/// What a filtered render's pixel (x, y) holds where nothing covers it: the visible environment or the opaque
+/// background, in linear light and opaque, else zero (transparent).
+fn empty_linear(s: &RenderSettings, env: Option<&EnvBackground>, x: i64, y: i64) -> Vec4 {
+    env.map(|env| env.at(x, y)).or(s.background).map_or(Vec4::ZERO, |c| c.extend(1.0))
 }
 
 fn majority_id(ids: &[u32]) -> u32 {

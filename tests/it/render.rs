@@ -160,11 +160,15 @@ fn a_huge_ground_plane_through_the_near_plane_is_drawn_exactly() {
     assert!((full as i64 - covered as i64).abs() < 64, "{full} vs {covered}");
 }
 
+/// A red triangle in the plane z = 0, about 1.5 units across.
+fn red_triangle() -> PosedScene {
+    let red = Material { base_color: Vec4::new(1.0, 0.0, 0.0, 1.0), ..Material::default() };
+    mesh(vec![Vec3::new(-0.7, -0.6, 0.0), Vec3::new(0.8, -0.5, 0.0), Vec3::new(0.1, 0.9, 0.0)], vec![0, 1, 2], red)
+}
+
 #[test]
 fn edge_pixels_keep_straight_colour() {
-    let red = Material { base_color: Vec4::new(1.0, 0.0, 0.0, 1.0), ..Material::default() };
-    let tri =
-        mesh(vec![Vec3::new(-0.7, -0.6, 0.0), Vec3::new(0.8, -0.5, 0.0), Vec3::new(0.1, 0.9, 0.0)], vec![0, 1, 2], red);
+    let tri = red_triangle();
     let c = cam(48, 48, 40.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
     let f = render(&tri, &c, &RenderSettings { samples: 16, ..Default::default() });
     let partial: Vec<&[u8]> = f.rgba.chunks(4).filter(|p| p[3] > 0 && p[3] < 255).collect();
@@ -180,9 +184,7 @@ fn edge_pixels_keep_straight_colour() {
 /// band is resolved).
 #[test]
 fn a_blackman_harris_filter_softens_edges_as_cycles_does_and_keeps_the_other_buffers() {
-    let red = Material { base_color: Vec4::new(1.0, 0.0, 0.0, 1.0), ..Material::default() };
-    let tri =
-        mesh(vec![Vec3::new(-0.7, -0.6, 0.0), Vec3::new(0.8, -0.5, 0.0), Vec3::new(0.1, 0.9, 0.0)], vec![0, 1, 2], red);
+    let tri = red_triangle();
     let c = cam(64, 48, 40.0, Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y));
     let boxed = RenderSettings { samples: 4, ..Default::default() };
     let bh = RenderSettings { filter: vvgen::render::PixelFilter::BlackmanHarris { width: 1.5 }, ..boxed.clone() };

@@ -404,9 +404,8 @@ pub fn raster_tile(
                     AlphaMode::Blend if albedo.w <= 0.0 => continue,
                     _ => {}
                 }
-                // Lit shading interpolates its own normal where it shades (deferred), but a blended sample is
-                // shaded here.
-                let nrm = if shade.normals || (blend && lit) { tri.normal_at(k) } else { Vec3::ZERO };
+                // Lit shading interpolates its own normal where it shades (deferred or, for a blended sample, here).
+                let nrm = if shade.normals { tri.normal_at(k) } else { Vec3::ZERO };
                 if blend {
                     // Shaded now (it may show through others), composited in depth order when the tile is drawn.
                     let rgb = match &shade.lit {
