@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::deferred::for_each_share;
 use super::{Lit, Projection, Rect, SampleTile, Tri, Tris};
-use crate::render::light::Surface;
+use crate::render::light::{Surface, Visibility};
 use crate::scene::material::{AlphaMode, Material, Texture, TextureRef};
 use crate::scene::PosedScene;
 
@@ -78,7 +78,7 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     let ao = m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
     let vis = match l.light.plane_visibility_at(tri.material, p) {
         Some(v) => v,
-        None => tri.vis[0] * k[0] + tri.vis[1] * k[1] + tri.vis[2] * k[2],
+        None => Visibility::blend(&tri.vis, k),
     };
     let n = match m.normal {
         Some((r, tex, scale)) => {

@@ -14,6 +14,7 @@ pub use setup::setup;
 
 use super::bin::Binned;
 use super::splat::{Layer, Splats};
+use crate::render::light::Visibility;
 use crate::scene::material::AlphaMode;
 use crate::scene::PosedScene;
 
@@ -36,8 +37,8 @@ struct ClipVert {
     uv: Vec2,
     normal: Vec3,
     color: Vec4,
-    /// The environment's visibility (lit shading; 1 otherwise).
-    vis: f32,
+    /// What reaches it of the environment's light (lit shading; 1 otherwise).
+    vis: Visibility,
     /// Tangent and handedness for a normal texture (zero without one).
     tangent: Vec4,
 }
@@ -49,7 +50,7 @@ impl ClipVert {
             uv: self.uv.lerp(o.uv, t),
             normal: self.normal.lerp(o.normal, t),
             color: self.color.lerp(o.color, t),
-            vis: self.vis + (o.vis - self.vis) * t,
+            vis: self.vis.lerp(o.vis, t),
             tangent: self.tangent.lerp(o.tangent, t),
         }
     }
@@ -66,7 +67,7 @@ pub struct Tri {
     uv: [Vec2; 3],
     normal: [Vec3; 3],
     color: [Vec4; 3],
-    vis: [f32; 3],
+    vis: [Visibility; 3],
     tangent: [Vec4; 3],
     /// Per sample step along x and y: the change of Σ bᵢ·uvᵢ/zᵢ and of Σ bᵢ/zᵢ (constants of the triangle), from
     /// which the perspective-correct uv derivative at any sample follows for the mip level.

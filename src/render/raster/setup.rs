@@ -5,15 +5,17 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::{edge, snap, Chunk, ClipVert, Projection, Tiles, Tri, Tris, SETUP_CHUNK, SUBPIXEL};
+use crate::render::light::Visibility;
 use crate::scene::{PosedScene, PrimKind};
 
 /// Clips, projects and orients every triangle of the scene, in scene order (chunks run in parallel and keep
 /// their order, so the order does not depend on threads), and bins them by tile.
-/// `visibility` is the environment's visibility per primitive and vertex (lit shading), or `None`.
-pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles, visibility: Option<&[Vec<f32>]>) -> Tris {
+/// `visibility` is what reaches each vertex of each primitive of the environment's light (lit shading), or
+/// `None`.
+pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles, visibility: Option<&[Vec<Visibility>]>) -> Tris {
     let mut out = Tris::default();
     for (pi, prim) in scene.primitives.iter().enumerate().filter(|(_, q)| q.kind == PrimKind::Triangles) {
-        let vis: &[f32] = visibility.and_then(|v| v.get(pi)).map_or(&[], |v| v.as_slice());
+        let vis: &[Visibility] = visibility.and_then(|v| v.get(pi)).map_or(&[], |v| v.as_slice());
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
         // Vertices are shared by about six triangles of a mesh: project each once. Triangles whose vertices are
         // all inside the clip planes use these; clipped ones project their new vertices the same way.
@@ -39,7 +41,7 @@ pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles, visibility: Optio
                             uv: prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO),
                             normal: prim.normals[i],
                             color: prim.colors.get(i).copied().unwrap_or(Vec4::ONE),
-                            vis: vis.get(i).copied().unwrap_or(1.0),
+                            vis: vis.get(i).copied().unwrap_or(Visibility::OPEN),
                             tangent: prim.tangents.get(i).copied().unwrap_or(Vec4::ZERO),
                         }
                     };

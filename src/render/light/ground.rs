@@ -1,0 +1,501 @@
+//! The ground: a `plane` source's receiving-only diffuse plane. How it is lit (grids of the environment's
+//! visibility and of the suns' shadows over it, and a shortcut for its top face), and what it gives back to the
+//! subject standing on it: the first bounce of its light, with its shadows in it.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::brdf::{basis, hammersley};
+use super::{EnvLight, FrameLight, Light, LightKind, Visibility};
+use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
+
+/// Cells along each side of a ground plane's grids: about 3 cm on a 4 m plane, fine enough for a subject's
+/// contact shadow to show.
+pub(super) const PLANE_CELLS: usize = 128;
+
+/// Directions (cosine-weighted about the normal) a point gathers the ground's bounce from: the bounce is a
+/// smooth average of the grids, so a fixed set this size changes it by under 2 % between neighbouring vertices.
+const BOUNCE_DIRECTIONS: u32 = 64;
+
+/// A ground plane's light, sampled on a grid of [`PLANE_CELLS`]² cells over its extent and read bilinearly:
+/// the environment's visibility and the suns'. A plane's vertices are only its corners, so it cannot carry its
+/// occlusion per vertex as other surfaces do; a grid costs the same to prepare as a finely tessellated plane did
+/// and nothing to rasterize.
+#[derive(Debug)]
+pub(super) struct PlaneVisibility {
+    /// The plane's material (only a plane source's triangles cast no shadow, and each has its own material).
+    pub(super) material: u32,
+    /// Corner of the grid (x, y) and the size of one cell.
+    lo: Vec2,
+    cell: Vec2,
+    /// The environment's visibility at (PLANE_CELLS + 1)² grid points, rows along +y.
+    vis: Vec<f32>,
+    /// The suns' visibility at the same points, each sun weighted by the irradiance it brings the plane (what
+    /// its bounce carries of their shadows). Empty when no sun lights the plane.
+    sun: Vec<f32>,
+    /// Summed-area tables of `vis` and `sun` ((PLANE_CELLS + 2)² entries, rows along +y; entry (i, j) sums the
+    /// grid points below and left of it), for averages over a footprint.
+    sums: Vec<[f64; 2]>,
+    /// The environment's irradiance on the plane's top face (before its visibility): the same everywhere on it.
+    sky: Vec3,
+    /// Per light, per cell (rows along +y): whether the light's shadow surely misses the whole cell
+    /// ([`super::ShadowMap::open_over`]), so its pixels need no shadow lookup. Empty for a light that cannot tell.
+    pub(super) open: Vec<Vec<bool>>,
+}
+
+/// Where a point falls on a plane's grid: its cell (column, row) and the fractions across it.
+#[derive(Clone, Copy)]
+struct GridPoint {
+    i: usize,
+    j: usize,
+    t: Vec2,
+}
+
+impl PlaneVisibility {
+    /// The environment's visibility at world (x, y), bilinear between grid points, held at the edges.
+    #[inline]
+    pub(super) fn at(&self, x: f32, y: f32) -> f32 {
+        self.cell_at(x, y).1
+    }
+
+    /// The cell holding world (x, y) (edge cells hold what lies past the edges; index rows along +y) and the
+    /// environment's visibility there.
+    #[inline]
+    pub(super) fn cell_at(&self, x: f32, y: f32) -> (usize, f32) {
+        let g = self.locate(x, y);
+        (g.j * PLANE_CELLS + g.i, read(&self.vis, g))
+    }
+
+    /// The plane's light at world (x, y) as fractions of the open plane's (environment, suns), or `None` past
+    /// its edges.
+    #[inline]
+    fn light_at(&self, x: f32, y: f32) -> Option<Vec2> {
+        let (u, v) = ((x - self.lo.x) / self.cell.x, (y - self.lo.y) / self.cell.y);
+        let n = PLANE_CELLS as f32;
+        if !(0.0..=n).contains(&u) || !(0.0..=n).contains(&v) {
+            return None;
+        }
+        let g = self.locate(x, y);
+        Some(Vec2::new(read(&self.vis, g), if self.sun.is_empty() { 1.0 } else { read(&self.sun, g) }))
+    }
+
+    /// The plane's light averaged over the square of half-side `w` (world units, at least half a cell) about
+    /// world (x, y), as fractions of the open plane's (environment, suns), and the fraction of the square on the
+    /// plane; `None` when none of it is.
+    fn light_over(&self, x: f32, y: f32, w: f32) -> Option<(Vec2, f32)> {
+        let n = PLANE_CELLS as f64;
+        // In grid units, where grid point k stands for the span [k − ½, k + ½]; the box is cut to the plane.
+        let (u, v) = (((x - self.lo.x) / self.cell.x) as f64, ((y - self.lo.y) / self.cell.y) as f64);
+        let (wu, wv) = ((w / self.cell.x).max(0.5) as f64, (w / self.cell.y).max(0.5) as f64);
+        let (u0, u1) = ((u - wu).max(0.0), (u + wu).min(n));
+        let (v0, v1) = ((v - wv).max(0.0), (v + wv).min(n));
+        if u1 <= u0 || v1 <= v0 {
+            return None;
+        }
+        let on = ((u1 - u0) * (v1 - v0) / (4.0 * wu * wv)) as f32;
+        let at = |u: f64, v: f64| self.sum_at(u + 0.5, v + 0.5);
+        let (a, b, c, d) = (at(u1, v1), at(u0, v1), at(u1, v0), at(u0, v0));
+        let area = (u1 - u0) * (v1 - v0);
+        let avg = |k: usize| ((a[k] - b[k] - c[k] + d[k]) / area) as f32;
+        let sun = if self.sun.is_empty() { 1.0 } else { avg(1) };
+        Some((Vec2::new(avg(0).clamp(0.0, 1.0), sun.clamp(0.0, 1.0)), on))
+    }
+
+    /// The summed-area tables at (u, v) in [0, PLANE_CELLS + 1]², interpolated bilinearly between entries.
+    fn sum_at(&self, u: f64, v: f64) -> [f64; 2] {
+        let m = PLANE_CELLS + 2;
+        let (i, j) = ((u as usize).min(m - 2), (v as usize).min(m - 2));
+        let (tu, tv) = (u - i as f64, v - j as f64);
+        let e = |i: usize, j: usize| self.sums[j * m + i];
+        std::array::from_fn(|k| {
+            let lo = e(i, j)[k] + (e(i + 1, j)[k] - e(i, j)[k]) * tu;
+            let hi = e(i, j + 1)[k] + (e(i + 1, j + 1)[k] - e(i, j + 1)[k]) * tu;
+            lo + (hi - lo) * tv
+        })
+    }
+
+    #[inline]
+    fn locate(&self, x: f32, y: f32) -> GridPoint {
+        let n = PLANE_CELLS;
+        let u = ((x - self.lo.x) / self.cell.x).clamp(0.0, n as f32);
+        let v = ((y - self.lo.y) / self.cell.y).clamp(0.0, n as f32);
+        let (i, j) = ((u as usize).min(n - 1), (v as usize).min(n - 1));
+        GridPoint { i, j, t: Vec2::new(u - i as f32, v - j as f32) }
+    }
+}
+
+/// The summed-area tables of grids `vis` and `sun` ((PLANE_CELLS + 1)² points each; `sun` may be empty).
+fn summed_areas(vis: &[f32], sun: &[f32]) -> Vec<[f64; 2]> {
+    let (n, m) = (PLANE_CELLS + 1, PLANE_CELLS + 2);
+    let mut sums = vec![[0.0f64; 2]; m * m];
+    for j in 0..n {
+        let mut row = [0.0f64; 2];
+        for i in 0..n {
+            row[0] += vis[j * n + i] as f64;
+            row[1] += sun.get(j * n + i).map_or(1.0, |&s| s as f64);
+            let below = sums[j * m + i + 1];
+            sums[(j + 1) * m + i + 1] = [below[0] + row[0], below[1] + row[1]];
+        }
+    }
+    sums
+}
+
+/// Grid `g` ((PLANE_CELLS + 1)² points) read bilinearly at `at`.
+#[inline]
+fn read(g: &[f32], at: GridPoint) -> f32 {
+    let n = PLANE_CELLS + 1;
+    let row = |j: usize| {
+        let a = g[j * n + at.i];
+        a + (g[j * n + at.i + 1] - a) * at.t.x
+    };
+    let (a, b) = (row(at.j), row(at.j + 1));
+    a + (b - a) * at.t.y
+}
+
+/// A ground plane's first bounce: a receiving-only diffuse plane (the `plane` source) stands in for the map
+/// below the horizon, as it does in a path tracer. Points above it receive the sky from the map and, from below,
+/// what lies below the horizon: E(n) = π·L·(1 − n_z)/2 with L the radiance from there averaged over the cosine
+/// lobe, the plane's own where the lobe meets it, its shadows in it ([`FrameLight::below`]). Point and spot lights
+/// do not enter the bounce.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Ground {
+    pub(super) z: f32,
+    /// The open plane's outgoing radiance under the environment's sky, and under the suns.
+    sky: Vec3,
+    sun: Vec3,
+}
+
+impl Ground {
+    /// The scene's ground: the first of its [`ground_planes`].
+    pub(super) fn find(scene: &PosedScene, lights: &[&Light], env: &EnvLight) -> Option<Ground> {
+        let prim = ground_planes(scene).next()?;
+        let albedo = scene.material(prim.material).base_color.truncate();
+        let sky = env.prefiltered.sky_irradiance(Vec3::Z) * env.strength;
+        let sun = lights.iter().map(|l| sun_irradiance(l)).sum::<Vec3>();
+        Some(Ground { z: prim.positions[0].z, sky: albedo * sky / PI, sun: albedo * sun / PI })
+    }
+
+    /// Its outgoing radiance where the fractions `light` (environment, suns) of the open plane's arrive.
+    #[inline]
+    pub(super) fn radiance(&self, light: Vec2) -> Vec3 {
+        self.sky * light.x + self.sun * light.y
+    }
+}
+
+/// The irradiance light `l` brings a horizontal plane facing +Z when it is a sun, unshadowed.
+fn sun_irradiance(l: &Light) -> Vec3 {
+    match l.kind {
+        LightKind::Sun { direction, .. } => l.color * (l.intensity * (-direction.z).max(0.0)),
+        _ => Vec3::ZERO,
+    }
+}
+
+/// The scene's ground planes: triangles whose material casts no shadow (only a plane source's does).
+pub(super) fn ground_planes(scene: &PosedScene) -> impl Iterator<Item = &PosedPrimitive> {
+    scene.primitives.iter().filter(|p| {
+        p.kind == PrimKind::Triangles
+            && !p.positions.is_empty()
+            && scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows)
+    })
+}
+
+impl FrameLight {
+    /// The light over the plane through `corners` (horizontal, facing +Z).
+    pub(super) fn plane_visibility(&self, material: u32, corners: &[Vec3]) -> PlaneVisibility {
+        let lo = corners.iter().fold(Vec3::INFINITY, |a, &p| a.min(p));
+        let hi = corners.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
+        let n = PLANE_CELLS;
+        let cell = (hi - lo).truncate().max(Vec2::splat(1e-6)) / n as f32;
+        let point = |k: usize| {
+            let (i, j) = (k % (n + 1), k / (n + 1));
+            Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z)
+        };
+        let vis: Vec<f32> =
+            (0..(n + 1) * (n + 1)).into_par_iter().map(|k| self.environment_visibility(point(k), Vec3::Z)).collect();
+        // Each sun counts by the luminance of the irradiance it brings: the bounce's colour stays the open
+        // plane's (its sky and sun parts apart), only how much of the suns' light arrives varies.
+        let weight = |l: &Light| sun_irradiance(l).dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        let total: f32 = self.lights.iter().map(|lamp| weight(&lamp.light)).sum();
+        let sun: Vec<f32> = if total > 0.0 {
+            (0..(n + 1) * (n + 1))
+                .into_par_iter()
+                .map(|k| {
+                    let p = point(k);
+                    let lit: f32 =
+                        self.lights.iter().map(|lamp| weight(&lamp.light) * lamp.visibility(p, Vec3::Z)).sum();
+                    lit / total
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        // A cell's box reaches a millimetre above and below the plane and a hair past its sides, so that every
+        // point shaded in it (rounding included) lies inside.
+        let margin = Vec3::new(1e-4 * cell.x.max(1e-3), 1e-4 * cell.y.max(1e-3), 1e-3);
+        let open = self
+            .lights
+            .iter()
+            .map(|lamp| match lamp.maps.as_slice() {
+                [map] if matches!(lamp.light.kind, LightKind::Sun { .. }) => (0..n * n)
+                    .into_par_iter()
+                    .map(|k| {
+                        let (i, j) = (k % n, k / n);
+                        let a = Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z) - margin;
+                        let b =
+                            Vec3::new(lo.x + cell.x * (i + 1) as f32, lo.y + cell.y * (j + 1) as f32, lo.z) + margin;
+                        let corners: [Vec3; 8] = std::array::from_fn(|c| {
+                            Vec3::new([a.x, b.x][c & 1], [a.y, b.y][(c >> 1) & 1], [a.z, b.z][c >> 2])
+                        });
+                        map.open_over(&corners, Vec3::Z, lamp.size)
+                    })
+                    .collect(),
+                _ => Vec::new(),
+            })
+            .collect();
+        let sky = self.irradiance(lo, Vec3::Z, Vec3::ZERO);
+        let sums = summed_areas(&vis, &sun);
+        PlaneVisibility { material, lo: lo.truncate(), cell, vis, sun, sums, sky, open }
+    }
+
+    /// What reaches world point `p` of a surface of material `material` of the environment's light, when that
+    /// is a ground plane's (whose visibility is a grid, not per vertex); from below it sees the open ground.
+    #[inline]
+    pub fn plane_visibility_at(&self, material: u32, p: Vec3) -> Option<Visibility> {
+        let g = self.planes.iter().find(|g| g.material == material)?;
+        let below = self.ground.map_or(Vec3::ZERO, |g| g.radiance(Vec2::ONE));
+        Some(Visibility { env: g.at(p.x, p.y), below, interreflects: 0.0 })
+    }
+
+    /// The radiance a point `p` with unit normal `n` receives from below the horizon, averaged over the cosine
+    /// lobe about `n` ([`BOUNCE_DIRECTIONS`] fixed directions): where a direction meets the ground, the
+    /// ground's radiance there, its shadows in it; past the ground's edges, the map's (what a path tracer sees
+    /// there). A side facing the subject's own shadow is lit from below by that shadow, not by open sunlit ground:
+    /// against Cycles, the open ground's radiance everywhere made such sides up to twice too bright.
+    /// Zero without a ground or below it.
+    pub(super) fn below(&self, p: Vec3, n: Vec3) -> Vec3 {
+        let Some(g) = self.ground else {
+            return Vec3::ZERO;
+        };
+        if p.z < g.z - 1e-3 {
+            return Vec3::ZERO;
+        }
+        let (t, b) = basis(n);
+        let (mut sum, mut count) = (Vec3::ZERO, 0u32);
+        for i in 0..BOUNCE_DIRECTIONS {
+            let xi = hammersley(i, BOUNCE_DIRECTIONS);
+            let (r, phi) = (xi.x.sqrt(), 2.0 * PI * xi.y);
+            let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - xi.x).sqrt();
+            if d.z >= -1e-4 {
+                continue;
+            }
+            let q = p + d * ((p.z - g.z).max(0.0) / -d.z);
+            sum += match self.planes.first().and_then(|plane| plane.light_at(q.x, q.y)) {
+                Some(light) => g.radiance(light),
+                None => self.map_below(d),
+            };
+            count += 1;
+        }
+        if count == 0 {
+            // The lobe misses the lower hemisphere (a normal pointing up), whose weight (1 − n_z)/2 is then
+            // below 1/64: the open ground.
+            g.radiance(Vec2::ONE)
+        } else {
+            sum / count as f32
+        }
+    }
+
+    /// The map's radiance along `d`, blurred (its roughest prefiltered level): what lies past the ground.
+    #[inline]
+    pub(super) fn map_below(&self, d: Vec3) -> Vec3 {
+        let e = &self.env;
+        e.prefiltered.levels.last().map_or(Vec3::ZERO, |m| m.radiance(e.rotation * d)) * e.strength
+    }
+
+    /// The ground's radiance along unit direction `d` from `p` (on or above it), averaged over a footprint that
+    /// widens by `spread` per unit of distance (a glossy lobe's), and the fraction of that footprint on the
+    /// plane: `None` when there is no ground, `d` does not point down, or the footprint misses the plane.
+    #[inline]
+    pub(super) fn ground_seen(&self, p: Vec3, d: Vec3, spread: f32) -> Option<(Vec3, f32)> {
+        let g = self.ground?;
+        let plane = self.planes.first()?;
+        if d.z >= -1e-4 || p.z < g.z - 1e-3 {
+            return None;
+        }
+        let t = (p.z - g.z).max(0.0) / -d.z;
+        let q = p + d * t;
+        plane.light_over(q.x, q.y, t * spread).map(|(light, on)| (g.radiance(light), on))
+    }
+
+    /// [`FrameLight::shade`] of the top face (normal +Z) of ground plane material `material`, when it is one,
+    /// at world point `p`, for a Lambertian surface of colour `albedo` (no specular layer, no occlusion
+    /// texture): what a `plane` source is. Such a face looks the same from every view, and all but its shadows
+    /// and occlusion is the same everywhere on it, so the environment's share was found once per frame.
+    #[inline]
+    pub fn shade_ground(&self, material: u32, p: Vec3, albedo: Vec3) -> Option<Vec3> {
+        let g = self.planes.iter().find(|g| g.material == material)?;
+        let (cell, vis) = g.cell_at(p.x, p.y);
+        let mut e = g.sky * vis;
+        for (lamp, open) in self.lights.iter().zip(&g.open) {
+            let (l, radiance) = lamp.incidence(p);
+            if l.z <= 0.0 || radiance == 0.0 {
+                continue;
+            }
+            let light = &lamp.light;
+            let vis = if open.get(cell) == Some(&true) { 1.0 } else { lamp.visibility(p, Vec3::Z) };
+            e += light.color * (radiance * light.intensity * vis * l.z);
+        }
+        Some(albedo * e / PI)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Surface;
+    use super::*;
+
+    /// A 4 m ground plane of colour (0.7, 0.6, 0.5) at z = 0 under a 0.6 m square caster at z = 1, lit by
+    /// `lights` and the studio map.
+    fn square_over_ground(lights: &[Light]) -> (PosedScene, FrameLight) {
+        let plane = crate::manifest::source::Plane { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
+        let h = 0.3;
+        let caster = PosedScene::single(
+            PrimKind::Triangles,
+            vec![Vec3::new(-h, -h, 1.0), Vec3::new(h, -h, 1.0), Vec3::new(h, h, 1.0), Vec3::new(-h, h, 1.0)],
+            vec![Vec3::Z; 4],
+            Vec::new(),
+            vec![0, 1, 2, 0, 2, 3],
+            crate::scene::material::Material::default(),
+        );
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0), caster], &mut scene);
+        let frame = FrameLight::prepare(&scene, lights, crate::render::Environment::default().studio());
+        (scene, frame)
+    }
+
+    fn light(kind: LightKind) -> Light {
+        Light { kind, color: Vec3::new(1.0, 0.9, 0.8), intensity: 3.0, shadows: true }
+    }
+
+    /// A sun straight overhead: the square's shadow is the square itself, x and y in −0.3..0.3.
+    fn overhead_sun() -> Light {
+        light(LightKind::Sun { direction: -Vec3::Z, angle: 0.01 })
+    }
+
+    #[test]
+    fn the_grounds_bounce_carries_its_shadows_and_the_map_lies_past_its_edges() {
+        let (_, frame) = square_over_ground(&[overhead_sun()]);
+        let g = frame.ground.expect("a ground");
+        let open = g.radiance(Vec2::ONE);
+        let lum = |c: Vec3| c.dot(Vec3::splat(1.0 / 3.0));
+        // Facing down a few centimetres over open ground, far from the caster: the open ground, give or take its
+        // own visibility of the sky there.
+        let far = frame.below(Vec3::new(-1.5, -1.5, 0.05), -Vec3::Z);
+        assert!((lum(far) / lum(open) - 1.0).abs() < 0.05, "{far} vs {open}");
+        // Facing down over the middle of the square's shadow, close to it: the shadowed ground, lit by what the
+        // square leaves of the sky, without the sun.
+        let shadowed = frame.below(Vec3::new(0.0, 0.0, 0.05), -Vec3::Z);
+        let sky = g.radiance(Vec2::X);
+        assert!(lum(shadowed) < lum(sky) && lum(shadowed) > 0.5 * lum(sky), "{shadowed}: {sky} .. {open}");
+        // A side facing the shadow receives less from below than a side facing away from it, at the same point.
+        let p = Vec3::new(0.5, 0.0, 0.3);
+        let toward = frame.below(p, Vec3::new(-1.0, 0.0, -0.3).normalize());
+        let away = frame.below(p, Vec3::new(1.0, 0.0, -0.3).normalize());
+        assert!(lum(toward) < lum(away) - 0.02, "{toward} vs {away}");
+        // Past the plane's edges the lobe meets the map's lower half, not an endless ground.
+        let beyond = frame.below(Vec3::new(10.0, 0.0, 0.05), -Vec3::Z);
+        // The map's lower half, cosine-weighted about −Z, by a dense quadrature of its own.
+        let m = 64;
+        let map = (0..m * m)
+            .map(|k| {
+                let (ct, phi) = (((k / m) as f32 + 0.5) / m as f32, ((k % m) as f32 + 0.5) / m as f32 * 2.0 * PI);
+                let (c, s) = (ct.sqrt(), (1.0 - ct).sqrt());
+                frame.map_below(Vec3::new(s * phi.cos(), s * phi.sin(), -c))
+            })
+            .sum::<Vec3>()
+            / (m * m) as f32;
+        assert!((beyond - map).abs().max_element() < 0.05 * map.max_element(), "{beyond} vs {map}");
+        assert!((beyond - open).abs().max_element() > 0.1, "{beyond} vs {open}");
+        // Below the ground nothing comes from below it; the ground's bounce reaches shading through the vertices.
+        assert_eq!(frame.below(Vec3::new(0.0, 0.0, -0.5), -Vec3::Z), Vec3::ZERO);
+        assert_eq!(frame.vertex_visibility[1][0].below, frame.below(Vec3::new(-0.3, -0.3, 1.0), Vec3::Z));
+    }
+
+    #[test]
+    fn the_grounds_reflection_averages_its_light_over_the_lobes_footprint() {
+        let (_, frame) = square_over_ground(&[overhead_sun()]);
+        let (g, plane) = (frame.ground.expect("a ground"), &frame.planes[0]);
+        // Seen straight down from 1 m: a sharp lobe reads the shadow's middle as shadowed, a footprint four times
+        // the shadow's width reads mostly open ground.
+        let down = -Vec3::Z;
+        let (sharp, on) = frame.ground_seen(Vec3::new(0.0, 0.0, 0.9), down, 0.01).expect("on the plane");
+        assert_eq!(on, 1.0);
+        let (wide, _) = frame.ground_seen(Vec3::new(0.0, 0.0, 0.9), down, 1.2).expect("on the plane");
+        assert!(sharp.x < g.radiance(Vec2::new(1.0, 0.1)).x && wide.x > g.radiance(Vec2::new(1.0, 0.8)).x);
+        // The footprint's average moves continuously with it: across the shadow's edge in 1 mm steps, no step
+        // jumps by more than a tenth of the edge's contrast.
+        let contrast = g.radiance(Vec2::ONE).x - g.radiance(Vec2::X).x;
+        let mut last: Option<f32> = None;
+        for i in 0..200 {
+            let p = Vec3::new(0.2 + i as f32 * 1e-3, 0.0, 0.5);
+            let (c, _) = frame.ground_seen(p, down, 0.05).expect("on the plane");
+            if let Some(l) = last {
+                assert!((c.x - l).abs() < 0.1 * contrast, "{p}: {l} → {}", c.x);
+            }
+            last = Some(c.x);
+        }
+        // A box over the plane's corner is a quarter on it; one past the edges is not on it at all.
+        let (_, quarter) = plane.light_over(2.0, 2.0, 0.2).expect("partly on the plane");
+        assert!((quarter - 0.25).abs() < 0.02, "{quarter}");
+        assert!(plane.light_over(3.0, 0.0, 0.2).is_none());
+        // The summed areas agree with the grid: a box over whole cells averages the grid points it spans.
+        let n = PLANE_CELLS + 1;
+        let (i0, j0, k) = (40, 60, 9);
+        let mean = |g: &[f32]| {
+            (0..k).flat_map(|j| (0..k).map(move |i| (i0 + i, j0 + j))).map(|(i, j)| g[j * n + i]).sum::<f32>()
+                / (k * k) as f32
+        };
+        let (x, y) = (plane.lo.x + plane.cell.x * (i0 as f32 + 4.0), plane.lo.y + plane.cell.y * (j0 as f32 + 4.0));
+        let (avg, on) = plane.light_over(x, y, plane.cell.x * 4.5).expect("on the plane");
+        assert_eq!(on, 1.0);
+        assert!((avg.x - mean(&plane.vis)).abs() < 1e-4 && (avg.y - mean(&plane.sun)).abs() < 1e-4, "{avg}");
+    }
+
+    #[test]
+    fn the_grounds_shortcut_shades_as_the_full_model_does_in_and_out_of_shadow() {
+        // A ground plane and a square caster over it, under a soft oblique sun, a point light and the studio map.
+        let lights = [
+            light(LightKind::Sun { direction: Vec3::new(0.3, 0.2, -1.0).normalize(), angle: 0.05 }),
+            light(LightKind::Point { position: Vec3::new(-1.0, 0.5, 2.0), radius: 0.1 }),
+        ];
+        let (scene, frame) = square_over_ground(&lights);
+        let ground = scene.primitives[0].material;
+        let albedo = Vec3::new(0.7, 0.6, 0.5);
+        let lambert = Surface { base: albedo, metallic: 0.0, roughness: 0.5, specular: 0.0 };
+        let (mut shadowed, mut open) = (0, 0);
+        // A grid over the whole plane, and two lines a millimetre apart across the shadow's edges (the square's
+        // shadow is the square moved by (0.3, 0.2): x in 0..0.6, y in −0.1..0.5), through its penumbra.
+        let grid =
+            (0..10_000).map(|i| Vec3::new(-1.98 + (i % 100) as f32 * 0.04, -1.98 + (i / 100) as f32 * 0.04, 0.0));
+        let across = (0..1000).map(|i| Vec3::new(-0.2 + i as f32 * 1e-3, 0.2, 0.0));
+        let along = (0..1000).map(|i| Vec3::new(0.3, -0.3 + i as f32 * 1e-3, 0.0));
+        for p in grid.chain(across).chain(along) {
+            let vis = frame.plane_visibility_at(ground, p).expect("the plane's material is a ground's");
+            let full = frame.shade(p, Vec3::Z, Vec3::new(0.2, -0.4, 0.9).normalize(), &lambert, 1.0, vis);
+            let fast = frame.shade_ground(ground, p, albedo).expect("a ground");
+            assert!((full - fast).abs().max_element() <= 1e-5 * (1.0 + full.max_element()), "{p}: {full} vs {fast}");
+            let sun = frame.lights[0].visibility(p, Vec3::Z);
+            (shadowed, open) = (shadowed + (sun == 0.0) as u32, open + (sun == 1.0) as u32);
+        }
+        // Both sides of the sun's shadow were compared, and the shortcut skipped the sun's lookup in most cells
+        // but not near the shadow (the point light, a perspective map, always looks up).
+        assert!(shadowed > 1000 && open > 8500, "{shadowed} in shadow, {open} open");
+        let cells = &frame.planes[0].open;
+        let skipped = cells[0].iter().filter(|&&o| o).count();
+        assert!(skipped > cells[0].len() / 2 && skipped < cells[0].len(), "{skipped} of {}", cells[0].len());
+        assert!(cells[1].is_empty());
+        // Only a ground plane's material takes the shortcut.
+        assert!(frame.shade_ground(scene.primitives[1].material, Vec3::ZERO, albedo).is_none());
+    }
+}
