@@ -98,9 +98,9 @@ impl PlaneVisibility {
         let at = |u: f64, v: f64| self.sum_at(u + 0.5, v + 0.5);
         let (a, b, c, d) = (at(u1, v1), at(u0, v1), at(u1, v0), at(u0, v0));
         let area = (u1 - u0) * (v1 - v0);
-        let avg = |k: usize| ((a[k] - b[k] - c[k] + d[k]) / area) as f32;
-        let sun = if self.sun.is_empty() { 1.0 } else { avg(1) };
-        Some((Vec2::new(avg(0).clamp(0.0, 1.0), sun.clamp(0.0, 1.0)), on))
+        // (An empty sun grid was summed as all ones.)
+        let avg = |k: usize| ((a[k] - b[k] - c[k] + d[k]) / area).clamp(0.0, 1.0) as f32;
+        Some((Vec2::new(avg(0), avg(1)), on))
     }
 
     /// The summed-area tables at (u, v) in [0, PLANE_CELLS + 1]², interpolated bilinearly between entries.
@@ -177,6 +177,14 @@ impl Ground {
         Some(Ground { z: prim.positions[0].z, sky: albedo * sky / PI, sun: albedo * sun / PI })
     }
 
+    /// Where the ray from `p` (on or above the ground) along `d` (pointing down) meets the ground's plane, and
+    /// how far along the ray.
+    #[inline]
+    fn hit(&self, p: Vec3, d: Vec3) -> (Vec3, f32) {
+        let t = (p.z - self.z).max(0.0) / -d.z;
+        (p + d * t, t)
+    }
+
     /// Its outgoing radiance where the fractions `light` (environment, suns) of the open plane's arrive.
     #[inline]
     pub(super) fn radiance(&self, light: Vec2) -> Vec3 {
@@ -216,17 +224,17 @@ impl FrameLight {
             (0..(n + 1) * (n + 1)).into_par_iter().map(|k| self.environment_visibility(point(k), Vec3::Z)).collect();
         // Each sun counts by the luminance of the irradiance it brings: the bounce's colour stays the open
         // plane's (its sky and sun parts apart), only how much of the suns' light arrives varies.
-        let weight = |l: &Light| sun_irradiance(l).dot(Vec3::new(0.2126, 0.7152, 0.0722));
-        let total: f32 = self.lights.iter().map(|lamp| weight(&lamp.light)).sum();
+        let suns: Vec<(&super::Lamp, f32)> = self
+            .lights
+            .iter()
+            .map(|lamp| (lamp, sun_irradiance(&lamp.light).dot(Vec3::new(0.2126, 0.7152, 0.0722))))
+            .filter(|&(_, w)| w > 0.0)
+            .collect();
+        let total: f32 = suns.iter().map(|&(_, w)| w).sum();
         let sun: Vec<f32> = if total > 0.0 {
             (0..(n + 1) * (n + 1))
                 .into_par_iter()
-                .map(|k| {
-                    let p = point(k);
-                    let lit: f32 =
-                        self.lights.iter().map(|lamp| weight(&lamp.light) * lamp.visibility(p, Vec3::Z)).sum();
-                    lit / total
-                })
+                .map(|k| suns.iter().map(|&(lamp, w)| w * lamp.visibility(point(k), Vec3::Z)).sum::<f32>() / total)
                 .collect()
         } else {
             Vec::new()
@@ -265,7 +273,7 @@ impl FrameLight {
     pub fn plane_visibility_at(&self, material: u32, p: Vec3) -> Option<Visibility> {
         let g = self.planes.iter().find(|g| g.material == material)?;
         let below = self.ground.map_or(Vec3::ZERO, |g| g.radiance(Vec2::ONE));
-        Some(Visibility { env: g.at(p.x, p.y), below, interreflects: 0.0 })
+        Some(Visibility { env: g.at(p.x, p.y), below })
     }
 
     /// The radiance a point `p` with unit normal `n` receives from below the horizon, averaged over the cosine
@@ -281,6 +289,7 @@ impl FrameLight {
         if p.z < g.z - 1e-3 {
             return Vec3::ZERO;
         }
+        let plane = self.planes.first();
         let (t, b) = basis(n);
         let (mut sum, mut count) = (Vec3::ZERO, 0u32);
         for i in 0..BOUNCE_DIRECTIONS {
@@ -290,8 +299,8 @@ impl FrameLight {
             if d.z >= -1e-4 {
                 continue;
             }
-            let q = p + d * ((p.z - g.z).max(0.0) / -d.z);
-            sum += match self.planes.first().and_then(|plane| plane.light_at(q.x, q.y)) {
+            let (q, _) = g.hit(p, d);
+            sum += match plane.and_then(|plane| plane.light_at(q.x, q.y)) {
                 Some(light) => g.radiance(light),
                 None => self.map_below(d),
             };
@@ -323,8 +332,7 @@ impl FrameLight {
         if d.z >= -1e-4 || p.z < g.z - 1e-3 {
             return None;
         }
-        let t = (p.z - g.z).max(0.0) / -d.z;
-        let q = p + d * t;
+        let (q, t) = g.hit(p, d);
         plane.light_over(q.x, q.y, t * spread).map(|(light, on)| (g.radiance(light), on))
     }
 
@@ -482,7 +490,7 @@ mod tests {
         let along = (0..1000).map(|i| Vec3::new(0.3, -0.3 + i as f32 * 1e-3, 0.0));
         for p in grid.chain(across).chain(along) {
             let vis = frame.plane_visibility_at(ground, p).expect("the plane's material is a ground's");
-            let full = frame.shade(p, Vec3::Z, Vec3::new(0.2, -0.4, 0.9).normalize(), &lambert, 1.0, vis);
+            let full = frame.shade(p, Vec3::Z, Vec3::new(0.2, -0.4, 0.9).normalize(), &lambert, 1.0, vis, false);
             let fast = frame.shade_ground(ground, p, albedo).expect("a ground");
             assert!((full - fast).abs().max_element() <= 1e-5 * (1.0 + full.max_element()), "{p}: {full} vs {fast}");
             let sun = frame.lights[0].visibility(p, Vec3::Z);

@@ -36,24 +36,16 @@ pub struct Visibility {
     /// ground's, its shadows in it, and past its edges the map's (see [`FrameLight::below`]). Unread without a
     /// ground.
     pub below: Vec3,
-    /// How much of what the casters block comes back to the diffuse layer by interreflection
-    /// ([`multi_bounce`]): 1 on a subject, whose casters are mostly its own parts, of colours like its own; 0 on
-    /// a ground plane, whose caster is the subject, of a colour the plane's says nothing of.
-    pub interreflects: f32,
 }
 
 impl Visibility {
     /// In the open, without a ground.
-    pub const OPEN: Visibility = Visibility { env: 1.0, below: Vec3::ZERO, interreflects: 1.0 };
+    pub const OPEN: Visibility = Visibility { env: 1.0, below: Vec3::ZERO };
 
     /// The linear blend `self` → `o` at `t`.
     #[inline]
     pub fn lerp(self, o: Visibility, t: f32) -> Visibility {
-        Visibility {
-            env: self.env + (o.env - self.env) * t,
-            below: self.below.lerp(o.below, t),
-            interreflects: self.interreflects + (o.interreflects - self.interreflects) * t,
-        }
+        Visibility { env: self.env + (o.env - self.env) * t, below: self.below.lerp(o.below, t) }
     }
 
     /// The blend of three vertices' by barycentric weights `k`.
@@ -62,7 +54,6 @@ impl Visibility {
         Visibility {
             env: v[0].env * k[0] + v[1].env * k[1] + v[2].env * k[2],
             below: v[0].below * k[0] + v[1].below * k[1] + v[2].below * k[2],
-            interreflects: v[0].interreflects * k[0] + v[1].interreflects * k[1] + v[2].interreflects * k[2],
         }
     }
 }
@@ -241,7 +232,7 @@ impl FrameLight {
 
     /// What reaches `p` (unit normal `n`) of the environment's light: see [`Visibility`].
     pub fn visibility(&self, p: Vec3, n: Vec3) -> Visibility {
-        Visibility { env: self.environment_visibility(p, n), below: self.below(p, n), interreflects: 1.0 }
+        Visibility { env: self.environment_visibility(p, n), below: self.below(p, n) }
     }
 
     /// The fraction of the environment's light (weighted by where it comes from and by the cosine to `n`) that
@@ -273,13 +264,17 @@ impl FrameLight {
             return albedo + emission;
         }
         let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
-        self.shade(p, n, n, &s, 1.0, self.visibility(p, n)) + emission
+        self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission
     }
 
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
     /// `v` (toward the eye), for surface `s`, with ambient occlusion `ao` (the material's) and what reaches it
-    /// of the environment's light, `vis` (interpolated from the vertices).
-    pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, vis: Visibility) -> Vec3 {
+    /// of the environment's light, `vis` (interpolated from the vertices). `interreflects`: whether what the
+    /// casters block comes partly back to the diffuse layer ([`multi_bounce`]): yes on a subject, whose casters
+    /// are mostly its own parts, of colours like its own; no on a ground plane, whose caster is the subject, of a
+    /// colour the plane's says nothing of.
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, vis: Visibility, interreflects: bool) -> Vec3 {
         let mut out = Vec3::ZERO;
         for lamp in &self.lights {
             let (l, radiance) = lamp.incidence(p);
@@ -322,10 +317,10 @@ impl FrameLight {
         // What the occluders block is not all lost: they reflect some of it back (interreflection, which a path
         // tracer follows). The diffuse layer gets it back by Jimenez et al.'s multi-bounce fit ("Practical
         // real-time strategies for accurate indirect occlusion", 2016), with the surface's own colour standing
-        // in for its surroundings' (see [`Visibility::interreflects`]); against Cycles it lifts CesiumMan's crevices
-        // by 1.9 dB.
+        // in for its surroundings' (on subjects only, see `interreflects`); against Cycles it lifts CesiumMan's
+        // crevices by 1.9 dB.
         let occlusion = ao * vis.env;
-        let returned = Vec3::splat(occlusion).lerp(multi_bounce(occlusion, s.diffuse()), vis.interreflects);
+        let returned = if interreflects { multi_bounce(occlusion, s.diffuse()) } else { Vec3::splat(occlusion) };
         out + diffuse * returned + specular * occlusion
     }
 

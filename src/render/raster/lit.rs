@@ -76,9 +76,11 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
         surface.metallic *= mr.z;
     }
     let ao = m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
-    let vis = match l.light.plane_visibility_at(tri.material, p) {
-        Some(v) => v,
-        None => Visibility::blend(&tri.vis, k),
+    // A ground plane's visibility is a grid; a subject's comes from its vertices, and only a subject
+    // interreflects (see `FrameLight::shade`).
+    let (vis, interreflects) = match l.light.plane_visibility_at(tri.material, p) {
+        Some(v) => (v, false),
+        None => (Visibility::blend(&tri.vis, k), true),
     };
     let n = match m.normal {
         Some((r, tex, scale)) => {
@@ -88,7 +90,7 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
         None => nrm,
     };
     let emission = mat.emissive * sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
-    l.light.shade(p, n, v, &surface, ao, vis) + emission
+    l.light.shade(p, n, v, &surface, ao, vis, interreflects) + emission
 }
 
 /// Whether a material is Lambertian and untextured, as a `plane` source's is: the top face of a ground plane of
