@@ -320,16 +320,17 @@ pub fn prefilter(map: &EnvMap) -> Prefiltered {
             let roughness = i as f32 / (LEVELS - 1) as f32;
             let w = LEVEL_WIDTH[i].min(map.width.max(2));
             let h = (w / 2).max(1);
+            let lobe = if i == 0 { Vec::new() } else { lobe(&pyramid, roughness) };
             let texels: Vec<Vec3> = (0..h)
                 .into_par_iter()
                 .flat_map_iter(|y| {
-                    let pyramid = &pyramid;
+                    let (pyramid, lobe) = (&pyramid, &lobe);
                     (0..w).map(move |x| {
                         let r = uv_to_dir(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
                         if i == 0 {
                             return level_for(pyramid, w).radiance(r);
                         }
-                        convolve(pyramid, r, roughness)
+                        convolve(pyramid, r, lobe)
                     })
                 })
                 .collect();
@@ -344,29 +345,46 @@ fn level_for(pyramid: &[EnvMap], width: u32) -> &EnvMap {
     pyramid.iter().find(|m| m.width <= width).unwrap_or_else(|| pyramid.last().expect("a pyramid has a level"))
 }
 
-/// Radiance around `r` weighted by the GGX lobe of `roughness` (n = v = r), by importance sampling.
-fn convolve(pyramid: &[EnvMap], r: Vec3, roughness: f32) -> Vec3 {
+/// One importance sample of a GGX lobe: its half vector in the lobe's tangent frame and the pyramid level it
+/// reads. Neither depends on the lobe's direction (n = v = r), so a level's samples are found once, not per texel.
+#[derive(Debug, Clone, Copy)]
+struct LobeSample {
+    half: Vec3,
+    level: usize,
+}
+
+/// The [`LOBE_SAMPLES`] samples of the GGX lobe of `roughness` over `pyramid` (filtered importance sampling:
+/// a sample reads the level whose texels are about its share of the lobe's solid angle).
+fn lobe(pyramid: &[EnvMap], roughness: f32) -> Vec<LobeSample> {
     let a = (roughness * roughness).max(1e-4);
-    let (t, b) = super::brdf::basis(r);
     let base = &pyramid[0];
     let texel_solid = 4.0 * PI / (base.width as f32 * base.height as f32);
+    (0..LOBE_SAMPLES)
+        .map(|k| {
+            let xi = super::brdf::hammersley(k, LOBE_SAMPLES);
+            let half = super::brdf::ggx_half(xi, a);
+            // pdf of l = D(h)·(n·h) / (4 (v·h)) with n = v: D/4.
+            let pdf = super::brdf::ggx_d(half.z, a) / 4.0;
+            let sample_solid = 1.0 / (LOBE_SAMPLES as f32 * pdf + 1e-6);
+            let lod = (0.5 * (sample_solid / texel_solid).log2() + 1.0).max(0.0);
+            LobeSample { half, level: (lod.round() as usize).min(pyramid.len() - 1) }
+        })
+        .collect()
+}
+
+/// Radiance around `r` weighted by the GGX lobe whose samples are `lobe` (see [`lobe`]).
+fn convolve(pyramid: &[EnvMap], r: Vec3, lobe: &[LobeSample]) -> Vec3 {
+    let (t, b) = super::brdf::basis(r);
     let (mut sum, mut wsum) = (Vec3::ZERO, 0.0);
-    for k in 0..LOBE_SAMPLES {
-        let xi = super::brdf::hammersley(k, LOBE_SAMPLES);
-        let h = super::brdf::ggx_half(xi, a);
+    for s in lobe {
+        let h = s.half;
         let hw = t * h.x + b * h.y + r * h.z;
         let l = 2.0 * r.dot(hw) * hw - r;
         let nl = r.dot(l);
         if nl <= 0.0 {
             continue;
         }
-        // pdf of l = D(h)·(n·h) / (4 (v·h)) with n = v: D/4.
-        let nh = h.z;
-        let pdf = super::brdf::ggx_d(nh, a) / 4.0;
-        let sample_solid = 1.0 / (LOBE_SAMPLES as f32 * pdf + 1e-6);
-        let lod = (0.5 * (sample_solid / texel_solid).log2() + 1.0).max(0.0);
-        let m = &pyramid[(lod.round() as usize).min(pyramid.len() - 1)];
-        sum += m.radiance(l) * nl;
+        sum += pyramid[s.level].radiance(l) * nl;
         wsum += nl;
     }
     if wsum > 0.0 {
