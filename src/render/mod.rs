@@ -377,23 +377,23 @@ fn resolve(
     for py in 0..ph {
         for px in 0..pw {
             let i = (py * out.width + x0 + px) as usize;
-            let (mut sum, mut covered, mut depth, mut normal) = (Vec4::ZERO, 0u32, 0f32, Vec3::ZERO);
-            // Transparent (BLEND) samples have alpha under 1: their colours weigh by it.
-            let mut weighted = Vec3::ZERO;
-            for sy in 0..k {
+            let (mut sum, mut covered, mut depth) = (Vec4::ZERO, 0u32, 0f32);
+            // The pixel's samples, row by row (what is summed only sometimes is summed in a second walk, in the
+            // same order).
+            let samples = (0..k).flat_map(|sy| {
                 let row = ((py * k + sy) * st.w + px * k) as usize;
-                for j in row..row + k as usize {
-                    if st.object[j] == 0 {
-                        continue;
-                    }
-                    ids[covered as usize] = st.object[j];
-                    covered += 1;
-                    sum += st.color[j];
-                    weighted += st.color[j].truncate() * st.color[j].w;
-                    depth += st.depth[j];
-                    normal += st.normal[j];
+                row..row + k as usize
+            });
+            for j in samples.clone() {
+                if st.object[j] == 0 {
+                    continue;
                 }
+                ids[covered as usize] = st.object[j];
+                covered += 1;
+                sum += st.color[j];
+                depth += st.depth[j];
             }
+            let covered_samples = || samples.clone().filter(|&j| st.object[j] != 0);
             if covered == 0 {
                 // The other buffers start zeroed.
                 if !out.linear.is_empty() {
@@ -412,6 +412,8 @@ fn resolve(
                 // covered·255/total rounded half up, in integers.
                 coverage = ((covered * 510 + total) / (2 * total)) as u8;
             } else {
+                // Transparent (BLEND) samples have alpha under 1: their colours weigh by it.
+                let weighted = covered_samples().fold(Vec3::ZERO, |w, j| w + st.color[j].truncate() * st.color[j].w);
                 alpha = sum.w / total as f32;
                 rgb = if sum.w > 0.0 { weighted / sum.w } else { Vec3::ZERO };
                 coverage = (alpha * 255.0 + 0.5) as u8;
@@ -455,6 +457,7 @@ fn resolve(
                 };
             }
             if 2 * covered >= total && !out.normal.is_empty() {
+                let normal = covered_samples().fold(Vec3::ZERO, |n, j| n + st.normal[j]);
                 out.normal[i] = normal.normalize_or_zero();
             }
         }
