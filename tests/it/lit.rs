@@ -271,6 +271,13 @@ fn lit_manifest(extra: &str) -> String {
     )
 }
 
+/// A fresh project folder holding `lit_manifest`'s map, `sky.hdr`.
+fn lit_project() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    write_hdr(&dir.path().join("sky.hdr"), 64, 32);
+    dir
+}
+
 fn build_in(dir: &Path, text: &str) -> vvgen::build::Report {
     std::fs::write(dir.join("m.toml"), text).unwrap();
     vvgen::build::build(&load(&dir.join("m.toml")), &dir.join("cache"), Default::default(), &vvgen::build::Silent)
@@ -280,9 +287,8 @@ fn build_in(dir: &Path, text: &str) -> vvgen::build::Report {
 #[test]
 fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
     use vvgen::plan::actions::Kind;
-    let dir = tempfile::tempdir().unwrap();
+    let dir = lit_project();
     let d = dir.path();
-    write_hdr(&d.join("sky.hdr"), 64, 32);
     let text = lit_manifest("");
     let first = build_in(d, &text);
     assert_eq!(first.ran(Kind::Environment), 1);
@@ -313,9 +319,8 @@ fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
 #[test]
 fn a_pixel_filter_re_renders_the_colour_passes_only() {
     use vvgen::plan::actions::Kind;
-    let dir = tempfile::tempdir().unwrap();
+    let dir = lit_project();
     let d = dir.path();
-    write_hdr(&d.join("sky.hdr"), 64, 32);
     let text = lit_manifest("");
     build_in(d, &text);
     let read = |f: &str| std::fs::read(d.join("out/m_dnerf").join(f)).unwrap();

@@ -19,6 +19,18 @@ pub(super) const PLANE_CELLS: usize = 128;
 /// smooth average of the grids, so a fixed set this size changes it by under 2 % between neighbouring vertices.
 const BOUNCE_DIRECTIONS: u32 = 64;
 
+/// The [`BOUNCE_DIRECTIONS`] directions in the tangent frame (z along the normal), cosine-weighted: the same for
+/// every point, so found once rather than per vertex and frame.
+static BOUNCE: std::sync::LazyLock<Vec<Vec3>> = std::sync::LazyLock::new(|| {
+    (0..BOUNCE_DIRECTIONS)
+        .map(|i| {
+            let xi = hammersley(i, BOUNCE_DIRECTIONS);
+            let (r, phi) = (xi.x.sqrt(), 2.0 * PI * xi.y);
+            Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - xi.x).sqrt())
+        })
+        .collect()
+});
+
 /// A ground plane's light, sampled on a grid of [`PLANE_CELLS`]² cells over its extent and read bilinearly:
 /// the environment's visibility and the suns'. A plane's vertices are only its corners, so it cannot carry its
 /// occlusion per vertex as other surfaces do; a grid costs the same to prepare as a finely tessellated plane did
@@ -216,10 +228,9 @@ impl FrameLight {
         let hi = corners.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
         let n = PLANE_CELLS;
         let cell = (hi - lo).truncate().max(Vec2::splat(1e-6)) / n as f32;
-        let point = |k: usize| {
-            let (i, j) = (k % (n + 1), k / (n + 1));
-            Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z)
-        };
+        // Grid point (i, j), and grid point k in row order.
+        let corner = |i: usize, j: usize| Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z);
+        let point = |k: usize| corner(k % (n + 1), k / (n + 1));
         let vis: Vec<f32> =
             (0..(n + 1) * (n + 1)).into_par_iter().map(|k| self.environment_visibility(point(k), Vec3::Z)).collect();
         // Each sun counts by the luminance of the irradiance it brings: the bounce's colour stays the open
@@ -250,9 +261,7 @@ impl FrameLight {
                     .into_par_iter()
                     .map(|k| {
                         let (i, j) = (k % n, k / n);
-                        let a = Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z) - margin;
-                        let b =
-                            Vec3::new(lo.x + cell.x * (i + 1) as f32, lo.y + cell.y * (j + 1) as f32, lo.z) + margin;
+                        let (a, b) = (corner(i, j) - margin, corner(i + 1, j + 1) + margin);
                         let corners: [Vec3; 8] = std::array::from_fn(|c| {
                             Vec3::new([a.x, b.x][c & 1], [a.y, b.y][(c >> 1) & 1], [a.z, b.z][c >> 2])
                         });
@@ -292,10 +301,8 @@ impl FrameLight {
         let plane = self.planes.first();
         let (t, b) = basis(n);
         let (mut sum, mut count) = (Vec3::ZERO, 0u32);
-        for i in 0..BOUNCE_DIRECTIONS {
-            let xi = hammersley(i, BOUNCE_DIRECTIONS);
-            let (r, phi) = (xi.x.sqrt(), 2.0 * PI * xi.y);
-            let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - xi.x).sqrt();
+        for h in BOUNCE.iter() {
+            let d = t * h.x + b * h.y + n * h.z;
             if d.z >= -1e-4 {
                 continue;
             }
