@@ -2,8 +2,9 @@
 //! peers' 100k-triangle vertex-coloured torus (head-lit), and an 800k-point frame drawn as true 3D cubes.
 //! Views: 20 cameras at radius 4 on the upper hemisphere, `camera_angle_y` 0.6911 (pyrender's bench setup).
 //!
-//! Run: `cargo bench --bench render [-- OUT_DIR] [--only cesium|torus|points] [--points N] [--case TEXT]` (the
-//! last three run one group, one cloud size, or the point cases whose label contains TEXT, for profiling). The
+//! Run: `cargo bench --bench render [-- OUT_DIR] [--only cesium|torus|points] [--points N] [--case TEXT]
+//! [--samples N] [--runs N]` (the flags run one group, one cloud size, the point cases whose label contains TEXT,
+//! or CesiumMan at one sample count, and set the timed repeats, default 3: for profiling). The
 //! point clouds are left in OUT_DIR (default `target/bench-data`) as `pc_100k.ply` and `pc_800k.ply`, so
 //! pyrender can draw the same points in the same run (`benches/peers.sh render …`).
 
@@ -160,6 +161,8 @@ fn main() {
     // `--case TEXT` runs only the point cases whose label contains TEXT, and `--points N` only the N-point cloud.
     let case = value("--case");
     let points: Option<usize> = value("--points").and_then(|v| v.parse().ok());
+    let samples: Option<u32> = value("--samples").and_then(|v| v.parse().ok());
+    let runs: usize = value("--runs").and_then(|v| v.parse().ok()).unwrap_or(3).max(1);
     std::fs::create_dir_all(&out).unwrap();
     println!("threads: {}, {RES}×{RES}, RGBA PNG (fast) included", rayon::current_num_threads());
 
@@ -180,10 +183,10 @@ fn main() {
     if run("cesium") {
         println!("CesiumMan ({} triangles, 1 texture), unlit:", man.triangle_count());
     }
-    for spp in [1, 4].into_iter().filter(|_| run("cesium")) {
+    for spp in [1, 4].into_iter().filter(|&n| run("cesium") && samples.is_none_or(|s| s == n)) {
         line(
             &format!("samples = {spp}"),
-            per_image(&man, &cams, &RenderSettings { samples: spp, ..Default::default() }, 3),
+            per_image(&man, &cams, &RenderSettings { samples: spp, ..Default::default() }, runs),
         );
     }
 
@@ -191,7 +194,7 @@ fn main() {
         let torus = torus_100k();
         println!("bumpy torus ({} triangles, vertex colours), lambert head light:", torus.triangle_count());
         let lit = RenderSettings { shading: Shading::Lambert, ..Default::default() };
-        line("samples = 1", per_image(&torus, &cams, &lit, 3));
+        line("samples = 1", per_image(&torus, &cams, &lit, runs));
     }
 
     for (n, name) in [(100_000usize, "pc_100k.ply"), (800_000, "pc_800k.ply")]
@@ -220,7 +223,7 @@ fn main() {
         .filter(|(label, ..)| case.as_deref().is_none_or(|c| label.contains(c)))
         {
             let s = RenderSettings { splat: SplatSettings { shape, size, min_px }, ..Default::default() };
-            line(label, per_image(&pts, &cams, &s, 3));
+            line(label, per_image(&pts, &cams, &s, runs));
         }
     }
 }
