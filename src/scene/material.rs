@@ -319,24 +319,21 @@ impl Texture {
         Lod { level: level as usize, t: lod - level as f32 }
     }
 
-    /// Bilinear (or nearest) lookup of already transformed `uv` in this level.
+    /// Bilinear (or nearest) lookup of already transformed `uv` in this level. Inlined into its callers: a
+    /// trilinear lookup makes two, and a call each cost a third of its instructions (registers saved and
+    /// restored, the checks below repeated).
+    #[inline(always)]
     fn filter(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
-        if self.width == 0 || self.height == 0 {
-            return Vec4::ONE;
-        }
         let (w, h) = (self.width as f32, self.height as f32);
-        if r.nearest {
-            let x = wrap(r.wrap_s, floor(uv.x * w), self.width);
-            let y = wrap(r.wrap_t, floor(uv.y * h), self.height);
-            return self.texel(x, y);
-        }
         let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
         // All four texels inside (almost every lookup): `floor(fx)` is in 0..width − 1 exactly when `fx` is in
-        // [0, width − 1) (NaN is in neither), and there the floor is the truncation. No wrapping, and each row's
-        // two texels are one 8-byte read decoded through tables looked up once (this is the texturing loop's
-        // innermost step).
-        if fx >= 0.0 && fy >= 0.0 && fx < (self.width - 1) as f32 && fy < (self.height - 1) as f32 {
-            let (x0, y0) = (fx as u32, fy as u32);
+        // [0, width − 1) (NaN is in neither; an empty or one-texel-wide level has no such `fx`), and there the
+        // floor is the truncation, which fits an i32 (a cheaper conversion than to u32). No wrapping, and each
+        // row's two texels are one 8-byte read decoded through tables looked up once (this is the texturing
+        // loop's innermost step).
+        let inside = |f: f32, n: u32| f >= 0.0 && f < n.saturating_sub(1) as f32;
+        if !r.nearest && inside(fx, self.width) && inside(fy, self.height) {
+            let (x0, y0) = (fx as i32, fy as i32);
             let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
             let d = self.tables();
             let row = self.width as usize * 4;
@@ -347,6 +344,22 @@ impl Texture {
             let bottom = d.decode(&b[..4]).lerp(d.decode(&b[4..8]), tx);
             return top.lerp(bottom, ty);
         }
+        self.filter_edge(r, uv)
+    }
+
+    /// [`Texture::filter`] where it wraps or clamps (or reads nearest, or the level is empty).
+    #[inline(never)]
+    fn filter_edge(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
+        if self.width == 0 || self.height == 0 {
+            return Vec4::ONE;
+        }
+        let (w, h) = (self.width as f32, self.height as f32);
+        if r.nearest {
+            let x = wrap(r.wrap_s, floor(uv.x * w), self.width);
+            let y = wrap(r.wrap_t, floor(uv.y * h), self.height);
+            return self.texel(x, y);
+        }
+        let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
         let (x0, y0) = (floor(fx), floor(fy));
         let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
         let xs = [wrap(r.wrap_s, x0, self.width), wrap(r.wrap_s, x0.saturating_add(1), self.width)];

@@ -11,7 +11,7 @@
 use glam::{Vec2, Vec3};
 
 use super::{SampleTile, Shade, Tris, NO_TRI};
-use crate::scene::material::AlphaMode;
+use crate::scene::material::{AlphaMode, Texture, TextureRef};
 use crate::scene::PosedScene;
 
 /// One triangle's share of one pixel: the samples it won there and its attributes at their centroid.
@@ -33,48 +33,71 @@ pub(super) struct Share {
 /// Calls `f` for every triangle's share of every pixel of the tile, pixels in row order and, within a pixel,
 /// triangles in the order of their first sample (so the result never depends on anything but the tile).
 /// `k` is the number of samples along a pixel side (at most 4).
-pub(super) fn for_each_share(t: &mut SampleTile, x0: i64, y0: i64, k: i64, mut f: impl FnMut(&Share, &mut SampleTile)) {
-    let (w, k) = (t.w as usize, k as usize);
-    let n = k * k;
-    // Each sample slot's offset within its pixel, from its top-left sample.
-    let offset: [Vec2; 16] = std::array::from_fn(|j| Vec2::new((j % k) as f32, (j / k) as f32));
+pub(super) fn for_each_share(t: &mut SampleTile, x0: i64, y0: i64, k: i64, f: impl FnMut(&Share, &mut SampleTile)) {
+    // One copy per sample grid: with the pixel's sample count known, its loops unroll and its indexing is
+    // checked once (the generic loops were as many instructions as the texture lookups they feed).
+    match k {
+        1 => shares::<1, 1>(t, x0, y0, f),
+        2 => shares::<2, 4>(t, x0, y0, f),
+        3 => shares::<3, 9>(t, x0, y0, f),
+        _ => shares::<4, 16>(t, x0, y0, f),
+    }
+}
+
+/// [`for_each_share`] for `K` × `K` samples per pixel (`N` = `K`²).
+#[inline(always)]
+fn shares<const K: usize, const N: usize>(
+    t: &mut SampleTile,
+    x0: i64,
+    y0: i64,
+    mut f: impl FnMut(&Share, &mut SampleTile),
+) {
+    debug_assert_eq!(N, K * K);
+    let w = t.w as usize;
+    // Each sample slot's offset within its pixel, from its top-left sample, and a full pixel's centroid (their
+    // mean, computed as `gather` computes any share's).
+    let offset: [Vec2; N] = std::array::from_fn(|j| Vec2::new((j % K) as f32, (j / K) as f32));
+    let full = offset.iter().fold(Vec2::ZERO, |a, &o| a + o) * (1.0 / N as f32);
     let mut share = Share { id: NO_TRI, samples: [0; 16], n: 0, at: Vec2::ZERO, bary: [0.0; 3], z: 0.0 };
-    let (mut index, mut ids) = ([0u32; 16], [NO_TRI; 16]);
-    for py in 0..t.h as usize / k {
+    for py in 0..t.h as usize / K {
         // Only the pixels between the row's first and last deferred sample (a tile around a figure is mostly
         // empty, and scanning it was a third of texturing's instructions).
-        let band = &t.tri[py * k * w..(py + 1) * k * w];
+        let band = &t.tri[py * K * w..(py + 1) * K * w];
         let deferred = |&d: &u32| d != NO_TRI;
         let Some(lo) = band.chunks_exact(w).filter_map(|r| r.iter().position(deferred)).min() else {
             continue;
         };
         let hi = band.chunks_exact(w).filter_map(|r| r.iter().rposition(deferred)).max().unwrap_or(lo);
-        for px in lo / k..=hi / k {
-            let first = py * k * w + px * k;
-            let mut j = 0;
-            for row in (0..k).map(|sy| first + sy * w) {
-                for i in row..row + k {
-                    (index[j], ids[j]) = (i as u32, t.tri[i]);
-                    j += 1;
-                }
-            }
-            let corner = Vec2::new(x0 as f32 + (px * k) as f32, y0 as f32 + (py * k) as f32) + 0.5;
+        for px in lo / K..=hi / K {
+            let first = py * K * w + px * K;
+            let index: [usize; N] = std::array::from_fn(|j| first + (j / K) * w + j % K);
+            let mut ids: [u32; N] = index.map(|i| t.tri[i]);
+            let corner = Vec2::new(x0 as f32 + (px * K) as f32, y0 as f32 + (py * K) as f32) + 0.5;
             let id = ids[0];
-            if id != NO_TRI && ids[1..n].iter().all(|&d| d == id) {
-                // Inside one triangle (most covered pixels): no sorting out.
-                gather(&mut share, t, id, corner, (0..n).map(|b| (index[b], offset[b])));
+            if id != NO_TRI && ids.iter().all(|&d| d == id) {
+                // Inside one triangle (most covered pixels): its centroid is the pixel's, no sorting out.
+                let (mut bary, mut z) = ([0.0f32; 3], 0.0);
+                for (slot, &i) in share.samples.iter_mut().zip(&index) {
+                    *slot = i as u32;
+                    let v = t.bary[i];
+                    (bary[0], bary[1], bary[2]) = (bary[0] + v[0], bary[1] + v[1], bary[2] + v[2]);
+                    z += t.depth[i];
+                }
+                let inv = 1.0 / N as f32;
+                (share.id, share.n, share.at) = (id, N, corner + full);
+                (share.bary, share.z) = (bary.map(|b| b * inv), z * inv);
                 f(&share, t);
                 continue;
             }
             // Each triangle in the order of its first sample; its samples are taken out of `ids` once gathered.
-            for a in 0..n {
+            for a in 0..N {
                 let id = ids[a];
                 if id == NO_TRI {
                     continue;
                 }
-                let mine = (a..n).filter(|&b| ids[b] == id).map(|b| (index[b], offset[b]));
+                let mine = (a..N).filter(|&b| ids[b] == id).map(|b| (index[b] as u32, offset[b]));
                 gather(&mut share, t, id, corner, mine);
-                ids[a..n].iter_mut().filter(|d| **d == id).for_each(|d| *d = NO_TRI);
+                ids[a..].iter_mut().filter(|d| **d == id).for_each(|d| *d = NO_TRI);
                 f(&share, t);
             }
         }
@@ -107,22 +130,39 @@ fn gather(share: &mut Share, t: &SampleTile, id: u32, corner: Vec2, samples: imp
 /// own albedo (base colour × vertex colour, left by [`super::raster_tile`]) and is shaded with its own normal.
 pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i64, y0: i64, t: &mut SampleTile) {
     let k = shade.per_side;
+    // What the last share's material needs (its texture and emissive): neighbouring shares are mostly one
+    // triangle's, or one mesh's, so the material is looked up again only when it changes.
+    let mut last: Option<(u32, Option<(TextureRef, &Texture)>, Vec3)> = None;
     for_each_share(t, x0, y0, k, |s, t| {
         let tri = tris.get(s.id);
-        let mat = scene.material(tri.material);
-        debug_assert_eq!(mat.alpha_mode, AlphaMode::Opaque);
-        // A texture the scene does not have (never from the loaders) reads as white.
-        let texel = match mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t))) {
+        let (texture, emissive) = match last {
+            Some((m, texture, emissive)) if m == tri.material => (texture, emissive),
+            _ => {
+                let mat = scene.material(tri.material);
+                debug_assert_eq!(mat.alpha_mode, AlphaMode::Opaque);
+                // A texture the scene does not have (never from the loaders) reads as white.
+                let texture =
+                    mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
+                last = Some((tri.material, texture, mat.emissive));
+                (texture, mat.emissive)
+            }
+        };
+        let texel = match texture {
             Some((r, tex)) => {
                 let (uv, dx, dy) = tri.uv_footprint(s.bary, s.z, k as f32);
                 tex.sample_footprint(&r, uv, dx, dy).truncate()
             }
             None => Vec3::ONE,
         };
-        for &i in &s.samples[..s.n] {
-            let i = i as usize;
-            let albedo = t.color[i].truncate() * texel;
-            t.color[i] = (super::shade_unlit(shade, albedo, t.normal[i]) + mat.emissive).extend(1.0);
+        let samples = s.samples[..s.n].iter().map(|&i| i as usize);
+        if shade.lambert.is_none() {
+            // Unlit: the albedo itself.
+            samples.for_each(|i| t.color[i] = (t.color[i].truncate() * texel + emissive).extend(1.0));
+        } else {
+            samples.for_each(|i| {
+                let albedo = t.color[i].truncate() * texel;
+                t.color[i] = (super::shade_unlit(shade, albedo, t.normal[i]) + emissive).extend(1.0);
+            });
         }
     });
 }
