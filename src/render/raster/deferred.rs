@@ -125,6 +125,9 @@ fn gather(share: &mut Share, t: &SampleTile, id: u32, corner: Vec2, samples: imp
     share.z = z * inv;
 }
 
+/// A material's base colour texture and the texture it reads, when it has one.
+type BaseColour<'a> = Option<(TextureRef, &'a Texture)>;
+
 /// Unlit (or Lambert) shading of the deferred samples of a drawn tile: opaque surfaces with a base colour
 /// texture read it once per pixel and triangle, over the pixel's footprint; each sample then multiplies its
 /// own albedo (base colour × vertex colour, left by [`super::raster_tile`]) and is shaded with its own normal.
@@ -132,7 +135,7 @@ pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i
     let k = shade.per_side;
     // What the last share's material needs (its texture and emissive): neighbouring shares are mostly one
     // triangle's, or one mesh's, so the material is looked up again only when it changes.
-    let mut last: Option<(u32, Option<(TextureRef, &Texture)>, Vec3)> = None;
+    let mut last: Option<(u32, BaseColour, Vec3)> = None;
     for_each_share(t, x0, y0, k, |s, t| {
         let tri = tris.get(s.id);
         let (texture, emissive) = match last {
