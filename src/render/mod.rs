@@ -17,7 +17,7 @@ pub use crate::camera::Camera;
 pub use filter::PixelFilter;
 pub use splat::{Shape as SplatShape, Size as SplatSize, SplatSettings};
 
-use crate::scene::material::linear_to_srgb8;
+use crate::scene::material::{linear_to_srgb8, Srgb8};
 use crate::scene::PosedScene;
 use raster::{Projection, Shade};
 
@@ -368,23 +368,45 @@ fn resolve(
     env: Option<&EnvBackground>,
     out: &mut Pixels,
 ) {
+    // One copy per sample grid, as for deferred shading: with the sample count known the per-pixel loops unroll
+    // (the generic ones were most of resolving's instructions).
+    match k {
+        1 => resolve_grid::<1, 1>(st, s, cam, x0, env, out),
+        2 => resolve_grid::<2, 4>(st, s, cam, x0, env, out),
+        3 => resolve_grid::<3, 9>(st, s, cam, x0, env, out),
+        _ => resolve_grid::<4, 16>(st, s, cam, x0, env, out),
+    }
+}
+
+/// [`resolve`] for `K` × `K` samples per pixel (`N` = `K`²).
+#[inline(always)]
+fn resolve_grid<const K: usize, const N: usize>(
+    st: &raster::SampleTile,
+    s: &RenderSettings,
+    cam: &Camera,
+    x0: i64,
+    env: Option<&EnvBackground>,
+    out: &mut Pixels,
+) {
+    debug_assert_eq!(N, K * K);
+    let k = K as i64;
     let (pw, ph) = (st.w / k, st.h / k);
-    let total = (k * k) as u32;
+    let total = N as u32;
     let y0 = st.y0 / k;
     // Most pixels of a dataset image are background: one precomputed value for them.
     let empty = empty_pixel(s).unwrap_or([0; 4]);
-    let mut ids = [0u32; 16];
+    let mut ids = [0u32; N];
+    let w = st.w as usize;
+    let srgb = Srgb8::tables();
     for py in 0..ph {
         for px in 0..pw {
             let i = (py * out.width + x0 + px) as usize;
             let (mut sum, mut covered, mut depth) = (Vec4::ZERO, 0u32, 0f32);
             // The pixel's samples, row by row (what is summed only sometimes is summed in a second walk, in the
             // same order).
-            let samples = (0..k).flat_map(|sy| {
-                let row = ((py * k + sy) * st.w + px * k) as usize;
-                row..row + k as usize
-            });
-            for j in samples.clone() {
+            let first = py as usize * K * w + px as usize * K;
+            let samples: [usize; N] = std::array::from_fn(|j| first + (j / K) * w + j % K);
+            for j in samples {
                 if st.object[j] == 0 {
                     continue;
                 }
@@ -393,7 +415,7 @@ fn resolve(
                 sum += st.color[j];
                 depth += st.depth[j];
             }
-            let covered_samples = || samples.clone().filter(|&j| st.object[j] != 0);
+            let covered_samples = || samples.into_iter().filter(|&j| st.object[j] != 0);
             if covered == 0 {
                 // The other buffers start zeroed.
                 if !out.linear.is_empty() {
@@ -435,9 +457,9 @@ fn resolve(
                 out.linear[i] = (rgb * alpha).extend(alpha);
             } else {
                 out.rgba[i * 4..i * 4 + 4].copy_from_slice(&[
-                    linear_to_srgb8(rgb.x),
-                    linear_to_srgb8(rgb.y),
-                    linear_to_srgb8(rgb.z),
+                    srgb.encode(rgb.x),
+                    srgb.encode(rgb.y),
+                    srgb.encode(rgb.z),
                     a8,
                 ]);
             }

@@ -199,10 +199,32 @@ static SRGB8_START: LazyLock<[u8; SRGB8_BUCKETS]> = LazyLock::new(|| {
 /// its unpredictable branches; this runs three times per covered pixel).
 #[inline]
 pub fn linear_to_srgb8(c: f32) -> u8 {
-    // NaN, negatives and −0 become +0; values above 1 become 1, code 255.
-    let c = if c > 0.0 { c.min(1.0) } else { 0.0 };
-    let code = SRGB8_START[(c.to_bits() >> 16) as usize];
-    code + (c >= SRGB8_STEPS[code as usize]) as u8
+    Srgb8::tables().encode(c)
+}
+
+/// [`linear_to_srgb8`] with its tables looked up once, for loops over pixels (each lookup of a lazily built
+/// table checks that it is built).
+#[derive(Debug, Clone, Copy)]
+pub struct Srgb8 {
+    start: &'static [u8; SRGB8_BUCKETS],
+    steps: &'static [f32; 256],
+}
+
+impl Srgb8 {
+    /// The encoder's tables.
+    #[inline]
+    pub fn tables() -> Srgb8 {
+        Srgb8 { start: &SRGB8_START, steps: &SRGB8_STEPS }
+    }
+
+    /// Linear float → nearest sRGB byte ([`linear_to_srgb8`]).
+    #[inline]
+    pub fn encode(self, c: f32) -> u8 {
+        // NaN, negatives and −0 become +0; values above 1 become 1, code 255.
+        let c = if c > 0.0 { c.min(1.0) } else { 0.0 };
+        let code = self.start[(c.to_bits() >> 16) as usize];
+        code + (c >= self.steps[code as usize]) as u8
+    }
 }
 
 /// sRGB byte → linear float, tabulated.
