@@ -282,7 +282,7 @@ impl Texture {
         self.tables().decode(&self.rgba[i..i + 4])
     }
 
-    /// The tables that decode this texture's bytes (looked up once per bilinear lookup, not per texel).
+    /// The tables that decode this texture's bytes (and its mip levels'): looked up once per lookup, not per texel.
     #[inline]
     fn tables(&self) -> Tables {
         let unorm: &'static [f32; 256] = &UNORM8;
@@ -292,7 +292,7 @@ impl Texture {
     /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light,
     /// from the full-resolution level.
     pub fn sample(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
-        self.filter(r, r.map(uv))
+        self.filter(r, r.map(uv), self.tables())
     }
 
     /// Samples with a screen footprint: `duv_dx`, `duv_dy` are the uv's derivatives across the footprint (a
@@ -302,19 +302,21 @@ impl Texture {
     pub fn sample_footprint(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec4 {
         let lod = self.lod(r, duv_dx, duv_dy);
         let uv = r.map(uv);
+        // Every level decodes through the same tables (looked up once: each is checked to be built).
+        let d = self.tables();
         if lod.level == 0 && lod.t == 0.0 {
-            return self.filter(r, uv);
+            return self.filter(r, uv, d);
         }
         let mips = self.mips();
         // Level i is the texture itself for 0, else mips[i − 1]; past the 1×1 level (or for a 1×1 texture,
         // which has no mips) the coarsest level answers alone.
         let level = |i: usize| if i == 0 { self } else { &mips[i - 1] };
         let i = lod.level.min(mips.len());
-        let a = level(i).filter(r, uv);
+        let a = level(i).filter(r, uv, d);
         if lod.t == 0.0 || i == mips.len() {
             return a;
         }
-        a.lerp(level(i + 1).filter(r, uv), lod.t)
+        a.lerp(level(i + 1).filter(r, uv, d), lod.t)
     }
 
     /// The mip level [`Texture::sample_footprint`] reads for a footprint.
@@ -345,7 +347,7 @@ impl Texture {
     /// trilinear lookup makes two, and a call each cost a third of its instructions (registers saved and
     /// restored, the checks below repeated).
     #[inline(always)]
-    fn filter(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
+    fn filter(&self, r: &TextureRef, uv: Vec2, d: Tables) -> Vec4 {
         let (w, h) = (self.width as f32, self.height as f32);
         let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
         // All four texels inside (almost every lookup): `floor(fx)` is in 0..width − 1 exactly when `fx` is in
@@ -357,7 +359,6 @@ impl Texture {
         if !r.nearest && inside(fx, self.width) && inside(fy, self.height) {
             let (x0, y0) = (fx as i32, fy as i32);
             let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
-            let d = self.tables();
             let row = self.width as usize * 4;
             let i = y0 as usize * row + x0 as usize * 4;
             let texels = &self.rgba[i..i + row + 8];

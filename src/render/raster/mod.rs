@@ -419,6 +419,9 @@ pub fn raster_tile(
             .filter(|_| !deferred_texture)
             .and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
         let wide = bx1 - bx0 >= SPAN_MIN;
+        // No vertex colours (white, the common case): their interpolation is the sum of the weights, the same
+        // sum in the same order as that of their products with 1, without the vector products.
+        let white = tri.color == [Vec4::ONE; 3];
         for sy in by0..=by1 {
             let start = row;
             for i in 0..3 {
@@ -452,7 +455,11 @@ pub fn raster_tile(
                     continue;
                 }
                 let k = [pb[0] * z, pb[1] * z, pb[2] * z];
-                let vc = tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2];
+                let vc = if white {
+                    Vec4::splat(k[0] + k[1] + k[2])
+                } else {
+                    tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2]
+                };
                 let mut albedo = mat.base_color * vc;
                 if let Some((r, texture)) = tex {
                     let (uv, dx, dy) = tri.uv_footprint(k, z, 1.0);
@@ -484,7 +491,10 @@ pub fn raster_tile(
                     // Shaded once per pixel and triangle when every triangle is drawn ([`lit`], [`deferred`]).
                     t.color[i] = albedo.truncate().extend(1.0);
                     t.depth[i] = z;
-                    t.normal[i] = nrm;
+                    if shade.normals {
+                        // Read by Lambert shading and the normal pass only.
+                        t.normal[i] = nrm;
+                    }
                     t.object[i] = tri.object + 1;
                     t.tri[i] = ti;
                     t.bary[i] = k;
