@@ -13,7 +13,7 @@
 use glam::Vec4;
 use rayon::prelude::*;
 
-use crate::scene::material::linear_to_srgb8;
+use crate::scene::material::Srgb8;
 
 /// A pixel filter.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -90,6 +90,7 @@ pub fn apply(kernel: &[f32], image: &mut [Vec4], w: usize, h: usize, rgba: &mut 
         })
         .collect();
     let image = &*image;
+    let srgb = Srgb8::tables();
     rgba.par_chunks_mut(w * 4).enumerate().for_each(|(y, out)| {
         // The columns any row within reach covers.
         let near = &spans[y.saturating_sub(r)..(y + r + 1).min(h)];
@@ -102,12 +103,7 @@ pub fn apply(kernel: &[f32], image: &mut [Vec4], w: usize, h: usize, rgba: &mut 
                 continue;
             }
             let rgb = c.truncate() / c.w;
-            out[x * 4..x * 4 + 4].copy_from_slice(&[
-                linear_to_srgb8(rgb.x),
-                linear_to_srgb8(rgb.y),
-                linear_to_srgb8(rgb.z),
-                a8,
-            ]);
+            out[x * 4..x * 4 + 4].copy_from_slice(&[srgb.encode(rgb.x), srgb.encode(rgb.y), srgb.encode(rgb.z), a8]);
         }
     });
 }

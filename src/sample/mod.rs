@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::rig::random::Keyed;
-use crate::scene::material::linear_to_srgb8;
+use crate::scene::material::Srgb8;
 use crate::scene::{PosedScene, PrimKind};
 
 /// What can go wrong reading or re-evaluating samples.
@@ -88,7 +88,8 @@ impl Points {
 
     /// Colours as 8-bit sRGB.
     pub fn srgb8(&self) -> Vec<[u8; 3]> {
-        self.colors.iter().map(|c| c.map(linear_to_srgb8)).collect()
+        let srgb = Srgb8::tables();
+        self.colors.iter().map(|c| c.map(|v| srgb.encode(v))).collect()
     }
 }
 
