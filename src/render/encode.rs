@@ -76,15 +76,30 @@ pub fn gray8_png(v: &[u8], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
 
 /// 16-bit single-channel PNG (instance ids).
 pub fn gray16_png(v: &[u16], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
-    gray16(v.iter().copied(), w, h, c)
+    gray16(v, |v| v, w, h, c)
 }
 
-/// 16-bit single-channel PNG of `samples` (row-major, top row first), written big-endian as PNG stores them,
-/// straight from the iterator (a loop the compiler vectorizes where the samples are computed).
-fn gray16(samples: impl ExactSizeIterator<Item = u16>, w: u32, h: u32, c: PngCompression) -> Vec<u8> {
+/// 16-bit single-channel PNG of `samples` (row-major, top row first) as `sample` turns them into 16 bits,
+/// written big-endian as PNG stores them. `sample` must map the zero value to 0: runs of zeros (the background of
+/// a dataset image, nine tenths of it) are left as the buffer starts, and the rest is converted in a loop the
+/// compiler vectorizes.
+fn gray16<S: Copy + Default + PartialEq>(
+    samples: &[S],
+    sample: impl Fn(S) -> u16,
+    w: u32,
+    h: u32,
+    c: PngCompression,
+) -> Vec<u8> {
+    const RUN: usize = 16;
     let mut be = vec![0u8; samples.len() * 2];
-    for (out, v) in be.chunks_exact_mut(2).zip(samples) {
-        out.copy_from_slice(&v.to_be_bytes());
+    for (out, run) in be.chunks_mut(2 * RUN).zip(samples.chunks(RUN)) {
+        // One branch per run (`&` of the comparisons rather than `all`, which would branch per sample).
+        if run.iter().fold(true, |zero, &v| zero & (v == S::default())) {
+            continue;
+        }
+        for (out, &v) in out.chunks_exact_mut(2).zip(run) {
+            out.copy_from_slice(&sample(v).to_be_bytes());
+        }
     }
     png(&be, w, h, png::ColorType::Grayscale, png::BitDepth::Sixteen, c)
 }
@@ -134,7 +149,7 @@ fn millimetres(d: f32) -> u16 {
 
 /// 16-bit single-channel PNG of depth in millimetres (0 = no depth; clamped at 65.535 m).
 pub fn depth_mm_png(depth: &[f32], w: u32, h: u32, c: PngCompression) -> Vec<u8> {
-    gray16(depth.iter().map(|d| millimetres(*d)), w, h, c)
+    gray16(depth, millimetres, w, h, c)
 }
 
 #[cfg(test)]
@@ -158,6 +173,25 @@ mod tests {
             assert_eq!(decode(gray8_png(&grey, w, h, c)).into_luma8().into_raw(), grey, "{c:?}");
             assert_eq!(decode(gray16_png(&depth, w, h, c)).into_luma16().into_raw(), depth, "{c:?}");
         }
+    }
+
+    #[test]
+    fn depth_runs_of_zeros_and_values_decode_to_their_millimetres() {
+        use super::{depth_mm_png, PngCompression};
+        // Runs of background (0, −0) of every length around the 16-sample runs, and depths in between.
+        let (w, h) = (53u32, 7u32);
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| match (i / 11) % 3 {
+                0 => 0.0,
+                1 if i % 2 == 0 => -0.0,
+                _ => 0.25 + i as f32 * 0.0137,
+            })
+            .collect();
+        let png = depth_mm_png(&depth, w, h, PngCompression::Fast);
+        let got = image::load_from_memory_with_format(&png, image::ImageFormat::Png).unwrap().into_luma16().into_raw();
+        let want: Vec<u16> = depth.iter().map(|&d| millimetres(d)).collect();
+        assert_eq!(got, want);
+        assert!(want.iter().filter(|&&v| v != 0).count() > 100);
     }
 
     #[test]

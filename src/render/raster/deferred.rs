@@ -159,8 +159,9 @@ pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i
         };
         let samples = s.samples[..s.n].iter().map(|&i| i as usize);
         if shade.lambert.is_none() {
-            // Unlit: the albedo itself.
-            samples.for_each(|i| t.color[i] = (t.color[i].truncate() * texel + emissive).extend(1.0));
+            // Unlit: the albedo itself (in four lanes at once: the same products and sums per channel).
+            let (texel, emissive) = (texel.extend(1.0), emissive.extend(0.0));
+            samples.for_each(|i| t.color[i] = (t.color[i] * texel + emissive).with_w(1.0));
         } else {
             samples.for_each(|i| {
                 let albedo = t.color[i].truncate() * texel;
