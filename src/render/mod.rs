@@ -404,8 +404,7 @@ fn resolve_grid<const K: usize, const N: usize>(
             let (mut sum, mut covered, mut depth) = (Vec4::ZERO, 0u32, 0f32);
             // The pixel's samples, row by row (what is summed only sometimes is summed in a second walk, in the
             // same order).
-            let first = py as usize * K * w + px as usize * K;
-            let samples: [usize; N] = std::array::from_fn(|j| first + (j / K) * w + j % K);
+            let samples: [usize; N] = raster::pixel_samples::<K, N>(w, px as usize, py as usize);
             for j in samples {
                 if st.object[j] == 0 {
                     continue;

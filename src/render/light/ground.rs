@@ -84,12 +84,12 @@ impl PlaneVisibility {
     /// its edges.
     #[inline]
     fn light_at(&self, x: f32, y: f32) -> Option<Vec2> {
-        let (u, v) = ((x - self.lo.x) / self.cell.x, (y - self.lo.y) / self.cell.y);
+        let uv = self.grid_uv(x, y);
         let n = PLANE_CELLS as f32;
-        if !(0.0..=n).contains(&u) || !(0.0..=n).contains(&v) {
+        if !(0.0..=n).contains(&uv.x) || !(0.0..=n).contains(&uv.y) {
             return None;
         }
-        let g = self.locate(x, y);
+        let g = locate(uv);
         Some(Vec2::new(read(&self.vis, g), if self.sun.is_empty() { 1.0 } else { read(&self.sun, g) }))
     }
 
@@ -99,7 +99,8 @@ impl PlaneVisibility {
     fn light_over(&self, x: f32, y: f32, w: f32) -> Option<(Vec2, f32)> {
         let n = PLANE_CELLS as f64;
         // In grid units, where grid point k stands for the span [k − ½, k + ½]; the box is cut to the plane.
-        let (u, v) = (((x - self.lo.x) / self.cell.x) as f64, ((y - self.lo.y) / self.cell.y) as f64);
+        let uv = self.grid_uv(x, y);
+        let (u, v) = (uv.x as f64, uv.y as f64);
         let (wu, wv) = ((w / self.cell.x).max(0.5) as f64, (w / self.cell.y).max(0.5) as f64);
         let (u0, u1) = ((u - wu).max(0.0), (u + wu).min(n));
         let (v0, v1) = ((v - wv).max(0.0), (v + wv).min(n));
@@ -128,14 +129,25 @@ impl PlaneVisibility {
         })
     }
 
+    /// World (x, y) in grid units: grid point (i, j) is at (i, j).
+    #[inline]
+    fn grid_uv(&self, x: f32, y: f32) -> Vec2 {
+        Vec2::new((x - self.lo.x) / self.cell.x, (y - self.lo.y) / self.cell.y)
+    }
+
     #[inline]
     fn locate(&self, x: f32, y: f32) -> GridPoint {
-        let n = PLANE_CELLS;
-        let u = ((x - self.lo.x) / self.cell.x).clamp(0.0, n as f32);
-        let v = ((y - self.lo.y) / self.cell.y).clamp(0.0, n as f32);
-        let (i, j) = ((u as usize).min(n - 1), (v as usize).min(n - 1));
-        GridPoint { i, j, t: Vec2::new(u - i as f32, v - j as f32) }
+        locate(self.grid_uv(x, y))
     }
+}
+
+/// The grid point at `uv` (grid units), held at the grid's edges.
+#[inline]
+fn locate(uv: Vec2) -> GridPoint {
+    let n = PLANE_CELLS;
+    let (u, v) = (uv.x.clamp(0.0, n as f32), uv.y.clamp(0.0, n as f32));
+    let (i, j) = ((u as usize).min(n - 1), (v as usize).min(n - 1));
+    GridPoint { i, j, t: Vec2::new(u - i as f32, v - j as f32) }
 }
 
 /// The summed-area tables of grids `vis` and `sun` ((PLANE_CELLS + 1)² points each; `sun` may be empty).

@@ -69,8 +69,7 @@ fn shares<const K: usize, const N: usize>(
         };
         let hi = band.chunks_exact(w).filter_map(|r| r.iter().rposition(deferred)).max().unwrap_or(lo);
         for px in lo / K..=hi / K {
-            let first = py * K * w + px * K;
-            let index: [usize; N] = std::array::from_fn(|j| first + (j / K) * w + j % K);
+            let index: [usize; N] = super::pixel_samples::<K, N>(w, px, py);
             let mut ids: [u32; N] = index.map(|i| t.tri[i]);
             let corner = Vec2::new(x0 as f32 + (px * K) as f32, y0 as f32 + (py * K) as f32) + 0.5;
             let id = ids[0];

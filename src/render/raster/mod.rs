@@ -184,6 +184,14 @@ impl Tris {
     }
 }
 
+/// The tile-buffer indices of pixel (px, py)'s `K` × `K` samples (`N` = `K`²) in a tile `w` samples wide, row by
+/// row: the order deferred shading and resolving walk a pixel's samples in.
+#[inline(always)]
+pub(super) fn pixel_samples<const K: usize, const N: usize>(w: usize, px: usize, py: usize) -> [usize; N] {
+    let first = py * K * w + px * K;
+    std::array::from_fn(|j| first + (j / K) * w + j % K)
+}
+
 /// Twice the signed area of (a, b, p), y down.
 #[inline]
 fn edge(ax: i64, ay: i64, bx: i64, by: i64, px: i64, py: i64) -> i64 {
