@@ -64,6 +64,11 @@ impl Points {
         b.extend_from_slice(RAW_MAGIC);
         b.extend_from_slice(&(self.len() as u64).to_le_bytes());
         for v in [&self.positions, &self.normals, &self.colors] {
+            // Little-endian floats are their own bytes: one copy (a million points' blob is 36 MB, and a
+            // byte-at-a-time extend was a tenth of sampling a frame).
+            #[cfg(target_endian = "little")]
+            b.extend_from_slice(bytemuck::cast_slice(v));
+            #[cfg(not(target_endian = "little"))]
             b.extend(v.iter().flatten().flat_map(|c| c.to_le_bytes()));
         }
         b
@@ -78,7 +83,12 @@ impl Points {
             return Err(Error::Damaged);
         }
         let arr = |k: usize| -> Vec<[f32; 3]> {
-            body[k * 12 * n..(k + 1) * 12 * n]
+            let bytes = &body[k * 12 * n..(k + 1) * 12 * n];
+            // One copy into aligned floats (the blob's bytes need not be aligned).
+            #[cfg(target_endian = "little")]
+            return bytemuck::pod_collect_to_vec(bytes);
+            #[cfg(not(target_endian = "little"))]
+            bytes
                 .chunks_exact(12)
                 .map(|c| [0, 1, 2].map(|j| f32::from_le_bytes(c[4 * j..4 * j + 4].try_into().unwrap())))
                 .collect()
@@ -296,4 +306,36 @@ fn surface_point(scene: &PosedScene, d: &Draw, shader: Option<Shader>) -> ([f32;
         None => c,
     };
     (pos.to_array(), n.to_array(), c.to_array())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The blob is the magic, the count, then positions, normals and colours as little-endian floats, whatever
+    /// the machine; it reads back exactly, also from bytes at an odd address, and a truncated one is refused.
+    #[test]
+    fn point_blobs_are_little_endian_floats_and_read_back_exactly() {
+        let v = |i: u32| [i as f32 * 0.25 - 3.0, f32::from_bits(0x3f80_0001 + i), -0.0];
+        let pts = Points {
+            positions: (0..5).map(v).collect(),
+            normals: (5..10).map(v).collect(),
+            colors: (10..15).map(v).collect(),
+        };
+        let b = pts.to_bytes();
+        let mut expected = RAW_MAGIC.to_vec();
+        expected.extend(5u64.to_le_bytes());
+        for a in [&pts.positions, &pts.normals, &pts.colors] {
+            expected.extend(a.iter().flatten().flat_map(|c| c.to_le_bytes()));
+        }
+        assert_eq!(b, expected);
+        let mut odd = vec![0u8];
+        odd.extend(&b);
+        let back = Points::from_bytes(&odd[1..]).unwrap();
+        let bits = |p: &Points| {
+            [&p.positions, &p.normals, &p.colors].map(|a| a.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>())
+        };
+        assert_eq!(bits(&back), bits(&pts));
+        assert!(matches!(Points::from_bytes(&b[..b.len() - 1]), Err(Error::Damaged)));
+    }
 }
