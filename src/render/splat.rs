@@ -196,10 +196,10 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
     let mut first = 0u32;
     let size = p.size;
-    // Each sample row's band, looked up: a 64-bit division per row, twice per splat for counting and twice
-    // for placing it, was a tenth of the setup.
+    // Each sample row's band, looked up (a 64-bit division per row, twice per splat for counting and twice
+    // for placing it, was a tenth of the setup), once per splat, from the rows that made it visible.
     let band_of: Vec<u32> = (0..size.1).map(|y| (y / band_rows) as u32).collect();
-    let band = |(y0, y1): (i64, i64)| [0, band_of[y0 as usize] as usize, 0, band_of[y1 as usize] as usize];
+    let band = |[y0, y1]: [i64; 2]| [band_of[y0 as usize], band_of[y1 as usize]];
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
         out.sources.push(Source { first, prim, base });
@@ -219,16 +219,18 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
                         if foot.surfel { prim.normals.get(c * SETUP_CHUNK..).unwrap_or_default() } else { &[] };
                     for (j, pos) in chunk.iter().enumerate() {
                         let normal = normals.get(j).copied().unwrap_or(Vec3::ZERO);
+                        // Each splat with its bands, found once from the rows `project` bounded it by (the sort
+                        // reads them twice).
                         match project(*pos, normal, p, &foot, offset + j as u32) {
-                            Some(Projected::Flat(sp)) => flat.push(sp),
-                            Some(Projected::Solid(sp)) => solid.push(sp),
+                            Some((Projected::Flat(sp), rows)) => flat.push((sp, band(rows))),
+                            Some((Projected::Solid(sp), rows)) => solid.push((sp, band(rows))),
                             None => {}
                         }
                     }
                     // A splat overlapping two bands is in each.
                     (
-                        Binned::sort(flat, 1, bands, |sp| band(sp.rows(size)), |_, sp| *sp),
-                        Binned::sort(solid, 1, bands, |sp| band(sp.rows(size)), |_, sp| *sp),
+                        Binned::sort(flat, 1, bands, |(_, [a, b])| [0, *a as usize, 0, *b as usize], |_, (sp, _)| *sp),
+                        Binned::sort(solid, 1, bands, |(_, [a, b])| [0, *a as usize, 0, *b as usize], |_, (sp, _)| *sp),
                     )
                 },
             )
@@ -241,9 +243,10 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     out
 }
 
-/// The splat of point `point` at world `pos`, or `None` when it is clipped or falls outside the image.
+/// The splat of point `point` at world `pos` and its first and last sample row, or `None` when it is clipped or
+/// falls outside the image.
 #[inline]
-fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<Projected> {
+fn project(pos: Vec3, normal: Vec3, p: &Projection, s: &Footprint, point: u32) -> Option<(Projected, [i64; 2])> {
     let [fx, fy, cx, cy] = p.f;
     let lim = (p.size.0.max(p.size.1) + 2) as f32;
     let v = p.w2c.transform_point3(pos);
@@ -336,18 +339,11 @@ trait ScreenBox: Copy {
         bbox(x, y, rx, ry, size)
     }
 
-    /// First and last sample row of its bounding box.
+    /// The splat and its first and last sample row, when its box holds a sample of the `size` sample grid.
     #[inline]
-    fn rows(&self, size: (i64, i64)) -> (i64, i64) {
+    fn visible(self, size: (i64, i64)) -> Option<(Projected, [i64; 2])> {
         let b = self.bbox(size);
-        (b[1], b[3])
-    }
-
-    /// The splat, when its box holds a sample of the `size` sample grid.
-    #[inline]
-    fn visible(self, size: (i64, i64)) -> Option<Projected> {
-        let b = self.bbox(size);
-        (self.half_box()[2] > 0 && b[0] <= b[2] && b[1] <= b[3]).then(|| self.projected())
+        (self.half_box()[2] > 0 && b[0] <= b[2] && b[1] <= b[3]).then(|| (self.projected(), [b[1], b[3]]))
     }
 }
 
