@@ -196,8 +196,8 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
     let mut first = 0u32;
     let size = p.size;
-    // Each sample row's band, looked up (a 64-bit division per row, twice per splat for counting and twice
-    // for placing it, was a tenth of the setup), once per splat, from the rows that made it visible.
+    // Each sample row's band, looked up (dividing, twice per splat in each of the sort's passes, was a tenth of
+    // the setup), once per splat, from the rows that made it visible.
     let band_of: Vec<u32> = (0..size.1).map(|y| (y / band_rows) as u32).collect();
     let band = |[y0, y1]: [i64; 2]| [band_of[y0 as usize], band_of[y1 as usize]];
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
@@ -229,8 +229,8 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
                     }
                     // A splat overlapping two bands is in each.
                     (
-                        Binned::sort(flat, 1, bands, |(_, [a, b])| [0, *a as usize, 0, *b as usize], |_, (sp, _)| *sp),
-                        Binned::sort(solid, 1, bands, |(_, [a, b])| [0, *a as usize, 0, *b as usize], |_, (sp, _)| *sp),
+                        Binned::sort(flat, 1, bands, band_cells, |_, (sp, _)| *sp),
+                        Binned::sort(solid, 1, bands, band_cells, |_, (sp, _)| *sp),
                     )
                 },
             )
@@ -241,6 +241,11 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
         first += prim.positions.len() as u32;
     }
     out
+}
+
+/// The cells (a column of bands) of a splat binned with its first and last band.
+fn band_cells<T>((_, [first, last]): &(T, [u32; 2])) -> [usize; 4] {
+    [0, *first as usize, 0, *last as usize]
 }
 
 /// The splat of point `point` at world `pos` and its first and last sample row, or `None` when it is clipped or

@@ -64,8 +64,8 @@ impl Points {
         b.extend_from_slice(RAW_MAGIC);
         b.extend_from_slice(&(self.len() as u64).to_le_bytes());
         for v in [&self.positions, &self.normals, &self.colors] {
-            // Little-endian floats are their own bytes: one copy (a million points' blob is 36 MB, and a
-            // byte-at-a-time extend was a tenth of sampling a frame).
+            // Little-endian floats are their own bytes: one copy (a million points' blob is 36 MB; extending it a
+            // byte at a time was 2 % of a sequence build's instructions).
             #[cfg(target_endian = "little")]
             b.extend_from_slice(bytemuck::cast_slice(v));
             #[cfg(not(target_endian = "little"))]
