@@ -76,7 +76,7 @@ impl PlaneVisibility {
     /// environment's visibility there.
     #[inline]
     pub(super) fn cell_at(&self, x: f32, y: f32) -> (usize, f32) {
-        let g = self.locate(x, y);
+        let g = locate(self.grid_uv(x, y));
         (g.j * PLANE_CELLS + g.i, read(&self.vis, g))
     }
 
@@ -133,11 +133,6 @@ impl PlaneVisibility {
     #[inline]
     fn grid_uv(&self, x: f32, y: f32) -> Vec2 {
         Vec2::new((x - self.lo.x) / self.cell.x, (y - self.lo.y) / self.cell.y)
-    }
-
-    #[inline]
-    fn locate(&self, x: f32, y: f32) -> GridPoint {
-        locate(self.grid_uv(x, y))
     }
 }
 

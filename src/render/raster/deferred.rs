@@ -74,7 +74,9 @@ fn shares<const K: usize, const N: usize>(
             let corner = Vec2::new(x0 as f32 + (px * K) as f32, y0 as f32 + (py * K) as f32) + 0.5;
             let id = ids[0];
             if id != NO_TRI && ids.iter().all(|&d| d == id) {
-                // Inside one triangle (most covered pixels): its centroid is the pixel's, no sorting out.
+                // Inside one triangle (most covered pixels): its centroid is the pixel's, no sorting out. `gather`'s
+                // sums written out over the whole pixel (through `gather` this path cost 2.8 % more of a
+                // 4-sample render's instructions: its count and slot checks are not constants there).
                 let (mut bary, mut z) = ([0.0f32; 3], 0.0);
                 for (slot, &i) in share.samples.iter_mut().zip(&index) {
                     *slot = i as u32;
