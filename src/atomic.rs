@@ -95,12 +95,50 @@ impl Staged {
 
     /// Syncs the file's bytes to disk, then renames it over its destination: after a power cut the destination
     /// holds the old file or the whole new one.
-    pub fn commit(mut self) -> std::io::Result<()> {
+    pub fn commit(self) -> std::io::Result<()> {
         self.file.sync_all()?;
+        self.rename()
+    }
+
+    /// Renames the file over its destination: the second half of [`Staged::commit`], for files that
+    /// [`sync_together`] made durable (renamed unsynced, a power cut could leave the name on a hole).
+    pub fn commit_synced(self) -> std::io::Result<()> {
+        self.rename()
+    }
+
+    fn rename(mut self) -> std::io::Result<()> {
         fs::rename(&self.tmp, &self.dest)?;
         self.committed = true;
         Ok(())
     }
+}
+
+/// Makes the bytes of every staged file in `files` durable, for [`Staged::commit_synced`]: a group commit. On
+/// Linux, one `syncfs` per file system the files are on: the disk's write cache is flushed once for the batch,
+/// where a `sync_all` per file flushes it once per file (a build's cache takes two files per image, and those
+/// flushes were a tenth of a seed-scale build's wall time). `syncfs` writes back whatever else on that file
+/// system is dirty too: the price of the one flush, paid on the committer's thread. Elsewhere each file's
+/// `sync_all`.
+pub fn sync_together<'a>(files: impl IntoIterator<Item = &'a Staged>) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        use std::os::unix::fs::MetadataExt;
+        let mut synced: Vec<u64> = Vec::new();
+        for f in files {
+            let dev = f.file.metadata()?.dev();
+            if !synced.contains(&dev) {
+                // SAFETY: the descriptor is open for as long as `f` lives; `syncfs` only reads it.
+                if unsafe { libc::syncfs(f.file.as_raw_fd()) } != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                synced.push(dev);
+            }
+        }
+        Ok(())
+    }
+    #[cfg(not(target_os = "linux"))]
+    files.into_iter().try_for_each(|f| f.file.sync_all())
 }
 
 impl Drop for Staged {

@@ -1,9 +1,14 @@
 //! Group commit of a build's results. A worker that made an action's blobs writes them, and the action's record,
 //! under temporary names ([`Store::stage`], [`Store::stage_action`]) and hands them to one committer thread,
-//! which syncs each file to disk and renames it into place: the blobs first, the record last, so a record only
+//! which makes them durable and renames them into place: the blobs first, the record last, so a record only
 //! ever names blobs that are in place (what [`Store::hit`] relies on). Rendering goes on meanwhile: a worker that
 //! synced its own files waited about half a millisecond per file with its core idle, a tenth of a build's wall
 //! time on two cores.
+//!
+//! The committer takes every job waiting when it wakes as one batch and syncs the batch's files together
+//! ([`atomic::sync_together`]) before renaming any of them: one flush of the disk's cache per batch rather
+//! than one per file (those flushes cost a seed-scale build about a tenth of its wall time again, in the
+//! kernel). The guarantee is the same: nothing is renamed into place before its bytes are on disk.
 //!
 //! Readers of a kind's blobs run after [`Committer::flush`], which waits for every commit handed over so far and
 //! reports the first failure. The queue is bounded, so a slow disk slows the workers rather than filling memory
@@ -17,7 +22,7 @@ use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Condvar, Mutex};
 
 use super::{commit, place, Digest, Error, StatCache};
-use crate::atomic::Staged;
+use crate::atomic::{self, Staged};
 
 /// Commits waiting at most: enough to ride out a slow sync, few enough to bound the open temporaries (three
 /// files each at most).
@@ -117,21 +122,27 @@ impl Committer {
         self.settled.notify_all();
     }
 
-    /// The committer thread: commits jobs in the order they came until the queue closes. After a failure, the
-    /// jobs still coming are dropped (their temporaries removed), not committed.
+    /// The committer thread: commits jobs in the order they came, in batches of those waiting, until the queue
+    /// closes. After a failure, the jobs still coming are dropped (their temporaries removed), not committed.
     fn work(&self, rx: Receiver<Job>, stat: &StatCache) {
         let mut panicked = None;
-        for Job { label, blobs, record } in rx {
+        while let Ok(first) = rx.recv() {
+            let batch: Vec<Job> = std::iter::once(first).chain(rx.try_iter().take(QUEUE)).collect();
             if self.lock().failed {
-                self.settle(None);
+                batch.iter().for_each(|_| self.settle(None));
                 continue;
             }
-            // A panic (a bug) settles its job as a failure and the queue drains, or `flush` would wait forever;
-            // it is raised when the queue closes, and the scope raises it again when `f` returns.
-            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| commit_action(blobs, record, stat))) {
-                Ok(result) => self.settle(result.err().map(|e| (label, e))),
+            // A panic (a bug) settles the batch's jobs as failures and the queue drains, or `flush` would wait
+            // forever; it is raised when the queue closes, and the scope raises it again when `f` returns.
+            let labels: Vec<String> = batch.iter().map(|j| j.label.clone()).collect();
+            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| commit_batch(batch, stat))) {
+                Ok(results) => {
+                    for (label, result) in labels.into_iter().zip(results) {
+                        self.settle(result.err().map(|e| (label, e)));
+                    }
+                }
                 Err(panic) => {
-                    self.settle(Some((label, Error::Stopped)));
+                    labels.into_iter().for_each(|label| self.settle(Some((label, Error::Stopped))));
                     panicked.get_or_insert(panic);
                 }
             }
@@ -142,12 +153,34 @@ impl Committer {
     }
 }
 
-/// Commits one action's blobs, then (only if they all went in) its record.
+/// Commits a batch of jobs: syncs all their files together, then places each job's blobs and (only if they all
+/// went in) its record, until one fails. Each job's outcome, in order; when the sync fails, every job fails.
+fn commit_batch(batch: Vec<Job>, stat: &StatCache) -> Vec<Result<(), Error>> {
+    let files = batch.iter().flat_map(|j| j.blobs.iter().map(|(_, f)| f).chain([&j.record]));
+    if let Err(e) = atomic::sync_together(files) {
+        // Named by each job's record (the batch's files are synced as one, so any of them may be the cause).
+        let failed = |j: &Job| {
+            let source = std::io::Error::new(e.kind(), format!("syncing the cache's new files: {e}"));
+            Err(Error::io(j.record.dest(), source))
+        };
+        return batch.iter().map(failed).collect();
+    }
+    // After a failure the rest are dropped, uncommitted (and settled without an error of their own), as the
+    // jobs that come after one are.
+    let mut failed = false;
+    let commit = |j: Job| match failed {
+        true => Ok(()),
+        false => commit_action(j.blobs, j.record, stat).inspect_err(|_| failed = true),
+    };
+    batch.into_iter().map(commit).collect()
+}
+
+/// Commits one action's synced blobs, then (only if they all went in) its synced record.
 fn commit_action(blobs: Vec<(Digest, Staged)>, record: Staged, stat: &StatCache) -> Result<(), Error> {
     for (d, f) in blobs {
-        place(d, f, stat)?;
+        place(d, f, stat, Staged::commit_synced)?;
     }
-    commit(record)
+    commit(record, Staged::commit_synced)
 }
 
 #[cfg(test)]
@@ -209,6 +242,51 @@ mod tests {
         });
         // The failed action has no record, and the dropped files left no temporaries.
         assert!(store.action(&key).is_none());
+        assert_eq!(debris(&dir), 0);
+    }
+
+    /// A job of one blob with content `bytes`, keyed by them.
+    fn job(store: &Store, stat: &StatCache, bytes: &[u8]) -> (Digest, Digest, Job) {
+        let key = crate::cache::key("test", &[bytes]);
+        let (d, staged) = store.stage(bytes, stat).unwrap();
+        let record = store.stage_action(&key, &[d], &[]).unwrap();
+        (key, d, Job { label: String::from_utf8_lossy(bytes).into_owned(), blobs: vec![(d, staged.unwrap())], record })
+    }
+
+    #[test]
+    fn a_batch_commits_in_order_up_to_its_first_failure() {
+        let (dir, store, stat) = fixture();
+        let jobs: Vec<_> = [&b"first"[..], b"second", b"third"].iter().map(|b| job(&store, &stat, b)).collect();
+        // The second job's blob cannot be renamed into place.
+        std::fs::create_dir_all(store.object_path(&jobs[1].1).join("x")).unwrap();
+        let keys: Vec<_> = jobs.iter().map(|(k, d, _)| (*k, *d)).collect();
+        let results = commit_batch(jobs.into_iter().map(|(.., j)| j).collect(), &stat);
+        assert!(results[0].is_ok() && results[1].is_err() && results[2].is_ok(), "{results:?}");
+        assert_eq!(store.hit(&keys[0].0, &stat), Some(vec![keys[0].1]));
+        // The failed job has no record; the one after it was dropped: neither record nor blob, nor temporaries.
+        assert!(store.action(&keys[1].0).is_none());
+        assert!(store.action(&keys[2].0).is_none() && !store.object_path(&keys[2].1).exists());
+        assert_eq!(debris(&dir), 0);
+    }
+
+    #[test]
+    fn many_jobs_handed_over_at_once_are_all_committed() {
+        let (dir, store, stat) = fixture();
+        let n = 3 * QUEUE;
+        let keys = Committer::scope(&stat, |c| {
+            let keys: Vec<_> = (0..n)
+                .map(|i| {
+                    let (key, d, j) = job(&store, &stat, format!("blob {i}").as_bytes());
+                    c.submit(&j.label, j.blobs, j.record).unwrap();
+                    (key, d)
+                })
+                .collect();
+            c.flush().unwrap();
+            keys
+        });
+        for (key, d) in keys {
+            assert_eq!(store.hit(&key, &stat), Some(vec![d]));
+        }
         assert_eq!(debris(&dir), 0);
     }
 }

@@ -92,16 +92,20 @@ pub fn key(kind: &str, parts: &[&[u8]]) -> Digest {
     Digest(*h.finalize().as_bytes())
 }
 
-/// Commits a staged file (sync, then rename into place), naming it in the error.
-fn commit(f: Staged) -> Result<(), Error> {
+/// How a staged file goes into place: [`Staged::commit`] (synced, then renamed), or, after a batch's
+/// [`crate::atomic::sync_together`], [`Staged::commit_synced`].
+type Commit = fn(Staged) -> std::io::Result<()>;
+
+/// Commits a staged file by `how`, naming it in the error.
+fn commit(f: Staged, how: Commit) -> Result<(), Error> {
     let dest = f.dest().to_path_buf();
-    f.commit().map_err(|e| Error::io(&dest, e))
+    how(f).map_err(|e| Error::io(&dest, e))
 }
 
-/// Commits the staged blob `d` and notes it in the stat cache (so this build does not hash it again).
-fn place(d: Digest, f: Staged, stat: &StatCache) -> Result<(), Error> {
+/// Commits the staged blob `d` by `how` and notes it in the stat cache (so this build does not hash it again).
+fn place(d: Digest, f: Staged, stat: &StatCache, how: Commit) -> Result<(), Error> {
     let dest = f.dest().to_path_buf();
-    commit(f)?;
+    commit(f, how)?;
     stat.record(&dest, d);
     Ok(())
 }
@@ -135,7 +139,7 @@ impl Store {
     pub fn put(&self, bytes: &[u8], stat: &StatCache) -> Result<Digest, Error> {
         let (d, staged) = self.stage(bytes, stat)?;
         if let Some(f) = staged {
-            place(d, f, stat)?;
+            place(d, f, stat, Staged::commit)?;
         }
         Ok(d)
     }
