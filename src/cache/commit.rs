@@ -7,7 +7,7 @@
 //!
 //! The committer takes every job waiting when it wakes as one batch and syncs the batch's files together
 //! ([`atomic::sync_together`]) before renaming any of them: one flush of the disk's cache per batch rather
-//! than one per file (those flushes cost a seed-scale build about a tenth of its wall time again, in the
+//! than one per file (on a cut of the seed-scale set, a sixth of the machine's busy CPU time, mostly in the
 //! kernel). The guarantee is the same: nothing is renamed into place before its bytes are on disk.
 //!
 //! Readers of a kind's blobs run after [`Committer::flush`], which waits for every commit handed over so far and
