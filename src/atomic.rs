@@ -97,16 +97,12 @@ impl Staged {
     /// holds the old file or the whole new one.
     pub fn commit(self) -> std::io::Result<()> {
         self.file.sync_all()?;
-        self.rename()
+        self.commit_synced()
     }
 
     /// Renames the file over its destination: the second half of [`Staged::commit`], for files that
     /// [`sync_together`] made durable (renamed unsynced, a power cut could leave the name on a hole).
-    pub fn commit_synced(self) -> std::io::Result<()> {
-        self.rename()
-    }
-
-    fn rename(mut self) -> std::io::Result<()> {
+    pub fn commit_synced(mut self) -> std::io::Result<()> {
         fs::rename(&self.tmp, &self.dest)?;
         self.committed = true;
         Ok(())
