@@ -9,8 +9,10 @@ mod blend;
 mod deferred;
 mod lit;
 mod setup;
+mod walk;
 
 pub use setup::setup;
+use walk::Walk;
 
 use super::bin::Binned;
 use super::splat::{Layer, Splats};
@@ -192,65 +194,6 @@ pub(super) fn pixel_samples<const K: usize, const N: usize>(w: usize, px: usize,
     std::array::from_fn(|j| first + (j / K) * w + j % K)
 }
 
-/// Twice the signed area of (a, b, p), y down.
-#[inline]
-fn edge(ax: i64, ay: i64, bx: i64, by: i64, px: i64, py: i64) -> i64 {
-    (bx - ax) * (py - ay) - (by - ay) * (px - ax)
-}
-
-/// The bounding-box width in samples (within a tile) from which a triangle's rows are walked over their inside
-/// runs ([`row_span`]) rather than tested sample by sample: measured, narrower ones lose by it (a 100k-triangle
-/// torus 10 % slower), a ground plane gains (unlit, 6 % of the build).
-const SPAN_MIN: i64 = 16;
-
-/// The samples `j` in `0..=n` of a row at which every edge value `v[i] + j·s[i]` is ≥ 0 (`v` at the row's first
-/// sample, tie bias included), as an inclusive run; `None` when there are none. Each edge is linear along the
-/// row, so each bounds the run on one side: the bound is estimated in floating point (exact to a sample or so,
-/// without the integer division's latency) and then settled by the exact integer test on either side of it.
-#[inline]
-fn row_span(v: [i64; 3], s: [i64; 3], n: i64) -> Option<(i64, i64)> {
-    let (mut lo, mut hi) = (0, n);
-    for i in 0..3 {
-        let (v, s) = (v[i], s[i]);
-        let inside = |j: i64| v + j * s >= 0;
-        if s > 0 {
-            // Rising: inside from the first j with v + j·s ≥ 0 on.
-            if v < 0 {
-                let mut j = ((-v) as f64 / s as f64).clamp(0.0, (n + 1) as f64) as i64;
-                while j > 0 && inside(j - 1) {
-                    j -= 1;
-                }
-                while j <= n && !inside(j) {
-                    j += 1;
-                }
-                lo = lo.max(j);
-            }
-        } else if s < 0 {
-            // Falling: inside up to the last j with v + j·s ≥ 0.
-            if v < 0 {
-                return None;
-            }
-            let mut j = (v as f64 / -s as f64).min(n as f64) as i64;
-            while j < n && inside(j + 1) {
-                j += 1;
-            }
-            while j >= 0 && !inside(j) {
-                j -= 1;
-            }
-            hi = hi.min(j);
-        } else if v < 0 {
-            return None;
-        }
-    }
-    (lo <= hi).then_some((lo, hi))
-}
-
-/// Whether an edge owns the samples exactly on it. Antisymmetric: of (u→v) and (v→u), exactly one owns.
-#[inline]
-fn owns(dx: i64, dy: i64) -> bool {
-    dy > 0 || (dy == 0 && dx < 0)
-}
-
 /// Samples of one tile: linear colour (straight), view depth, world normal, object id + 1 (0 = empty).
 #[derive(Debug, Clone)]
 pub struct SampleTile {
@@ -388,7 +331,6 @@ pub fn raster_tile(
 ) {
     let TileWork { tris, tile, splats } = work;
     let Rect { x0, y0, w, h } = rect;
-    let (near, far) = (proj.near, proj.far);
     t.reset(rect);
     let lit = shade.lit.is_some();
     // Opaque textured surfaces are textured once per pixel and triangle ([`deferred`]), and lit ones are shaded
@@ -398,128 +340,7 @@ pub fn raster_tile(
     if deferring {
         t.reset_deferred();
     }
-    for ti in tris.tile(tile) {
-        let tri = tris.get(ti);
-        let (bx0, by0) = (tri.bbox[0].max(x0), tri.bbox[1].max(y0));
-        let (bx1, by1) = (tri.bbox[2].min(x0 + w - 1), tri.bbox[3].min(y0 + h - 1));
-        if bx0 > bx1 || by0 > by1 {
-            continue;
-        }
-        let (x, y) = (tri.x, tri.y);
-        // Edge i is opposite vertex i: (1→2), (2→0), (0→1). Each is evaluated once at the first sample and then
-        // stepped (it is linear in the sample position). A sample exactly on an edge belongs to the triangle only
-        // if the edge owns it: `bias` is −1 for the others, so "inside" is `v + bias ≥ 0` for all three.
-        let e = [(1, 2), (2, 0), (0, 1)];
-        let bias: [i64; 3] = e.map(|(a, b)| if owns(x[b] - x[a], y[b] - y[a]) { 0 } else { -1 });
-        let step_x: [i64; 3] = e.map(|(a, b)| -(y[b] - y[a]) * SUBPIXEL);
-        let step_y: [i64; 3] = e.map(|(a, b)| (x[b] - x[a]) * SUBPIXEL);
-        let (px0, py0) = (bx0 * SUBPIXEL + SUBPIXEL / 2, by0 * SUBPIXEL + SUBPIXEL / 2);
-        let mut row: [i64; 3] = e.map(|(a, b)| edge(x[a], y[a], x[b], y[b], px0, py0));
-        let inv_area = 1.0 / tri.area as f32;
-        let mat = scene.material(tri.material);
-        // Opaque surfaces read their base colour texture when shaded, once per pixel and triangle: every sample
-        // but the shaded one would read it for nothing. Alpha-tested and blended ones need it per sample.
-        let deferred_texture = mat.alpha_mode == AlphaMode::Opaque && (lit || mat.base_color_texture.is_some());
-        // Lit surfaces are all shaded deferred (blended ones excepted, below).
-        let deferred = lit || deferred_texture;
-        let tex = mat
-            .base_color_texture
-            .filter(|_| !deferred_texture)
-            .and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
-        let wide = bx1 - bx0 >= SPAN_MIN;
-        // No vertex colours (white, the common case): their interpolation is the sum of the weights, the same
-        // sum in the same order as that of their products with 1, without the vector products.
-        let white = tri.color == [Vec4::ONE; 3];
-        for sy in by0..=by1 {
-            let start = row;
-            for i in 0..3 {
-                row[i] += step_y[i];
-            }
-            // A wide triangle's row is walked over its run of inside samples only, found from the edge values at
-            // its start; a narrow one's is tested sample by sample (cheaper than finding the run).
-            let (lo, hi) = if wide {
-                let biased = [start[0] + bias[0], start[1] + bias[1], start[2] + bias[2]];
-                let Some(run) = row_span(biased, step_x, bx1 - bx0) else { continue };
-                run
-            } else {
-                (0, bx1 - bx0)
-            };
-            let mut wgt: [i64; 3] = std::array::from_fn(|i| start[i] + lo * step_x[i]);
-            for sx in bx0 + lo..=bx0 + hi {
-                let v = wgt;
-                for i in 0..3 {
-                    wgt[i] += step_x[i];
-                }
-                if !wide && ((v[0] + bias[0]) | (v[1] + bias[1]) | (v[2] + bias[2])) < 0 {
-                    continue;
-                }
-                debug_assert!(((v[0] + bias[0]) | (v[1] + bias[1]) | (v[2] + bias[2])) >= 0);
-                let b = v.map(|v| v as f32 * inv_area);
-                let pb = [b[0] * tri.inv_z[0], b[1] * tri.inv_z[1], b[2] * tri.inv_z[2]];
-                let s = pb[0] + pb[1] + pb[2];
-                let z = 1.0 / s;
-                let i = ((sy - y0) * w + (sx - x0)) as usize;
-                if !(z >= near && z <= far) || z >= t.depth[i] {
-                    continue;
-                }
-                let k = [pb[0] * z, pb[1] * z, pb[2] * z];
-                let vc = if white {
-                    Vec4::splat(k[0] + k[1] + k[2])
-                } else {
-                    tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2]
-                };
-                let mut albedo = mat.base_color * vc;
-                if let Some((r, texture)) = tex {
-                    let (uv, dx, dy) = tri.uv_footprint(k, z, 1.0);
-                    albedo *= texture.sample_footprint(&r, uv, dx, dy);
-                }
-                let blend = mat.alpha_mode == AlphaMode::Blend;
-                match mat.alpha_mode {
-                    AlphaMode::Mask if albedo.w < mat.alpha_cutoff => continue,
-                    AlphaMode::Blend if albedo.w <= 0.0 => continue,
-                    _ => {}
-                }
-                // Lit shading interpolates its own normal where it shades (deferred or, for a blended sample, here).
-                let nrm = if shade.normals { tri.normal_at(k) } else { Vec3::ZERO };
-                if blend {
-                    // Shaded now (it may show through others), composited in depth order when the tile is drawn.
-                    let rgb = match &shade.lit {
-                        Some(l) => {
-                            let at = Vec2::new(sx as f32 + 0.5, sy as f32 + 0.5);
-                            let s = lit::Sample { at, bary: k, z, footprint: 1.0 };
-                            lit::shade_sample(scene, tri, l, proj, s, albedo.truncate())
-                        }
-                        None => shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive,
-                    };
-                    let color = rgb.extend(albedo.w.min(1.0));
-                    t.blend.push(blend::Fragment { i: i as u32, tri: ti, z, color, normal: nrm, object: tri.object });
-                    continue;
-                }
-                if deferred {
-                    // Shaded once per pixel and triangle when every triangle is drawn ([`lit`], [`deferred`]).
-                    t.color[i] = albedo.truncate().extend(1.0);
-                    t.depth[i] = z;
-                    if shade.normals {
-                        // Read by Lambert shading and the normal pass only.
-                        t.normal[i] = nrm;
-                    }
-                    t.object[i] = tri.object + 1;
-                    t.tri[i] = ti;
-                    t.bary[i] = k;
-                    continue;
-                }
-                let rgb = shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive;
-                t.color[i] = rgb.extend(1.0);
-                t.depth[i] = z;
-                t.normal[i] = nrm;
-                t.object[i] = tri.object + 1;
-                if deferring {
-                    // Shaded already: a deferred surface this one hides must not shade it again.
-                    t.tri[i] = NO_TRI;
-                }
-            }
-        }
-    }
+    draw_triangles(scene, tris, tile, shade, rect, proj, deferring, t);
     if let Some((splats, layer)) = splats {
         // The tile's samples as (index in the tile, index in the band's layer).
         let rows = (y0..y0 + h).map(|sy| ((sy - y0) * w - x0, (sy - layer.y0) * layer.w));
@@ -551,6 +372,122 @@ pub fn raster_tile(
     blend::composite(t);
 }
 
+/// Draws tile `tile`'s triangles, in scene order, into `t` (reset to `rect`): depth-tested samples, shaded now or
+/// left for deferred shading (`deferring`: the tile has deferred surfaces, so shaded samples must clear theirs).
+/// The tile's buffers are taken apart first so that their pointers and lengths stay in registers across the
+/// sample loop (through `t` they were reloaded per sample: writes through one `Vec` may alias another's header).
+#[allow(clippy::too_many_arguments)]
+fn draw_triangles(
+    scene: &PosedScene,
+    tris: &Tris,
+    tile: usize,
+    shade: &Shade,
+    rect: Rect,
+    proj: &Projection,
+    deferring: bool,
+    t: &mut SampleTile,
+) {
+    let Rect { x0, y0, w, h } = rect;
+    let lit = shade.lit.is_some();
+    let SampleTile { color, depth, normal, object, tri: tri_at, bary, blend: blends, .. } = t;
+    let (color, depth, normal, object) = (&mut color[..], &mut depth[..], &mut normal[..], &mut object[..]);
+    let (tri_at, bary) = (&mut tri_at[..], &mut bary[..]);
+    for ti in tris.tile(tile) {
+        let tri = tris.get(ti);
+        let (bx0, by0) = (tri.bbox[0].max(x0), tri.bbox[1].max(y0));
+        let (bx1, by1) = (tri.bbox[2].min(x0 + w - 1), tri.bbox[3].min(y0 + h - 1));
+        if bx0 > bx1 || by0 > by1 {
+            continue;
+        }
+        let mat = scene.material(tri.material);
+        // Opaque surfaces read their base colour texture when shaded, once per pixel and triangle: every sample
+        // but the shaded one would read it for nothing. Alpha-tested and blended ones need it per sample.
+        let deferred_texture = mat.alpha_mode == AlphaMode::Opaque && (lit || mat.base_color_texture.is_some());
+        // Lit surfaces are all shaded deferred (blended ones excepted, below).
+        let deferred = lit || deferred_texture;
+        // No vertex colours (white, the common case): their interpolation is the sum of the weights, the same
+        // sum in the same order as that of their products with 1, without the vector products.
+        let white = tri.color == [Vec4::ONE; 3];
+        let vertex_colour = |k: [f32; 3]| {
+            if white {
+                Vec4::splat(k[0] + k[1] + k[2])
+            } else {
+                tri.color[0] * k[0] + tri.color[1] * k[1] + tri.color[2] * k[2]
+            }
+        };
+        let walk = Walk::new(tri, [bx0, by0, bx1, by1], proj);
+        if deferred && mat.alpha_mode == AlphaMode::Opaque {
+            // Deferred opaque surfaces (a textured dataset render's every triangle): what a sample that wins keeps
+            // for shading, without the tests the others need.
+            walk.hits(y0, w, x0, depth, |i, _, k, _| {
+                color[i] = (mat.base_color * vertex_colour(k)).truncate().extend(1.0);
+                if shade.normals {
+                    // Read by Lambert shading and the normal pass only.
+                    normal[i] = tri.normal_at(k);
+                }
+                object[i] = tri.object + 1;
+                tri_at[i] = ti;
+                bary[i] = k;
+                true
+            });
+            continue;
+        }
+        let tex = mat
+            .base_color_texture
+            .filter(|_| !deferred_texture)
+            .and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
+        walk.hits(y0, w, x0, depth, |i, (sx, sy), k, z| {
+            let mut albedo = mat.base_color * vertex_colour(k);
+            if let Some((r, texture)) = tex {
+                let (uv, dx, dy) = tri.uv_footprint(k, z, 1.0);
+                albedo *= texture.sample_footprint(&r, uv, dx, dy);
+            }
+            match mat.alpha_mode {
+                AlphaMode::Mask if albedo.w < mat.alpha_cutoff => return false,
+                AlphaMode::Blend if albedo.w <= 0.0 => return false,
+                _ => {}
+            }
+            // Lit shading interpolates its own normal where it shades (deferred or, for a blended sample, here).
+            let nrm = if shade.normals { tri.normal_at(k) } else { Vec3::ZERO };
+            if mat.alpha_mode == AlphaMode::Blend {
+                // Shaded now (it may show through others), composited in depth order when the tile is drawn; the
+                // depth it is tested against stays the opaque surfaces'.
+                let rgb = match &shade.lit {
+                    Some(l) => {
+                        let at = Vec2::new(sx as f32 + 0.5, sy as f32 + 0.5);
+                        let s = lit::Sample { at, bary: k, z, footprint: 1.0 };
+                        lit::shade_sample(scene, tri, l, proj, s, albedo.truncate())
+                    }
+                    None => shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive,
+                };
+                let color = rgb.extend(albedo.w.min(1.0));
+                blends.push(blend::Fragment { i: i as u32, tri: ti, z, color, normal: nrm, object: tri.object });
+                return false;
+            }
+            if deferred {
+                // Alpha-tested, shaded once per pixel and triangle when every triangle is drawn ([`lit`]).
+                color[i] = albedo.truncate().extend(1.0);
+                if shade.normals {
+                    normal[i] = nrm;
+                }
+                object[i] = tri.object + 1;
+                tri_at[i] = ti;
+                bary[i] = k;
+                return true;
+            }
+            let rgb = shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive;
+            color[i] = rgb.extend(1.0);
+            normal[i] = nrm;
+            object[i] = tri.object + 1;
+            if deferring {
+                // Shaded already: a deferred surface this one hides must not shade it again.
+                tri_at[i] = NO_TRI;
+            }
+            true
+        });
+    }
+}
+
 /// Unlit or Lambert colour of albedo `albedo` with normal `nrm`.
 #[inline]
 fn shade_unlit(shade: &Shade, albedo: Vec3, nrm: Vec3) -> Vec3 {
@@ -566,34 +503,4 @@ fn shade_unlit(shade: &Shade, albedo: Vec3, nrm: Vec3) -> Vec3 {
 /// The camera's backward axis in world space (the head light's direction toward the light).
 pub fn camera_back(c2w: &Mat4) -> Vec3 {
     Mat3::from_mat4(*c2w).z_axis.normalize()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The run `row_span` finds is exactly the samples the per-sample test accepts, for edges of every slope
-    /// and offset (ties at zero included) and rows of every width a tile has: the two paths draw the same bytes.
-    #[test]
-    fn row_spans_are_exactly_the_inside_samples() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |m: i64| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 33) as i64).rem_euclid(2 * m + 1) - m
-        };
-        for case in 0..20_000 {
-            // Small magnitudes hit exact zeros and ties; large ones the floating-point estimate's rounding.
-            let scale = if case % 2 == 0 { 40 } else { 1 << 40 };
-            let s = [next(scale), next(scale), next(scale)];
-            let v = [next(scale * 64), next(scale * 64), next(scale * 64)];
-            let n = next(64).abs() + 1;
-            let inside: Vec<i64> = (0..=n).filter(|&j| (0..3).all(|i| v[i] + j * s[i] >= 0)).collect();
-            let expected = inside.first().map(|&lo| (lo, *inside.last().unwrap()));
-            assert_eq!(row_span(v, s, n), expected, "v {v:?} s {s:?} n {n}");
-            // The inside samples of a row through a triangle are one run (edges are linear).
-            if let Some((lo, hi)) = expected {
-                assert_eq!(inside.len() as i64, hi - lo + 1);
-            }
-        }
-    }
 }

@@ -4,7 +4,8 @@
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::{edge, snap, Chunk, ClipVert, Projection, Tiles, Tri, Tris, SETUP_CHUNK, SUBPIXEL};
+use super::walk::edge;
+use super::{snap, Chunk, ClipVert, Projection, Tiles, Tri, Tris, SETUP_CHUNK, SUBPIXEL};
 use crate::render::light::Visibility;
 use crate::scene::{PosedScene, PrimKind};
 
