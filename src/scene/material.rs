@@ -19,6 +19,9 @@ pub struct Texture {
     /// Levels 1.. of the mip chain, built on the renderer's first minified lookup (the point sampler reads
     /// level 0 only and never pays for it).
     mips: OnceLock<Vec<Texture>>,
+    /// The tables that decode its bytes, looked up once here: each lookup of a lazily built table checks that it
+    /// is built, and a trilinear lookup decodes 32 values.
+    tables: Tables,
 }
 
 /// A mip level to read: trilinear between `level` and the next, by `t` in [0, 1).
@@ -236,7 +239,9 @@ pub fn srgb8_to_linear(v: u8) -> f32 {
 impl Texture {
     /// A texture of `width × height` RGBA8 texels, top row first.
     pub fn new(width: u32, height: u32, rgba: Vec<u8>, srgb: bool) -> Texture {
-        Texture { width, height, rgba, srgb, mips: OnceLock::new() }
+        let unorm: &'static [f32; 256] = &UNORM8;
+        let tables = Tables { unorm, colour: if srgb { &SRGB8_TO_LINEAR } else { unorm } };
+        Texture { width, height, rgba, srgb, mips: OnceLock::new(), tables }
     }
 
     /// Levels 1.. of the mip chain: each halves the previous level (rounding down, at least 1) by averaging
@@ -282,11 +287,10 @@ impl Texture {
         self.tables().decode(&self.rgba[i..i + 4])
     }
 
-    /// The tables that decode this texture's bytes (and its mip levels'): looked up once per lookup, not per texel.
+    /// The tables that decode this texture's bytes (and its mip levels').
     #[inline]
     fn tables(&self) -> Tables {
-        let unorm: &'static [f32; 256] = &UNORM8;
-        Tables { unorm, colour: if self.srgb { &SRGB8_TO_LINEAR } else { unorm } }
+        self.tables
     }
 
     /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light,
@@ -357,7 +361,7 @@ impl Texture {
         // loop's innermost step).
         let inside = |f: f32, n: u32| f >= 0.0 && f < n.saturating_sub(1) as f32;
         if !r.nearest && inside(fx, self.width) && inside(fy, self.height) {
-            let (x0, y0) = (fx as i32, fy as i32);
+            let (x0, y0) = truncate2(fx, fy);
             let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
             let row = self.width as usize * 4;
             let i = y0 as usize * row + x0 as usize * 4;
@@ -401,12 +405,46 @@ struct Tables {
     colour: &'static [f32; 256],
 }
 
+impl std::fmt::Debug for Tables {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let srgb = std::ptr::eq(self.colour, &*SRGB8_TO_LINEAR);
+        f.debug_struct("Tables").field("srgb", &srgb).finish_non_exhaustive()
+    }
+}
+
+impl PartialEq for Tables {
+    /// The same tables (there are two, both static).
+    fn eq(&self, o: &Tables) -> bool {
+        std::ptr::eq(self.unorm, o.unorm) && std::ptr::eq(self.colour, o.colour)
+    }
+}
+
 impl Tables {
     /// Linear RGBA of one texel's four bytes.
     #[inline]
     fn decode(self, t: &[u8]) -> Vec4 {
         let c = self.colour;
         Vec4::new(c[t[0] as usize], c[t[1] as usize], c[t[2] as usize], self.unorm[t[3] as usize])
+    }
+}
+
+/// `(a as i32, b as i32)` for `a`, `b` in [0, 2³¹): in one SSE2 conversion, without the checks `as` makes for
+/// values out of range (the texel lookup's innermost step; its callers have bounded both).
+#[inline(always)]
+fn truncate2(a: f32, b: f32) -> (i32, i32) {
+    debug_assert!((0.0..2_147_483_648.0).contains(&a) && (0.0..2_147_483_648.0).contains(&b));
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvtsi128_si32, _mm_cvttps_epi32, _mm_setr_ps, _mm_srli_si128};
+        // SAFETY: SSE2 is part of x86-64's baseline, so these instructions exist on every machine this runs on.
+        unsafe {
+            let v = _mm_cvttps_epi32(_mm_setr_ps(a, b, 0.0, 0.0));
+            (_mm_cvtsi128_si32(v), _mm_cvtsi128_si32(_mm_srli_si128::<4>(v)))
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        (a as i32, b as i32)
     }
 }
 
