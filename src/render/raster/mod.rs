@@ -418,7 +418,9 @@ fn draw_triangles(
         let walk = Walk::new(tri, [bx0, by0, bx1, by1], proj);
         if deferred && mat.alpha_mode == AlphaMode::Opaque {
             // Deferred opaque surfaces (a textured dataset render's every triangle): what a sample that wins keeps
-            // for shading, without the tests the others need.
+            // for shading, without the tests the others need. The writes repeat the alpha-tested deferred case's
+            // below: folded into one helper over the tile's buffers they cost 1 % more of a textured render's
+            // instructions (callgrind, the render bench's CesiumMan at 4 samples).
             walk.hits(y0, w, x0, depth, |i, _, k, _| {
                 color[i] = (mat.base_color * vertex_colour(k)).truncate().extend(1.0);
                 if shade.normals {
