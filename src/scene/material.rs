@@ -284,7 +284,7 @@ impl Texture {
     #[inline]
     pub fn texel(&self, x: u32, y: u32) -> Vec4 {
         let i = ((y * self.width + x) * 4) as usize;
-        self.tables().decode(&self.rgba[i..i + 4])
+        self.tables().decode::<true>(&self.rgba[i..i + 4])
     }
 
     /// The tables that decode this texture's bytes (and its mip levels').
@@ -296,7 +296,7 @@ impl Texture {
     /// Samples at `uv` (glTF: origin top-left) with the reference's wrap modes and filter; bilinear in linear light,
     /// from the full-resolution level.
     pub fn sample(&self, r: &TextureRef, uv: Vec2) -> Vec4 {
-        self.filter(r, r.map(uv), self.tables())
+        self.filter::<true>(r, r.map(uv), self.tables())
     }
 
     /// Samples with a screen footprint: `duv_dx`, `duv_dy` are the uv's derivatives across the footprint (a
@@ -304,23 +304,36 @@ impl Texture {
     /// between the two mip levels around log2 of its size in texels ([`Texture::lod`]); magnified and `nearest`
     /// lookups read level 0.
     pub fn sample_footprint(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec4 {
+        self.footprint::<true>(r, uv, duv_dx, duv_dy)
+    }
+
+    /// [`Texture::sample_footprint`]'s colour alone, for what ignores alpha (opaque surfaces' base colour, data
+    /// textures): the same values, without decoding the eight texels' alpha.
+    pub fn sample_footprint_rgb(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec3 {
+        self.footprint::<false>(r, uv, duv_dx, duv_dy).truncate()
+    }
+
+    /// [`Texture::sample_footprint`], with alpha decoded only when `ALPHA` (else it is meaningless): the four
+    /// lanes are filtered apart, so the colour is the same either way.
+    #[inline(always)]
+    fn footprint<const ALPHA: bool>(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec4 {
         let lod = self.lod(r, duv_dx, duv_dy);
         let uv = r.map(uv);
-        // Every level decodes through the same tables (looked up once: each is checked to be built).
+        // Every level decodes through the same tables.
         let d = self.tables();
         if lod.level == 0 && lod.t == 0.0 {
-            return self.filter(r, uv, d);
+            return self.filter::<ALPHA>(r, uv, d);
         }
         let mips = self.mips();
         // Level i is the texture itself for 0, else mips[i − 1]; past the 1×1 level (or for a 1×1 texture,
         // which has no mips) the coarsest level answers alone.
         let level = |i: usize| if i == 0 { self } else { &mips[i - 1] };
         let i = lod.level.min(mips.len());
-        let a = level(i).filter(r, uv, d);
+        let a = level(i).filter::<ALPHA>(r, uv, d);
         if lod.t == 0.0 || i == mips.len() {
             return a;
         }
-        a.lerp(level(i + 1).filter(r, uv, d), lod.t)
+        a.lerp(level(i + 1).filter::<ALPHA>(r, uv, d), lod.t)
     }
 
     /// The mip level [`Texture::sample_footprint`] reads for a footprint.
@@ -351,7 +364,7 @@ impl Texture {
     /// trilinear lookup makes two, and a call each cost a third of its instructions (registers saved and
     /// restored, the checks below repeated).
     #[inline(always)]
-    fn filter(&self, r: &TextureRef, uv: Vec2, d: Tables) -> Vec4 {
+    fn filter<const ALPHA: bool>(&self, r: &TextureRef, uv: Vec2, d: Tables) -> Vec4 {
         let (w, h) = (self.width as f32, self.height as f32);
         let (fx, fy) = (uv.x * w - 0.5, uv.y * h - 0.5);
         // All four texels inside (almost every lookup): `floor(fx)` is in 0..width − 1 exactly when `fx` is in
@@ -367,8 +380,8 @@ impl Texture {
             let i = y0 as usize * row + x0 as usize * 4;
             let texels = &self.rgba[i..i + row + 8];
             let (a, b) = (&texels[..8], &texels[row..]);
-            let top = d.decode(&a[..4]).lerp(d.decode(&a[4..8]), tx);
-            let bottom = d.decode(&b[..4]).lerp(d.decode(&b[4..8]), tx);
+            let top = d.decode::<ALPHA>(&a[..4]).lerp(d.decode::<ALPHA>(&a[4..8]), tx);
+            let bottom = d.decode::<ALPHA>(&b[..4]).lerp(d.decode::<ALPHA>(&b[4..8]), tx);
             return top.lerp(bottom, ty);
         }
         self.filter_edge(r, uv)
@@ -420,11 +433,12 @@ impl PartialEq for Tables {
 }
 
 impl Tables {
-    /// Linear RGBA of one texel's four bytes.
+    /// Linear RGBA of one texel's four bytes (alpha 0 unless `ALPHA`).
     #[inline]
-    fn decode(self, t: &[u8]) -> Vec4 {
+    fn decode<const ALPHA: bool>(self, t: &[u8]) -> Vec4 {
         let c = self.colour;
-        Vec4::new(c[t[0] as usize], c[t[1] as usize], c[t[2] as usize], self.unorm[t[3] as usize])
+        let alpha = if ALPHA { self.unorm[t[3] as usize] } else { 0.0 };
+        Vec4::new(c[t[0] as usize], c[t[1] as usize], c[t[2] as usize], alpha)
     }
 }
 

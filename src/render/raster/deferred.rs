@@ -154,7 +154,7 @@ pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i
         let texel = match texture {
             Some((r, tex)) => {
                 let (uv, dx, dy) = tri.uv_footprint(s.bary, s.z, k as f32);
-                tex.sample_footprint(&r, uv, dx, dy).truncate()
+                tex.sample_footprint_rgb(&r, uv, dx, dy)
             }
             None => Vec3::ONE,
         };

@@ -59,14 +59,15 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     let nrm = tri.normal_at(k);
     let m = LitMaterial::of(mat, &scene.textures);
     let (uv, dx, dy) = tri.uv_footprint(k, z, footprint);
-    let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint(&r, uv, dx, dy));
+    // Opaque base colour and the data textures ignore alpha.
+    let sample = |t: Option<(TextureRef, &Texture)>| t.map(|(r, t)| t.sample_footprint_rgb(&r, uv, dx, dy));
     let v = (l.eye - p).normalize_or_zero();
     // An opaque surface's base colour texture is read here, once per pixel and triangle (see `raster_tile`).
     let mut albedo = albedo;
     if mat.alpha_mode == AlphaMode::Opaque {
         let base = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
         if let Some(t) = sample(base) {
-            albedo *= t.truncate();
+            albedo *= t;
         }
     }
     let mut surface =
@@ -75,7 +76,8 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
         surface.roughness *= mr.y;
         surface.metallic *= mr.z;
     }
-    let ao = m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint(&r, uv, dx, dy).x - 1.0));
+    let ao =
+        m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint_rgb(&r, uv, dx, dy).x - 1.0));
     // A ground plane's visibility is a grid; a subject's comes from its vertices, and only a subject
     // interreflects (see `FrameLight::shade`).
     let (vis, interreflects) = match l.light.plane_visibility_at(tri.material, p) {
@@ -85,11 +87,11 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     let n = match m.normal {
         Some((r, tex, scale)) => {
             let tangent = tri.tangent[0] * k[0] + tri.tangent[1] * k[1] + tri.tangent[2] * k[2];
-            normal_mapped(nrm, tri.back, tangent, tex.sample_footprint(&r, uv, dx, dy), scale)
+            normal_mapped(nrm, tri.back, tangent, tex.sample_footprint_rgb(&r, uv, dx, dy), scale)
         }
         None => nrm,
     };
-    let emission = mat.emissive * sample(m.emissive).map_or(Vec3::ONE, |e| e.truncate());
+    let emission = mat.emissive * sample(m.emissive).unwrap_or(Vec3::ONE);
     l.light.shade(p, n, v, &surface, ao, vis, interreflects) + emission
 }
 
@@ -132,7 +134,7 @@ impl<'t> LitMaterial<'t> {
 /// the texel's X and Y are scaled by `scale` and the result is T·x + B·y + N·z with B = w·(N × T). A back face is
 /// mapped in its front's frame, then flipped, as its geometric normal is. Without a usable tangent (none given,
 /// or degenerate) the normal stays as it is.
-fn normal_mapped(n: Vec3, back: bool, tangent: Vec4, texel: Vec4, scale: f32) -> Vec3 {
+fn normal_mapped(n: Vec3, back: bool, tangent: Vec4, texel: Vec3, scale: f32) -> Vec3 {
     let front = if back { -n } else { n };
     // Gram–Schmidt: the interpolated tangent leans off the interpolated normal.
     let t = tangent.truncate() - front * front.dot(tangent.truncate());
