@@ -336,7 +336,9 @@ impl Texture {
         a.lerp(level(i + 1).filter::<ALPHA>(r, uv, d), lod.t)
     }
 
-    /// The mip level [`Texture::sample_footprint`] reads for a footprint.
+    /// The mip level [`Texture::sample_footprint`] reads for a footprint. Inlined into both of its callers (an
+    /// outlined call cost 10 instructions a lookup, 0.6 % of a textured render).
+    #[inline(always)]
     fn lod(&self, r: &TextureRef, duv_dx: Vec2, duv_dy: Vec2) -> Lod {
         let (dx, dy) = match &r.transform {
             Some([x, y, _]) => (*x * duv_dx.x + *y * duv_dx.y, *x * duv_dy.x + *y * duv_dy.y),
