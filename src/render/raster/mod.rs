@@ -329,7 +329,7 @@ pub fn raster_tile(
     proj: &Projection,
     t: &mut SampleTile,
 ) {
-    let TileWork { tris, tile, splats } = work;
+    let TileWork { tris, splats, .. } = work;
     let Rect { x0, y0, w, h } = rect;
     t.reset(rect);
     let lit = shade.lit.is_some();
@@ -340,7 +340,7 @@ pub fn raster_tile(
     if deferring {
         t.reset_deferred();
     }
-    draw_triangles(scene, tris, tile, shade, rect, proj, deferring, t);
+    draw_triangles(scene, work, shade, rect, proj, deferring, t);
     if let Some((splats, layer)) = splats {
         // The tile's samples as (index in the tile, index in the band's layer).
         let rows = (y0..y0 + h).map(|sy| ((sy - y0) * w - x0, (sy - layer.y0) * layer.w));
@@ -372,21 +372,21 @@ pub fn raster_tile(
     blend::composite(t);
 }
 
-/// Draws tile `tile`'s triangles, in scene order, into `t` (reset to `rect`): depth-tested samples, shaded now or
-/// left for deferred shading (`deferring`: the tile has deferred surfaces, so shaded samples must clear theirs).
-/// The tile's buffers are taken apart first so that their pointers and lengths stay in registers across the
-/// sample loop (through `t` they were reloaded per sample: writes through one `Vec` may alias another's header).
-#[allow(clippy::too_many_arguments)]
+/// Draws the tile's triangles (of `work`; its splats are merged after), in scene order, into `t` (reset to
+/// `rect`): depth-tested samples, shaded now or left for deferred shading (`deferring`: the tile has deferred
+/// surfaces, so shaded samples must clear theirs). The tile's buffers are taken apart first so that their
+/// pointers and lengths stay in registers across the sample loop (through `t` they were reloaded per sample:
+/// writes through one `Vec` may alias another's header).
 fn draw_triangles(
     scene: &PosedScene,
-    tris: &Tris,
-    tile: usize,
+    work: TileWork,
     shade: &Shade,
     rect: Rect,
     proj: &Projection,
     deferring: bool,
     t: &mut SampleTile,
 ) {
+    let TileWork { tris, tile, .. } = work;
     let Rect { x0, y0, w, h } = rect;
     let lit = shade.lit.is_some();
     let SampleTile { color, depth, normal, object, tri: tri_at, bary, blend: blends, .. } = t;
