@@ -168,9 +168,11 @@ fn commit_batch(batch: Vec<Job>, stat: &StatCache) -> Vec<Result<(), Error>> {
     // After a failure the rest are dropped, uncommitted (and settled without an error of their own), as the
     // jobs that come after one are.
     let mut failed = false;
-    let commit = |j: Job| match failed {
-        true => Ok(()),
-        false => commit_action(j.blobs, j.record, stat).inspect_err(|_| failed = true),
+    let commit = |j: Job| {
+        if failed {
+            return Ok(());
+        }
+        commit_action(j.blobs, j.record, stat).inspect_err(|_| failed = true)
     };
     batch.into_iter().map(commit).collect()
 }

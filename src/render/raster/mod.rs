@@ -421,7 +421,7 @@ fn draw_triangles(
             // for shading, without the tests the others need. The writes repeat the alpha-tested deferred case's
             // below: folded into one helper over the tile's buffers they cost 1 % more of a textured render's
             // instructions (callgrind, the render bench's CesiumMan at 4 samples).
-            walk.hits(y0, w, x0, depth, |i, _, k, _| {
+            walk.hits(x0, y0, w, depth, |i, _, k, _| {
                 color[i] = (mat.base_color * vertex_colour(k)).truncate().extend(1.0);
                 if shade.normals {
                     // Read by Lambert shading and the normal pass only.
@@ -438,7 +438,7 @@ fn draw_triangles(
             .base_color_texture
             .filter(|_| !deferred_texture)
             .and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
-        walk.hits(y0, w, x0, depth, |i, (sx, sy), k, z| {
+        walk.hits(x0, y0, w, depth, |i, (sx, sy), k, z| {
             let mut albedo = mat.base_color * vertex_colour(k);
             if let Some((r, texture)) = tex {
                 let (uv, dx, dy) = tri.uv_footprint(k, z, 1.0);

@@ -99,15 +99,15 @@ impl<'a> Walk<'a> {
     }
 
     /// Calls `hit(i, (sx, sy), k, z)` for every sample inside the triangle, between the planes and nearer than
-    /// `depth[i]` (the tile's buffers are `w` samples wide from sample (`x0`, `y0`)), row by row: `i` is the
+    /// `depth[i]` (the tile's buffers start at sample (`x0`, `y0`) and are `w` samples wide), row by row: `i` is the
     /// sample's index in the tile, `k` its perspective-correct barycentrics, `z` its view depth. The sample's
     /// depth becomes `z` when `hit` returns true (it keeps the sample).
     #[inline(always)]
     pub(super) fn hits(
         &self,
+        x0: i64,
         y0: i64,
         w: i64,
-        x0: i64,
         depth: &mut [f32],
         mut hit: impl FnMut(usize, (i64, i64), [f32; 3], f32) -> bool,
     ) {
@@ -115,9 +115,9 @@ impl<'a> Walk<'a> {
         // its start; a narrow one's is tested sample by sample (cheaper than finding the run). One copy of the
         // row loop each, so that neither tests which it is per sample.
         if self.bbox[2] - self.bbox[0] >= SPAN_MIN {
-            self.rows::<true>(y0, w, x0, depth, &mut hit);
+            self.rows::<true>(x0, y0, w, depth, &mut hit);
         } else {
-            self.rows::<false>(y0, w, x0, depth, &mut hit);
+            self.rows::<false>(x0, y0, w, depth, &mut hit);
         }
     }
 
@@ -125,9 +125,9 @@ impl<'a> Walk<'a> {
     #[inline(always)]
     fn rows<const WIDE: bool>(
         &self,
+        x0: i64,
         y0: i64,
         w: i64,
-        x0: i64,
         depth: &mut [f32],
         hit: &mut impl FnMut(usize, (i64, i64), [f32; 3], f32) -> bool,
     ) {
