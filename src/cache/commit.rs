@@ -49,6 +49,8 @@ struct Progress {
     sent: u64,
     done: u64,
     failed: bool,
+    /// New submissions are refused ([`Committer::refuse`]); those handed over still commit.
+    refusing: bool,
     error: Option<(String, Error)>,
 }
 
@@ -80,7 +82,7 @@ impl Committer {
     pub fn submit(&self, label: &str, blobs: Vec<(Digest, Staged)>, record: Staged) -> Result<(), Error> {
         {
             let mut p = self.lock();
-            if p.failed {
+            if p.failed || p.refusing {
                 return Err(Error::Stopped);
             }
             p.sent += 1;
@@ -95,15 +97,26 @@ impl Committer {
     }
 
     /// Waits until every commit handed over so far is done; the first failure, with its action's label.
+    /// Submissions made meanwhile (by kinds running beside the caller's) are not waited for: jobs commit in the
+    /// order they were sent, so once as many are done as had been counted on entry, all of the caller's are.
+    /// The failure goes to the first flush after it; later ones report [`Error::Stopped`] (unlabelled), since
+    /// their own jobs may have been dropped behind the failed one.
     pub fn flush(&self) -> Result<(), (String, Error)> {
         let mut p = self.lock();
-        while p.done < p.sent {
+        let target = p.sent;
+        while p.done < target {
             p = self.settled.wait(p).unwrap_or_else(|p| p.into_inner());
         }
-        match p.error.take() {
-            Some(e) => Err(e),
-            None => Ok(()),
+        if !p.failed {
+            return Ok(());
         }
+        Err(p.error.take().unwrap_or_else(|| (String::new(), Error::Stopped)))
+    }
+
+    /// Refuses every later submission with [`Error::Stopped`], while the jobs already handed over still
+    /// commit: an action failed and the build stops, keeping what the other actions made.
+    pub fn refuse(&self) {
+        self.lock().refusing = true;
     }
 
     /// The progress (a panicking holder cannot leave it inconsistent: every update is one field at a time).

@@ -39,9 +39,9 @@ pub enum Error {
         /// What is wrong with it.
         why: String,
     },
-    /// A result was not stored because an earlier one could not be committed (that failure is the one to
-    /// report; see [`Committer`]).
-    #[error("not stored: an earlier result could not be committed to the cache")]
+    /// A result was not stored because the build is stopping: an earlier one could not be committed, or
+    /// another action failed (that failure is the one to report; see [`Committer`]).
+    #[error("not stored: the build stopped after an earlier failure")]
     Stopped,
 }
 

@@ -1,6 +1,7 @@
 //! Execution: run the graph's actions the cache lacks, and record each result (blobs plus the fields it was
-//! keyed by) in the action cache. Kinds run in [`Kind::ALL`] order, so an action's inputs exist before it
-//! runs; within a kind, actions run in parallel on the worker threads. `lookup` is the side table every
+//! keyed by) in the action cache. A kind runs once every kind its actions read has finished ([`Kind::ALL`] is
+//! an order that respects this), so an action's inputs exist before it runs; kinds that do not read each other
+//! run at once, and within a kind, actions run in parallel, all on the same worker threads. `lookup` is the side table every
 //! reader of the graph shares: which actions are cached, which must run, which are not needed.
 
 mod points;
@@ -8,8 +9,9 @@ mod preview;
 mod render;
 pub mod video;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -311,7 +313,7 @@ pub(crate) fn run(
     started: &dyn Fn(usize, usize),
     done: &(dyn Fn(usize) + Sync),
 ) -> Result<Outcome, Error> {
-    let Lookup { mut blobs, state } = look;
+    let Lookup { blobs, state } = look;
     let here = runs_here(g, &state, shard);
     let mut counts: BTreeMap<Kind, Counts> = BTreeMap::new();
     for id in g.ids() {
@@ -334,33 +336,161 @@ pub(crate) fn run(
     started(cached, work);
     let count = AtomicUsize::new(0);
     let tick = || done(count.fetch_add(1, Ordering::Relaxed) + 1);
-    for kind in Kind::ALL {
-        let ids: Vec<ActionId> =
-            g.ids().filter(|id| here[id.0 as usize] && g.node(*id).action.kind() == kind).collect();
-        if ids.is_empty() {
-            continue;
-        }
-        let t = std::time::Instant::now();
-        let made: Result<Made, Error> = match kind {
-            Kind::Environment => render::environment(g, x, &ids, &tick),
-            Kind::RenderPass => render::passes(g, x, &blobs, &ids, &tick),
-            Kind::Composite => render::composites(g, x, &blobs, &ids, &tick),
-            Kind::Video => video::videos(g, x, &blobs, &ids, &tick),
-            Kind::PreviewSheet | Kind::PreviewRig | Kind::PreviewStrip => preview::run(g, x, &blobs, &ids, &tick),
-            Kind::WriteOutput => unreachable!("outputs are not cached actions"),
-            _ => points::run(g, x, &blobs, &ids, &tick),
-        };
-        // The next kinds read these results: every commit must be done. A failed commit is the cause to report
-        // (the actions after it stopped with `Stopped`).
-        x.commit.flush().map_err(|(action, source)| Error::Cache { action, source })?;
-        let made = made?;
-        for (id, b) in made {
-            blobs[id.0 as usize] = Some(b);
-        }
-        counts.entry(kind).or_default().seconds = t.elapsed().as_secs_f64();
+    let kinds = KindGraph::new(g, &here);
+    let run =
+        Running { g, x, here: &here, kinds: &kinds, tick: &tick, state: Mutex::new(Progress::new(blobs, &kinds)) };
+    rayon::scope(|s| kinds.roots().for_each(|kind| run.spawn(s, kind)));
+    let Progress { blobs, seconds, failure, .. } = run.state.into_inner().unwrap_or_else(|p| p.into_inner());
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    for (kind, secs) in seconds {
+        counts.entry(kind).or_default().seconds = secs;
     }
     let cached = state.iter().map(|s| *s == State::Cached).collect();
     Ok(Outcome { blobs, counts, cached, ran: here })
+}
+
+/// The kinds a build runs and which read which: a kind starts once every kind its actions read has finished, so
+/// kinds that do not read each other (a dataset's images and its point clouds) run at once on the same workers,
+/// and neither waits at the other's end.
+struct KindGraph {
+    /// Per kind that runs, the kinds it reads (that run too: cached inputs are already there).
+    reads: BTreeMap<Kind, BTreeSet<Kind>>,
+}
+
+impl KindGraph {
+    fn new(g: &Graph, here: &[bool]) -> KindGraph {
+        let mut reads: BTreeMap<Kind, BTreeSet<Kind>> = BTreeMap::new();
+        for id in g.ids().filter(|id| here[id.0 as usize]) {
+            let n = g.node(id);
+            let kind = n.action.kind();
+            let mine = reads.entry(kind).or_default();
+            for d in n.deps.iter().filter(|d| here[d.0 as usize]) {
+                let dep = g.node(*d).action.kind();
+                // Actions read only kinds earlier in `Kind::ALL` (the graph is built so), so this cannot cycle.
+                debug_assert!(order(dep) < order(kind), "{kind:?} reads {dep:?}");
+                mine.insert(dep);
+            }
+        }
+        KindGraph { reads }
+    }
+
+    /// Kinds that read no kind that runs.
+    fn roots(&self) -> impl Iterator<Item = Kind> + '_ {
+        self.reads.iter().filter(|(_, r)| r.is_empty()).map(|(k, _)| *k)
+    }
+
+    /// Kinds that read `kind`.
+    fn readers(&self, kind: Kind) -> impl Iterator<Item = Kind> + '_ {
+        self.reads.iter().filter(move |(_, r)| r.contains(&kind)).map(|(k, _)| *k)
+    }
+}
+
+/// `kind`'s place in [`Kind::ALL`].
+fn order(kind: Kind) -> usize {
+    Kind::ALL.iter().position(|k| *k == kind).unwrap_or(usize::MAX)
+}
+
+/// What the kinds running at once share: the blobs made so far, what each kind still waits for, wall times, and
+/// the first failure.
+struct Progress {
+    blobs: Vec<Option<Vec<Digest>>>,
+    /// Per kind not yet started, the kinds it reads that have not finished.
+    waiting: BTreeMap<Kind, usize>,
+    /// Per finished kind, the wall time from its start to its end (kinds running at once overlap).
+    seconds: BTreeMap<Kind, f64>,
+    failure: Option<Error>,
+}
+
+impl Progress {
+    fn new(blobs: Vec<Option<Vec<Digest>>>, kinds: &KindGraph) -> Progress {
+        let waiting = kinds.reads.iter().map(|(k, r)| (*k, r.len())).collect();
+        Progress { blobs, waiting, seconds: BTreeMap::new(), failure: None }
+    }
+
+    /// Keeps the first failure that is a cause: [`cache::Error::Stopped`] is only the echo of one (a kind
+    /// refused beside the one that failed), reported only when there is nothing else.
+    fn fail(&mut self, e: Error) {
+        let echo = |e: &Error| matches!(e, Error::Cache { source: cache::Error::Stopped, .. });
+        if self.failure.as_ref().is_none_or(|f| echo(f) && !echo(&e)) {
+            self.failure = Some(e);
+        }
+    }
+}
+
+/// One build's kinds running on the worker threads.
+struct Running<'a> {
+    g: &'a Graph<'a>,
+    x: &'a Inputs<'a>,
+    here: &'a [bool],
+    kinds: &'a KindGraph,
+    tick: &'a (dyn Fn() + Sync),
+    state: Mutex<Progress>,
+}
+
+impl<'a> Running<'a> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Progress> {
+        self.state.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Runs `kind`'s actions as a task of `s`, then starts the kinds that were waiting only for it. After a
+    /// failure nothing new starts, and the committer refuses the running kinds' next results (what they
+    /// handed over is kept).
+    fn spawn<'s>(&'s self, s: &rayon::Scope<'s>, kind: Kind) {
+        s.spawn(move |s| {
+            // The kinds it reads are done: their blobs are all in (a copy, so that kinds finishing meanwhile can
+            // add theirs).
+            let blobs = {
+                let p = self.lock();
+                if p.failure.is_some() {
+                    return;
+                }
+                p.blobs.clone()
+            };
+            let (g, x) = (self.g, self.x);
+            let ids: Vec<ActionId> =
+                g.ids().filter(|id| self.here[id.0 as usize] && g.node(*id).action.kind() == kind).collect();
+            let t = std::time::Instant::now();
+            let tick = self.tick;
+            let made: Result<Made, Error> = match kind {
+                Kind::Environment => render::environment(g, x, &ids, tick),
+                Kind::RenderPass => render::passes(g, x, &blobs, &ids, tick),
+                Kind::Composite => render::composites(g, x, &blobs, &ids, tick),
+                Kind::Video => video::videos(g, x, &blobs, &ids, tick),
+                Kind::PreviewSheet | Kind::PreviewRig | Kind::PreviewStrip => preview::run(g, x, &blobs, &ids, tick),
+                Kind::WriteOutput => unreachable!("outputs are not cached actions"),
+                _ => points::run(g, x, &blobs, &ids, tick),
+            };
+            drop(blobs);
+            // Its readers read these results: every commit must be done. A failed commit is the cause to report
+            // (the actions after it stopped with `Stopped`).
+            let flushed = x.commit.flush().map_err(|(action, source)| Error::Cache { action, source });
+            let mut p = self.lock();
+            let made = match flushed.and(made) {
+                Ok(made) => made,
+                Err(e) => {
+                    p.fail(e);
+                    x.commit.refuse();
+                    return;
+                }
+            };
+            for (id, b) in made {
+                p.blobs[id.0 as usize] = Some(b);
+            }
+            p.seconds.insert(kind, t.elapsed().as_secs_f64());
+            let mut ready = Vec::new();
+            for r in self.kinds.readers(kind) {
+                let left = p.waiting.get_mut(&r).expect("BUG: every reader waits");
+                *left -= 1;
+                if *left == 0 {
+                    ready.push(r);
+                }
+            }
+            drop(p);
+            ready.into_iter().for_each(|r| self.spawn(s, r));
+        });
+    }
 }
 
 /// The key that decides which shard runs node `id`: its own, except where one action feeds exactly one other,
@@ -380,5 +510,55 @@ fn owner_key(g: &Graph, id: ActionId) -> Digest {
             key_of(&Action::PointFrame { output: output.clone(), frame: *frame }).unwrap_or(g.node(id).key)
         }
         _ => g.node(id).key,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dataset's images and its point clouds read nothing of each other, so their kinds start together
+    /// (neither waits at the other's end); each kind still waits for the kinds it reads.
+    #[test]
+    fn images_and_point_clouds_run_at_once_and_readers_wait_for_their_inputs() {
+        let dir = tempfile::tempdir().unwrap();
+        let glb = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb");
+        let text = format!(
+            "[dataset]\nname = \"k\"\nout = \"out\"\ncache = \"cache\"\npreview = false\n\
+             [source.man]\ngltf = {:?}\nframes = {{ count = 2, fps = 24 }}\n\
+             [render]\nresolution = [16, 16]\n[rig.o]\nkind = \"orbit\"\n\
+             [split.train]\nrig = \"o\"\nviews = 2\ntime = \"all\"\n\
+             [output.d]\nwriter = \"colmap\"\n\
+             [output.p]\nwriter = \"ply-sequence\"\npoints = 100\nvoxel = 0.01\n",
+            glb.display().to_string()
+        );
+        std::fs::write(dir.path().join("m.toml"), text).unwrap();
+        let (m, _) =
+            crate::manifest::load(&dir.path().join("m.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
+        let p = crate::build::prepare(&m, &dir.path().join("cache"), false).unwrap();
+        let g = p.graph(&m).unwrap();
+        let look = lookup(&g, &p.store, &p.stat);
+        let kinds = KindGraph::new(&g, &runs_here(&g, &look.state, None));
+        let roots: BTreeSet<Kind> = kinds.roots().collect();
+        assert!(roots.contains(&Kind::RenderPass), "{:?}", kinds.reads);
+        assert!(roots.contains(&Kind::SampleFrame) || roots.contains(&Kind::Bounds), "{:?}", kinds.reads);
+        let readers = |k| kinds.readers(k).collect::<BTreeSet<Kind>>();
+        assert_eq!(readers(Kind::RenderPass), BTreeSet::from([Kind::Composite]), "{:?}", kinds.reads);
+        assert!(readers(Kind::SampleFrame).contains(&Kind::PointFrame), "{:?}", kinds.reads);
+        assert!(!kinds.reads[&Kind::PointFrame].contains(&Kind::RenderPass));
+    }
+
+    /// A refusal echoed by a kind running beside the one that failed never hides the failure, whichever
+    /// reports first; the first cause is kept.
+    #[test]
+    fn the_first_cause_is_reported_not_its_echo() {
+        let stopped = || Error::Cache { action: "b".into(), source: cache::Error::Stopped };
+        let cause = |a: &str| Error::Content { action: a.into(), message: "broken".into() };
+        let mut p = Progress::new(Vec::new(), &KindGraph { reads: BTreeMap::new() });
+        p.fail(stopped());
+        p.fail(cause("a"));
+        p.fail(stopped());
+        p.fail(cause("c"));
+        assert!(matches!(&p.failure, Some(Error::Content { action, .. }) if action == "a"), "{:?}", p.failure);
     }
 }

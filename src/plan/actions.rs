@@ -63,7 +63,8 @@ pub enum Kind {
 }
 
 impl Kind {
-    /// Every kind, in execution order (an action's inputs are of earlier kinds).
+    /// Every kind, in an order that puts an action's inputs' kinds before its own (`execute` starts a kind
+    /// once the kinds it reads have finished, so kinds that read nothing of each other run at once).
     pub const ALL: [Kind; 13] = [
         Kind::Environment,
         Kind::RenderPass,

@@ -77,7 +77,7 @@ impl Environment {
         static STUDIO: std::sync::LazyLock<(std::sync::Arc<light::EnvMap>, std::sync::Arc<light::Prefiltered>)> =
             std::sync::LazyLock::new(|| {
                 let map = light::environment::studio();
-                let pre = light::environment::prefilter(&map);
+                let pre = light::environment::prefilter_here(&map);
                 (std::sync::Arc::new(map), std::sync::Arc::new(pre))
             });
         self.with(STUDIO.1.clone(), Some(STUDIO.0.clone()))

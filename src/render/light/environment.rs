@@ -268,6 +268,19 @@ const LOBE_SAMPLES: u32 = 96;
 
 /// Prefilters a map: deterministic (fixed sample sets, fixed order; rows in parallel write their own texels).
 pub fn prefilter(map: &EnvMap) -> Prefiltered {
+    prefilter_rows(map, 1)
+}
+
+/// [`prefilter`] on the calling thread alone: for a lazily computed map, whose initializer must not wait on
+/// the thread pool. A worker waiting there takes other jobs meanwhile, and one of those that wants the same
+/// map would wait on the initializer below it on its own stack, for ever (seen as a hang of the test suite once
+/// builds ran kinds at once).
+pub fn prefilter_here(map: &EnvMap) -> Prefiltered {
+    prefilter_rows(map, usize::MAX)
+}
+
+/// [`prefilter`], with at least `min_rows` rows per parallel task (`usize::MAX`: one task, no waiting).
+fn prefilter_rows(map: &EnvMap, min_rows: usize) -> Prefiltered {
     use rayon::prelude::*;
     // Irradiance SH over the full map, rows in parallel, summed in row order. Each row is integrated over
     // SUB sub-rows with their exact band areas (the midpoint rule over whole rows leaves a residue in the
@@ -276,6 +289,7 @@ pub fn prefilter(map: &EnvMap) -> Prefiltered {
     // The sky's own SH keeps the sub-rows above the horizon (t < ½ is z > 0).
     let rows: Vec<([Vec3; 9], [Vec3; 9])> = (0..map.height)
         .into_par_iter()
+        .with_min_len(min_rows)
         .map(|y| {
             let (mut acc, mut sky) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9]);
             for k in 0..SUB {
@@ -323,6 +337,7 @@ pub fn prefilter(map: &EnvMap) -> Prefiltered {
             let lobe = if i == 0 { Vec::new() } else { lobe(&pyramid, roughness) };
             let texels: Vec<Vec3> = (0..h)
                 .into_par_iter()
+                .with_min_len(min_rows)
                 .flat_map_iter(|y| {
                     let (pyramid, lobe) = (&pyramid, &lobe);
                     (0..w).map(move |x| {
