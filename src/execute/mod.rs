@@ -1,8 +1,9 @@
 //! Execution: run the graph's actions the cache lacks, and record each result (blobs plus the fields it was
 //! keyed by) in the action cache. A kind runs once every kind its actions read has finished ([`Kind::ALL`] is
 //! an order that respects this), so an action's inputs exist before it runs; kinds that do not read each other
-//! run at once, and within a kind, actions run in parallel, all on the same worker threads. `lookup` is the side table every
-//! reader of the graph shares: which actions are cached, which must run, which are not needed.
+//! run at once, and within a kind, actions run in parallel, all on the same worker threads. `lookup` is the
+//! side table every reader of the graph shares: which actions are cached, which must run, which are not
+//! needed.
 
 mod points;
 mod preview;
