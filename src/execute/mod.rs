@@ -338,10 +338,9 @@ pub(crate) fn run(
     let count = AtomicUsize::new(0);
     let tick = || done(count.fetch_add(1, Ordering::Relaxed) + 1);
     let kinds = KindGraph::new(g, &here);
-    let run =
-        Running { g, x, here: &here, kinds: &kinds, tick: &tick, state: Mutex::new(Progress::new(blobs, &kinds)) };
+    let run = Running { g, x, here: &here, kinds: &kinds, tick: &tick, state: Mutex::new(Shared::new(blobs, &kinds)) };
     rayon::scope(|s| kinds.roots().for_each(|kind| run.spawn(s, kind)));
-    let Progress { blobs, seconds, failure, .. } = run.state.into_inner().unwrap_or_else(|p| p.into_inner());
+    let Shared { blobs, seconds, failure, .. } = run.state.into_inner().unwrap_or_else(|p| p.into_inner());
     if let Some(e) = failure {
         return Err(e);
     }
@@ -361,6 +360,7 @@ struct KindGraph {
 }
 
 impl KindGraph {
+    /// The kinds of the actions `here` marks, and which of them each reads.
     fn new(g: &Graph, here: &[bool]) -> KindGraph {
         let mut reads: BTreeMap<Kind, BTreeSet<Kind>> = BTreeMap::new();
         for id in g.ids().filter(|id| here[id.0 as usize]) {
@@ -395,7 +395,7 @@ fn order(kind: Kind) -> usize {
 
 /// What the kinds running at once share: the blobs made so far, what each kind still waits for, wall times, and
 /// the first failure.
-struct Progress {
+struct Shared {
     blobs: Vec<Option<Vec<Digest>>>,
     /// Per kind not yet started, the kinds it reads that have not finished.
     waiting: BTreeMap<Kind, usize>,
@@ -404,10 +404,10 @@ struct Progress {
     failure: Option<Error>,
 }
 
-impl Progress {
-    fn new(blobs: Vec<Option<Vec<Digest>>>, kinds: &KindGraph) -> Progress {
+impl Shared {
+    fn new(blobs: Vec<Option<Vec<Digest>>>, kinds: &KindGraph) -> Shared {
         let waiting = kinds.reads.iter().map(|(k, r)| (*k, r.len())).collect();
-        Progress { blobs, waiting, seconds: BTreeMap::new(), failure: None }
+        Shared { blobs, waiting, seconds: BTreeMap::new(), failure: None }
     }
 
     /// Keeps the first failure that is a cause: [`cache::Error::Stopped`] is only the echo of one (a kind
@@ -427,11 +427,11 @@ struct Running<'a> {
     here: &'a [bool],
     kinds: &'a KindGraph,
     tick: &'a (dyn Fn() + Sync),
-    state: Mutex<Progress>,
+    state: Mutex<Shared>,
 }
 
 impl<'a> Running<'a> {
-    fn lock(&self) -> std::sync::MutexGuard<'_, Progress> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Shared> {
         self.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
@@ -555,7 +555,7 @@ mod tests {
     fn the_first_cause_is_reported_not_its_echo() {
         let stopped = || Error::Cache { action: "b".into(), source: cache::Error::Stopped };
         let cause = |a: &str| Error::Content { action: a.into(), message: "broken".into() };
-        let mut p = Progress::new(Vec::new(), &KindGraph { reads: BTreeMap::new() });
+        let mut p = Shared::new(Vec::new(), &KindGraph { reads: BTreeMap::new() });
         p.fail(stopped());
         p.fail(cause("a"));
         p.fail(stopped());
