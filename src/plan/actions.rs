@@ -21,7 +21,7 @@ pub const RENDER_SALT: &str = "render 7";
 /// bytes only, so that unlit datasets keep their keys.
 pub const LIT_SALT: &str = "lit 7";
 /// Version of the point sampler's output.
-pub const SAMPLE_SALT: &str = "sample 2";
+pub const SAMPLE_SALT: &str = "sample 3";
 /// How a cloud of a given size picks among a point cloud's own points (at most its share, keyed).
 const SELECTION: &str = "at most n points 1";
 /// Version of the PLY / COLMAP point encodings and of compositing.
