@@ -509,3 +509,44 @@ fn only_the_passes_asked_for_are_written() {
     }
     assert!(covered > 20, "{covered} pixels carry an id");
 }
+
+/// A point kind that fails while the images render beside it (a sample blob damaged behind the stat cache's
+/// back, so that only reading it finds out) stops the build with its own cause, never with the refusal the
+/// renders get as the build stops; a verified rebuild then treats the blob as missing and completes.
+#[test]
+fn a_kind_failing_beside_running_renders_reports_its_own_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let points = |voxel: f64| format!("[output.p]\nwriter = \"ply-sequence\"\npoints = 2000\nvoxel = {voxel}\n");
+    let first = cesium(2, "", &points(0.02));
+    run(d, &first);
+    // Files an hour old, re-recorded by a no-op build: entries the stat cache trusts (fresh ones are racy and
+    // hashed again anyway).
+    backdate(&d.join("cache/objects"));
+    assert!(run(d, &first).nothing_to_do());
+    let objects = d.join("cache/objects");
+    let (rel, _) =
+        tree(&objects).into_iter().find(|(_, b)| b.starts_with(b"vvgenPT")).expect("a sample blob in the cache");
+    let blob = objects.join(rel);
+    // One byte flipped in place, keeping size, inode and mtime: only reading the blob finds out.
+    let mtime = std::fs::metadata(&blob).unwrap().modified().unwrap();
+    let last = std::fs::metadata(&blob).unwrap().len() - 1;
+    let byte = std::fs::read(&blob).unwrap()[last as usize] ^ 1;
+    let f = std::fs::OpenOptions::new().write(true).open(&blob).unwrap();
+    std::os::unix::fs::FileExt::write_all_at(&f, &[byte], last).unwrap();
+    f.set_modified(mtime).unwrap();
+    // New voxels reduce the cached samples again while a new resolution renders every image beside them.
+    let text = cesium(2, "", &points(0.03)).replace("resolution = [64, 64]", "resolution = [48, 48]");
+    std::fs::write(d.join("m.toml"), &text).unwrap();
+    let (m, _) = vvgen::manifest::load(&d.join("m.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
+    let err = build(&m, &d.join("cache"), Options::default(), &Silent).unwrap_err();
+    let mut chain = err.to_string();
+    let mut cur = std::error::Error::source(&err);
+    while let Some(c) = cur {
+        chain.push_str(&format!(": {c}"));
+        cur = c.source();
+    }
+    assert!(chain.contains("is corrupt") && !chain.contains("stopped"), "{chain}");
+    let r = run_with(d, &text, Options { verify: true, ..Default::default() });
+    assert!(r.ran(Kind::SampleFrame) >= 1 && r.ran(Kind::PointFrame) == 2, "{:?}", r.actions);
+}
