@@ -540,12 +540,7 @@ fn a_kind_failing_beside_running_renders_reports_its_own_cause() {
     std::fs::write(d.join("m.toml"), &text).unwrap();
     let (m, _) = vvgen::manifest::load(&d.join("m.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
     let err = build(&m, &d.join("cache"), Options::default(), &Silent).unwrap_err();
-    let mut chain = err.to_string();
-    let mut cur = std::error::Error::source(&err);
-    while let Some(c) = cur {
-        chain.push_str(&format!(": {c}"));
-        cur = c.source();
-    }
+    let chain = crate::common::error_chain(&err);
     assert!(chain.contains("is corrupt") && !chain.contains("stopped"), "{chain}");
     let r = run_with(d, &text, Options { verify: true, ..Default::default() });
     assert!(r.ran(Kind::SampleFrame) >= 1 && r.ran(Kind::PointFrame) == 2, "{:?}", r.actions);

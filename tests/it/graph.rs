@@ -407,21 +407,11 @@ fn overflowing_geometry_never_reaches_a_dataset() {
     for output in outputs {
         std::fs::write(d.join("m.toml"), crate::common::triangle_manifest(2, 1, 8, 1, output)).unwrap();
         let err = build::build(&load(&d.join("m.toml")), &d.join("cache"), Default::default(), &Silent).unwrap_err();
-        assert!(format!("{:#}", anyhow_chain(&err)).contains("not finite"), "{output}: {}", anyhow_chain(&err));
+        let chain = crate::common::error_chain(&err);
+        assert!(chain.contains("not finite"), "{output}: {chain}");
         assert_eq!(err.exit_code(), 2, "{output}");
     }
     assert!(!d.join("out/tri_ngp/transforms_train.json").exists());
-}
-
-/// The error and its causes, as the CLI prints them.
-fn anyhow_chain(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut cur = e.source();
-    while let Some(c) = cur {
-        s.push_str(&format!(": {c}"));
-        cur = c.source();
-    }
-    s
 }
 
 /// `correspondence` is judged on the source a point output samples: a glTF source tracks its surface even
