@@ -13,8 +13,9 @@ use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec4};
 use vvgen::sample::{self, voxel};
-use vvgen::scene::material::{Material, Texture, TextureRef};
+use vvgen::scene::material::Material;
 use vvgen::scene::ply::{self, PlyOut};
+use vvgen::scene::texture::{Texture, TextureRef};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 mod common;

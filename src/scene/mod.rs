@@ -9,6 +9,7 @@ pub mod obj;
 pub mod ply;
 pub mod posed;
 pub mod source;
+pub mod texture;
 pub mod transform;
 
 use std::path::PathBuf;

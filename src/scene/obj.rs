@@ -10,8 +10,9 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::material::{srgb_to_linear, Material, Texture, TextureRef};
+use super::material::{srgb_to_linear, Material};
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use super::texture::{Texture, TextureRef};
 use super::Error;
 
 /// Largest texture side accepted (a corrupt header should not allocate gigabytes).

@@ -7,7 +7,8 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::light::Light;
-use super::material::{Material, Texture};
+use super::material::Material;
+use super::texture::Texture;
 
 /// What a primitive is drawn as.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -205,7 +206,8 @@ impl PosedScene {
 mod legacy {
     use glam::{Vec3, Vec4};
 
-    use crate::scene::material::{self as m, AlphaMode, TextureRef};
+    use crate::scene::material::{self as m, AlphaMode};
+    use crate::scene::texture::TextureRef;
 
     #[derive(Debug)]
     pub(super) struct Material {
@@ -245,7 +247,8 @@ mod canonical {
     use glam::Vec3;
 
     use crate::scene::light::{Light, LightKind};
-    use crate::scene::material::{Material, TextureRef};
+    use crate::scene::material::Material;
+    use crate::scene::texture::TextureRef;
 
     fn f32s(out: &mut Vec<u8>, v: &[f32]) {
         for x in v {
@@ -347,7 +350,8 @@ mod canonical {
         use glam::{Vec2, Vec4};
 
         use super::*;
-        use crate::scene::material::{AlphaMode, Wrap};
+        use crate::scene::material::AlphaMode;
+        use crate::scene::texture::Wrap;
 
         fn bytes(m: &Material) -> Vec<u8> {
             let mut out = Vec::new();

@@ -289,7 +289,7 @@ pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScen
     };
     let mut scene = PosedScene::single(kind, positions, normals, colors, d.triangles, material.clone());
     if let (Some(tex), Some(uvs)) = (texture, &d.uvs) {
-        material.base_color_texture = Some(super::material::TextureRef::new(0));
+        material.base_color_texture = Some(super::texture::TextureRef::new(0));
         scene.materials = Arc::new(vec![material]);
         scene.textures = Arc::new(vec![super::obj::texture(&tex)?]);
         // v runs up from the bottom row; textures are stored top row first.

@@ -7,8 +7,9 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 use vvgen::sample::{self, voxel};
-use vvgen::scene::material::{Material, Texture, TextureRef, Wrap};
+use vvgen::scene::material::Material;
 use vvgen::scene::ply;
+use vvgen::scene::texture::{Texture, TextureRef, Wrap};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 fn cesium_manifest(dir: &Path, output: &str) -> PathBuf {

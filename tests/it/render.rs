@@ -5,7 +5,8 @@ use std::sync::Arc;
 
 use glam::{DMat4, Mat4, Vec2, Vec3, Vec4};
 use vvgen::render::{render, Camera, RenderSettings, SplatSettings};
-use vvgen::scene::material::{Material, Texture, TextureRef};
+use vvgen::scene::material::Material;
+use vvgen::scene::texture::{Texture, TextureRef};
 use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 fn mesh(positions: Vec<Vec3>, indices: Vec<u32>, material: Material) -> PosedScene {

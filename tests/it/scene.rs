@@ -555,7 +555,7 @@ fn malformed_references_offsets_and_enums_are_errors_not_panics() {
 /// index), whatever the wrap mode.
 #[test]
 fn huge_and_corrupt_uvs_sample_inside_the_texture() {
-    use vvgen::scene::material::{Texture, TextureRef, Wrap};
+    use vvgen::scene::texture::{Texture, TextureRef, Wrap};
     let tex = Texture::new(2, 2, vec![255; 16], true);
     for wrap in [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror] {
         let mut r = TextureRef::new(0);

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
-use crate::scene::material::floor;
+use crate::scene::texture::floor;
 
 /// Largest map side read (a 16k map is 1.6 GB of f32 texels; environment maps are 1k–8k wide).
 pub const MAX_SIDE: u32 = 16384;

@@ -6,7 +6,7 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
-use crate::scene::material::floor;
+use crate::scene::texture::floor;
 use crate::scene::{PosedScene, PrimKind};
 
 /// How a map projects.

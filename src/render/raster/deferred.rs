@@ -11,7 +11,8 @@
 use glam::{Vec2, Vec3};
 
 use super::{SampleTile, Shade, Tris, NO_TRI};
-use crate::scene::material::{AlphaMode, Texture, TextureRef};
+use crate::scene::material::AlphaMode;
+use crate::scene::texture::{Texture, TextureRef};
 use crate::scene::PosedScene;
 
 /// One triangle's share of one pixel: the samples it won there and its attributes at their centroid.

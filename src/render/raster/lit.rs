@@ -7,7 +7,8 @@ use glam::{Vec2, Vec3, Vec4};
 use super::deferred::for_each_share;
 use super::{Lit, Projection, Rect, SampleTile, Tri, Tris};
 use crate::render::light::{Surface, Visibility};
-use crate::scene::material::{AlphaMode, Material, Texture, TextureRef};
+use crate::scene::material::{AlphaMode, Material};
+use crate::scene::texture::{Texture, TextureRef};
 use crate::scene::PosedScene;
 
 /// Lit shading of a drawn tile's deferred samples: once per pixel and triangle, at the centroid of its samples

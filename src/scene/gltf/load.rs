@@ -12,8 +12,9 @@ use super::anim::{Animation, Channel, Interp, Sampler, Target};
 use super::materials::{linear_data_textures, material};
 use super::uri::fetch_uri;
 use crate::scene::light::{FileLight, GltfLightKind};
-use crate::scene::material::{Material, Texture};
+use crate::scene::material::Material;
 use crate::scene::posed::PrimKind;
+use crate::scene::texture::Texture;
 
 /// Extensions vvgen understands; a file that *requires* any other is refused.
 const SUPPORTED_REQUIRED: &[&str] =

@@ -3,7 +3,8 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::scene::material::{AlphaMode, Material, Texture, TextureRef, Wrap};
+use crate::scene::material::{AlphaMode, Material};
+use crate::scene::texture::{Texture, TextureRef, Wrap};
 
 pub(super) fn material(m: &gltf::Material<'_>) -> Material {
     let pbr = m.pbr_metallic_roughness();
