@@ -67,8 +67,8 @@ impl Points {
     /// A compact binary form for the cache: magic, count, then positions as f32 and normals and colours as
     /// binary16 (IEEE half floats), all little-endian. Positions stay exact (they decide voxels); a unit normal
     /// or a linear colour keeps 11 significant bits: at most about a hundredth of a degree, or a thirtieth of an
-    /// 8-bit sRGB step, far below what the writers keep. The blob is a third smaller than in f32 (a million points: 24
-    /// MB, not 36), and writing it was most of a point-cloud build's system time. Colours beyond binary16's range
+    /// 8-bit sRGB step, far below what the writers keep. The blob is a third smaller than in f32 (a million
+    /// points: 24 MB, not 36), and writing it was most of a point-cloud build's system time. Colours beyond binary16's range
     /// (65 504) are clamped to it, never written as infinities.
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(16 + self.len() * POINT_BYTES);

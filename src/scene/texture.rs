@@ -351,8 +351,8 @@ fn truncate2(a: f32, b: f32) -> (i32, i32) {
 fn log2(x: f32) -> f32 {
     let bits = x.to_bits();
     let e = ((bits >> 23) & 0xff) as i32 - 127;
-    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000); // [1, 2)
-                                                                // ln m = 2·atanh(s) = 2(s + s³/3 + s⁵/5 + …), s = (m − 1)/(m + 1) < 1/3.
+    // The mantissa m in [1, 2): ln m = 2·atanh(s) = 2(s + s³/3 + s⁵/5 + …), s = (m − 1)/(m + 1) < 1/3.
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
     let s = (m - 1.0) / (m + 1.0);
     let s2 = s * s;
     let series = s * (1.0 + s2 * (1.0 / 3.0 + s2 * (1.0 / 5.0 + s2 * (1.0 / 7.0 + s2 * (1.0 / 9.0 + s2 / 11.0)))));
