@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Whether two vvgen binaries render the same bytes: the check a speed change that should not move a pixel owes
-# (the render bench keeps no images). Builds five small manifests with each binary, cold, and compares the
+# (the render bench keeps no images). Builds nine small manifests with each binary, cold, and compares the
 # datasets file by file (`vvgen/dataset.json` aside: it records the manifest's digest, and the manifests differ
 # in their output paths). The manifests cover the renderer's paths: unlit textured CesiumMan at 4 and 9 samples
 # with normal and mask passes (deferred texturing, resolve per sample grid), Lambert shading with vertex colours
 # (shaded per sample), a textured box at 1 sample, and lit (`pbr`) CesiumMan on a ground plane under a sun and
-# an HDR map with the albedo pass.
+# an HDR map with the albedo pass; and a vox10 point-cloud sequence drawn as cubes (a voxel's edge, and larger at
+# their true size), 1-px squares and disks.
 #
 #   benches/same_bytes.sh OLD_VVGEN NEW_VVGEN [WORK_DIR]
 #
@@ -71,6 +72,20 @@ kind = \"sun\"
 direction = [0.45, 0.35, -0.82]
 intensity = 2.5
 angle_deg = 3" > "$1/pbr.toml"
+    local seq="ply_sequence = \"$repo/tests/data/seq/torus_vox10_{frame:04}.ply\"
+frames = { start = 1000, end = 1001, fps = 30 }"
+    manifest cubes "$seq" 'samples = 4
+splat = { shape = "cube" }
+passes = ["rgba", "depth", "normal"]' > "$1/cubes.toml"
+    manifest solids "$seq" 'samples = 1
+splat = { shape = "cube", size = 0.02, min_px = 0 }
+passes = ["rgba", "depth", "normal"]' > "$1/solids.toml"
+    manifest squares "$seq" 'samples = 4
+splat = { shape = "square", size_px = 1 }
+passes = ["rgba", "depth"]' > "$1/squares.toml"
+    manifest disks "$seq" 'samples = 4
+splat = { shape = "disk", size = 0.015 }
+passes = ["rgba", "depth"]' > "$1/disks.toml"
 }
 
 status=0
@@ -78,7 +93,7 @@ for side in old new; do
     mkdir -p "$work/$side"
     write_manifests "$work/$side"
 done
-for m in unlit unlit9 lambert boxtex pbr; do
+for m in unlit unlit9 lambert boxtex pbr cubes solids squares disks; do
     for side in old new; do
         bin=$old
         [ "$side" = new ] && bin=$new

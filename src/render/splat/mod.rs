@@ -23,6 +23,9 @@
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+#[cfg(target_arch = "x86_64")]
+mod lanes;
+
 use super::bin::Binned;
 use super::raster::{snap, Projection, SUBPIXEL};
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
@@ -103,6 +106,7 @@ struct Solid {
 }
 
 /// What [`project`] makes of a point.
+#[derive(Debug)]
 enum Projected {
     Flat(Flat),
     Solid(Solid),
@@ -157,42 +161,45 @@ struct Footprint {
     eye: Vec3,
 }
 
+impl Footprint {
+    /// What drawing splats of `s` under `p` at `k` samples per pixel side takes.
+    fn new(p: &Projection, s: &SplatSettings, k: f32) -> Footprint {
+        let [fx, ..] = p.f;
+        // Half the edge of a cube; a pixel size is taken at unit distance.
+        let half = |size: Size| {
+            0.5 * match size {
+                Size::World(w) => w,
+                Size::Pixels(px) => px * k / fx,
+            }
+        };
+        let cube = matches!(s.shape, Shape::Cube | Shape::Surfel).then(|| half(s.size));
+        let surfel = s.shape == Shape::Surfel;
+        // A world-axis-aligned cube of half edge h spans h·Σⱼ|Rᵢⱼ| along view axis i (R: the view rotation), a box
+        // much tighter than the circumscribed sphere; widened by a hair so that rounding never trims a sample.
+        let rot = glam::Mat3::from_mat4(p.w2c).transpose();
+        let extent = [rot.x_axis, rot.y_axis, rot.z_axis].map(|row| row.abs().element_sum());
+        // A surfel of radius r lies in its bounding sphere: r along every view axis.
+        let extent = if surfel { Vec3::ONE } else { Vec3::from(extent) };
+        let extent = extent * cube.unwrap_or(0.0) * (1.0 + 1e-4);
+        let eye = p.w2c.inverse().w_axis.truncate();
+        Footprint { cube, surfel, extent, size: s.size, min_half: 0.5 * s.min_px.max(0.0) * k, k, eye }
+    }
+}
+
 /// Projects every point of the scene's point primitives and bins the splats by band of `band_rows` sample rows.
 pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f32, band_rows: i64) -> Splats<'a> {
-    let [fx, ..] = p.f;
-    // Half the edge of a cube; a pixel size is taken at unit distance.
-    let half = |size: Size| {
-        0.5 * match size {
-            Size::World(w) => w,
-            Size::Pixels(px) => px * k / fx,
-        }
-    };
+    let foot = Footprint::new(p, s, k);
     let mut out = Splats {
         sources: Vec::new(),
         flat: Vec::new(),
         solid: Vec::new(),
-        cube: matches!(s.shape, Shape::Cube | Shape::Surfel).then(|| half(s.size)),
-        surfel: s.shape == Shape::Surfel,
+        cube: foot.cube,
+        surfel: foot.surfel,
         disk: s.shape == Shape::Disk,
         band_rows,
     };
-    // A world-axis-aligned cube of half edge h spans h·Σⱼ|Rᵢⱼ| along view axis i (R: the view rotation), a box
-    // much tighter than the circumscribed sphere; widened by a hair so that rounding never trims a sample.
-    let rot = glam::Mat3::from_mat4(p.w2c).transpose();
-    let extent = [rot.x_axis, rot.y_axis, rot.z_axis].map(|row| row.abs().element_sum());
-    // A surfel of radius r lies in its bounding sphere: r along every view axis.
-    let extent = if out.surfel { Vec3::ONE } else { Vec3::from(extent) };
-    let extent = extent * out.cube.unwrap_or(0.0) * (1.0 + 1e-4);
-    let eye = p.w2c.inverse().w_axis.truncate();
-    let foot = Footprint {
-        cube: out.cube,
-        surfel: out.surfel,
-        extent,
-        size: s.size,
-        min_half: 0.5 * s.min_px.max(0.0) * k,
-        k,
-        eye,
-    };
+    #[cfg(target_arch = "x86_64")]
+    let lanes = lanes::Lanes::new(p, &foot);
     let bands = ((p.size.1 + band_rows - 1) / band_rows) as usize;
     let mut first = 0u32;
     let size = p.size;
@@ -217,15 +224,27 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
                     // positions.
                     let normals =
                         if foot.surfel { prim.normals.get(c * SETUP_CHUNK..).unwrap_or_default() } else { &[] };
-                    for (j, pos) in chunk.iter().enumerate() {
-                        let normal = normals.get(j).copied().unwrap_or(Vec3::ZERO);
-                        // Each splat with its bands, found once from the rows `project` bounded it by (the sort
-                        // reads them twice).
-                        match project(*pos, normal, p, &foot, offset + j as u32) {
-                            Some((Projected::Flat(sp), rows)) => flat.push((sp, band(rows))),
-                            Some((Projected::Solid(sp), rows)) => solid.push((sp, band(rows))),
-                            None => {}
+                    // Each splat with its bands, found once from the rows `project` bounded it by (the sort reads
+                    // them twice).
+                    let mut push = |splat: Option<(Projected, [i64; 2])>| match splat {
+                        Some((Projected::Flat(sp), rows)) => flat.push((sp, band(rows))),
+                        Some((Projected::Solid(sp), rows)) => solid.push((sp, band(rows))),
+                        None => {}
+                    };
+                    // Four at a time where the lanes draw the shape, the rest one by one.
+                    let mut done = 0;
+                    #[cfg(target_arch = "x86_64")]
+                    if let Some(lanes) = &lanes {
+                        let fours = chunk.chunks_exact(4);
+                        done = chunk.len() - fours.remainder().len();
+                        for (q, four) in fours.enumerate() {
+                            let four = four.try_into().expect("BUG: chunks of four");
+                            lanes.project4(four, offset + 4 * q as u32, p, &foot, &mut push);
                         }
+                    }
+                    for (j, pos) in chunk.iter().enumerate().skip(done) {
+                        let normal = normals.get(j).copied().unwrap_or(Vec3::ZERO);
+                        push(project(*pos, normal, p, &foot, offset + j as u32));
                     }
                     // A splat overlapping two bands is in each.
                     (

@@ -1,0 +1,439 @@
+//! Four points projected at once, in SSE2 (part of x86-64's baseline): squares, disks and cubes, the splats of a
+//! dense cloud. Projecting was half of an 800k-point cube render, one point at a time: a transform, five
+//! divisions (a cube's screen box is four) and the box's rounding, each of which takes the same time for four
+//! lanes as for one.
+//!
+//! Every lane goes through the same IEEE operations in the same order as [`project`], so the splats are the same
+//! bits (a test compares the two on every kind of point): products and sums as `project` groups them, `x / 2` as
+//! `x · 0.5` (both the correctly rounded half), and [`snap`](crate::render::raster::snap)'s rounding as SSE2's
+//! conversion under the default rounding mode (both to nearest, ties to even; the product by 256 is exact in
+//! `f32` as in `f64`). SSE2's `min`, `max` and conversion treat NaN otherwise than Rust's scalar ones, so a lane
+//! with anything not finite is handed to [`project`] itself, as are surfels (they read their normals).
+
+use std::arch::x86_64::{
+    __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_andnot_ps, _mm_cmpge_ps, _mm_cmple_ps, _mm_cmplt_ps, _mm_cvtps_epi32,
+    _mm_div_ps, _mm_max_ps, _mm_min_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_ps, _mm_setr_ps, _mm_sub_ps,
+    _mm_xor_ps,
+};
+use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
+
+use glam::Vec3;
+
+use super::{key, project, Flat, Footprint, Projected, ScreenBox, Size, Solid, CLAMPED, WHOLE};
+use crate::render::raster::{snap, Projection, SUBPIXEL};
+
+/// What [`project`] makes of a point: its splat and first and last sample row, or `None`.
+type Splat = Option<(Projected, [i64; 2])>;
+
+/// A view's projection constants, each in four lanes.
+pub(super) struct Lanes {
+    /// The view matrix's first three rows: `m[r][c]` is column `c`'s component `r`.
+    m: [[F4; 4]; 3],
+    near: F4,
+    far: F4,
+    /// The sample grid's reach, as `project`'s `fixed` clamps to it.
+    lim: f32,
+    fx: F4,
+    fy: F4,
+    cx: F4,
+    cy: F4,
+    shape: Kind,
+}
+
+/// What differs between cubes and screen-aligned splats.
+enum Kind {
+    Cube {
+        /// The half edge times √3: nearer than this to the near plane, a cube is dropped.
+        reach: F4,
+        /// The half extents of its view-space bounding box.
+        extent: [F4; 3],
+        /// The half edge times fx: its inscribed disk's radius in samples at unit depth.
+        radius: F4,
+        /// The radius below which it is drawn as a flat square, when there is a minimum footprint.
+        small: Option<F4>,
+        /// Half the minimum footprint, in samples.
+        min_half: F4,
+    },
+    Flat {
+        /// Half the size: in samples at unit depth (world sizes, divided by the depth), or in samples.
+        half: Half,
+        /// Half the minimum footprint, in samples.
+        min_half: F4,
+        /// The half size of a splat drawn at the minimum footprint.
+        clamped_r: i32,
+    },
+}
+
+/// A screen-aligned splat's half size.
+enum Half {
+    /// Samples at unit depth.
+    World(F4),
+    /// Samples, whatever the depth.
+    Pixels(F4),
+}
+
+impl Lanes {
+    /// The lanes for splats of `s` under `p`; `None` for surfels, which [`project`] draws one at a time.
+    pub(super) fn new(p: &Projection, s: &Footprint) -> Option<Lanes> {
+        if s.surfel {
+            return None;
+        }
+        let [fx, fy, cx, cy] = p.f;
+        let lim = (p.size.0.max(p.size.1) + 2) as f32;
+        let c = p.w2c.to_cols_array_2d();
+        let splat = F4::splat;
+        // Each constant computed as `project` computes it.
+        let shape = match (s.cube, s.size) {
+            (Some(h), _) => Kind::Cube {
+                reach: splat(h * 3f32.sqrt()),
+                extent: s.extent.to_array().map(splat),
+                radius: splat(h * fx),
+                small: (s.min_half > 0.0).then(|| splat(s.min_half.max(std::f32::consts::FRAC_1_SQRT_2))),
+                min_half: splat(s.min_half),
+            },
+            (None, size) => Kind::Flat {
+                half: match size {
+                    Size::World(w) => Half::World(splat(0.5 * w * fx)),
+                    Size::Pixels(px) => Half::Pixels(splat(0.5 * px * s.k)),
+                },
+                min_half: splat(s.min_half),
+                clamped_r: snap(s.min_half.clamp(-lim, lim) as f64) as i32 + 1,
+            },
+        };
+        Some(Lanes {
+            m: std::array::from_fn(|r| std::array::from_fn(|col| splat(c[col][r]))),
+            near: splat(p.near),
+            far: splat(p.far),
+            lim,
+            fx: splat(fx),
+            fy: splat(fy),
+            cx: splat(cx),
+            cy: splat(cy),
+            shape,
+        })
+    }
+
+    /// Projects the four points `pos`, the first of which is point `point`, passing each one's splat to `emit`
+    /// in order: what [`project`] gives each (whose steps these follow, line by line).
+    #[inline]
+    pub(super) fn project4(
+        &self,
+        pos: &[Vec3; 4],
+        point: u32,
+        p: &Projection,
+        s: &Footprint,
+        mut emit: impl FnMut(Splat),
+    ) {
+        let axis = |i: usize| F4::new(pos.map(|v| v[i]));
+        let (px, py, pz) = (axis(0), axis(1), axis(2));
+        // As glam's `transform_point3`: ((c0·x + c1·y) + c2·z) + c3 (each sum's order aside: IEEE sums commute).
+        let m = &self.m;
+        let row = |r: usize| m[r][0] * px + m[r][1] * py + m[r][2] * pz + m[r][3];
+        let (vx, vy, z) = (row(0), row(1), -row(2));
+        let seen = z.ge(self.near) & z.le(self.far);
+        let iz = F4::splat(1.0) / z;
+        let fixed = |v: F4| v.fixed(self.lim);
+        match &self.shape {
+            Kind::Cube { reach, extent: [ex, ey, ez], radius, small, min_half } => {
+                let seen = seen.and_not((z - *reach).lt(self.near));
+                let (near_z, far_z) = (z - *ez, z + *ez);
+                let zero = F4::splat(0.0);
+                let ratio =
+                    |lo: F4, hi: F4| (lo / lo.ge(zero).pick(far_z, near_z), hi / hi.ge(zero).pick(near_z, far_z));
+                let (x0, x1) = ratio(vx - *ex, vx + *ex);
+                let (y0, y1) = ratio(vy - *ey, vy + *ey);
+                let (sx0, sx1) = (self.cx + self.fx * x0, self.cx + self.fx * x1);
+                let (sy0, sy1) = (self.cy - self.fy * y1, self.cy - self.fy * y0);
+                // `/ 2.0` as `· 0.5`: both are the correctly rounded half.
+                let half = F4::splat(0.5);
+                let (mx, my) = ((sx0 + sx1) * half, (sy0 + sy1) * half);
+                let (wx, wy) = ((sx1 - sx0) * half, (sy1 - sy0) * half);
+                let flat = small.map_or(0, |t| (*radius * iz).lt(t).bits());
+                let finite = F4::finite(&[near_z, mx, my, wx, wy]);
+                let (x, y) = (fixed(mx), fixed(my));
+                let r = fixed(min_half.max(wx.min(wy)));
+                let (rx, ry) = (fixed(wx), fixed(wy));
+                let (near_z, seen) = (near_z.lanes(), seen.bits());
+                for l in 0..4 {
+                    let (bit, id) = (1 << l, point + l as u32);
+                    emit(if seen & bit == 0 {
+                        None
+                    } else if finite & bit == 0 {
+                        project(pos[l], Vec3::ZERO, p, s, id)
+                    } else if flat & bit != 0 {
+                        // The face turned most towards the eye, as in `project`.
+                        let centre = pos[l] - s.eye;
+                        let axis = centre.abs().max_position();
+                        let face = 2 * axis as u8 + (centre[axis] < 0.0) as u8;
+                        Flat { x: x[l], y: y[l], r: r[l] + 1, small: face, key: key(near_z[l], id) }.visible(p.size)
+                    } else {
+                        let (rx, ry, centre) = (rx[l] + 1, ry[l] + 1, pos[l] - s.eye);
+                        Solid { x: x[l], y: y[l], rx, ry, z: near_z[l], point: id, centre }.visible(p.size)
+                    });
+                }
+            }
+            Kind::Flat { half, min_half, clamped_r } => {
+                let half = match half {
+                    Half::World(c) => *c * iz,
+                    Half::Pixels(h) => *h,
+                };
+                let clamped = half.lt(*min_half).bits();
+                let r = fixed(half.min(F4::splat(self.lim)));
+                let sx = self.cx + self.fx * vx * iz;
+                let sy = self.cy - self.fy * vy * iz;
+                let finite = F4::finite(&[half, sx, sy]);
+                let (x, y) = (fixed(sx), fixed(sy));
+                let (z, seen) = (z.lanes(), seen.bits());
+                for l in 0..4 {
+                    let (bit, id) = (1 << l, point + l as u32);
+                    emit(if seen & bit == 0 {
+                        None
+                    } else if finite & bit == 0 {
+                        project(pos[l], Vec3::ZERO, p, s, id)
+                    } else {
+                        let (r, small) = if clamped & bit != 0 { (*clamped_r, CLAMPED) } else { (r[l], WHOLE) };
+                        Flat { x: x[l], y: y[l], r, small, key: key(z[l], id) }.visible(p.size)
+                    });
+                }
+            }
+        }
+    }
+}
+
+// Four f32 lanes and their operations, one SSE2 instruction each. SAFETY, for every `unsafe` block below: SSE2 is
+// part of x86-64's baseline, so its instructions exist on every machine this code is compiled for.
+
+/// Four f32 lanes.
+#[derive(Clone, Copy)]
+struct F4(__m128);
+
+/// A lane mask (all ones or all zeros per lane), from a comparison.
+#[derive(Clone, Copy)]
+struct Mask(__m128);
+
+impl F4 {
+    #[inline(always)]
+    fn new(v: [f32; 4]) -> F4 {
+        F4(unsafe { _mm_setr_ps(v[0], v[1], v[2], v[3]) })
+    }
+
+    #[inline(always)]
+    fn splat(v: f32) -> F4 {
+        F4(unsafe { _mm_set1_ps(v) })
+    }
+
+    #[inline(always)]
+    fn lanes(self) -> [f32; 4] {
+        // SAFETY: four f32 lanes are their array, bit for bit.
+        unsafe { std::mem::transmute::<__m128, [f32; 4]>(self.0) }
+    }
+
+    #[inline(always)]
+    fn lt(self, o: F4) -> Mask {
+        Mask(unsafe { _mm_cmplt_ps(self.0, o.0) })
+    }
+
+    #[inline(always)]
+    fn le(self, o: F4) -> Mask {
+        Mask(unsafe { _mm_cmple_ps(self.0, o.0) })
+    }
+
+    #[inline(always)]
+    fn ge(self, o: F4) -> Mask {
+        Mask(unsafe { _mm_cmpge_ps(self.0, o.0) })
+    }
+
+    /// The lesser per lane (as `f32::min` where neither is NaN).
+    #[inline(always)]
+    fn min(self, o: F4) -> F4 {
+        F4(unsafe { _mm_min_ps(self.0, o.0) })
+    }
+
+    /// The greater per lane (as `f32::max` where neither is NaN).
+    #[inline(always)]
+    fn max(self, o: F4) -> F4 {
+        F4(unsafe { _mm_max_ps(self.0, o.0) })
+    }
+
+    /// `project`'s `fixed` for finite lanes: clamped to ±`lim` and rounded to the fixed-point grid, ties to even.
+    #[inline(always)]
+    fn fixed(self, lim: f32) -> [i32; 4] {
+        let v = self.min(F4::splat(lim)).max(F4::splat(-lim)) * F4::splat(SUBPIXEL as f32);
+        let i: __m128i = unsafe { _mm_cvtps_epi32(v.0) };
+        // SAFETY: four i32 lanes are their array, bit for bit.
+        unsafe { std::mem::transmute::<__m128i, [i32; 4]>(i) }
+    }
+
+    /// The lanes (as mask bits) in which every one of `vs` is finite.
+    #[inline(always)]
+    fn finite(vs: &[F4]) -> i32 {
+        let inf = F4::splat(f32::INFINITY);
+        // |v| < ∞ is false for ±∞ and NaN.
+        vs.iter().fold(0b1111, |m, v| m & F4(unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), v.0) }).lt(inf).bits())
+    }
+}
+
+impl Mask {
+    /// `a` where set, else `b`.
+    #[inline(always)]
+    fn pick(self, a: F4, b: F4) -> F4 {
+        F4(unsafe { _mm_or_ps(_mm_and_ps(self.0, a.0), _mm_andnot_ps(self.0, b.0)) })
+    }
+
+    /// Set where `self` is and `o` is not.
+    #[inline(always)]
+    fn and_not(self, o: Mask) -> Mask {
+        Mask(unsafe { _mm_andnot_ps(o.0, self.0) })
+    }
+
+    /// One bit per lane, lane 0 lowest.
+    #[inline(always)]
+    fn bits(self) -> i32 {
+        unsafe { _mm_movemask_ps(self.0) }
+    }
+}
+
+impl BitAnd for Mask {
+    type Output = Mask;
+    #[inline(always)]
+    fn bitand(self, o: Mask) -> Mask {
+        Mask(unsafe { _mm_and_ps(self.0, o.0) })
+    }
+}
+
+impl Add for F4 {
+    type Output = F4;
+    #[inline(always)]
+    fn add(self, o: F4) -> F4 {
+        F4(unsafe { _mm_add_ps(self.0, o.0) })
+    }
+}
+
+impl Sub for F4 {
+    type Output = F4;
+    #[inline(always)]
+    fn sub(self, o: F4) -> F4 {
+        F4(unsafe { _mm_sub_ps(self.0, o.0) })
+    }
+}
+
+impl Mul for F4 {
+    type Output = F4;
+    #[inline(always)]
+    fn mul(self, o: F4) -> F4 {
+        F4(unsafe { _mm_mul_ps(self.0, o.0) })
+    }
+}
+
+impl Div for F4 {
+    type Output = F4;
+    #[inline(always)]
+    fn div(self, o: F4) -> F4 {
+        F4(unsafe { _mm_div_ps(self.0, o.0) })
+    }
+}
+
+impl Neg for F4 {
+    type Output = F4;
+    /// The sign flipped, as scalar negation (not `0 − x`, which differs at zero).
+    #[inline(always)]
+    fn neg(self) -> F4 {
+        F4(unsafe { _mm_xor_ps(self.0, _mm_set1_ps(-0.0)) })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Mat4, Vec4};
+
+    use super::*;
+    use crate::render::splat::{Shape, SplatSettings};
+
+    /// The view matrix of a camera at `eye` looking at `target`, y up (OpenGL's: −z forward).
+    fn look_at(eye: Vec3, target: Vec3) -> Mat4 {
+        let f = (target - eye).normalize();
+        let r = f.cross(Vec3::Y).normalize();
+        let u = r.cross(f);
+        Mat4::from_cols(
+            Vec4::new(r.x, u.x, -f.x, 0.0),
+            Vec4::new(r.y, u.y, -f.y, 0.0),
+            Vec4::new(r.z, u.z, -f.z, 0.0),
+            Vec4::new(-r.dot(eye), -u.dot(eye), f.dot(eye), 1.0),
+        )
+    }
+
+    /// Four lanes at a time give what one point at a time gives, bit for bit, for every shape and size, near and
+    /// far planes, sizes on either side of the minimum footprint, and points no lane can draw (behind the eye,
+    /// huge, infinite, NaN).
+    #[test]
+    fn four_lanes_project_as_one_point_at_a_time() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut unit = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let settings = [
+            (Shape::Cube, Size::World(0.004), 1.0),
+            (Shape::Cube, Size::World(0.004), 0.0),
+            (Shape::Cube, Size::World(0.05), 1.0),
+            (Shape::Cube, Size::Pixels(1.5), 2.5),
+            (Shape::Square, Size::Pixels(1.0), 1.0),
+            (Shape::Square, Size::World(0.004), 1.0),
+            (Shape::Square, Size::World(0.02), 0.0),
+            (Shape::Disk, Size::World(0.01), 2.0),
+        ];
+        let mut seen = [0usize; 3];
+        for (case, &(shape, size, min_px)) in settings.iter().enumerate() {
+            for k in [1i64, 2] {
+                let eye = Vec3::new(3.0 * unit() - 1.5, 2.0 * unit() + 0.5, 4.0);
+                let w2c = look_at(eye, Vec3::new(0.0, 1.0, 0.0));
+                let (w, h) = (800 - 100 * case as i64, 600);
+                let p = Projection {
+                    w2c,
+                    f: [900.0 * k as f32, 900.0 * k as f32, 400.0 * k as f32, 300.0 * k as f32],
+                    near: 0.5,
+                    far: 6.0,
+                    size: (w * k, h * k),
+                };
+                let s = SplatSettings { shape, size, min_px };
+                let foot = Footprint::new(&p, &s, k as f32);
+                let lanes = Lanes::new(&p, &foot).expect("lanes for every shape but surfels");
+                let forward = (Vec3::new(0.0, 1.0, 0.0) - eye).normalize();
+                let mut points: Vec<Vec3> = (0..40_000)
+                    .map(|i| match i % 8 {
+                        // Around the near and far planes (and a cube's reach past the near one).
+                        0 => eye + forward * (0.45 + 0.1 * unit()),
+                        1 => eye + forward * (5.95 + 0.1 * unit()) + Vec3::X * (unit() - 0.5),
+                        // Behind the eye.
+                        2 => eye - forward * unit(),
+                        // Far off to a side: clamped to the grid's reach.
+                        3 => eye + forward + Vec3::X * 1e4 * (unit() - 0.5),
+                        _ => Vec3::new(unit() - 0.5, 2.0 * unit(), unit() - 0.5) * 3.0,
+                    })
+                    .collect();
+                points.extend([
+                    Vec3::new(f32::NAN, 1.0, 0.0),
+                    Vec3::new(f32::INFINITY, 1.0, 0.0),
+                    Vec3::new(0.0, f32::NEG_INFINITY, 0.0),
+                    Vec3::new(1e30, 1.0, 0.0),
+                ]);
+                for (q, four) in points.chunks_exact(4).enumerate() {
+                    let first = 4 * q as u32;
+                    let mut got = Vec::new();
+                    lanes.project4(four.try_into().unwrap(), first, &p, &foot, |sp| got.push(format!("{sp:?}")));
+                    for (l, pos) in four.iter().enumerate() {
+                        let one = project(*pos, Vec3::ZERO, &p, &foot, first + l as u32);
+                        seen[match &one {
+                            None => 0,
+                            Some((Projected::Flat(_), _)) => 1,
+                            Some((Projected::Solid(_), _)) => 2,
+                        }] += 1;
+                        assert_eq!(got[l], format!("{one:?}"), "case {case}, k {k}, point {pos}");
+                    }
+                }
+            }
+        }
+        // Every outcome was compared, many times over.
+        assert!(seen.iter().all(|&n| n > 1000), "{seen:?}");
+    }
+}
