@@ -11,19 +11,17 @@
 //! with anything not finite is handed to [`project`] itself, as are surfels (they read their normals).
 
 use std::arch::x86_64::{
-    __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_andnot_ps, _mm_cmpge_ps, _mm_cmple_ps, _mm_cmplt_ps, _mm_cvtps_epi32,
-    _mm_div_ps, _mm_max_ps, _mm_min_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_ps, _mm_setr_ps, _mm_sub_ps,
-    _mm_xor_ps,
+    __m128, __m128i, _mm_add_epi32, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_andnot_si128,
+    _mm_castps_si128, _mm_castsi128_ps, _mm_cmpge_ps, _mm_cmpgt_epi32, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_ps,
+    _mm_cvtps_epi32, _mm_div_ps, _mm_max_ps, _mm_min_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_or_si128,
+    _mm_set1_epi32, _mm_set1_ps, _mm_setr_ps, _mm_srai_epi32, _mm_sub_epi32, _mm_sub_ps, _mm_xor_ps,
 };
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
 
 use glam::Vec3;
 
-use super::{key, project, Flat, Footprint, Projected, ScreenBox, Size, Solid, CLAMPED, WHOLE};
+use super::{key, project, Flat, Footprint, Sink, Size, Solid, CLAMPED, WHOLE};
 use crate::render::raster::{snap, Projection, SUBPIXEL};
-
-/// What [`project`] makes of a point: its splat and first and last sample row, or `None`.
-type Splat = Option<(Projected, [i64; 2])>;
 
 /// A view's projection constants, each in four lanes.
 pub(super) struct Lanes {
@@ -113,17 +111,10 @@ impl Lanes {
         })
     }
 
-    /// Projects the four points `pos`, the first of which is point `point`, passing each one's splat to `emit`
-    /// in order: what [`project`] gives each (whose steps these follow, line by line).
+    /// Projects the four points `pos`, the first of which is point `point`, into `sink` in order: what [`project`]
+    /// gives each (whose steps these follow, line by line).
     #[inline]
-    pub(super) fn project4(
-        &self,
-        pos: &[Vec3; 4],
-        point: u32,
-        p: &Projection,
-        s: &Footprint,
-        mut emit: impl FnMut(Splat),
-    ) {
+    pub(super) fn project4(&self, pos: &[Vec3; 4], point: u32, p: &Projection, s: &Footprint, sink: &mut Sink) {
         let axis = |i: usize| F4::new(pos.map(|v| v[i]));
         let (px, py, pz) = (axis(0), axis(1), axis(2));
         // As glam's `transform_point3`: ((c0·x + c1·y) + c2·z) + c3 (each sum's order aside: IEEE sums commute).
@@ -133,6 +124,7 @@ impl Lanes {
         let seen = z.ge(self.near) & z.le(self.far);
         let iz = F4::splat(1.0) / z;
         let fixed = |v: F4| v.fixed(self.lim);
+        let size = (I4::splat(p.size.0 as i32 - 1), I4::splat(p.size.1 as i32 - 1));
         match &self.shape {
             Kind::Cube { reach, extent: [ex, ey, ez], radius, small, min_half } => {
                 let seen = seen.and_not((z - *reach).lt(self.near));
@@ -148,28 +140,39 @@ impl Lanes {
                 let half = F4::splat(0.5);
                 let (mx, my) = ((sx0 + sx1) * half, (sy0 + sy1) * half);
                 let (wx, wy) = ((sx1 - sx0) * half, (sy1 - sy0) * half);
-                let flat = small.map_or(0, |t| (*radius * iz).lt(t).bits());
+                let flat = small.map_or(Mask::NONE, |t| (*radius * iz).lt(t));
                 let finite = F4::finite(&[near_z, mx, my, wx, wy]);
                 let (x, y) = (fixed(mx), fixed(my));
-                let r = fixed(min_half.max(wx.min(wy)));
-                let (rx, ry) = (fixed(wx), fixed(wy));
-                let (near_z, seen) = (near_z.lanes(), seen.bits());
+                // A flat square's half size, or a solid's half width and height; one fixed-point unit more.
+                let one = I4::splat(1);
+                let r = fixed(min_half.max(wx.min(wy))) + one;
+                let (rx, ry) = (flat.pick_i(r, fixed(wx) + one), flat.pick_i(r, fixed(wy) + one));
+                let b = bbox(x, y, rx, ry, size);
+                let shown = seen.bits() & finite & (rx.gt(I4::splat(0)) & b.shown).bits();
+                // The face a flat cube shows: the one turned most towards the eye, as in `project`.
+                let eye = s.eye;
+                let (dx, dy, dz) = (px - F4::splat(eye.x), py - F4::splat(eye.y), pz - F4::splat(eye.z));
+                let (ax, ay, az) = (dx.abs(), dy.abs(), dz.abs());
+                // `max_position`: the first of the greatest.
+                let y_over_x = ay.gt(ax);
+                let z_over = az.gt(y_over_x.pick(ay, ax));
+                let axis = z_over.pick(F4::splat(2.0), y_over_x.pick(F4::splat(1.0), zero));
+                let negative = z_over.pick(dz, y_over_x.pick(dy, dx)).lt(zero).pick(F4::splat(1.0), zero);
+                let face = (axis + axis + negative).to_ints();
+                let (x, y, rx, ry, near_z) = (x.lanes(), y.lanes(), rx.lanes(), ry.lanes(), near_z.lanes());
+                let ((y0, y1), flat, one) = (b.rows(), flat.bits(), seen.bits() & !finite);
                 for l in 0..4 {
                     let (bit, id) = (1 << l, point + l as u32);
-                    emit(if seen & bit == 0 {
-                        None
-                    } else if finite & bit == 0 {
-                        project(pos[l], Vec3::ZERO, p, s, id)
-                    } else if flat & bit != 0 {
-                        // The face turned most towards the eye, as in `project`.
-                        let centre = pos[l] - s.eye;
-                        let axis = centre.abs().max_position();
-                        let face = 2 * axis as u8 + (centre[axis] < 0.0) as u8;
-                        Flat { x: x[l], y: y[l], r: r[l] + 1, small: face, key: key(near_z[l], id) }.visible(p.size)
-                    } else {
-                        let (rx, ry, centre) = (rx[l] + 1, ry[l] + 1, pos[l] - s.eye);
-                        Solid { x: x[l], y: y[l], rx, ry, z: near_z[l], point: id, centre }.visible(p.size)
-                    });
+                    let rows = [y0[l] as i64, y1[l] as i64];
+                    if shown & bit != 0 && flat & bit != 0 {
+                        let small = face[l] as u8;
+                        sink.flat(Flat { x: x[l], y: y[l], r: rx[l], small, key: key(near_z[l], id) }, rows);
+                    } else if shown & bit != 0 {
+                        let (rx, ry, centre) = (rx[l], ry[l], pos[l] - s.eye);
+                        sink.solid(Solid { x: x[l], y: y[l], rx, ry, z: near_z[l], point: id, centre }, rows);
+                    } else if one & bit != 0 {
+                        sink.push(project(pos[l], Vec3::ZERO, p, s, id));
+                    }
                 }
             }
             Kind::Flat { half, min_half, clamped_r } => {
@@ -177,27 +180,57 @@ impl Lanes {
                     Half::World(c) => *c * iz,
                     Half::Pixels(h) => *h,
                 };
-                let clamped = half.lt(*min_half).bits();
-                let r = fixed(half.min(F4::splat(self.lim)));
+                let clamped = half.lt(*min_half);
+                let r = clamped.pick_i(I4::splat(*clamped_r), fixed(half.min(F4::splat(self.lim))));
                 let sx = self.cx + self.fx * vx * iz;
                 let sy = self.cy - self.fy * vy * iz;
                 let finite = F4::finite(&[half, sx, sy]);
                 let (x, y) = (fixed(sx), fixed(sy));
-                let (z, seen) = (z.lanes(), seen.bits());
+                let b = bbox(x, y, r, r, size);
+                let shown = seen.bits() & finite & (r.gt(I4::splat(0)) & b.shown).bits();
+                let (x, y, r, z, (y0, y1)) = (x.lanes(), y.lanes(), r.lanes(), z.lanes(), b.rows());
+                let (clamped, one) = (clamped.bits(), seen.bits() & !finite);
                 for l in 0..4 {
                     let (bit, id) = (1 << l, point + l as u32);
-                    emit(if seen & bit == 0 {
-                        None
-                    } else if finite & bit == 0 {
-                        project(pos[l], Vec3::ZERO, p, s, id)
-                    } else {
-                        let (r, small) = if clamped & bit != 0 { (*clamped_r, CLAMPED) } else { (r[l], WHOLE) };
-                        Flat { x: x[l], y: y[l], r, small, key: key(z[l], id) }.visible(p.size)
-                    });
+                    if shown & bit != 0 {
+                        let small = if clamped & bit != 0 { CLAMPED } else { WHOLE };
+                        let rows = [y0[l] as i64, y1[l] as i64];
+                        sink.flat(Flat { x: x[l], y: y[l], r: r[l], small, key: key(z[l], id) }, rows);
+                    } else if one & bit != 0 {
+                        sink.push(project(pos[l], Vec3::ZERO, p, s, id));
+                    }
                 }
             }
         }
     }
+}
+
+/// [`super::bbox`] in four lanes: the first and last sample rows of each box, and whether it holds a sample.
+struct Boxes {
+    y0: I4,
+    y1: I4,
+    shown: Mask,
+}
+
+impl Boxes {
+    /// Each lane's first and last row.
+    #[inline(always)]
+    fn rows(&self) -> ([i32; 4], [i32; 4]) {
+        (self.y0.lanes(), self.y1.lanes())
+    }
+}
+
+/// [`super::bbox`] of boxes centred at (`x`, `y`) with half sizes `rx`, `ry` (fixed point) on a grid whose last
+/// column and row are `last`, and whether each is not empty. (In 32 bits: fixed-point coordinates are clamped to
+/// the grid's reach, 256 times a few thousand.)
+#[inline(always)]
+fn bbox(x: I4, y: I4, rx: I4, ry: I4, last: (I4, I4)) -> Boxes {
+    let zero = I4::splat(0);
+    let first = |a: I4| zero - (I4::splat((SUBPIXEL / 2) as i32) - a).shr8();
+    let end = |b: I4| (b - I4::splat((SUBPIXEL / 2 + 1) as i32)).shr8();
+    let (x0, y0) = (first(x - rx).max(zero), first(y - ry).max(zero));
+    let (x1, y1) = (end(x + rx).min(last.0), end(y + ry).min(last.1));
+    Boxes { y0, y1, shown: x0.gt(x1).or(y0.gt(y1)).not() }
 }
 
 // Four f32 lanes and their operations, one SSE2 instruction each. SAFETY, for every `unsafe` block below: SSE2 is
@@ -243,6 +276,23 @@ impl F4 {
         Mask(unsafe { _mm_cmpge_ps(self.0, o.0) })
     }
 
+    #[inline(always)]
+    fn gt(self, o: F4) -> Mask {
+        Mask(unsafe { _mm_cmpgt_ps(self.0, o.0) })
+    }
+
+    /// The magnitude per lane (the sign bit cleared, as `f32::abs`).
+    #[inline(always)]
+    fn abs(self) -> F4 {
+        F4(unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), self.0) })
+    }
+
+    /// Whole-valued lanes as integers.
+    #[inline(always)]
+    fn to_ints(self) -> [i32; 4] {
+        I4(unsafe { _mm_cvtps_epi32(self.0) }).lanes()
+    }
+
     /// The lesser per lane (as `f32::min` where neither is NaN).
     #[inline(always)]
     fn min(self, o: F4) -> F4 {
@@ -257,11 +307,9 @@ impl F4 {
 
     /// `project`'s `fixed` for finite lanes: clamped to ±`lim` and rounded to the fixed-point grid, ties to even.
     #[inline(always)]
-    fn fixed(self, lim: f32) -> [i32; 4] {
+    fn fixed(self, lim: f32) -> I4 {
         let v = self.min(F4::splat(lim)).max(F4::splat(-lim)) * F4::splat(SUBPIXEL as f32);
-        let i: __m128i = unsafe { _mm_cvtps_epi32(v.0) };
-        // SAFETY: four i32 lanes are their array, bit for bit.
-        unsafe { std::mem::transmute::<__m128i, [i32; 4]>(i) }
+        I4(unsafe { _mm_cvtps_epi32(v.0) })
     }
 
     /// The lanes (as mask bits) in which every one of `vs` is finite.
@@ -269,15 +317,38 @@ impl F4 {
     fn finite(vs: &[F4]) -> i32 {
         let inf = F4::splat(f32::INFINITY);
         // |v| < ∞ is false for ±∞ and NaN.
-        vs.iter().fold(0b1111, |m, v| m & F4(unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), v.0) }).lt(inf).bits())
+        vs.iter().fold(0b1111, |m, v| m & v.abs().lt(inf).bits())
     }
 }
 
 impl Mask {
+    /// No lane set.
+    // SAFETY: any bits are a valid vector.
+    const NONE: Mask = Mask(unsafe { std::mem::transmute::<[u32; 4], __m128>([0; 4]) });
+
     /// `a` where set, else `b`.
     #[inline(always)]
     fn pick(self, a: F4, b: F4) -> F4 {
         F4(unsafe { _mm_or_ps(_mm_and_ps(self.0, a.0), _mm_andnot_ps(self.0, b.0)) })
+    }
+
+    /// `a` where set, else `b`.
+    #[inline(always)]
+    fn pick_i(self, a: I4, b: I4) -> I4 {
+        let m = unsafe { _mm_castps_si128(self.0) };
+        I4(unsafe { _mm_or_si128(_mm_and_si128(m, a.0), _mm_andnot_si128(m, b.0)) })
+    }
+
+    /// Set where either is.
+    #[inline(always)]
+    fn or(self, o: Mask) -> Mask {
+        Mask(unsafe { _mm_or_ps(self.0, o.0) })
+    }
+
+    /// Set where `self` is not.
+    #[inline(always)]
+    fn not(self) -> Mask {
+        Mask(unsafe { _mm_xor_ps(self.0, _mm_castsi128_ps(_mm_set1_epi32(-1))) })
     }
 
     /// Set where `self` is and `o` is not.
@@ -290,6 +361,62 @@ impl Mask {
     #[inline(always)]
     fn bits(self) -> i32 {
         unsafe { _mm_movemask_ps(self.0) }
+    }
+}
+
+/// Four i32 lanes.
+#[derive(Clone, Copy)]
+struct I4(__m128i);
+
+impl I4 {
+    #[inline(always)]
+    fn splat(v: i32) -> I4 {
+        I4(unsafe { _mm_set1_epi32(v) })
+    }
+
+    #[inline(always)]
+    fn lanes(self) -> [i32; 4] {
+        // SAFETY: four i32 lanes are their array, bit for bit.
+        unsafe { std::mem::transmute::<__m128i, [i32; 4]>(self.0) }
+    }
+
+    /// An arithmetic shift right by 8: the floor of a division by 256, as `>>` on `i64`.
+    #[inline(always)]
+    fn shr8(self) -> I4 {
+        I4(unsafe { _mm_srai_epi32::<8>(self.0) })
+    }
+
+    #[inline(always)]
+    fn gt(self, o: I4) -> Mask {
+        Mask(unsafe { _mm_castsi128_ps(_mm_cmpgt_epi32(self.0, o.0)) })
+    }
+
+    /// The greater per lane (SSE2 has no `pmaxsd`: a comparison and a select).
+    #[inline(always)]
+    fn max(self, o: I4) -> I4 {
+        self.gt(o).pick_i(self, o)
+    }
+
+    /// The lesser per lane.
+    #[inline(always)]
+    fn min(self, o: I4) -> I4 {
+        o.gt(self).pick_i(self, o)
+    }
+}
+
+impl Add for I4 {
+    type Output = I4;
+    #[inline(always)]
+    fn add(self, o: I4) -> I4 {
+        I4(unsafe { _mm_add_epi32(self.0, o.0) })
+    }
+}
+
+impl Sub for I4 {
+    type Output = I4;
+    #[inline(always)]
+    fn sub(self, o: I4) -> I4 {
+        I4(unsafe { _mm_sub_epi32(self.0, o.0) })
     }
 }
 
@@ -347,7 +474,7 @@ mod tests {
     use glam::{Mat4, Vec4};
 
     use super::*;
-    use crate::render::splat::{Shape, SplatSettings};
+    use crate::render::splat::{Projected, Shape, SplatSettings};
 
     /// The view matrix of a camera at `eye` looking at `target`, y up (OpenGL's: −z forward).
     fn look_at(eye: Vec3, target: Vec3) -> Mat4 {
@@ -384,8 +511,15 @@ mod tests {
         ];
         let mut seen = [0usize; 3];
         for (case, &(shape, size, min_px)) in settings.iter().enumerate() {
-            for k in [1i64, 2] {
-                let eye = Vec3::new(3.0 * unit() - 1.5, 2.0 * unit() + 0.5, 4.0);
+            // Two random eyes, and two on diagonals, whose points below are exactly as far from them along x as
+            // along z or y (a cube's face is chosen by the first of the greatest).
+            let eyes = [
+                (1i64, Vec3::new(3.0 * unit() - 1.5, 2.0 * unit() + 0.5, 4.0)),
+                (2, Vec3::new(3.0 * unit() - 1.5, 2.0 * unit() + 0.5, 4.0)),
+                (1, Vec3::new(2.0, 1.0, 2.0)),
+                (1, Vec3::new(2.0, 3.0, 0.0)),
+            ];
+            for (k, eye) in eyes {
                 let w2c = look_at(eye, Vec3::new(0.0, 1.0, 0.0));
                 let (w, h) = (800 - 100 * case as i64, 600);
                 let p = Projection {
@@ -396,7 +530,8 @@ mod tests {
                     size: (w * k, h * k),
                 };
                 let s = SplatSettings { shape, size, min_px };
-                let foot = Footprint::new(&p, &s, k as f32);
+                // The eye as given, rather than as inverting the view recovers it, so that the ties below are exact.
+                let foot = Footprint { eye, ..Footprint::new(&p, &s, k as f32) };
                 let lanes = Lanes::new(&p, &foot).expect("lanes for every shape but surfels");
                 let forward = (Vec3::new(0.0, 1.0, 0.0) - eye).normalize();
                 let mut points: Vec<Vec3> = (0..40_000)
@@ -411,25 +546,40 @@ mod tests {
                         _ => Vec3::new(unit() - 0.5, 2.0 * unit(), unit() - 0.5) * 3.0,
                     })
                     .collect();
+                points.extend((1..200).flat_map(|i| {
+                    let (a, b) = (i as f32 / 64.0, (i % 9) as f32 / 32.0 - 0.125);
+                    [eye + Vec3::new(-a, b, -a), eye + Vec3::new(-a, -a, b), eye + Vec3::new(-a, -b, -a)]
+                }));
                 points.extend([
                     Vec3::new(f32::NAN, 1.0, 0.0),
                     Vec3::new(f32::INFINITY, 1.0, 0.0),
                     Vec3::new(0.0, f32::NEG_INFINITY, 0.0),
                     Vec3::new(1e30, 1.0, 0.0),
                 ]);
+                // Each sample row its own band, so that the bands say the rows.
+                let band_of: Vec<u32> = (0..p.size.1 as u32).collect();
+                let sink = |flat, solid| Sink { flat, solid, band_of: &band_of };
+                let (mut flat, mut solid, mut flat_one, mut solid_one) = (vec![], vec![], vec![], vec![]);
+                let mut four_at_once = sink(&mut flat, &mut solid);
                 for (q, four) in points.chunks_exact(4).enumerate() {
-                    let first = 4 * q as u32;
-                    let mut got = Vec::new();
-                    lanes.project4(four.try_into().unwrap(), first, &p, &foot, |sp| got.push(format!("{sp:?}")));
-                    for (l, pos) in four.iter().enumerate() {
-                        let one = project(*pos, Vec3::ZERO, &p, &foot, first + l as u32);
-                        seen[match &one {
-                            None => 0,
-                            Some((Projected::Flat(_), _)) => 1,
-                            Some((Projected::Solid(_), _)) => 2,
-                        }] += 1;
-                        assert_eq!(got[l], format!("{one:?}"), "case {case}, k {k}, point {pos}");
-                    }
+                    lanes.project4(four.try_into().unwrap(), 4 * q as u32, &p, &foot, &mut four_at_once);
+                }
+                let mut one_by_one = sink(&mut flat_one, &mut solid_one);
+                for (i, pos) in points.iter().enumerate().take(points.len() / 4 * 4) {
+                    let one = project(*pos, Vec3::ZERO, &p, &foot, i as u32);
+                    seen[match &one {
+                        None => 0,
+                        Some((Projected::Flat(_), _)) => 1,
+                        Some((Projected::Solid(_), _)) => 2,
+                    }] += 1;
+                    one_by_one.push(one);
+                }
+                assert_eq!((flat.len(), solid.len()), (flat_one.len(), solid_one.len()), "case {case}, k {k}");
+                for (a, b) in flat.iter().zip(&flat_one) {
+                    assert_eq!(format!("{a:?}"), format!("{b:?}"), "case {case}, k {k}");
+                }
+                for (a, b) in solid.iter().zip(&solid_one) {
+                    assert_eq!(format!("{a:?}"), format!("{b:?}"), "case {case}, k {k}");
                 }
             }
         }

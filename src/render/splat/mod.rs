@@ -206,7 +206,6 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     // Each sample row's band, looked up (dividing, twice per splat in each of the sort's passes, was a tenth of
     // the setup), once per splat, from the rows that made it visible.
     let band_of: Vec<u32> = (0..size.1).map(|y| (y / band_rows) as u32).collect();
-    let band = |[y0, y1]: [i64; 2]| [band_of[y0 as usize], band_of[y1 as usize]];
     for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
         out.sources.push(Source { first, prim, base });
@@ -224,13 +223,7 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
                     // positions.
                     let normals =
                         if foot.surfel { prim.normals.get(c * SETUP_CHUNK..).unwrap_or_default() } else { &[] };
-                    // Each splat with its bands, found once from the rows `project` bounded it by (the sort reads
-                    // them twice).
-                    let mut push = |splat: Option<(Projected, [i64; 2])>| match splat {
-                        Some((Projected::Flat(sp), rows)) => flat.push((sp, band(rows))),
-                        Some((Projected::Solid(sp), rows)) => solid.push((sp, band(rows))),
-                        None => {}
-                    };
+                    let mut sink = Sink { flat, solid, band_of: &band_of };
                     // Four at a time where the lanes draw the shape, the rest one by one.
                     let mut done = 0;
                     #[cfg(target_arch = "x86_64")]
@@ -239,12 +232,12 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
                         done = chunk.len() - fours.remainder().len();
                         for (q, four) in fours.enumerate() {
                             let four = four.try_into().expect("BUG: chunks of four");
-                            lanes.project4(four, offset + 4 * q as u32, p, &foot, &mut push);
+                            lanes.project4(four, offset + 4 * q as u32, p, &foot, &mut sink);
                         }
                     }
                     for (j, pos) in chunk.iter().enumerate().skip(done) {
                         let normal = normals.get(j).copied().unwrap_or(Vec3::ZERO);
-                        push(project(*pos, normal, p, &foot, offset + j as u32));
+                        sink.push(project(*pos, normal, p, &foot, offset + j as u32));
                     }
                     // A splat overlapping two bands is in each.
                     (
@@ -260,6 +253,45 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
         first += prim.positions.len() as u32;
     }
     out
+}
+
+/// A setup task's splats, each with its first and last band, found once from the rows that made it visible (the
+/// sort reads them twice).
+struct Sink<'a> {
+    flat: &'a mut Vec<(Flat, [u32; 2])>,
+    solid: &'a mut Vec<(Solid, [u32; 2])>,
+    /// Each sample row's band.
+    band_of: &'a [u32],
+}
+
+impl Sink<'_> {
+    /// The bands of sample rows `y0` to `y1`.
+    #[inline]
+    fn bands(&self, [y0, y1]: [i64; 2]) -> [u32; 2] {
+        [self.band_of[y0 as usize], self.band_of[y1 as usize]]
+    }
+
+    #[inline]
+    fn flat(&mut self, sp: Flat, rows: [i64; 2]) {
+        let bands = self.bands(rows);
+        self.flat.push((sp, bands));
+    }
+
+    #[inline]
+    fn solid(&mut self, sp: Solid, rows: [i64; 2]) {
+        let bands = self.bands(rows);
+        self.solid.push((sp, bands));
+    }
+
+    /// What [`project`] made of a point.
+    #[inline]
+    fn push(&mut self, splat: Option<(Projected, [i64; 2])>) {
+        match splat {
+            Some((Projected::Flat(sp), rows)) => self.flat(sp, rows),
+            Some((Projected::Solid(sp), rows)) => self.solid(sp, rows),
+            None => {}
+        }
+    }
 }
 
 /// The cells (a column of bands) of a splat binned with its first and last band.
