@@ -71,13 +71,16 @@ enum Half {
 }
 
 impl Lanes {
-    /// The lanes for splats of `s` under `p`; `None` for surfels, which [`project`] draws one at a time.
+    /// The lanes for splats of `s` under `p`; `None` for surfels, which [`project`] draws one at a time (and for
+    /// grids too large for 32-bit lanes).
     pub(super) fn new(p: &Projection, s: &Footprint) -> Option<Lanes> {
-        if s.surfel {
+        let lim = (p.size.0.max(p.size.1) + 2) as f32;
+        // Fixed-point boxes are 32-bit lanes here: a grid whose reach, 256 times over and doubled, would not fit
+        // (millions of samples a side, far past any image) goes one point at a time.
+        if s.surfel || lim > (1 << 22) as f32 {
             return None;
         }
         let [fx, fy, cx, cy] = p.f;
-        let lim = (p.size.0.max(p.size.1) + 2) as f32;
         let c = p.w2c.to_cols_array_2d();
         let splat = F4::splat;
         // Each constant computed as `project` computes it.
@@ -222,7 +225,7 @@ impl Boxes {
 
 /// [`super::bbox`] of boxes centred at (`x`, `y`) with half sizes `rx`, `ry` (fixed point) on a grid whose last
 /// column and row are `last`, and whether each is not empty. (In 32 bits: fixed-point coordinates are clamped to
-/// the grid's reach, 256 times a few thousand.)
+/// the grid's reach, which [`Lanes::new`] bounds.)
 #[inline(always)]
 fn bbox(x: I4, y: I4, rx: I4, ry: I4, last: (I4, I4)) -> Boxes {
     let zero = I4::splat(0);
@@ -233,8 +236,8 @@ fn bbox(x: I4, y: I4, rx: I4, ry: I4, last: (I4, I4)) -> Boxes {
     Boxes { y0, y1, shown: x0.gt(x1).or(y0.gt(y1)).not() }
 }
 
-// Four f32 lanes and their operations, one SSE2 instruction each. SAFETY, for every `unsafe` block below: SSE2 is
-// part of x86-64's baseline, so its instructions exist on every machine this code is compiled for.
+// Four-lane values and their operations, an SSE2 instruction or two each. SAFETY, for every `unsafe` block below:
+// SSE2 is part of x86-64's baseline, so its instructions exist on every machine this code is compiled for.
 
 /// Four f32 lanes.
 #[derive(Clone, Copy)]
