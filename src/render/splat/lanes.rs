@@ -5,7 +5,7 @@
 //!
 //! Every lane goes through the same IEEE operations in the same order as [`project`], so the splats are the same
 //! bits (a test compares the two on every kind of point): products and sums as `project` groups them, `x / 2` as
-//! `x · 0.5` (both the correctly rounded half), and [`snap`](crate::render::raster::snap)'s rounding as SSE2's
+//! `x · 0.5` (both the correctly rounded half), and [`snap`]'s rounding as SSE2's
 //! conversion under the default rounding mode (both to nearest, ties to even; the product by 256 is exact in
 //! `f32` as in `f64`). SSE2's `min`, `max` and conversion treat NaN otherwise than Rust's scalar ones, so a lane
 //! with anything not finite is handed to [`project`] itself, as are surfels (they read their normals).

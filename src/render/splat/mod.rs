@@ -6,6 +6,8 @@
 //! - a splat is a small record carrying what drawing needs; colour, normal and object are read from its
 //!   primitive only for the samples that end up showing it. Most splats of a dense cloud are [`Flat`] (one depth
 //!   over a square, 24 bytes); only cubes and surfels drawn at their own size are [`Solid`] (ray-tested);
+//! - points are projected four at a time where the shape allows (squares, disks, cubes: `lanes`, SSE2), with the
+//!   same bits as one at a time ([`project`]);
 //! - binning happens inside the parallel setup: each chunk of points sorts its splats by band of tile rows (a
 //!   counting sort into a few sequential streams);
 //! - a band's splats are drawn on their own into a [`Layer`] (nearest splat per sample, first in scene order among
@@ -25,6 +27,12 @@ use rayon::prelude::*;
 
 #[cfg(target_arch = "x86_64")]
 mod lanes;
+mod layer;
+mod rays;
+
+use layer::key;
+pub use layer::Layer;
+use rays::Rays;
 
 use super::bin::Binned;
 use super::raster::{snap, Projection, SUBPIXEL};
@@ -571,19 +579,6 @@ impl<'a> Splats<'a> {
     }
 }
 
-/// A sample's depth test and tie rule as one integer: the depth's bits (a positive float's order is its bits'
-/// order) above the point's index. The smaller key is the nearer splat, and among equal depths the earlier
-/// point, the first drawn in scene order: "strictly nearer wins" in one compare, and a layer's merge with the
-/// tile's triangles reads one word per sample.
-#[inline]
-fn key(z: f32, point: u32) -> u64 {
-    debug_assert!(z.is_sign_positive(), "splat depths are past the near plane (> 0)");
-    (u64::from(z.to_bits()) << 32) | u64::from(point)
-}
-
-/// The key of a sample no splat covers: depth +∞.
-const EMPTY: u64 = ((f32::INFINITY.to_bits() as u64) << 32) | u32::MAX as u64;
-
 /// A hint that `v` will be read soon (nothing where there is no such instruction).
 #[inline]
 fn prefetch<T>(v: Option<&T>) {
@@ -598,108 +593,5 @@ fn prefetch<T>(v: Option<&T>) {
     let _ = v;
 }
 
-/// A band's splats drawn alone, full image width: per sample the nearest splat's depth and point, and (cubes) the
-/// face it shows.
-#[derive(Debug, Default)]
-pub struct Layer {
-    /// First sample row.
-    pub y0: i64,
-    /// Width in samples.
-    pub w: i64,
-    /// Depth and point as one [`key`]; [`EMPTY`] where no splat.
-    key: Vec<u64>,
-    /// The entered face of a cube, an index into [`FACES`] (meaningful where a splat is).
-    face: Vec<u8>,
-}
-
-impl Layer {
-    /// Whether any sample of columns `x0 .. x0 + w` shows a splat.
-    pub fn any(&self, x0: i64, w: i64) -> bool {
-        self.key
-            .chunks_exact(self.w as usize)
-            .any(|row| row[x0 as usize..(x0 + w) as usize].iter().any(|&k| k != EMPTY))
-    }
-
-    /// The view depth at sample `j`, +∞ where no splat.
-    #[inline]
-    pub fn depth(&self, j: usize) -> f32 {
-        f32::from_bits((self.key[j] >> 32) as u32)
-    }
-
-    /// The point shown at sample `j` (meaningful where the depth is finite).
-    #[inline]
-    fn point(&self, j: usize) -> u32 {
-        self.key[j] as u32
-    }
-
-    fn reset(&mut self, y0: i64, w: i64, h: i64) {
-        let n = (w * h) as usize;
-        (self.y0, self.w) = (y0, w);
-        self.key.clear();
-        self.key.resize(n, EMPTY);
-        self.face.clear();
-        self.face.resize(n, 0);
-    }
-}
-
 /// Cube face normals: −x, +x, −y, +y, −z, +z.
 const FACES: [Vec3; 6] = [Vec3::NEG_X, Vec3::X, Vec3::NEG_Y, Vec3::Y, Vec3::NEG_Z, Vec3::Z];
-
-/// Per-sample rays of a band for cube splats: the reciprocal of each sample's world direction, scaled so that the
-/// ray parameter is the planar view depth.
-struct Rays {
-    inv: Vec<Vec3>,
-}
-
-impl Rays {
-    /// Rays through the sample centres of the `w × h` samples at (`x0`, `y0`).
-    fn new(p: &Projection, x0: i64, y0: i64, w: i64, h: i64) -> Rays {
-        let rot = glam::Mat3::from_mat4(p.w2c.inverse());
-        let [fx, fy, cx, cy] = p.f;
-        let mut inv = Vec::with_capacity((w * h) as usize);
-        for sy in y0..y0 + h {
-            for sx in x0..x0 + w {
-                // Camera space, looking down −Z: z = −1 makes the ray parameter the planar depth.
-                let d = Vec3::new((sx as f32 + 0.5 - cx) / fx, -(sy as f32 + 0.5 - cy) / fy, -1.0);
-                inv.push((rot * d).recip());
-            }
-        }
-        Rays { inv }
-    }
-
-    /// Where sample `i`'s ray meets the disk of radius `r` centred at `c` (relative to the eye) perpendicular to
-    /// `n`: its planar depth, `None` on a miss or a ray parallel to the disk.
-    #[inline]
-    fn disk_hit(&self, i: usize, c: Vec3, n: Vec3, r: f32) -> Option<f32> {
-        let d = self.inv[i].recip();
-        let nd = n.dot(d);
-        if nd.abs() < 1e-12 {
-            return None;
-        }
-        let t = n.dot(c) / nd;
-        ((d * t - c).length_squared() <= r * r && t > 0.0).then_some(t)
-    }
-
-    /// Where sample `i`'s ray enters the cube (centre `c` relative to the eye, half edge `h`): planar depth and
-    /// the entered face (an index into [`FACES`]); `None` on a miss.
-    #[inline]
-    fn hit(&self, i: usize, c: Vec3, h: f32) -> Option<(f32, u8)> {
-        let inv = self.inv[i];
-        let t1 = (c - Vec3::splat(h)) * inv;
-        let t2 = (c + Vec3::splat(h)) * inv;
-        let (lo, hi) = (t1.min(t2), t1.max(t2));
-        let enter = lo.max_element();
-        if enter > hi.min_element() {
-            return None;
-        }
-        // The entered face is on the axis that entered last, facing against the ray.
-        let axis = if enter == lo.x {
-            0
-        } else if enter == lo.y {
-            1
-        } else {
-            2
-        };
-        Some((enter, 2 * axis + (inv[axis as usize] < 0.0) as u8))
-    }
-}
