@@ -407,60 +407,27 @@ impl I4 {
     }
 }
 
-impl Add for I4 {
-    type Output = I4;
-    #[inline(always)]
-    fn add(self, o: I4) -> I4 {
-        I4(unsafe { _mm_add_epi32(self.0, o.0) })
-    }
+/// `impl $op for $t` as one SSE2 instruction, lane by lane.
+macro_rules! lanewise {
+    ($($t:ident: $op:ident::$f:ident = $intrinsic:ident;)*) => {$(
+        impl $op for $t {
+            type Output = $t;
+            #[inline(always)]
+            fn $f(self, o: $t) -> $t {
+                $t(unsafe { $intrinsic(self.0, o.0) })
+            }
+        }
+    )*};
 }
 
-impl Sub for I4 {
-    type Output = I4;
-    #[inline(always)]
-    fn sub(self, o: I4) -> I4 {
-        I4(unsafe { _mm_sub_epi32(self.0, o.0) })
-    }
-}
-
-impl BitAnd for Mask {
-    type Output = Mask;
-    #[inline(always)]
-    fn bitand(self, o: Mask) -> Mask {
-        Mask(unsafe { _mm_and_ps(self.0, o.0) })
-    }
-}
-
-impl Add for F4 {
-    type Output = F4;
-    #[inline(always)]
-    fn add(self, o: F4) -> F4 {
-        F4(unsafe { _mm_add_ps(self.0, o.0) })
-    }
-}
-
-impl Sub for F4 {
-    type Output = F4;
-    #[inline(always)]
-    fn sub(self, o: F4) -> F4 {
-        F4(unsafe { _mm_sub_ps(self.0, o.0) })
-    }
-}
-
-impl Mul for F4 {
-    type Output = F4;
-    #[inline(always)]
-    fn mul(self, o: F4) -> F4 {
-        F4(unsafe { _mm_mul_ps(self.0, o.0) })
-    }
-}
-
-impl Div for F4 {
-    type Output = F4;
-    #[inline(always)]
-    fn div(self, o: F4) -> F4 {
-        F4(unsafe { _mm_div_ps(self.0, o.0) })
-    }
+lanewise! {
+    I4: Add::add = _mm_add_epi32;
+    I4: Sub::sub = _mm_sub_epi32;
+    Mask: BitAnd::bitand = _mm_and_ps;
+    F4: Add::add = _mm_add_ps;
+    F4: Sub::sub = _mm_sub_ps;
+    F4: Mul::mul = _mm_mul_ps;
+    F4: Div::div = _mm_div_ps;
 }
 
 impl Neg for F4 {
