@@ -2,8 +2,9 @@
 //! engine as `vvgen build` runs it: CesiumMan, 60 frames, 80 training and 20 test views on the NeRF-synthetic
 //! hemisphere, 800², 4 samples, RGBA + 16-bit depth (6 000 images, a D-NeRF layout with its init cloud), plus a
 //! 60-frame point-cloud sequence (1M surface samples per frame, 5 mm voxels). Previews off (the workload as
-//! the issue defines it). Prints the wall time, per-kind times and ms per image; Blender's per-image time for
-//! the same images comes from `../shared/bench-peers/render_nerf.py` in the same session (see README).
+//! the issue defines it). Prints the wall time, per-kind times and ms per image. `benches/seed_peers.sh` builds
+//! the same set with `vvgen` binaries (today's beside an older one) and times Blender on the same images in the
+//! same run (see README).
 //!
 //! Run: `cargo bench --bench seed [-- OUT_DIR]` (default `target/bench-seed`; about 2 GB written).
 
