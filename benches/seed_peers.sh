@@ -62,7 +62,11 @@ build() {
     local d
     d=$(mktemp -d "$work/run.XXXX")
     if "$1" check "$work/seed.toml" >/dev/null 2>&1; then cp "$work/seed.toml" "$d/seed.toml"; else cp "$work/seed-old.toml" "$d/seed.toml"; fi
-    (cd "$d" && /usr/bin/time -f "%e %U %S" -o "$d/time" "$1" build seed.toml >/dev/null 2>&1)
+    if ! (cd "$d" && /usr/bin/time -f "%e %U %S" -o "$d/time" "$1" build seed.toml >"$d/log" 2>&1); then
+        echo "$1: the build failed:" >&2
+        tail -20 "$d/log" >&2
+        exit 1
+    fi
     read -r wall user sys < "$d/time"
     printf '%-40s %7.1f s wall  %6.1f s user  %5.1f s system  %6.2f ms per image\n' \
         "$1" "$wall" "$user" "$sys" "$(echo "$wall" | awk '{print $1 * 1000 / 6000}')"
