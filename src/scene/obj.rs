@@ -112,7 +112,8 @@ fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error>
     Ok(deps)
 }
 
-/// The `map_Kd` textures of an MTL file, each checked to exist.
+/// The `map_Kd` textures of an MTL file, each checked to exist; and the numbers tobj reads, checked as it reads
+/// them (it panics on a colour with fewer than three numbers, and names no line for a number it cannot parse).
 fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
     let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let text = String::from_utf8_lossy(&text);
@@ -120,7 +121,21 @@ fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
-        if words.next() == Some("map_Kd") {
+        let key = words.next();
+        let count = match key {
+            Some(k @ ("Ka" | "Kd" | "Ks" | "Ke")) => Some((k, 3)),
+            Some(k @ ("Ns" | "Ni" | "d")) => Some((k, 1)),
+            _ => None,
+        };
+        if let Some((key, n)) = count {
+            // tobj reads the first `n` words as numbers and ignores the rest.
+            let finite = words.clone().take(n).filter(|w| w.parse::<f32>().is_ok_and(f32::is_finite)).count();
+            if finite < n {
+                let what = if n == 1 { "a finite number".to_string() } else { format!("{n} finite numbers") };
+                return Err(at(path, i + 1, format!("`{key}` needs {what}: `{}`", line.trim())));
+            }
+        }
+        if key == Some("map_Kd") {
             // Options (`-s 1 1 1`, …) come first; the file name is the last word.
             let Some(name) = words.next_back() else {
                 return Err(at(path, i + 1, "`map_Kd` names no file".into()));

@@ -191,3 +191,56 @@ fn fuzz_the_manifest_checker() {
         let _ = vvgen::manifest::parse(&String::from_utf8_lossy(bytes), path);
     });
 }
+
+/// The companions of the mesh-frame seeds: a material library naming a texture, and the texture.
+const MTL: &str = "newmtl skin\nKd 0.8 0.7 0.6\nd 1\nmap_Kd tex.png\nnewmtl plain\nKd 0.2 0.4 0.9\n";
+
+#[test]
+fn fuzz_mesh_sequence_frames() {
+    // Mesh-sequence frames as captures ship them: OBJ (a library and its texture, normals, vertex colours,
+    // negative and slash-free indices, polygons, objects and groups), the MTL it names, and a PLY mesh textured
+    // by `comment TextureFile`. Each mutant is written in its place beside unmutated companions and read as a
+    // build reads a frame: its dependencies for the key, then the scene, then a render.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbaImage::from_raw(2, 2, [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255; 4]].concat())
+        .unwrap()
+        .save(d.join("tex.png"))
+        .unwrap();
+    let quad = "mtllib skin.mtl\no quad\nv -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\n\
+                vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nusemtl skin\nf 1/1/1 2/2/1 3/3/1 4/4/1\n";
+    let fan = "mtllib skin.mtl\ng fan\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0.5 1 1 1\n\
+               v -1 0.5 0.2 0.5 0.5 0.5\nusemtl plain\nf 1 2 3 4 5\no tail\nvt 0.5 0.5\nusemtl skin\n\
+               f -3/1 -2/1 -1/1\ns 1\nf 1 2 3\n";
+    let ply = "ply\nformat ascii 1.0\ncomment TextureFile tex.png\nelement vertex 4\nproperty float x\n\
+               property float y\nproperty float z\nproperty float s\nproperty float t\nelement face 2\n\
+               property list uchar int vertex_indices\nend_header\n0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n\
+               3 0 1 2\n3 0 2 3\n";
+    let seeds: Vec<(PathBuf, Vec<u8>)> = [("frame.obj", quad), ("fan.obj", fan), ("skin.mtl", MTL), ("frame.ply", ply)]
+        .into_iter()
+        .map(|(name, text)| (PathBuf::from(name), text.as_bytes().to_vec()))
+        .collect();
+    for (name, text) in &seeds {
+        std::fs::write(d.join(name), text).unwrap();
+    }
+    // The seeds themselves load (else the mutants would test little beyond the first error).
+    for (name, _) in &seeds {
+        if name.extension().is_some_and(|e| e != "mtl") {
+            let scene = vvgen::scene::source::mesh_frame(&d.join(name)).unwrap_or_else(|e| panic!("{name:?}: {e}"));
+            assert!(scene.primitives.iter().any(|p| !p.indices.is_empty()), "{name:?}");
+        }
+    }
+    fuzz("mesh-frame", &seeds, 4, |path, bytes| {
+        // Companions as seeded (a mutant that panicked left its file behind), then the mutant in its place.
+        for (name, text) in &seeds {
+            std::fs::write(d.join(name), if name == path { bytes } else { text }).unwrap();
+        }
+        // An MTL mutant is read through the OBJ that names it.
+        let frame = d.join(if path.extension().is_some_and(|e| e == "mtl") { Path::new("frame.obj") } else { path });
+        if vvgen::scene::source::mesh_frame_deps(&frame).is_ok() {
+            if let Ok(scene) = vvgen::scene::source::mesh_frame(&frame) {
+                render_small(&scene);
+            }
+        }
+    });
+}

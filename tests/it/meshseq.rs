@@ -164,7 +164,7 @@ type Case = (&'static str, fn(&Path), &'static str);
 /// Bad mesh frames: `check` names the file and line (and `build` refuses the same way, before rendering).
 #[test]
 fn bad_mesh_frames_are_named_by_file_and_line() {
-    let cases: [Case; 4] = [
+    let cases: [Case; 6] = [
         (
             "a missing MTL",
             |d| std::fs::remove_file(d.join("seq/skin.mtl")).unwrap(),
@@ -179,6 +179,17 @@ fn bad_mesh_frames_are_named_by_file_and_line() {
             "a face index out of range",
             |d| std::fs::write(d.join("seq/f_001.obj"), obj(1).replace("f 5/1 6/2 7/3", "f 5/1 6/2 17/3")).unwrap(),
             "f_001.obj:16: face corner `17/3` refers to vertex 17, but only 7 are defined above",
+        ),
+        (
+            // tobj itself panics on a colour short of three numbers (found by the fuzzer).
+            "a colour with two numbers",
+            |d| std::fs::write(d.join("seq/skin.mtl"), "newmtl skin\nKd 1 1\nmap_Kd tex.png\n").unwrap(),
+            "skin.mtl:2: `Kd` needs 3 finite numbers: `Kd 1 1`",
+        ),
+        (
+            "an opacity that is not a number",
+            |d| std::fs::write(d.join("seq/skin.mtl"), "newmtl skin\nd nan\nmap_Kd tex.png\n").unwrap(),
+            "skin.mtl:2: `d` needs a finite number: `d nan`",
         ),
         (
             "an unreadable texture",
