@@ -112,8 +112,9 @@ fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error>
     Ok(deps)
 }
 
-/// The `map_Kd` textures of an MTL file, each checked to exist; and the numbers tobj reads, checked as it reads
-/// them (it panics on a colour with fewer than three numbers, and names no line for a number it cannot parse).
+/// The `map_Kd` textures of an MTL file, each checked to exist; and the numbers tobj reads, checked here with
+/// their line: tobj panics on a colour with fewer than three numbers and names no line for one it cannot parse,
+/// and a number that is not finite (which it accepts) would reach the images.
 fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
     let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let text = String::from_utf8_lossy(&text);

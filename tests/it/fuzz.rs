@@ -192,7 +192,7 @@ fn fuzz_the_manifest_checker() {
     });
 }
 
-/// The companions of the mesh-frame seeds: a material library naming a texture, and the texture.
+/// The mesh-frame seeds' material library: a textured material and a plain one (the OBJ seeds use both).
 const MTL: &str = "newmtl skin\nKd 0.8 0.7 0.6\nd 1\nmap_Kd tex.png\nnewmtl plain\nKd 0.2 0.4 0.9\n";
 
 #[test]
