@@ -64,7 +64,7 @@ pub fn write(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
 }
 
 /// A file written under a temporary name beside its destination, not yet synced nor renamed: the first half of
-/// [`write`], whose second half, [`Staged::commit`], may run later on another thread (a build's renders do not
+/// [`write()`], whose second half, [`Staged::commit`], may run later on another thread (a build's renders do not
 /// wait on the disk). Dropped uncommitted, the temporary is removed.
 #[derive(Debug)]
 pub struct Staged {

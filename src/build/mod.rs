@@ -1,6 +1,6 @@
 //! A build, end to end: manifest → scene → plan (the action graph, every action keyed) → execute (run what the
 //! cache lacks) → export (place blobs, write metadata). [`Build`] is the entry point for Rust callers; the
-//! command line only adds progress display and exit codes. [`status`] answers what a build would do, and why,
+//! command line only adds progress display and exit codes. [`status()`] answers what a build would do, and why,
 //! from the same graph; [`reachable`] is what `gc --keep` keeps.
 
 mod error;

@@ -10,7 +10,7 @@ const FONT: &[u8] = include_bytes!("vendor/DejaVuSans-subset.ttf");
 /// An sRGB colour.
 pub type Rgb = [u8; 3];
 
-/// Borrowed RGB pixels, rows top first: what [`Canvas::image`] scales in.
+/// Borrowed RGB pixels, rows top first: what [`Canvas::blit`] draws and [`shrink`] scales.
 #[derive(Clone, Copy)]
 pub struct Pixels<'a> {
     /// The pixels.

@@ -156,7 +156,7 @@ impl Texture {
 
     /// Samples with a screen footprint: `duv_dx`, `duv_dy` are the uv's derivatives across the footprint (a
     /// pixel, or a sample for per-sample lookups). When it covers more than one texel the lookup is trilinear
-    /// between the two mip levels around log2 of its size in texels ([`Texture::lod`]); magnified and `nearest`
+    /// between the two mip levels around log2 of its size in texels (`Texture::lod`); magnified and `nearest`
     /// lookups read level 0.
     pub fn sample_footprint(&self, r: &TextureRef, uv: Vec2, duv_dx: Vec2, duv_dy: Vec2) -> Vec4 {
         self.footprint::<true>(r, uv, duv_dx, duv_dy)

@@ -230,7 +230,7 @@ fn row_solid_angle(y: u32, h: u32) -> f32 {
 /// What shading reads of an environment: irradiance SH and GGX-prefiltered radiance at [`LEVELS`] roughnesses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prefiltered {
-    /// Irradiance spherical harmonics (bands 0–2, cosine-convolved): E(n) = Σ sh[i]·Yᵢ(n).
+    /// Irradiance spherical harmonics (bands 0–2, cosine-convolved): E(n) = Σᵢ `sh[i]`·Yᵢ(n).
     pub sh: [Vec3; 9],
     /// The same for the sky alone (the map above the horizon, black below): what a point above a ground plane
     /// receives from the map, the ground hiding the rest.

@@ -33,7 +33,7 @@ pub struct Visibility {
     /// caster blocks.
     pub env: f32,
     /// Above a ground: the radiance arriving from below the horizon, averaged over the cosine lobe — the
-    /// ground's, its shadows in it, and past its edges the map's (see [`FrameLight::below`]). Unread without a
+    /// ground's, its shadows in it, and past its edges the map's (see `FrameLight::below`). Unread without a
     /// ground.
     pub below: Vec3,
 }
@@ -270,7 +270,7 @@ impl FrameLight {
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
     /// `v` (toward the eye), for surface `s`, with ambient occlusion `ao` (the material's) and what reaches it
     /// of the environment's light, `vis` (interpolated from the vertices). `interreflects`: whether what the
-    /// casters block comes partly back to the diffuse layer ([`multi_bounce`]): yes on a subject, whose casters
+    /// casters block comes partly back to the diffuse layer (`multi_bounce`): yes on a subject, whose casters
     /// are mostly its own parts, of colours like its own; no on a ground plane, whose caster is the subject, of a
     /// colour the plane's says nothing of.
     #[allow(clippy::too_many_arguments)]

@@ -4,14 +4,14 @@
 //!
 //! An 800k-point frame is dominated by per-point overhead and cache misses, so:
 //! - a splat is a small record carrying what drawing needs; colour, normal and object are read from its
-//!   primitive only for the samples that end up showing it. Most splats of a dense cloud are [`Flat`] (one depth
-//!   over a square, 24 bytes); only cubes and surfels drawn at their own size are [`Solid`] (ray-tested);
+//!   primitive only for the samples that end up showing it. Most splats of a dense cloud are `Flat` (one depth
+//!   over a square, 24 bytes); only cubes and surfels drawn at their own size are `Solid` (ray-tested);
 //! - points are projected four at a time where the shape allows (squares, disks, cubes: `lanes`, SSE2), with the
-//!   same bits as one at a time ([`project`]);
+//!   same bits as one at a time (`project`);
 //! - binning happens inside the parallel setup: each chunk of points sorts its splats by band of tile rows (a
 //!   counting sort into a few sequential streams);
 //! - a band's splats are drawn on their own into a [`Layer`] (nearest splat per sample, first in scene order among
-//!   equals, as one integer [`key`] per sample), which each tile then merges behind its triangles: the same result
+//!   equals, as one integer `key` per sample), which each tile then merges behind its triangles: the same result
 //!   as drawing the splats after the triangles, since "first nearest" of a sequence is the first nearest of its
 //!   head and of the rest. A sample keeps the smallest key and keys are unique, so the layer does not depend on
 //!   the order splats are drawn in: not on the thread count, nor on flat and solid splats being drawn apart;
