@@ -12,6 +12,8 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use vvgen::camera::Camera;
+use vvgen::render::encode::PngCompression;
+use vvgen::render::light::environment;
 use vvgen::render::{render, RenderSettings};
 use vvgen::scene::gltf::{self, PoseScratch};
 use vvgen::scene::PosedScene;
@@ -240,6 +242,49 @@ fn fuzz_mesh_sequence_frames() {
         if vvgen::scene::source::mesh_frame_deps(&frame).is_ok() {
             if let Ok(scene) = vvgen::scene::source::mesh_frame(&frame) {
                 render_small(&scene);
+            }
+        }
+    });
+}
+
+#[test]
+fn fuzz_environment_maps() {
+    // Equirectangular maps as `[environment] map` reads them: OpenEXR (RLE and ZIP, as vvgen writes them) and
+    // Radiance HDR, small so that a mutant decodes in microseconds. Each is read as check and build do (header,
+    // then texels) and looked up.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (w, h) = (8u32, 4u32);
+    let channel = |k: f32| (0..w * h).map(|i| k * (i % w) as f32 + 0.1 * (i / w) as f32).collect::<Vec<f32>>();
+    let (r, g, b) = (channel(0.5), channel(0.25), channel(2.0));
+    let rgb = [("R", &r[..]), ("G", &g[..]), ("B", &b[..])];
+    let mut seeds: Vec<(PathBuf, Vec<u8>)> = [("rle.exr", PngCompression::Fast), ("zip.exr", PngCompression::Default)]
+        .into_iter()
+        .map(|(name, c)| (PathBuf::from(name), vvgen::render::encode::f32_exr(&rgb, w, h, c)))
+        .collect();
+    let hdr = image::Rgb32FImage::from_fn(w, h, |x, y| {
+        let i = (y * w + x) as usize;
+        image::Rgb([r[i], g[i], b[i]])
+    });
+    image::DynamicImage::ImageRgb32F(hdr).save(d.join("map.hdr")).unwrap();
+    seeds.push((PathBuf::from("map.hdr"), std::fs::read(d.join("map.hdr")).unwrap()));
+    let read = |path: &Path| {
+        environment::header(path)?;
+        environment::load(path)
+    };
+    for (name, bytes) in &seeds {
+        std::fs::write(d.join(name), bytes).unwrap();
+        let map = read(&d.join(name)).unwrap_or_else(|e| panic!("{name:?}: {e}"));
+        assert_eq!((map.width, map.height), (w, h), "{name:?}");
+    }
+    fuzz("environment", &seeds, 5, |path, bytes| {
+        let file = d
+            .join(path.file_name().unwrap())
+            .with_extension(format!("mutant.{}", path.extension().unwrap().to_string_lossy()));
+        std::fs::write(&file, bytes).unwrap();
+        if let Ok(map) = read(&file) {
+            for v in [glam::Vec3::X, glam::Vec3::NEG_Z, glam::Vec3::new(0.3, -0.4, 0.8)] {
+                assert!(map.radiance(v).is_finite());
             }
         }
     });
