@@ -250,13 +250,21 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
 
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.
 pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, Error> {
-    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    ply_scene_slice(&bytes, path)
+    // Streamed from the file where its layout allows (`ply::read_file`): a sequence's frames are read this way.
+    let d = ply::read_file(path).map_err(|e| match e {
+        ply::FileError::Io(source) => Error::Io { path: path.to_path_buf(), source },
+        ply::FileError::Ply(source) => Error::Ply { path: path.to_path_buf(), source },
+    })?;
+    ply_posed(d, path)
 }
 
 /// [`ply_scene`] from the file's bytes; `path` names it in errors.
 pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScene, Error> {
-    let d = ply::read(bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
+    ply_posed(ply::read(bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?, path)
+}
+
+/// A decoded PLY as a posed scene in source space; `path` finds its texture and names it in errors.
+fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Error> {
     let kind = if d.triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
     let positions: Vec<Vec3> = d.positions.iter().map(|p| Vec3::from(*p)).collect();
     let normals = match (&d.normals, kind) {

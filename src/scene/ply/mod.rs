@@ -5,13 +5,18 @@
 //! before anything is allocated, and every read is bounds-checked, so a malformed file gives an error, never a
 //! panic or an unbounded allocation.
 //!
-//! [`parse_header`] parses the header (formats, scalar types, elements and properties); [`read()`] decodes a body into
-//! [`PlyData`]; [`write()`] encodes points and triangles.
+//! [`parse_header`] parses the header (formats, scalar types, elements and properties); [`read()`] decodes a file's
+//! bytes into [`PlyData`]; [`read_file`] reads a file from disk, streaming the common little-endian cloud layouts
+//! (the `columns` module's one-pass decoder) and giving the same data and errors as [`read()`] of its bytes;
+//! [`write()`] encodes points and triangles.
 
+mod columns;
+mod file;
 mod header;
 mod read;
 mod write;
 
+pub use file::{read_file, FileError};
 pub use header::{parse_header, Element, Format, Header, Property, Scalar};
 pub use read::{read, PlyData};
 pub use write::{write, PlyOut};
@@ -94,6 +99,70 @@ mod tests {
         b.extend_from_slice(&(-2i16).to_be_bytes());
         b.extend_from_slice(&7u32.to_be_bytes());
         assert_eq!(read(&b).unwrap().positions, [[1.5, -2.0, 7.0]]);
+    }
+
+    /// A little-endian or big-endian file with the given float and uchar columns in that order (big endian goes
+    /// through the general path, so it is the fast path's reference).
+    fn columns(props: &[&str], rows: &[Vec<f32>], be: bool) -> Vec<u8> {
+        let is_byte = |p: &str| ["red", "green", "blue"].contains(&p);
+        let mut b = format!(
+            "ply\nformat binary_{}_endian 1.0\nelement vertex {}\n",
+            if be { "big" } else { "little" },
+            rows.len()
+        );
+        for p in props {
+            b += &format!("property {} {p}\n", if is_byte(p) { "uchar" } else { "float" });
+        }
+        let mut b = (b + "end_header\n").into_bytes();
+        for row in rows {
+            for (p, &v) in props.iter().zip(row) {
+                match (is_byte(p), be) {
+                    (true, _) => b.push(v as u8),
+                    (false, false) => b.extend_from_slice(&v.to_le_bytes()),
+                    (false, true) => b.extend_from_slice(&v.to_be_bytes()),
+                }
+            }
+        }
+        b
+    }
+
+    #[test]
+    fn every_fast_layout_reads_as_the_general_path_and_rejects_non_finite_positions() {
+        let layouts: [&[&str]; 6] = [
+            &["x", "y", "z"],
+            &["x", "y", "z", "red", "green", "blue"],
+            &["red", "green", "blue", "x", "y", "z"],
+            &["x", "y", "z", "nx", "ny", "nz"],
+            &["nx", "ny", "nz", "x", "y", "z", "red", "green", "blue"],
+            &["x", "y", "z", "red", "green", "blue", "nx", "ny", "nz"],
+        ];
+        for props in layouts {
+            let rows: Vec<Vec<f32>> =
+                (0..37).map(|i| (0..props.len()).map(|k| (i * 7 + k * 31) as f32 * 0.75 % 255.0).collect()).collect();
+            let fast = read(&columns(props, &rows, false)).unwrap();
+            let general = read(&columns(props, &rows, true)).unwrap();
+            assert_eq!(fast, general, "{props:?}");
+            assert_eq!(fast.positions.len(), 37);
+            assert_eq!(fast.normals.is_some(), props.contains(&"nx"), "{props:?}");
+            assert_eq!(fast.colors.is_some(), props.contains(&"red"), "{props:?}");
+            // A NaN or infinity in any position component of any row is refused and named by its row.
+            for (row, bad) in [(0, f32::NAN), (19, f32::INFINITY), (36, f32::NEG_INFINITY)] {
+                for k in ["x", "y", "z"] {
+                    let mut r = rows.clone();
+                    r[row][props.iter().position(|p| *p == k).unwrap()] = bad;
+                    for be in [false, true] {
+                        let e = read(&columns(props, &r, be)).unwrap_err();
+                        assert!(matches!(e, PlyError::Body { row: r, .. } if r == row), "{props:?} {k} {row}: {e}");
+                    }
+                }
+            }
+            // Non-finite normals pass (they are not positions): the same as the general path.
+            if let Some(k) = props.iter().position(|p| *p == "nx") {
+                let mut r = rows.clone();
+                r[3][k] = f32::NAN;
+                assert!(read(&columns(props, &r, false)).unwrap().normals.unwrap()[3][0].is_nan());
+            }
+        }
     }
 
     #[test]

@@ -1,6 +1,8 @@
-//! Decoding a PLY body into [`PlyData`]: a fast path for little-endian binary files whose vertex properties are
-//! all 4-byte scalars, and a general path for every other layout (ascii, big endian, any type, lists).
+//! Decoding a PLY body into [`PlyData`]: the common little-endian cloud layouts through the one-pass decoder of
+//! the `columns` module, fixed-size binary rows (big endian, any scalar type) read straight from the row, and a
+//! general path for everything else (ascii, lists).
 
+use super::columns::{Columns, Layout};
 use super::header::{parse_header, Element, Format, Scalar};
 use super::PlyError;
 
@@ -21,14 +23,15 @@ pub struct PlyData {
     pub comments: Vec<String>,
 }
 
-const SLOT_X: usize = 0;
-const SLOT_NX: usize = 3;
-const SLOT_R: usize = 6;
-const SLOT_A: usize = 9;
-const SLOT_U: usize = 10;
-const NO_SLOT: usize = usize::MAX;
+pub(super) const SLOT_X: usize = 0;
+pub(super) const SLOT_NX: usize = 3;
+pub(super) const SLOT_R: usize = 6;
+pub(super) const SLOT_A: usize = 9;
+pub(super) const SLOT_U: usize = 10;
+pub(super) const NO_SLOT: usize = usize::MAX;
 
-fn slot(name: &str) -> usize {
+/// Where a vertex property's value goes (`SLOT_*`), or [`NO_SLOT`] for one vvgen does not read.
+pub(super) fn slot(name: &str) -> usize {
     match name {
         "x" => 0,
         "y" => 1,
@@ -59,19 +62,8 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
         match el.name.as_str() {
             name if name == points && !vertex_seen => {
                 vertex_seen = true;
-                read_vertices(&mut cursor, el, &mut out)?;
-                // NaN or infinity would reach fits, bounds, cameras and images as garbage.
-                // (A branch-free pass first: the search below runs only when something is not finite.)
-                let finite = out
-                    .positions
-                    .iter()
-                    .fold(true, |ok, p| ok & p[0].is_finite() & p[1].is_finite() & p[2].is_finite());
-                if let Some(row) =
-                    (!finite).then(|| out.positions.iter().position(|p| !p.iter().all(|c| c.is_finite()))).flatten()
-                {
-                    let msg = format!("position {:?} is not finite", out.positions[row]);
-                    return Err(PlyError::Body { element: points.into(), row, msg });
-                }
+                let checked = read_vertices(&mut cursor, el, &mut out)?;
+                check_finite(&out.positions, checked, points)?;
             }
             "face" => read_faces(&mut cursor, el, out.positions.len(), &mut out.triangles)?,
             _ => cursor.skip_element(el)?,
@@ -81,6 +73,21 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
         return Err(PlyError::Unusable("no `vertex` (or `point`) element".into()));
     }
     Ok(out)
+}
+
+/// Refuses positions with a NaN or an infinity (they would reach fits, bounds, cameras and images as garbage),
+/// naming the first such row of `element`. `known_finite`: the decoder already checked them on the way; otherwise
+/// a branch-free pass runs first, and the search for the row only when something is not finite.
+pub(super) fn check_finite(positions: &[[f32; 3]], known_finite: bool, element: &str) -> Result<(), PlyError> {
+    let finite = known_finite
+        || positions.iter().fold(true, |ok, p| ok & p[0].is_finite() & p[1].is_finite() & p[2].is_finite());
+    match (!finite).then(|| positions.iter().position(|p| !p.iter().all(|c| c.is_finite()))).flatten() {
+        Some(row) => {
+            let msg = format!("position {:?} is not finite", positions[row]);
+            Err(PlyError::Body { element: element.into(), row, msg })
+        }
+        None => Ok(()),
+    }
 }
 
 struct Cursor<'a> {
@@ -208,12 +215,23 @@ fn parse_number(t: &[u8]) -> Option<f64> {
     std::str::from_utf8(t).ok()?.parse::<f64>().ok()
 }
 
-fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<(), PlyError> {
+/// Reads the vertex element into `out`; returns whether the positions were already found finite on the way (the
+/// fast path checks as it reads; otherwise the caller checks).
+fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<bool, PlyError> {
     c.check_count(el)?;
     let slots: Vec<usize> = el.props.iter().map(|p| if p.list.is_some() { NO_SLOT } else { slot(&p.name) }).collect();
     let has = |s: usize| slots.contains(&s);
     if !(has(SLOT_X) && has(SLOT_X + 1) && has(SLOT_X + 2)) {
         return Err(PlyError::Unusable("the vertex element has no x, y, z".into()));
+    }
+    let n = el.count;
+    if let Some(layout) = Layout::of(el, c.format) {
+        // `check_count` made sure the body holds the rows.
+        let data = &c.body[c.pos..c.pos + n * layout.row_size];
+        let mut cols = Columns::new(&layout, n);
+        layout.append(&mut cols, data);
+        c.pos += data.len();
+        return Ok(cols.finish(out));
     }
     let has_n = has(SLOT_NX) && has(SLOT_NX + 1) && has(SLOT_NX + 2);
     let has_c = has(SLOT_R) && has(SLOT_R + 1) && has(SLOT_R + 2);
@@ -230,7 +248,6 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
             _ => 1.0,
         })
         .unwrap_or(1.0);
-    let n = el.count;
     out.positions = Vec::with_capacity(n);
     let mut normals = Vec::with_capacity(if has_n { n } else { 0 });
     let mut colors = Vec::with_capacity(if has_c { n } else { 0 });
@@ -285,26 +302,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         let xyz = group(SLOT_X, Scalar::F32);
         let nxyz = if has_n { group(SLOT_NX, Scalar::F32) } else { None };
         let rgb = if has_c && !slots.contains(&SLOT_A) { group(SLOT_R, Scalar::U8) } else { None };
-        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv && !be) {
-            // Little-endian (what every writer of large clouds emits): each column group read as a fixed-size
-            // array (no per-byte bounds checks, no per-value endianness branch), into exactly sized vectors.
-            let xyz3 = |r: &[u8], o: usize| {
-                let b: &[u8; 12] = r[o..o + 12].try_into().expect("BUG: the row holds the group");
-                let w = |k: usize| f32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
-                [w(0), w(4), w(8)]
-            };
-            out.positions = rows().map(|r| xyz3(r, o)).collect();
-            if let Some(o) = nxyz {
-                normals = rows().map(|r| xyz3(r, o)).collect();
-            }
-            if let Some(o) = rgb {
-                let rgb3 = |r: &[u8]| -> [u8; 4] {
-                    let c: &[u8; 3] = r[o..o + 3].try_into().expect("BUG: the row holds the group");
-                    [c[0], c[1], c[2], 255]
-                };
-                colors = rows().map(rgb3).collect();
-            }
-        } else if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv) {
+        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv) {
             out.positions = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
             if let Some(o) = nxyz {
                 normals = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
@@ -363,7 +361,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
     out.normals = has_n.then_some(normals);
     out.uvs = has_uv.then_some(uvs);
     out.colors = has_c.then_some(colors);
-    Ok(())
+    Ok(false)
 }
 
 #[inline]
