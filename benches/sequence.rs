@@ -2,7 +2,8 @@
 //! points (4 hemisphere views at 400², cubes, a 100k-point init cloud) and this reports each build's peak RSS
 //! (the child's own, from `wait4`) and the share of its wall time spent outside rendering.
 //!
-//! `cargo bench --bench sequence` (writes about 1 GB of frames to `target/bench-data/seq800k` once).
+//! `cargo bench --bench sequence` (writes about 1 GB of frames to `target/bench-data/seq800k` once). `VVGEN=path`
+//! builds with another `vvgen` binary (an older one, for a before and after in one run).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -49,13 +50,9 @@ fn frames(dir: &Path, n: usize) {
 // The child is reaped by `wait4`, which also returns its own resource usage (`Child::wait` does not).
 #[allow(clippy::zombie_processes)]
 fn build(manifest: &Path) -> (i64, f64, f64) {
-    let child = Command::new(env!("CARGO_BIN_EXE_vvgen"))
-        .arg("build")
-        .arg(manifest)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let bin = std::env::var_os("VVGEN").unwrap_or_else(|| env!("CARGO_BIN_EXE_vvgen").into());
+    let child =
+        Command::new(bin).arg("build").arg(manifest).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
     let pid = child.id() as libc::pid_t;
     let mut stderr = child.stderr.unwrap();
     let mut log = String::new();

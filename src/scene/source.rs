@@ -129,14 +129,14 @@ impl LoadedSource {
                 asset.pose(clips, t, post, scratch, out);
             }
             SourceData::Static(rest) => transform_into(rest, post, out),
+            // A frame read from its file is transformed where it lies and becomes `out`: copying it into `out`'s
+            // buffers would hold a second copy of its positions and normals (24 bytes a point) for nothing.
             SourceData::Sequence(frames) => {
                 let f = &frames[frame.min(frames.len() - 1)];
-                let rest = ply_scene(&f.path)?;
-                transform_into(&rest, post, out);
+                *out = transformed(ply_scene(&f.path)?, post);
             }
             SourceData::MeshSequence(frames) => {
-                let rest = mesh_frame(&frames[frame.min(frames.len() - 1)].path)?;
-                transform_into(&rest, post, out);
+                *out = transformed(mesh_frame(&frames[frame.min(frames.len() - 1)].path)?, post);
             }
         }
         Ok(())
@@ -265,16 +265,16 @@ pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScen
 
 /// A decoded PLY as a posed scene in source space; `path` finds its texture and names it in errors.
 fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Error> {
-    let kind = if d.triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
-    let positions: Vec<Vec3> = d.positions.iter().map(|p| Vec3::from(*p)).collect();
-    let normals = match (&d.normals, kind) {
-        (Some(n), _) => n.iter().map(|n| Vec3::from(*n).normalize_or_zero()).collect(),
-        (None, PrimKind::Triangles) => super::gltf::load::smooth_normals(&positions, &d.triangles),
+    let ply::PlyData { positions, normals, colors, uvs, triangles, comments } = d;
+    let kind = if triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
+    // In place: `[f32; 3]` and `Vec3` have one size and alignment, so the collect reuses the allocation.
+    let positions: Vec<Vec3> = positions.into_iter().map(Vec3::from).collect();
+    let normals = match (normals, kind) {
+        (Some(n), _) => n.into_iter().map(|n| Vec3::from(n).normalize_or_zero()).collect(),
+        (None, PrimKind::Triangles) => super::gltf::load::smooth_normals(&positions, &triangles),
         (None, PrimKind::Points) => vec![Vec3::ZERO; positions.len()],
     };
-    let colors = d
-        .colors
-        .as_ref()
+    let colors = colors
         .map(|c| {
             c.iter()
                 .map(|c| {
@@ -291,12 +291,12 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
     // Scans rarely have consistent winding: draw both sides.
     let mut material = Material { double_sided: true, ..Material::default() };
     // A textured mesh (MeshLab's convention: per-vertex texture_u/v or s/t, `comment TextureFile`).
-    let texture = match (&d.uvs, kind) {
-        (Some(_), PrimKind::Triangles) => texture_file(&d.comments, path)?,
+    let texture = match (&uvs, kind) {
+        (Some(_), PrimKind::Triangles) => texture_file(&comments, path)?,
         _ => None,
     };
-    let mut scene = PosedScene::single(kind, positions, normals, colors, d.triangles, material.clone());
-    if let (Some(tex), Some(uvs)) = (texture, &d.uvs) {
+    let mut scene = PosedScene::single(kind, positions, normals, colors, triangles, material.clone());
+    if let (Some(tex), Some(uvs)) = (texture, &uvs) {
         material.base_color_texture = Some(super::texture::TextureRef::new(0));
         scene.materials = Arc::new(vec![material]);
         scene.textures = Arc::new(vec![super::obj::texture(&tex)?]);
@@ -308,6 +308,7 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
 
 /// Copies `rest` into `out` with `m` applied, reusing `out`'s buffers.
 fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
+    // (`transformed` does the same to a scene it owns, with the same operations: keep the two in step.)
     let nm = super::gltf::pose::normal_matrix(&m);
     out.materials = rest.materials.clone();
     out.textures = rest.textures.clone();
@@ -339,6 +340,20 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
     }
 }
 
+/// `scene` transformed by `m` in place: what [`transform_into`] copies out of a scene it borrows, bit for bit.
+fn transformed(mut scene: PosedScene, m: Mat4) -> PosedScene {
+    let nm = super::gltf::pose::normal_matrix(&m);
+    for l in &mut scene.lights {
+        *l = l.transformed(m);
+    }
+    for p in &mut scene.primitives {
+        p.positions.iter_mut().for_each(|v| *v = m.transform_point3(*v));
+        p.normals.iter_mut().for_each(|n| *n = (nm * *n).normalize_or_zero());
+        p.tangents.iter_mut().for_each(|t| *t = super::gltf::pose::tangent(&m, *t));
+    }
+    scene
+}
+
 /// The ground plane's geometry at height `z`, in world space: a double-sided diffuse rectangle facing +Z (two
 /// triangles) that receives shadows and casts none. Lit shading reads the environment's visibility over it from
 /// a grid (`render::light`), not from its vertices.
@@ -358,4 +373,46 @@ pub fn ground(p: &crate::manifest::source::Plane, z: f32) -> PosedScene {
         ..Material::default()
     };
     PosedScene::single(PrimKind::Triangles, positions, normals, Vec::new(), indices, material)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::light::{Light, LightKind};
+
+    #[test]
+    fn transformed_in_place_matches_the_copy_bit_for_bit() {
+        let mut scene = PosedScene::single(
+            PrimKind::Triangles,
+            vec![Vec3::new(0.1, 2.0, -3.0), Vec3::new(1.0, 0.0, 0.5), Vec3::new(-0.7, 0.3, 0.9)],
+            vec![Vec3::X, Vec3::new(0.0, 0.6, 0.8), Vec3::ZERO],
+            vec![Vec4::ONE; 3],
+            vec![0, 1, 2],
+            Material::default(),
+        );
+        scene.primitives[0].tangents = vec![Vec4::new(0.0, 1.0, 0.0, -1.0); 3];
+        scene.lights.push(Light {
+            kind: LightKind::Point { position: Vec3::new(1.0, 2.0, 3.0), radius: 0.1 },
+            color: Vec3::ONE,
+            intensity: 100.0,
+            shadows: true,
+        });
+        // Rotation, non-uniform scale and translation: normals and tangents take different matrices.
+        let m = Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, 0.5, 1.5),
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0),
+            Vec3::new(0.25, -4.0, 7.0),
+        );
+        let mut copy = PosedScene::default();
+        transform_into(&scene, m, &mut copy);
+        let moved = transformed(scene, m);
+        assert_eq!(moved.lights, copy.lights);
+        let (a, b) = (&moved.primitives[0], &copy.primitives[0]);
+        let bits = |v: &[Vec3]| v.iter().flat_map(|v| v.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&a.positions), bits(&b.positions));
+        assert_eq!(bits(&a.normals), bits(&b.normals));
+        let tbits = |v: &[Vec4]| v.iter().flat_map(|v| v.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert_eq!(tbits(&a.tangents), tbits(&b.tangents));
+        assert_ne!(a.positions[0], Vec3::new(0.1, 2.0, -3.0), "the transform applies");
+    }
 }
