@@ -122,16 +122,27 @@ pub struct Poser {
 /// The number of frames a build of `m` has (the longest source's), from loading each source without posing it:
 /// what `vvgen check` needs to judge the consumers' frame-count limits before anything renders.
 ///
-/// A mesh sequence's frames are scanned too (an OBJ's face indices, its MTL files and textures; a PLY's
-/// texture), as the build's keying will, so their errors name file and line before anything renders.
+/// A mesh sequence's frames are scanned too (an OBJ's face indices, its MTL files and textures; a PLY's header and
+/// texture), as the build's keying will, so their errors name file and line before anything renders; and a PLY
+/// sequence's frames have their headers checked, and their sizes against the rows they declare.
 pub fn frame_count(m: &Manifest) -> Result<usize, Error> {
     let mut frames = 0;
     for (name, s) in &m.sources {
         let src = LoadedSource::load(name, s, &m.dir)?;
-        if let SourceData::MeshSequence(files) = &src.data {
-            for f in files {
-                source::mesh_frame_deps(&f.path)?;
+        // Every frame's header (and what its size says of its rows), as the build would find them when it
+        // reaches the frame.
+        match &src.data {
+            SourceData::MeshSequence(files) => {
+                for f in files {
+                    source::mesh_frame_deps(&f.path)?;
+                }
             }
+            SourceData::Sequence(files) => {
+                for f in files {
+                    source::checked_ply(&f.path)?;
+                }
+            }
+            _ => {}
         }
         frames = frames.max(src.frame_count());
     }

@@ -200,11 +200,7 @@ pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => super::obj::scan(path),
-        "ply" => {
-            let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-            let header = ply::parse_header(&bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
-            Ok(texture_file(&header.comments, path)?.into_iter().collect())
-        }
+        "ply" => Ok(texture_file(&checked_ply(path)?.comments, path)?.into_iter().collect()),
         _ => Ok(Vec::new()),
     }
 }
@@ -251,11 +247,20 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.
 pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, Error> {
     // Streamed from the file where its layout allows (`ply::read_file`): a sequence's frames are read this way.
-    let d = ply::read_file(path).map_err(|e| match e {
+    ply_posed(ply::read_file(path).map_err(|e| file_error(path, e))?, path)
+}
+
+/// The header of the PLY file at `path`, after what its header and size decide is checked (`ply::check_file`):
+/// what `vvgen check` can refuse in a frame without reading its body.
+pub fn checked_ply(path: &std::path::Path) -> Result<ply::Header, Error> {
+    ply::check_file(path).map_err(|e| file_error(path, e))
+}
+
+fn file_error(path: &std::path::Path, e: ply::FileError) -> Error {
+    match e {
         ply::FileError::Io(source) => Error::Io { path: path.to_path_buf(), source },
         ply::FileError::Ply(source) => Error::Ply { path: path.to_path_buf(), source },
-    })?;
-    ply_posed(d, path)
+    }
 }
 
 /// [`ply_scene`] from the file's bytes; `path` names it in errors.

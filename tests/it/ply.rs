@@ -133,3 +133,70 @@ fn a_point_element_reads_as_the_points() {
     let d = vvgen::scene::ply::read(text.as_bytes()).unwrap();
     assert_eq!(d.positions, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
 }
+
+/// Whatever `check_file` refuses from a header and a size, reading the whole file refuses too: over the real odd
+/// and malformed files, and each of them cut short at every eighth of its length.
+#[test]
+fn check_file_refuses_nothing_a_read_accepts() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/ply");
+    let tmp = tempfile::tempdir().unwrap();
+    let mut refused = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let bytes = std::fs::read(entry.unwrap().path()).unwrap();
+        for k in 1..=8 {
+            let cut = &bytes[..bytes.len() * k / 8];
+            let p = tmp.path().join("cut.ply");
+            std::fs::write(&p, cut).unwrap();
+            if let Err(e) = ply::check_file(&p) {
+                refused += 1;
+                assert!(ply::read(cut).is_err(), "check_file refused what read accepts: {e}");
+            }
+        }
+    }
+    assert!(refused > 10, "only {refused} cut files refused");
+}
+
+/// `vvgen check` reads every frame's header of a PLY sequence: a frame cut short or not a PLY at all is refused
+/// there, naming the file, before anything renders, as the build refuses it when it reaches the frame (here
+/// every frame: multi-view video). Check refuses such a frame even where the splits would not read it.
+#[test]
+fn check_refuses_a_sequence_frame_that_is_cut_short_or_not_a_ply() {
+    use std::process::Command;
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::create_dir(d.join("seq")).unwrap();
+    let frame = |f: usize| {
+        let pos: Vec<[f32; 3]> = (0..500).map(|i| [i as f32 * 0.01, f as f32 * 0.1, (i % 7) as f32 * 0.02]).collect();
+        ply::write(&ply::PlyOut { positions: &pos, ..Default::default() })
+    };
+    for f in 0..3 {
+        std::fs::write(d.join(format!("seq/f_{f:04}.ply")), frame(f)).unwrap();
+    }
+    std::fs::write(
+        d.join("m.toml"),
+        "[dataset]\nname = \"t\"\nout = \"out\"\ncache = \"cache\"\n\
+         [source.pc]\nply_sequence = \"seq/f_{frame:04}.ply\"\n\
+         [render]\nresolution = [32, 32]\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\ntime = \"all\"\n[output.d]\nwriter = \"dnerf\"\n",
+    )
+    .unwrap();
+    let run = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
+    assert_eq!(run(&["check", "m.toml"]).status.code(), Some(0));
+    let cut = frame(1);
+    let damages: [(&str, Vec<u8>, &str); 2] = [
+        ("f_0001.ply", cut[..cut.len() - 7].to_vec(), "declares 500 rows"),
+        ("f_0002.ply", b"solid not-a-ply\n".to_vec(), "not a PLY file"),
+    ];
+    for (name, bytes, says) in damages {
+        for f in 0..3 {
+            std::fs::write(d.join(format!("seq/f_{f:04}.ply")), frame(f)).unwrap();
+        }
+        std::fs::write(d.join("seq").join(name), bytes).unwrap();
+        for args in [&["check", "m.toml"][..], &["-q", "build", "m.toml"][..]] {
+            let out = run(args);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{args:?} {name}: {err}");
+            assert!(err.contains(name) && err.contains(says), "{args:?} {name}: {err}");
+        }
+        assert!(!d.join("out/t_dnerf/train").exists(), "{name}: nothing is rendered");
+    }
+}

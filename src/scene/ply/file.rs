@@ -1,7 +1,8 @@
 //! Reading a PLY file from disk. A cloud in the common little-endian layout (one `vertex` element of float
 //! positions, optionally float normals and uchar colours: see [`Layout`]) streams through a buffer that stays in
 //! the CPU's cache and is decoded as it arrives; any other file is read whole and decoded by [`read()`], so the
-//! results and errors are the same either way.
+//! results and errors are the same either way. [`check_file`] refuses what the header and the file's size
+//! decide, reading only the header: what `vvgen check` runs on every frame of a sequence.
 //!
 //! Why stream: reading a 1M-point, 15 MB frame whole copies it once from the page cache into memory and then
 //! reads it back out of memory to decode it. Decoding from a 240 KB buffer saves that round trip, about half of
@@ -12,8 +13,8 @@ use std::io::Read;
 use std::path::Path;
 
 use super::columns::{Columns, Layout};
-use super::read::{check_finite, read, PlyData};
-use super::{parse_header, PlyError};
+use super::read::{check_finite, min_row, points_element, read, require_xyz, too_many_rows, PlyData};
+use super::{parse_header, Header, PlyError};
 
 /// Reading a PLY file failed.
 #[derive(Debug, thiserror::Error)]
@@ -84,6 +85,41 @@ fn read_file_in(path: &Path, head_len: usize, chunk_rows: usize) -> Result<PlyDa
     let finite = cols.finish(&mut out);
     check_finite(&out.positions, finite, &el.name)?;
     Ok(out)
+}
+
+/// What reading the PLY file at `path` would refuse that its header and size decide, found without reading its
+/// body: not a PLY, a malformed header, no `vertex` (or `point`) element or one without `x`, `y`, `z`, or more
+/// rows declared than the file can hold (each row at its smallest). Returns the header. `vvgen check` runs it on
+/// every frame of a sequence, which the build reads only when it renders them.
+pub fn check_file(path: &Path) -> Result<Header, FileError> {
+    let mut file = File::open(path)?;
+    let len = file.metadata()?.len();
+    let mut head = Vec::with_capacity(HEAD.min(len as usize));
+    (&mut file).take(HEAD as u64).read_to_end(&mut head)?;
+    let header = match parse_header(&head) {
+        // A header longer than the first read: read on (the file's size bounds it).
+        Err(PlyError::NoEndHeader) if (head.len() as u64) < len => {
+            file.read_to_end(&mut head)?;
+            parse_header(&head)?
+        }
+        h => h?,
+    };
+    let points = points_element(&header);
+    let el = header
+        .elements
+        .iter()
+        .find(|e| e.name == points)
+        .ok_or_else(|| PlyError::Unusable("no `vertex` (or `point`) element".into()))?;
+    require_xyz(el)?;
+    // (A header cut at a CR whose LF follows would start the body a byte early: one byte more lenient.)
+    let mut remaining = len.saturating_sub(header.body_start as u64);
+    for el in &header.elements {
+        match (el.count as u64).checked_mul(min_row(el, header.format) as u64) {
+            Some(need) if need <= remaining => remaining -= need,
+            _ => return Err(too_many_rows(el, remaining).into()),
+        }
+    }
+    Ok(header)
 }
 
 #[cfg(test)]
@@ -257,5 +293,41 @@ mod tests {
             streamed += usize::from(head < b.len() && whole.is_ok());
         }
         assert!(streamed > 500, "{streamed} mutants streamed");
+    }
+
+    #[test]
+    fn check_file_refuses_what_the_header_and_size_decide() {
+        let check = |bytes: &[u8]| {
+            let (_d, p) = file(bytes);
+            check_file(&p)
+        };
+        let b = cloud(1000, true, 0, "\n");
+        assert_eq!(check(&b).unwrap().elements[0].count, 1000);
+        // A header longer than the first read.
+        assert!(check(&cloud(10, false, HEAD + 100, "\n")).is_ok());
+        // Cut short by one byte: one row cannot fit.
+        let e = check(&b[..b.len() - 1]).unwrap_err();
+        assert!(
+            matches!(e, FileError::Ply(PlyError::Truncated(ref m)) if m.contains("`vertex` declares 1000 rows")),
+            "{e}"
+        );
+        // Not a PLY, no points, no x y z, a header that never ends.
+        assert!(matches!(check(b"solid cube\n"), Err(FileError::Ply(PlyError::NotPly))));
+        let no_points = b"ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
+        assert!(matches!(check(no_points), Err(FileError::Ply(PlyError::Unusable(_)))));
+        let no_z = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n";
+        assert!(matches!(check(no_z), Err(FileError::Ply(PlyError::Unusable(_)))));
+        assert!(matches!(check(b"ply\nformat ascii 1.0\n"), Err(FileError::Ply(PlyError::NoEndHeader))));
+        // Faces past what the file holds after its vertices: 9 rows take at least their 9 count bytes.
+        let mut mesh = cloud(4, false, 0, "\n");
+        let at = mesh.windows(11).position(|w| w == b"end_header\n").unwrap();
+        mesh.splice(at..at, b"element face 9\nproperty list uchar int vertex_indices\n".iter().copied());
+        mesh.extend_from_slice(&[3, 0, 0, 0, 0]);
+        let e = check(&mesh).unwrap_err();
+        assert!(matches!(e, FileError::Ply(PlyError::Truncated(ref m)) if m.contains("`face` declares 9 rows")), "{e}");
+        // What it passes, reading the whole file finds readable (or refuses for what only the body shows).
+        for bytes in [&b[..], &cloud(3, false, 0, "\r\n")[..]] {
+            assert!(check(bytes).is_ok() && read(bytes).is_ok());
+        }
     }
 }

@@ -16,7 +16,7 @@ mod header;
 mod read;
 mod write;
 
-pub use file::{read_file, FileError};
+pub use file::{check_file, read_file, FileError};
 pub use header::{parse_header, Element, Format, Header, Property, Scalar};
 pub use read::{read, PlyData};
 pub use write::{write, PlyOut};

@@ -56,8 +56,7 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
     let mut out = PlyData { comments: header.comments.clone(), ..Default::default() };
     let mut cursor = Cursor { body, pos: 0, format: header.format };
     let mut vertex_seen = false;
-    // Some writers call the points `point`; read that element when there is no `vertex`.
-    let points = if header.elements.iter().any(|e| e.name == "vertex") { "vertex" } else { "point" };
+    let points = points_element(&header);
     for el in &header.elements {
         match el.name.as_str() {
             name if name == points && !vertex_seen => {
@@ -90,6 +89,41 @@ pub(super) fn check_finite(positions: &[[f32; 3]], known_finite: bool, element: 
     }
 }
 
+/// The fewest bytes a row of `el` can take: its scalars and list counts in binary; in ascii, a character and a
+/// separator per property.
+pub(super) fn min_row(el: &Element, format: Format) -> usize {
+    match format {
+        Format::Ascii => 2 * el.props.len().max(1),
+        _ => el.props.iter().map(|p| p.list.map_or(p.ty.size(), |c| c.size())).sum::<usize>().max(1),
+    }
+}
+
+/// `el` declares more rows than the `remaining` bytes of the file can hold.
+pub(super) fn too_many_rows(el: &Element, remaining: u64) -> PlyError {
+    PlyError::Truncated(format!(
+        "element `{}` declares {} rows, more than the remaining {remaining} bytes can hold",
+        el.name, el.count
+    ))
+}
+
+/// The element the points are read from: `vertex`, else `point` (some writers' name).
+pub(super) fn points_element(header: &super::Header) -> &'static str {
+    if header.elements.iter().any(|e| e.name == "vertex") {
+        "vertex"
+    } else {
+        "point"
+    }
+}
+
+/// Refuses a point element without `x`, `y` and `z` scalars.
+pub(super) fn require_xyz(el: &Element) -> Result<(), PlyError> {
+    let has = |s: usize| el.props.iter().any(|p| p.list.is_none() && slot(&p.name) == s);
+    if !(has(SLOT_X) && has(SLOT_X + 1) && has(SLOT_X + 2)) {
+        return Err(PlyError::Unusable("the vertex element has no x, y, z".into()));
+    }
+    Ok(())
+}
+
 struct Cursor<'a> {
     body: &'a [u8],
     pos: usize,
@@ -103,18 +137,8 @@ impl<'a> Cursor<'a> {
 
     /// Rejects counts the rest of the file cannot hold, before allocating for them.
     fn check_count(&self, el: &Element) -> Result<(), PlyError> {
-        let min_row: usize = match self.format {
-            // Every ascii value takes at least one character and one separator.
-            Format::Ascii => 2 * el.props.len().max(1),
-            _ => el.props.iter().map(|p| p.list.map_or(p.ty.size(), |c| c.size())).sum::<usize>().max(1),
-        };
-        if el.count.checked_mul(min_row).is_none_or(|n| n > self.remaining()) {
-            return Err(PlyError::Truncated(format!(
-                "element `{}` declares {} rows, more than the remaining {} bytes can hold",
-                el.name,
-                el.count,
-                self.remaining()
-            )));
+        if el.count.checked_mul(min_row(el, self.format)).is_none_or(|n| n > self.remaining()) {
+            return Err(too_many_rows(el, self.remaining() as u64));
         }
         Ok(())
     }
@@ -221,9 +245,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
     c.check_count(el)?;
     let slots: Vec<usize> = el.props.iter().map(|p| if p.list.is_some() { NO_SLOT } else { slot(&p.name) }).collect();
     let has = |s: usize| slots.contains(&s);
-    if !(has(SLOT_X) && has(SLOT_X + 1) && has(SLOT_X + 2)) {
-        return Err(PlyError::Unusable("the vertex element has no x, y, z".into()));
-    }
+    require_xyz(el)?;
     let n = el.count;
     if let Some(layout) = Layout::of(el, c.format) {
         // `check_count` made sure the body holds the rows.
