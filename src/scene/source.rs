@@ -216,9 +216,8 @@ pub fn mesh_frame_deps_cached(path: &std::path::Path, stat: &crate::cache::StatC
             let io = |e| Error::Io { path: path.to_path_buf(), source: e };
             let name = stat
                 .derived("ply texture 1", path, || {
-                    let bytes = std::fs::read(path).map_err(io)?;
-                    let header =
-                        ply::parse_header(&bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?;
+                    // The header alone (`ply::check_file`), not the whole frame.
+                    let header = checked_ply(path)?;
                     Ok(header.comments.into_iter().find(|c| c.trim().starts_with("TextureFile")).unwrap_or_default())
                 })
                 .map_err(io)??;
