@@ -6,7 +6,7 @@
 //! panic or an unbounded allocation.
 //!
 //! [`parse_header`] parses the header (formats, scalar types, elements and properties); [`read()`] decodes a file's
-//! bytes into [`PlyData`]; [`read_file`] reads a file from disk, streaming the common little-endian cloud layouts
+//! bytes into [`PlyData`]; [`read_file`] reads a file from disk, streaming the common binary cloud layouts
 //! (the `columns` module's one-pass decoder) and giving the same data and errors as [`read()`] of its bytes;
 //! [`write()`] encodes points and triangles.
 
@@ -101,26 +101,33 @@ mod tests {
         assert_eq!(read(&b).unwrap().positions, [[1.5, -2.0, 7.0]]);
     }
 
-    /// A little-endian or big-endian file with the given float and uchar columns in that order (big endian goes
-    /// through the general path, so it is the fast path's reference).
-    fn columns(props: &[&str], rows: &[Vec<f32>], be: bool) -> Vec<u8> {
+    /// A file in `format` with the given float and uchar columns in that order (ascii goes through the general
+    /// path, so it is the binary fast path's reference).
+    fn columns(props: &[&str], rows: &[Vec<f32>], format: Format) -> Vec<u8> {
         let is_byte = |p: &str| ["red", "green", "blue"].contains(&p);
-        let mut b = format!(
-            "ply\nformat binary_{}_endian 1.0\nelement vertex {}\n",
-            if be { "big" } else { "little" },
-            rows.len()
-        );
+        let name = match format {
+            Format::Ascii => "ascii",
+            Format::BinaryLe => "binary_little_endian",
+            Format::BinaryBe => "binary_big_endian",
+        };
+        let mut b = format!("ply\nformat {name} 1.0\nelement vertex {}\n", rows.len());
         for p in props {
             b += &format!("property {} {p}\n", if is_byte(p) { "uchar" } else { "float" });
         }
         let mut b = (b + "end_header\n").into_bytes();
         for row in rows {
             for (p, &v) in props.iter().zip(row) {
-                match (is_byte(p), be) {
+                match (is_byte(p), format) {
+                    // Shortest round-trip decimals (and `NaN`, `inf`): the same f32 back.
+                    (true, Format::Ascii) => b.extend_from_slice(format!("{} ", v as u8).as_bytes()),
+                    (false, Format::Ascii) => b.extend_from_slice(format!("{v} ").as_bytes()),
                     (true, _) => b.push(v as u8),
-                    (false, false) => b.extend_from_slice(&v.to_le_bytes()),
-                    (false, true) => b.extend_from_slice(&v.to_be_bytes()),
+                    (false, Format::BinaryLe) => b.extend_from_slice(&v.to_le_bytes()),
+                    (false, Format::BinaryBe) => b.extend_from_slice(&v.to_be_bytes()),
                 }
+            }
+            if format == Format::Ascii {
+                b.push(b'\n');
             }
         }
         b
@@ -136,22 +143,25 @@ mod tests {
             &["nx", "ny", "nz", "x", "y", "z", "red", "green", "blue"],
             &["x", "y", "z", "red", "green", "blue", "nx", "ny", "nz"],
         ];
+        let formats = [Format::BinaryLe, Format::BinaryBe, Format::Ascii];
         for props in layouts {
             let rows: Vec<Vec<f32>> =
                 (0..37).map(|i| (0..props.len()).map(|k| (i * 7 + k * 31) as f32 * 0.75 % 255.0).collect()).collect();
-            let fast = read(&columns(props, &rows, false)).unwrap();
-            let general = read(&columns(props, &rows, true)).unwrap();
-            assert_eq!(fast, general, "{props:?}");
-            assert_eq!(fast.positions.len(), 37);
-            assert_eq!(fast.normals.is_some(), props.contains(&"nx"), "{props:?}");
-            assert_eq!(fast.colors.is_some(), props.contains(&"red"), "{props:?}");
+            let general = read(&columns(props, &rows, Format::Ascii)).unwrap();
+            for format in [Format::BinaryLe, Format::BinaryBe] {
+                let fast = read(&columns(props, &rows, format)).unwrap();
+                assert_eq!(fast, general, "{props:?} {format:?}");
+                assert_eq!(fast.positions.len(), 37);
+                assert_eq!(fast.normals.is_some(), props.contains(&"nx"), "{props:?}");
+                assert_eq!(fast.colors.is_some(), props.contains(&"red"), "{props:?}");
+            }
             // A NaN or infinity in any position component of any row is refused and named by its row.
             for (row, bad) in [(0, f32::NAN), (19, f32::INFINITY), (36, f32::NEG_INFINITY)] {
                 for k in ["x", "y", "z"] {
                     let mut r = rows.clone();
                     r[row][props.iter().position(|p| *p == k).unwrap()] = bad;
-                    for be in [false, true] {
-                        let e = read(&columns(props, &r, be)).unwrap_err();
+                    for format in formats {
+                        let e = read(&columns(props, &r, format)).unwrap_err();
                         assert!(matches!(e, PlyError::Body { row: r, .. } if r == row), "{props:?} {k} {row}: {e}");
                     }
                 }
@@ -160,7 +170,9 @@ mod tests {
             if let Some(k) = props.iter().position(|p| *p == "nx") {
                 let mut r = rows.clone();
                 r[3][k] = f32::NAN;
-                assert!(read(&columns(props, &r, false)).unwrap().normals.unwrap()[3][0].is_nan());
+                for format in formats {
+                    assert!(read(&columns(props, &r, format)).unwrap().normals.unwrap()[3][0].is_nan());
+                }
             }
         }
     }

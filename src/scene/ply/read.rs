@@ -1,6 +1,6 @@
-//! Decoding a PLY body into [`PlyData`]: the common little-endian cloud layouts through the one-pass decoder of
-//! the `columns` module, fixed-size binary rows (big endian, any scalar type) read straight from the row, and a
-//! general path for everything else (ascii, lists).
+//! Decoding a PLY body into [`PlyData`]: the common binary cloud layouts through the one-pass decoder of the
+//! `columns` module, other fixed-size binary rows (any scalar type) read straight from the row, and a general
+//! path for everything else (ascii, lists).
 
 use super::columns::{Columns, Layout};
 use super::header::{parse_header, Element, Format, Scalar};
@@ -243,8 +243,6 @@ fn parse_number(t: &[u8]) -> Option<f64> {
 /// fast path checks as it reads; otherwise the caller checks).
 fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<bool, PlyError> {
     c.check_count(el)?;
-    let slots: Vec<usize> = el.props.iter().map(|p| if p.list.is_some() { NO_SLOT } else { slot(&p.name) }).collect();
-    let has = |s: usize| slots.contains(&s);
     require_xyz(el)?;
     let n = el.count;
     if let Some(layout) = Layout::of(el, c.format) {
@@ -255,6 +253,8 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         c.pos += data.len();
         return Ok(cols.finish(out));
     }
+    let slots: Vec<usize> = el.props.iter().map(|p| if p.list.is_some() { NO_SLOT } else { slot(&p.name) }).collect();
+    let has = |s: usize| slots.contains(&s);
     let has_n = has(SLOT_NX) && has(SLOT_NX + 1) && has(SLOT_NX + 2);
     let has_c = has(SLOT_R) && has(SLOT_R + 1) && has(SLOT_R + 2);
     let has_uv = has(SLOT_U) && has(SLOT_U + 1);
@@ -305,48 +305,20 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
             .filter(|(_, &s)| s != NO_SLOT)
             .map(|((p, &o), &s)| (o, p.ty, s))
             .collect();
-        let rows = || data.chunks_exact(row_size);
-        // Column fast paths: a group of three consecutive properties of one type (x y z float, nx ny nz float,
-        // red green blue uchar) is decoded by one tight loop each; anything else goes through the generic row loop.
-        let group = |first: usize, ty: Scalar| -> Option<usize> {
-            let at = |s: usize| mapped.iter().find(|m| m.2 == s);
-            let (a, b, c) = (at(first)?, at(first + 1)?, at(first + 2)?);
-            (a.1 == ty && b.1 == ty && c.1 == ty && b.0 == a.0 + ty.size() && c.0 == b.0 + ty.size()).then_some(a.0)
-        };
-        let f = |r: &[u8], o: usize| {
-            let b = [r[o], r[o + 1], r[o + 2], r[o + 3]];
-            if be {
-                f32::from_be_bytes(b)
-            } else {
-                f32::from_le_bytes(b)
+        // (The common cloud layouts took the `columns` path above; this is any other mix of scalar types.)
+        for row in data.chunks_exact(row_size) {
+            for &(o, t, s) in &mapped {
+                v[s] = t.read(&row[o..], be);
             }
-        };
-        let xyz = group(SLOT_X, Scalar::F32);
-        let nxyz = if has_n { group(SLOT_NX, Scalar::F32) } else { None };
-        let rgb = if has_c && !slots.contains(&SLOT_A) { group(SLOT_R, Scalar::U8) } else { None };
-        if let Some(o) = xyz.filter(|_| (!has_n || nxyz.is_some()) && (!has_c || rgb.is_some()) && !has_uv) {
-            out.positions = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
-            if let Some(o) = nxyz {
-                normals = rows().map(|r| [f(r, o), f(r, o + 4), f(r, o + 8)]).collect();
+            out.positions.push([v[0] as f32, v[1] as f32, v[2] as f32]);
+            if has_n {
+                normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
             }
-            if let Some(o) = rgb {
-                colors = rows().map(|r| [r[o], r[o + 1], r[o + 2], 255]).collect();
+            if has_c {
+                colors.push(to_rgba8(&v, color_scale));
             }
-        } else {
-            for row in rows() {
-                for &(o, t, s) in &mapped {
-                    v[s] = t.read(&row[o..], be);
-                }
-                out.positions.push([v[0] as f32, v[1] as f32, v[2] as f32]);
-                if has_n {
-                    normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
-                }
-                if has_c {
-                    colors.push(to_rgba8(&v, color_scale));
-                }
-                if has_uv {
-                    uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
-                }
+            if has_uv {
+                uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
             }
         }
         c.pos += total;
