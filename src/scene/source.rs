@@ -312,8 +312,7 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
 
 /// Copies `rest` into `out` with `m` applied, reusing `out`'s buffers.
 fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
-    // (`transformed` does the same to a scene it owns, with the same operations: keep the two in step.)
-    let nm = super::gltf::pose::normal_matrix(&m);
+    let t = VertexTransform::new(m);
     out.materials = rest.materials.clone();
     out.textures = rest.textures.clone();
     out.lights.clear();
@@ -336,26 +335,55 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
         o.material = p.material;
         o.object = p.object;
         o.positions.clear();
-        o.positions.extend(p.positions.iter().map(|v| m.transform_point3(*v)));
+        o.positions.extend(p.positions.iter().map(|&v| t.point(v)));
         o.normals.clear();
-        o.normals.extend(p.normals.iter().map(|n| (nm * *n).normalize_or_zero()));
+        o.normals.extend(p.normals.iter().map(|&n| t.normal(n)));
         o.tangents.clear();
-        o.tangents.extend(p.tangents.iter().map(|t| super::gltf::pose::tangent(&m, *t)));
+        o.tangents.extend(p.tangents.iter().map(|&v| t.tangent(v)));
     }
 }
 
 /// `scene` transformed by `m` in place: what [`transform_into`] copies out of a scene it borrows, bit for bit.
 fn transformed(mut scene: PosedScene, m: Mat4) -> PosedScene {
-    let nm = super::gltf::pose::normal_matrix(&m);
+    let t = VertexTransform::new(m);
     for l in &mut scene.lights {
         *l = l.transformed(m);
     }
     for p in &mut scene.primitives {
-        p.positions.iter_mut().for_each(|v| *v = m.transform_point3(*v));
-        p.normals.iter_mut().for_each(|n| *n = (nm * *n).normalize_or_zero());
-        p.tangents.iter_mut().for_each(|t| *t = super::gltf::pose::tangent(&m, *t));
+        p.positions.iter_mut().for_each(|v| *v = t.point(*v));
+        p.normals.iter_mut().for_each(|n| *n = t.normal(*n));
+        p.tangents.iter_mut().for_each(|v| *v = t.tangent(*v));
     }
     scene
+}
+
+/// What a transform does to a vertex's position, normal and tangent: one definition for [`transform_into`] and
+/// [`transformed`], so the copy and the in-place transform agree bit for bit.
+struct VertexTransform {
+    m: Mat4,
+    /// The normals' matrix (the cofactor matrix: right under non-uniform scale and mirroring).
+    nm: glam::Mat3,
+}
+
+impl VertexTransform {
+    fn new(m: Mat4) -> VertexTransform {
+        VertexTransform { m, nm: super::gltf::pose::normal_matrix(&m) }
+    }
+
+    #[inline]
+    fn point(&self, v: Vec3) -> Vec3 {
+        self.m.transform_point3(v)
+    }
+
+    #[inline]
+    fn normal(&self, n: Vec3) -> Vec3 {
+        (self.nm * n).normalize_or_zero()
+    }
+
+    #[inline]
+    fn tangent(&self, t: Vec4) -> Vec4 {
+        super::gltf::pose::tangent(&self.m, t)
+    }
 }
 
 /// The ground plane's geometry at height `z`, in world space: a double-sided diffuse rectangle facing +Z (two
