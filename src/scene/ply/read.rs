@@ -288,6 +288,19 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         });
     let mut v = [0f64; 12];
     v[SLOT_A] = 255.0;
+    // One row's values (by slot) onto the columns the element has.
+    let mut push = |v: &[f64; 12]| {
+        out.positions.push([v[0] as f32, v[1] as f32, v[2] as f32]);
+        if has_n {
+            normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
+        }
+        if has_c {
+            colors.push(to_rgba8(v, color_scale));
+        }
+        if has_uv {
+            uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
+        }
+    };
     if let Some(offsets) = fixed {
         // Fixed-size rows: one bounds check for the whole element, then straight reads.
         let row_size: usize = el.props.iter().map(|p| p.ty.size()).sum();
@@ -310,16 +323,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
             for &(o, t, s) in &mapped {
                 v[s] = t.read(&row[o..], be);
             }
-            out.positions.push([v[0] as f32, v[1] as f32, v[2] as f32]);
-            if has_n {
-                normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
-            }
-            if has_c {
-                colors.push(to_rgba8(&v, color_scale));
-            }
-            if has_uv {
-                uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
-            }
+            push(&v);
         }
         c.pos += total;
     } else {
@@ -340,16 +344,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
                     }
                 }
             }
-            out.positions.push([v[0] as f32, v[1] as f32, v[2] as f32]);
-            if has_n {
-                normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
-            }
-            if has_c {
-                colors.push(to_rgba8(&v, color_scale));
-            }
-            if has_uv {
-                uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
-            }
+            push(&v);
         }
     }
     out.normals = has_n.then_some(normals);
