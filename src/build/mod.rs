@@ -88,8 +88,7 @@ impl Build {
         Ok(Build::new(m))
     }
 
-    /// Uses the cache at `dir` (default: the manifest's `[dataset] cache`, else `cache/` in the working
-    /// directory).
+    /// Uses the cache at `dir` (default: the manifest's `[dataset] cache`, else `cache/` beside the manifest).
     pub fn cache(mut self, dir: impl Into<PathBuf>) -> Build {
         self.cache = Some(dir.into());
         self
@@ -129,13 +128,12 @@ impl Build {
     }
 }
 
-/// The manifest's cache: `[dataset] cache` (manifest-relative), else `cache/` in the working directory. (The
-/// CLI's `VVGEN_CACHE` overrides both; the library reads no environment.)
+/// The manifest's cache: `[dataset] cache` (manifest-relative), else `cache/` beside the manifest, as `out`
+/// resolves: where a command runs never changes which cache a manifest uses (a build from another folder would
+/// otherwise render everything again into a new cache). The CLI's `VVGEN_CACHE` overrides both; the library
+/// reads no environment.
 pub fn default_cache_dir(m: &Manifest) -> PathBuf {
-    match m.dataset.cache() {
-        Some(c) => m.resolve(c),
-        None => PathBuf::from("cache"),
-    }
+    m.resolve(m.dataset.cache().unwrap_or("cache"))
 }
 
 /// Progress events of a build.

@@ -242,9 +242,16 @@ pub fn run() -> ExitCode {
 
 /// The cache a command uses: `VVGEN_CACHE` when set (shared caches on clusters), else the manifest's.
 pub(crate) fn cache_dir(m: &crate::manifest::Manifest) -> PathBuf {
+    cache_choice(m).0
+}
+
+/// The cache a command uses and why that one, for `status`: a user who finds a second cache asks where it came
+/// from.
+pub(crate) fn cache_choice(m: &crate::manifest::Manifest) -> (PathBuf, &'static str) {
     match std::env::var_os("VVGEN_CACHE").filter(|p| !p.is_empty()) {
-        Some(p) => PathBuf::from(p),
-        None => crate::build::default_cache_dir(m),
+        Some(p) => (PathBuf::from(p), "VVGEN_CACHE"),
+        None if m.dataset.cache().is_some() => (crate::build::default_cache_dir(m), "[dataset] cache"),
+        None => (crate::build::default_cache_dir(m), "the default: cache/ beside the manifest"),
     }
 }
 

@@ -38,17 +38,22 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     if !WRITERS.contains(&writer) {
         bail!("unknown writer `{writer}`: one of {}", WRITERS.join(", "));
     }
-    let name: String = asset
+    // `vvgen new .` names the dataset after the folder, not after `.`.
+    let named = if asset.is_dir() { absolute(asset)? } else { asset.to_path_buf() };
+    let name: String = named
         .file_stem()
         .map(|s| s.to_string_lossy().chars().map(|c| if c.is_alphanumeric() || c == '-' { c } else { '-' }).collect())
         .filter(|s: &String| !s.is_empty())
         .unwrap_or_else(|| "dataset".into());
+    // What the asset is comes first: `vvgen new base.toml` is "not an asset", not "base.toml exists".
+    let (kind, up, note) = describe(asset)?;
     let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
     if out.exists() {
         bail!("{} exists: choose another with -o", out.display());
     }
-    let (kind, up, note) = describe(asset)?;
-    let manifest_dir = absolute(out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")))?;
+    let folder = crate::manifest::folder_of(&out);
+    std::fs::create_dir_all(folder).with_context(|| format!("creating the folder {}", folder.display()))?;
+    let manifest_dir = absolute(folder)?;
     let rel = |p: &Path| -> anyhow::Result<String> { Ok(relative(&manifest_dir, &absolute(p)?)) };
     let text = manifest(&name, asset, &kind, up, &note, writer, &rel)?;
     std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
@@ -155,8 +160,7 @@ fn manifest(
             1
         }
         Asset::Sequence { key, glob, frames } => {
-            let dir =
-                if asset.is_dir() { asset.to_path_buf() } else { asset.parent().unwrap_or(Path::new(".")).into() };
+            let dir = if asset.is_dir() { asset.to_path_buf() } else { crate::manifest::folder_of(asset).into() };
             let pattern = format!("{}/{glob}", rel(&dir)?.trim_end_matches('/'));
             let _ = writeln!(w, "{key} = \"{pattern}\"   # {frames} file(s), natural order");
             let _ = writeln!(w, "frames = {{ fps = 30 }}   # recorded in the metadata; set your capture's rate");
@@ -164,8 +168,11 @@ fn manifest(
         }
     };
     let _ = writeln!(w, "\n[transform]\nup     = \"{up}\"    # {}", up_note(note));
-    let _ =
-        writeln!(w, "fit    = {{ height = 2.4 }}   # NeRF-synthetic's ±1.3 box: near 2 / far 6 hold for every loader");
+    let _ = writeln!(
+        w,
+        "fit    = \"frame\"   # the whole subject, every frame, inside every camera (5 % margin): within 1.3 of the\n\
+         \x20                  # centre, so NeRF-synthetic's near 2 / far 6 hold; its height convention: {{ height = 2.4 }}"
+    );
     let _ =
         writeln!(w, "center = \"bbox\"\nover   = \"all-frames\"        # one normalization for the whole sequence\n");
     let _ = writeln!(

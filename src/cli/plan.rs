@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
+use super::{cache_choice, cache_dir, load_manifest, Ui, EXIT_INVALID};
 use crate::build::{self, State};
 
 pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> anyhow::Result<ExitCode> {
@@ -44,7 +44,7 @@ pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> 
 
 pub fn status(manifest: &Path, verify: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
-    let cache = cache_dir(&m);
+    let (cache, why) = cache_choice(&m);
     let st = build::status_with(&m, &cache, false, verify)?;
     let total: usize = st.kinds.values().map(|k| k.planned).sum();
     let done: usize = st.kinds.values().map(|k| k.cached).sum();
@@ -63,7 +63,7 @@ pub fn status(manifest: &Path, verify: bool, ui: Ui) -> anyhow::Result<ExitCode>
         println!("  {}: {}", a.label, a.reasons.join("; "));
     }
     let (files, bytes) = dir_size(&cache);
-    println!("cache {}: {files} files, {:.1} MB", cache.display(), bytes as f64 / 1e6);
+    println!("cache {} ({why}): {files} files, {:.1} MB", cache.display(), bytes as f64 / 1e6);
     Ok(ExitCode::SUCCESS)
 }
 

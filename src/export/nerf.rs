@@ -123,7 +123,9 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
         if first != 0.0 {
             files.warn(format!("split `{split}` starts at time {first}: D-NeRF asserts every split starts at 0"));
         }
-        if split == "train" && last != 1.0 {
+        // A one-frame scene is a NeRF-synthetic set (time 0 throughout), which NeRF, 3DGS and nerfstudio read
+        // as it is; only D-NeRF's own loader asserts the end, and it is for scenes that move.
+        if split == "train" && last != 1.0 && x.plan.frames > 1 {
             files.warn(format!("split `train` ends at time {last}: D-NeRF asserts it ends at exactly 1"));
         }
         let mut doc = intrinsics(&x.plan.images[list[0]]);

@@ -21,8 +21,8 @@ pub struct Dataset {
     /// Root of every random stream (camera draws, point samples).
     #[serde(default)]
     pub seed: u64,
-    /// Cache directory, relative to the manifest (default `cache/` in the working directory; `VVGEN_CACHE`
-    /// overrides both).
+    /// Cache directory, relative to the manifest (default `cache/` beside the manifest, wherever the command
+    /// runs; `VVGEN_CACHE` overrides both).
     #[serde(default)]
     #[schemars(with = "Option<String>")]
     pub(super) cache: Option<Spanned<String>>,

@@ -10,6 +10,7 @@ pub mod consumers;
 pub mod dataset;
 pub mod diag;
 pub mod frames;
+pub mod framing;
 pub mod light;
 pub mod output;
 pub mod render;
@@ -42,6 +43,15 @@ use suggest::did_you_mean;
 /// The top-level tables, in the order the reference documents them.
 pub const TABLES: &[&str] =
     &["dataset", "source", "transform", "render", "environment", "light", "rig", "split", "output"];
+
+/// The folder a file's relative names resolve against: its parent, or `.` for a bare name (`Path::parent`
+/// of `model.gltf` is the empty path, which `canonicalize` and `read_dir` refuse).
+pub fn folder_of(file: &Path) -> &Path {
+    match file.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
 
 /// A validated manifest. Named tables are kept sorted by name, so table order in the file never matters.
 #[derive(Debug, Clone)]
@@ -193,7 +203,7 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
     if let Some(r) = &render {
         r.validate(diags);
     }
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let dir = folder_of(path).to_path_buf();
     let mut after = Vec::new();
     for a in dataset.iter().flat_map(|d| &d.after) {
         match after::load(&dir, a.get_ref(), stack) {

@@ -17,7 +17,7 @@ pub struct Transform {
     /// The source's up axis: `"y"` (glTF, most scanners) or `"z"`. Default: `"y"` for glTF, `"z"` otherwise.
     pub up: Option<UpAxis>,
     /// Scale so that one measure of the bounds has this size.
-    #[schemars(with = "Option<Fit>")]
+    #[schemars(with = "Option<FitSchema>")]
     pub(super) fit: Option<Spanned<Fit>>,
     /// Which point moves to the origin (default `"none"`).
     pub center: Option<Center>,
@@ -44,9 +44,9 @@ pub enum UpAxis {
     Z,
 }
 
-/// `fit = { height = … }` / `{ radius = … }` / `{ extent = … }`: exactly one.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
+/// `fit = "frame"`, `{ frame = true, margin = … }`, `{ height = … }`, `{ radius = … }` or `{ extent = … }`:
+/// exactly one measure.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Fit {
     /// Size along world Z.
     pub height: Option<f64>,
@@ -54,6 +54,88 @@ pub struct Fit {
     pub radius: Option<f64>,
     /// Largest side of the bounding box.
     pub extent: Option<f64>,
+    /// Scale so that the subject, over every frame, is whole inside every camera of every rig a split uses.
+    pub frame: bool,
+    /// With `frame`: the share of the room to the image's nearest edge left empty (default
+    /// [`FRAME_MARGIN`]).
+    pub margin: Option<f64>,
+}
+
+/// The margin `fit = "frame"` leaves: the subject's bounding sphere reaches 95 % of the way to the nearest image
+/// edge, so an edge pixel's filter footprint still sees background.
+pub const FRAME_MARGIN: f64 = 0.05;
+
+impl Fit {
+    /// The margin of a frame fit (`None` for the other measures).
+    pub fn frame_margin(&self) -> Option<f64> {
+        self.frame.then(|| self.margin.unwrap_or(FRAME_MARGIN))
+    }
+}
+
+/// The table form of [`Fit`] as written.
+#[derive(Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+struct FitTable {
+    /// Size along world Z (NeRF-synthetic subjects: `height = 2.4`).
+    height: Option<f64>,
+    /// Radius of the sphere about the centre that encloses the bounding box.
+    radius: Option<f64>,
+    /// Largest side of the bounding box.
+    extent: Option<f64>,
+    /// `true`: as `fit = "frame"`.
+    frame: Option<bool>,
+    /// With `frame = true`: the share of the room to the nearest image edge left empty (default 0.05).
+    margin: Option<f64>,
+}
+
+/// The word form: `fit = "frame"`.
+#[derive(schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+#[allow(dead_code)]
+enum FitWord {
+    /// The whole subject, over the whole clip, inside every camera of every rig, with a 5 % margin.
+    Frame,
+}
+
+/// What `fit` accepts, for the schema.
+#[derive(schemars::JsonSchema)]
+#[allow(dead_code)]
+enum FitSchema {
+    /// `fit = "frame"`.
+    Word(FitWord),
+    /// `fit = { height = 2.4 }` and the like.
+    Table(FitTable),
+}
+
+impl<'de> Deserialize<'de> for Fit {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Fit, D::Error> {
+        // By hand rather than an untagged enum: serde's untagged error ("did not match any variant") names
+        // neither form.
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Fit;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("\"frame\" or a table such as { height = 2.4 }")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Fit, E> {
+                match v {
+                    "frame" => Ok(Fit { frame: true, ..Fit::default() }),
+                    _ => Err(E::invalid_value(serde::de::Unexpected::Str(v), &self)),
+                }
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, a: A) -> Result<Fit, A::Error> {
+                let t = FitTable::deserialize(serde::de::value::MapAccessDeserializer::new(a))?;
+                Ok(Fit {
+                    height: t.height,
+                    radius: t.radius,
+                    extent: t.extent,
+                    frame: t.frame.unwrap_or(false),
+                    margin: t.margin,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// Centering rule.
@@ -94,16 +176,26 @@ impl Transform {
         if let Some(fit) = &self.fit {
             let f = fit.get_ref();
             let given: Vec<f64> = [f.height, f.radius, f.extent].into_iter().flatten().collect();
-            if given.len() != 1 {
+            if f.frame && !given.is_empty() || !f.frame && given.len() != 1 {
                 diags.push(
-                    Diagnostic::error("`fit` takes exactly one of `height`, `radius`, `extent`", Some(fit.span()))
-                        .with_help("e.g. fit = { height = 2.4 }"),
+                    Diagnostic::error(
+                        "`fit` takes exactly one of `frame`, `height`, `radius`, `extent`",
+                        Some(fit.span()),
+                    )
+                    .with_help("e.g. fit = \"frame\" (the whole subject in every camera) or fit = { height = 2.4 }"),
                 );
-            } else if !(given[0].is_finite() && given[0] > 0.0) {
-                diags.push(Diagnostic::error(
-                    format!("fit size {} must be a positive number", given[0]),
-                    Some(fit.span()),
-                ));
+            } else if f.margin.is_some() && !f.frame {
+                diags.push(
+                    Diagnostic::error("`margin` goes with `frame` only", Some(fit.span()))
+                        .with_help("fit = { frame = true, margin = 0.1 }"),
+                );
+            } else if let Some(m) = f.margin.filter(|m| !(0.0..0.9).contains(m)) {
+                diags.push(
+                    Diagnostic::error(format!("margin {m} is outside 0 … 0.9"), Some(fit.span()))
+                        .with_help("the share of the room to the image edge left empty, e.g. margin = 0.05"),
+                );
+            } else if let Some(&v) = given.first().filter(|v| !(v.is_finite() && **v > 0.0)) {
+                diags.push(Diagnostic::error(format!("fit size {v} must be a positive number"), Some(fit.span())));
             }
         }
         if let Some(m) = &self.matrix {

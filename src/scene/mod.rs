@@ -166,6 +166,8 @@ impl Scene {
         let mut scratch = PoseScratch::default();
         let mut posed = PosedScene::default();
         let mut locals = Vec::new();
+        // What a frame fit sizes the subject to: the splits' cameras, read off the manifest.
+        let reach = crate::manifest::framing::reach(m);
         for (src, (_, cfg)) in sources.iter().zip(&m.sources) {
             if src.ground.is_some() {
                 // Placed in world units: no transform, and no part in fitting the others.
@@ -178,11 +180,15 @@ impl Scene {
             let pre = transform::pre(&t, up).as_mat4();
             let mut stats = Stats::default();
             if transform::needs_stats(&t) {
-                gather(src, pre, over, &mut scratch, &mut posed, &mut stats)?;
+                gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.add(p))?;
+            }
+            if let Some(c) = transform::frame_centre(&t, &stats) {
+                gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.far = stats.far.max(farthest(p, c)))?;
             }
             let table = || format!("source `{}`", src.name);
             locals.push(
-                transform::resolve(&t, up, &stats).map_err(|source| Error::Transform { table: table(), source })?,
+                transform::resolve(&t, up, &stats, reach.as_ref())
+                    .map_err(|source| Error::Transform { table: table(), source })?,
             );
         }
         // The global table's `up` is only the sources' default: the rotation was applied per source.
@@ -190,12 +196,20 @@ impl Scene {
         g.up = None;
         let g_pre = transform::pre(&g, UpAxis::Z).as_mat4();
         let mut stats = Stats::default();
+        let over = g.over.unwrap_or_default();
+        let fitted = || sources.iter().zip(&locals).filter(|(s, _)| s.ground.is_none());
         if transform::needs_stats(&g) {
-            for (src, local) in sources.iter().zip(&locals).filter(|(s, _)| s.ground.is_none()) {
-                gather(src, g_pre * *local, g.over.unwrap_or_default(), &mut scratch, &mut posed, &mut stats)?;
+            for (src, local) in fitted() {
+                gather(src, g_pre * *local, over, &mut scratch, &mut posed, &mut |p| stats.add(p))?;
             }
         }
-        let global = transform::resolve(&g, UpAxis::Z, &stats)
+        if let Some(c) = transform::frame_centre(&g, &stats) {
+            for (src, local) in fitted() {
+                let far = &mut stats.far;
+                gather(src, g_pre * *local, over, &mut scratch, &mut posed, &mut |p| *far = far.max(farthest(p, c)))?;
+            }
+        }
+        let global = transform::resolve(&g, UpAxis::Z, &stats, reach.as_ref())
             .map_err(|source| Error::Transform { table: "[transform]".into(), source })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
         let file_lights = m.render.gltf_lights && m.lit();
@@ -212,7 +226,9 @@ impl Scene {
             let mut stats = Stats::default();
             for i in 0..self.sources.len() {
                 if self.sources[i].ground.is_none() {
-                    gather(&self.sources[i], self.world_from_source(i), Over::AllFrames, scratch, posed, &mut stats)?;
+                    gather(&self.sources[i], self.world_from_source(i), Over::AllFrames, scratch, posed, &mut |p| {
+                        stats.add(p)
+                    })?;
                 }
             }
             if stats.count > 0 {
@@ -287,13 +303,19 @@ impl Scene {
 }
 
 /// Accumulates the bounds of `src`'s frames (`over`) after `post`.
+/// The distance of the point of `points` farthest from `c`.
+fn farthest(points: &[glam::Vec3], c: glam::DVec3) -> f64 {
+    points.iter().map(|p| p.as_dvec3().distance_squared(c)).fold(0.0, f64::max).sqrt()
+}
+
+/// Shows `visit` the positions of every frame `over` selects of `src`, after `post`, in frame order.
 fn gather(
     src: &LoadedSource,
     post: Mat4,
     over: Over,
     scratch: &mut PoseScratch,
     posed: &mut PosedScene,
-    stats: &mut Stats,
+    visit: &mut dyn FnMut(&[glam::Vec3]),
 ) -> Result<(), Error> {
     let frames = if over == Over::First { 1 } else { src.frame_count() };
     // Fresh buffers per source (another source's materials must not carry over), reused across its frames.
@@ -314,7 +336,7 @@ fn gather(
                 .collect();
             for frame in read {
                 for p in &frame?.primitives {
-                    stats.add(&p.positions);
+                    visit(&p.positions);
                 }
             }
         }
@@ -323,7 +345,7 @@ fn gather(
     for f in 0..frames {
         src.pose(f, post, scratch, posed)?;
         for p in &posed.primitives {
-            stats.add(&p.positions);
+            visit(&p.positions);
         }
     }
     Ok(())

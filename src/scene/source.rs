@@ -232,7 +232,7 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
     let Some(name) = comments.iter().find_map(|c| c.trim().strip_prefix("TextureFile").map(str::trim)) else {
         return Ok(None);
     };
-    let tex = path.parent().unwrap_or(std::path::Path::new(".")).join(name);
+    let tex = crate::manifest::folder_of(path).join(name);
     if !tex.is_file() {
         return Err(Error::Mesh {
             path: path.to_path_buf(),

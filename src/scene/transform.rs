@@ -5,6 +5,7 @@
 
 use glam::{DMat4, DVec3, Mat4, Vec3};
 
+use crate::manifest::framing::Reach;
 use crate::manifest::transform::{Center, Scale, Transform, UpAxis};
 
 /// Bounds and centroid accumulator.
@@ -18,11 +19,20 @@ pub struct Stats {
     pub sum: DVec3,
     /// Number of points.
     pub count: u64,
+    /// The distance of the farthest point from the centre the transform moves to the origin: a frame fit's
+    /// measure, gathered in a second pass once that centre is known ([`frame_centre`]).
+    pub far: f64,
 }
 
 impl Default for Stats {
     fn default() -> Self {
-        Stats { lo: DVec3::splat(f64::INFINITY), hi: DVec3::splat(f64::NEG_INFINITY), sum: DVec3::ZERO, count: 0 }
+        Stats {
+            lo: DVec3::splat(f64::INFINITY),
+            hi: DVec3::splat(f64::NEG_INFINITY),
+            sum: DVec3::ZERO,
+            count: 0,
+            far: 0.0,
+        }
     }
 }
 
@@ -61,6 +71,21 @@ pub enum Error {
     /// Fitting or centring was asked of a source with no geometry.
     #[error("cannot fit or centre: the source has no geometry")]
     NoGeometry,
+    /// A frame fit has no camera to size the subject for.
+    #[error(
+        "`fit = \"frame\"` sizes the subject for the splits' cameras, and no split uses a rig that places them \
+         around a target: use fit = {{ height = … }} or fit = {{ radius = … }}"
+    )]
+    NoFraming,
+    /// A frame fit's cameras cannot hold any subject whole.
+    #[error(
+        "`fit = \"frame\"`: rig `{rig}`'s cameras cannot see a sphere about the origin whole (its target is too far \
+         off-centre, or its cameras too close): move its target nearer the origin or raise its radius"
+    )]
+    NoRoom {
+        /// The rig.
+        rig: String,
+    },
     /// The measure a fit scales to is zero.
     #[error("cannot fit {what}: the geometry's {what} is zero")]
     ZeroExtent {
@@ -74,21 +99,46 @@ pub fn needs_stats(t: &Transform) -> bool {
     t.fit().is_some() || matches!(t.center, Some(Center::Bbox | Center::Centroid))
 }
 
-/// The full matrix, given stats gathered after [`pre`]. Errors when a fit is asked of empty or flat geometry.
-pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats) -> Result<Mat4, Error> {
-    let pre = pre(t, up);
-    let center = match t.center.unwrap_or(Center::None) {
+/// The centring rule: `center`, else the bounding box's centre for a frame fit (the cameras aim at the
+/// origin), else none.
+fn center_rule(t: &Transform) -> Center {
+    t.center.unwrap_or(if t.fit().is_some_and(|f| f.frame) { Center::Bbox } else { Center::None })
+}
+
+/// The point the transform moves to the origin, in the space after [`pre`].
+fn centre_of(t: &Transform, stats: &Stats) -> DVec3 {
+    match center_rule(t) {
         Center::None => DVec3::ZERO,
         Center::Bbox => (stats.lo + stats.hi) * 0.5,
         Center::Centroid => stats.sum / stats.count.max(1) as f64,
-    };
+    }
+}
+
+/// For a frame fit: the centre whose farthest point [`Stats::far`] must be gathered before [`resolve`] (a second
+/// pass over the frames: the centre is known only once the first has seen them all).
+pub fn frame_centre(t: &Transform, stats: &Stats) -> Option<DVec3> {
+    t.fit().is_some_and(|f| f.frame).then(|| centre_of(t, stats))
+}
+
+/// The full matrix, given stats gathered after [`pre`] and, for a frame fit, the reach of the cameras
+/// ([`crate::manifest::framing::reach`]). Errors when a fit is asked of empty or flat geometry, or a frame fit
+/// of cameras with no room.
+pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats, reach: Option<&Reach>) -> Result<Mat4, Error> {
+    let pre = pre(t, up);
+    let center = centre_of(t, stats);
     if needs_stats(t) && stats.is_empty() {
         return Err(Error::NoGeometry);
     }
     let mut s = 1.0;
     if let Some(f) = t.fit() {
         let size = stats.hi - stats.lo;
-        let (measure, target, what) = if let Some(h) = f.height {
+        let (measure, target, what) = if let Some(margin) = f.frame_margin() {
+            let reach = reach.ok_or(Error::NoFraming)?;
+            if reach.radius <= 0.0 {
+                return Err(Error::NoRoom { rig: reach.rig.clone() });
+            }
+            (stats.far, reach.radius * (1.0 - margin), "size")
+        } else if let Some(h) = f.height {
             (size.z, h, "height")
         } else if let Some(r) = f.radius {
             let far = (0..8)
@@ -146,7 +196,7 @@ mod tests {
         // A column 4 tall along source Y, from y=1 to y=5: after up it spans z=1..5.
         let p = pre(&t, UpAxis::Y).as_mat4();
         st.add(&[p.transform_point3(Vec3::new(0.0, 1.0, 0.0)), p.transform_point3(Vec3::new(1.0, 5.0, 0.0))]);
-        let m = resolve(&t, UpAxis::Y, &st).unwrap();
+        let m = resolve(&t, UpAxis::Y, &st, None).unwrap();
         let top = m.transform_point3(Vec3::new(1.0, 5.0, 0.0));
         let bottom = m.transform_point3(Vec3::new(0.0, 1.0, 0.0));
         assert!((top.z - 1.0).abs() < 1e-6 && (bottom.z + 1.0).abs() < 1e-6, "{top} {bottom}");
