@@ -75,6 +75,15 @@ impl Camera {
         (z > 0.0).then(|| (self.cx + self.fx * v.x / z, self.cy - self.fy * v.y / z, z))
     }
 
+    /// Whether world point `p` is in front of the camera and projects inside the image (edges included);
+    /// `w2c` is [`Camera::w2c`], computed once by a caller that tests many points.
+    pub fn shows(&self, w2c: &DMat4, p: glam::DVec3) -> bool {
+        let v = w2c.transform_point3(p);
+        let z = -v.z;
+        let (u, t) = (self.cx + self.fx * v.x / z, self.cy - self.fy * v.y / z);
+        z > 0.0 && (0.0..=self.width as f64).contains(&u) && (0.0..=self.height as f64).contains(&t)
+    }
+
     /// The world-to-camera matrix as f32, for the rasterizer.
     pub fn w2c_f32(&self) -> Mat4 {
         self.w2c().as_mat4()

@@ -87,6 +87,19 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// Warnings were found and they are errors here: nothing was rendered.
+    #[error(
+        "{}: {} warning(s), and warnings are errors here (`[dataset] strict` or --deny-warnings):\n  {}",
+        manifest.display(),
+        warnings.len(),
+        warnings.join("\n  ")
+    )]
+    Warnings {
+        /// The manifest.
+        manifest: PathBuf,
+        /// What was found.
+        warnings: Vec<String>,
+    },
     /// `release` refuses: actions are not built.
     #[error("{pending} action(s) are not built: run `vvgen build` first (`vvgen plan --explain` says why)")]
     NotBuilt {
@@ -107,7 +120,11 @@ impl Error {
     /// Whether the error is the input's fault (the manifest, a source file): the user must change something.
     pub fn is_bad_input(&self) -> bool {
         match self {
-            Error::Manifest(_) | Error::Scene { .. } | Error::Plan { .. } | Error::TooMuchWork { .. } => true,
+            Error::Manifest(_)
+            | Error::Scene { .. }
+            | Error::Plan { .. }
+            | Error::TooMuchWork { .. }
+            | Error::Warnings { .. } => true,
             Error::Execute { source, .. } => match &**source {
                 execute::Error::Scene { .. } | execute::Error::Content { .. } => true,
                 execute::Error::Sample { source, .. } => matches!(source, crate::sample::Error::TopologyChanged),

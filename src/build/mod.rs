@@ -172,6 +172,9 @@ pub struct Options {
     /// Refuse ([`Error::NotBuilt`]) when any cacheable action would run: what `release` certifies must be
     /// built already, decided by the same lookup the build makes.
     pub require_built: bool,
+    /// Refuse ([`Error::Warnings`]) before anything runs when the scene, the plan or the framing warns
+    /// (`[dataset] strict`, the CLI's `--deny-warnings`).
+    pub deny_warnings: bool,
 }
 
 /// What a build did.
@@ -312,11 +315,17 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
             return Err(Error::NotBuilt { pending });
         }
     }
+    let to_render = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, opts.shard));
     if let Some(max) = opts.max_images {
-        let images = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, opts.shard));
-        if images > max {
-            return Err(Error::TooMuchWork { manifest: m.path.clone(), images, max });
+        if to_render.len() > max {
+            return Err(Error::TooMuchWork { manifest: m.path.clone(), images: to_render.len(), max });
         }
+    }
+    let mut warnings = p.scene.warnings.clone();
+    warnings.extend(p.plan.warnings.iter().cloned());
+    warnings.extend(crop_warnings(m, &p, &to_render)?);
+    if (opts.deny_warnings || m.dataset.strict) && !warnings.is_empty() {
+        return Err(Error::Warnings { manifest: m.path.clone(), warnings });
     }
     let environment = m.environment.as_ref().and_then(|e| e.map()).map(|f| m.resolve(f));
     let outcome = crate::cache::Committer::scope(&p.stat, |commit| {
@@ -326,8 +335,6 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     })
     .map_err(|source| Error::Execute { manifest: m.path.clone(), source: Box::new(source) })?;
     let (images, hits, renders) = image_counts(&g, &outcome);
-    let mut warnings = p.scene.warnings.clone();
-    warnings.extend(p.plan.warnings.iter().cloned());
     let mut report = Report {
         actions: outcome.counts.clone(),
         after_actions: before_actions,
@@ -393,6 +400,20 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     p.stat.save().map_err(|e| Error::cache(m, crate::cache::Error::io(p.store.root(), e)))?;
     report.total_seconds = t0.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// The crop warnings of a build: over every image when the scene poses from memory (cheap), over the images
+/// this build renders when frames are files (their frames are read for rendering anyway, and a build with
+/// nothing to render reads none). `vvgen check` measures every image.
+fn crop_warnings(m: &Manifest, p: &Prepared, to_render: &[usize]) -> Result<Vec<String>, Error> {
+    use crate::plan::coverage;
+    let images = p.scene.reads_frame_files().then_some(to_render);
+    let c = coverage::measure(&p.scene, &p.plan, images).map_err(|source| Error::Scene {
+        manifest: m.path.clone(),
+        source: Box::new(source),
+        hint: "",
+    })?;
+    Ok(coverage::warnings(m, &p.plan, &c))
 }
 
 /// Images planned, found whole in the cache, and rendered (some pass ran), from the render-pass actions.

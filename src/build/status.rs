@@ -90,7 +90,7 @@ pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> R
     let p = prepare(m, cache, verify)?;
     let g = p.graph(m)?;
     let look = execute::lookup(&g, &p.store, &p.stat);
-    let images_to_render = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, None));
+    let images_to_render = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, None)).len();
     let [w, h] = m.render.resolution();
     let per_pixel: u64 = m
         .render

@@ -8,7 +8,7 @@ use std::sync::Mutex;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use super::{cache_dir, load_manifest, Ui, EXIT_INVALID};
+use super::{cache_dir, load_manifest_warned, Ui, EXIT_INVALID};
 use crate::build::{self, Options, Progress};
 use crate::execute::Shard;
 use crate::plan::actions::Kind;
@@ -78,9 +78,23 @@ pub(super) fn parse_shard(s: &str) -> Result<Shard, String> {
 
 /// `vvgen build`: `preview: false` (`--no-preview`) skips the previews for this build.
 pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, preview: bool, ui: Ui) -> anyhow::Result<ExitCode> {
-    let Some(mut m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
+    let Some((mut m, warned)) = load_manifest_warned(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
+    let strict = opts.deny_warnings || m.dataset.strict;
+    if strict && warned > 0 {
+        eprintln!(
+            "error: {}: {warned} warning(s), and warnings are errors here (`[dataset] strict` or --deny-warnings)",
+            manifest.display()
+        );
+        return Ok(ExitCode::from(EXIT_INVALID));
+    }
     m.dataset.preview &= preview;
-    build_and_report(&m, jobs, opts, ui)?;
+    let report = build_and_report(&m, jobs, opts, ui)?;
+    // What the writers warn of is known only once they have written: the datasets stay, the exit says so.
+    let late: usize = report.after.iter().chain(&report.outputs).map(|(_, w)| w.warnings.len()).sum();
+    if strict && late > 0 {
+        eprintln!("error: {}: the writers warned {late} time(s), and warnings are errors here", manifest.display());
+        return Ok(ExitCode::from(EXIT_INVALID));
+    }
     Ok(ExitCode::SUCCESS)
 }
 

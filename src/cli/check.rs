@@ -4,12 +4,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::{Ui, EXIT_INVALID};
-use crate::manifest::{self, consumers};
-use crate::plan::Plan;
+use crate::manifest::{self, consumers, Diagnostic};
+use crate::plan::{coverage, Plan};
 use crate::scene;
 
 /// Checks each manifest; exit 2 if any has an error.
-pub fn run(paths: &[PathBuf], ui: Ui) -> anyhow::Result<ExitCode> {
+pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let mut invalid = 0;
     for path in paths {
         match manifest::load(path) {
@@ -21,12 +21,23 @@ pub fn run(paths: &[PathBuf], ui: Ui) -> anyhow::Result<ExitCode> {
                     // Its `after` manifests write its inputs: `build` plans it once they exist.
                     Ok((0, None))
                 } else {
-                    scene::frame_count(&m)
-                        .map_err(anyhow::Error::from)
-                        .and_then(|frames| Ok((frames, Some(Plan::new(&m, frames)?))))
+                    scene::frame_count(&m).map_err(anyhow::Error::from).and_then(|frames| {
+                        // The scene as the build opens it (transforms resolved, a frame fit sized), so the
+                        // framing of every planned image is measured here too.
+                        let scene = scene::Scene::open(&m)?;
+                        let plan = Plan::new(&m, frames)?;
+                        let crops = coverage::measure(&scene, &plan, None)?;
+                        let mut warnings = scene.warnings.clone();
+                        warnings.extend(plan.warnings.iter().cloned());
+                        warnings.extend(coverage::warnings(&m, &plan, &crops));
+                        Ok((frames, Some(warnings)))
+                    })
                 };
                 match planned {
-                    Ok((frames, Some(_))) => report.diagnostics.extend(consumers::frame_diagnostics(&m, frames)),
+                    Ok((frames, Some(warnings))) => {
+                        report.diagnostics.extend(consumers::frame_diagnostics(&m, frames));
+                        report.diagnostics.extend(warnings.into_iter().map(|w| Diagnostic::warning(w, None)));
+                    }
                     Ok((_, None)) => {}
                     Err(e) => {
                         invalid += 1;
@@ -34,6 +45,16 @@ pub fn run(paths: &[PathBuf], ui: Ui) -> anyhow::Result<ExitCode> {
                         eprintln!("error: {}: {e:#}", path.display());
                         continue;
                     }
+                }
+                let warned = report.diagnostics.len();
+                if (deny_warnings || m.dataset.strict) && warned > 0 {
+                    invalid += 1;
+                    eprint!("{}", report.render(ui.color));
+                    eprintln!(
+                        "{}: {warned} warning(s), and warnings are errors here (`[dataset] strict` or --deny-warnings)",
+                        path.display()
+                    );
+                    continue;
                 }
                 if !ui.quiet {
                     eprint!("{}", report.render(ui.color));

@@ -58,6 +58,9 @@ pub enum Command {
         /// Manifest files.
         #[arg(required = true)]
         manifests: Vec<PathBuf>,
+        /// Every warning is an error (exit 2), as `[dataset] strict = true` makes it.
+        #[arg(long)]
+        deny_warnings: bool,
     },
     /// Build every output of a manifest: plan the images, render them (in parallel), write the datasets.
     #[command(after_help = "Example:\n  vvgen build manifests/cesium-man.toml --jobs 2")]
@@ -81,6 +84,10 @@ pub enum Command {
         /// Skip the preview (`preview/` in each dataset: contact sheets, rig plot, viewer) for this build.
         #[arg(long)]
         no_preview: bool,
+        /// Every warning is an error (exit 2): the build stops before rendering, as `[dataset] strict = true`
+        /// makes it.
+        #[arg(long)]
+        deny_warnings: bool,
     },
     /// Build a manifest's datasets with their previews (contact sheets, rig plot, point-cloud strip, HTML
     /// viewer); with `--out`, also copy each output's preview to DIR/OUTPUT.
@@ -203,10 +210,10 @@ pub fn run() -> ExitCode {
     };
     let ui = Ui { color, quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
-        Command::Check { manifests } => check::run(&manifests, ui),
-        Command::Build { manifest, jobs, shard, verify, yes, no_preview } => {
+        Command::Check { manifests, deny_warnings } => check::run(&manifests, deny_warnings, ui),
+        Command::Build { manifest, jobs, shard, verify, yes, no_preview, deny_warnings } => {
             let max_images = (!yes).then_some(build::MAX_IMAGES_WITHOUT_YES);
-            let opts = crate::build::Options { shard, verify, max_images, ..Default::default() };
+            let opts = crate::build::Options { shard, verify, max_images, deny_warnings, ..Default::default() };
             build::run(&manifest, jobs, opts, !no_preview, ui)
         }
         Command::Preview { manifest, out, jobs } => preview::run(&manifest, out.as_deref(), jobs, ui),
@@ -257,12 +264,17 @@ pub(crate) fn cache_choice(m: &crate::manifest::Manifest) -> (PathBuf, &'static 
 
 /// Loads a manifest, printing its diagnostics; `None` when it is invalid.
 pub(crate) fn load_manifest(path: &std::path::Path, ui: Ui) -> Option<crate::manifest::Manifest> {
+    load_manifest_warned(path, ui).map(|(m, _)| m)
+}
+
+/// [`load_manifest`], with the number of warnings it printed.
+pub(crate) fn load_manifest_warned(path: &std::path::Path, ui: Ui) -> Option<(crate::manifest::Manifest, usize)> {
     match crate::manifest::load(path) {
         Ok((m, report)) => {
             if !ui.quiet && !report.diagnostics.is_empty() {
                 eprint!("{}", report.render(ui.color));
             }
-            Some(m)
+            Some((m, report.diagnostics.len()))
         }
         Err(report) => {
             eprint!("{}", report.render(ui.color));

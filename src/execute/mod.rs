@@ -289,7 +289,7 @@ pub(crate) fn runs_here(g: &Graph, state: &[State], shard: Option<Shard>) -> Vec
 }
 
 /// Images (plan indices) with a render pass among `here`.
-pub(crate) fn images_to_render(g: &Graph, here: &[bool]) -> usize {
+pub(crate) fn images_to_render(g: &Graph, here: &[bool]) -> Vec<usize> {
     let mut images: Vec<usize> = g
         .ids()
         .filter(|id| here[id.0 as usize])
@@ -300,7 +300,7 @@ pub(crate) fn images_to_render(g: &Graph, here: &[bool]) -> usize {
         .collect();
     images.sort_unstable();
     images.dedup();
-    images.len()
+    images
 }
 
 /// Runs every action `look` says must run ([`runs_here`]: those of `shard` only, when given, with the inputs

@@ -21,6 +21,9 @@ pub struct Dataset {
     /// Root of every random stream (camera draws, point samples).
     #[serde(default)]
     pub seed: u64,
+    /// Every warning is an error: `check` exits 2 and `build` stops before rendering (as `--deny-warnings`).
+    #[serde(default)]
+    pub strict: bool,
     /// Cache directory, relative to the manifest (default `cache/` beside the manifest, wherever the command
     /// runs; `VVGEN_CACHE` overrides both).
     #[serde(default)]

@@ -134,14 +134,19 @@ fn render_one(path: &Path, src: &str, d: &Diagnostic, color: bool) -> String {
             }
         }
         msg = msg.snippet(Snippet::source(src).line_start(1).origin(&origin).fold(true).annotation(level.span(span)));
-    } else {
-        msg = msg.snippet(Snippet::source("").origin(&origin));
     }
     if d.help.is_some() {
         msg = msg.footer(Level::Help.title(&help));
     }
     let text = renderer.render(msg).to_string();
-    text
+    if d.span.is_some() {
+        return text;
+    }
+    // No place in the text (a problem of the inputs, or of the whole file): name the file under the title, not
+    // an empty `| |` frame.
+    let (title, rest) = text.split_once('\n').unwrap_or((&text, ""));
+    let sep = if rest.is_empty() { "" } else { "\n" };
+    format!("{title}\n  --> {origin}{sep}{rest}")
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 //! graph, so what a build will do is known, and explained, before it does anything.
 
 pub mod actions;
+pub mod coverage;
 pub mod graph;
 pub mod key;
 pub mod keys;

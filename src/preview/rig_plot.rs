@@ -38,15 +38,7 @@ pub fn cropping(cameras: &[Camera], points: &[[f32; 3]]) -> usize {
         .iter()
         .filter(|c| {
             let w2c = c.w2c();
-            points.iter().any(|p| {
-                let v = w2c.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
-                let z = -v.z;
-                if z <= 0.0 {
-                    return true;
-                }
-                let (u, t) = (c.cx + c.fx * v.x / z, c.cy - c.fy * v.y / z);
-                !(0.0..=c.width as f64).contains(&u) || !(0.0..=c.height as f64).contains(&t)
-            })
+            points.iter().any(|p| !c.shows(&w2c, DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)))
         })
         .count()
 }

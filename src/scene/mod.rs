@@ -258,6 +258,12 @@ impl Scene {
         Some(self.world_from_source(i).x_axis.truncate().length())
     }
 
+    /// Whether some source reads a file per frame (PLY or mesh sequences): posing a frame then costs a read,
+    /// where other sources pose from memory.
+    pub fn reads_frame_files(&self) -> bool {
+        self.sources.iter().any(|s| matches!(s.data, SourceData::Sequence(_) | SourceData::MeshSequence(_)))
+    }
+
     /// Whether any source draws points: a PLY sequence, a PLY cloud, or glTF points (judged on frame 0).
     pub fn has_points(&self) -> bool {
         let mut poser = Poser::default();

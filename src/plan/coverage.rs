@@ -1,0 +1,139 @@
+//! Whether each planned image sees the whole subject, and a warning per split whose cameras crop it: how many
+//! views, the worst one, and the setting that keeps it whole. `check` and `build` both ask, so a dataset whose
+//! every view cuts the subject off never builds silently.
+//!
+//! The subject is every source but ground planes (which reach past every image by design), posed at each
+//! image's frame. A view crops it when some vertex or point is outside the image or behind the camera; the
+//! share outside is counted over vertices. A frame's bounding box inside the frustum (its eight corners, the
+//! frustum being convex) settles a view without looking at its vertices.
+
+use std::collections::BTreeMap;
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use super::Plan;
+use crate::manifest::{framing, transform::FRAME_MARGIN, Manifest};
+use crate::scene::{self, Poser, Scene};
+
+/// One view that crops the subject.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crop {
+    /// The image (index into [`Plan::images`]).
+    pub image: usize,
+    /// The share of the subject's vertices outside the image, in (0, 1].
+    pub outside: f64,
+}
+
+/// What [`measure`] found.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Coverage {
+    /// The images that crop the subject, in image order.
+    pub crops: Vec<Crop>,
+    /// The images measured.
+    pub measured: usize,
+    /// How far from the origin the subject reaches over the measured frames, world units.
+    pub reach: f64,
+}
+
+/// Measures `images` (all when `None`), posing each frame they show once, frames in parallel.
+pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<Coverage, scene::Error> {
+    let all: Vec<usize>;
+    let images = match images {
+        Some(i) => i,
+        None => {
+            all = (0..plan.images.len()).collect();
+            &all
+        }
+    };
+    let mut by_frame: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for &i in images {
+        by_frame.entry(plan.images[i].frame).or_default().push(i);
+    }
+    let subject: Vec<usize> = (0..scene.sources.len()).filter(|&i| scene.sources[i].ground.is_none()).collect();
+    let per_frame: Vec<Result<(Vec<Crop>, f64), scene::Error>> = by_frame
+        .into_par_iter()
+        .map_init(Poser::default, |poser, (frame, list)| {
+            let mut points: Vec<Vec3> = Vec::new();
+            for &s in &subject {
+                for p in &scene.pose_source(s, frame, poser)?.primitives {
+                    points.extend_from_slice(&p.positions);
+                }
+            }
+            let reach = points.iter().map(|p| p.as_dvec3().length_squared()).fold(0.0, f64::max).sqrt();
+            Ok((list.into_iter().filter_map(|i| crop(plan, i, &points)).collect(), reach))
+        })
+        .collect();
+    let mut out = Coverage { measured: images.len(), ..Coverage::default() };
+    for r in per_frame {
+        let (crops, reach) = r?;
+        out.crops.extend(crops);
+        out.reach = out.reach.max(reach);
+    }
+    out.crops.sort_by_key(|c| c.image);
+    Ok(out)
+}
+
+/// Whether image `i` crops `points`, and by how much.
+fn crop(plan: &Plan, i: usize, points: &[Vec3]) -> Option<Crop> {
+    if points.is_empty() {
+        return None;
+    }
+    let cam = &plan.images[i].camera;
+    let w2c = cam.w2c();
+    let (lo, hi) = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
+    let corners = (0..8).map(|k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x } as f64,
+            if k & 2 == 0 { lo.y } else { hi.y } as f64,
+            if k & 4 == 0 { lo.z } else { hi.z } as f64,
+        )
+    });
+    if corners.into_iter().all(|c| cam.shows(&w2c, c)) {
+        return None;
+    }
+    let outside = points.iter().filter(|p| !cam.shows(&w2c, p.as_dvec3())).count();
+    (outside > 0).then(|| Crop { image: i, outside: outside as f64 / points.len() as f64 })
+}
+
+/// One warning per split whose views crop the subject: how many, the worst, and what keeps it whole.
+pub fn warnings(m: &Manifest, plan: &Plan, c: &Coverage) -> Vec<String> {
+    let mut per_split: BTreeMap<usize, Vec<Crop>> = BTreeMap::new();
+    for crop in &c.crops {
+        per_split.entry(plan.images[crop.image].split).or_default().push(*crop);
+    }
+    let frame_fit = m.transform.fit().is_some_and(|f| f.frame);
+    per_split
+        .into_iter()
+        .map(|(s, crops)| {
+            let split = &plan.splits[s];
+            let worst = crops.iter().max_by(|a, b| a.outside.total_cmp(&b.outside)).expect("a split listed has crops");
+            let img = &plan.images[worst.image];
+            let share = if worst.outside < 0.01 { "under 1 %".to_string() } else { format!("{:.0} %", worst.outside * 100.0) };
+            let views: std::collections::BTreeSet<u32> = crops.iter().map(|c| plan.images[c.image].view).collect();
+            let rig_name = m.splits.get(&split.name).map(|s| s.rig()).unwrap_or_default();
+            let radius = m
+                .rigs
+                .get(rig_name)
+                .and_then(|rig| framing::radius_keeping(m, rig, c.reach, FRAME_MARGIN))
+                .map(|r| format!("rig `{rig_name}` radius = {:.1}", (r * 10.0).ceil() / 10.0));
+            let fix = match (frame_fit, radius) {
+                (false, Some(r)) => format!("[transform] fit = \"frame\" or {r} keeps it whole"),
+                (false, None) => "[transform] fit = \"frame\" sizes the subject for the cameras".to_string(),
+                (true, Some(r)) => format!("{r} keeps it whole"),
+                (true, None) => format!("these cameras are not sized by fit = \"frame\": move rig `{rig_name}`'s cameras back"),
+            };
+            format!(
+                "{} of {} `{}` images crop the subject ({} of {} views; worst: view {}, frame {}, {share} of its vertices \
+                 outside the image); {fix}",
+                crops.len(),
+                split.images.len(),
+                split.name,
+                views.len(),
+                split.poses.len(),
+                img.view,
+                img.frame,
+            )
+        })
+        .collect()
+}
