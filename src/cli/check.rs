@@ -30,14 +30,17 @@ pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<Exi
                         let mut warnings = scene.warnings.clone();
                         warnings.extend(plan.warnings.iter().cloned());
                         warnings.extend(coverage::warnings(&m, &plan, &crops));
-                        Ok((frames, Some(warnings)))
+                        // The consumers' frame-count limits, on the frames each output's splits select.
+                        let mut diags = Vec::new();
+                        for (name, out) in &m.outputs {
+                            diags.extend(consumers::frame_diagnostic(name, out, plan.output_frames(out)?));
+                        }
+                        diags.extend(warnings.into_iter().map(|w| Diagnostic::warning(w, None)));
+                        Ok((frames, Some(diags)))
                     })
                 };
                 match planned {
-                    Ok((frames, Some(warnings))) => {
-                        report.diagnostics.extend(consumers::frame_diagnostics(&m, frames));
-                        report.diagnostics.extend(warnings.into_iter().map(|w| Diagnostic::warning(w, None)));
-                    }
+                    Ok((_, Some(diags))) => report.diagnostics.extend(diags),
                     Ok((_, None)) => {}
                     Err(e) => {
                         invalid += 1;

@@ -146,9 +146,10 @@ fn manifest(
             let _ = writeln!(w, "gltf   = \"{}\"", rel(asset)?);
             let _ = writeln!(w, "# clips in the file (pick with `animation = N`, a name, a list, or \"all\"):");
             for (i, (n, d)) in clips.iter().enumerate() {
-                let _ = writeln!(w, "#   {i}: `{n}`, {d:.3} s");
+                let _ =
+                    writeln!(w, "#   {i}: `{n}`, {d:.3} s: frames = {{ count = {}, fps = 30 }}", frames_covering(*d));
             }
-            let n = (clips[0].1 as f64 * 30.0 + 1e-4).floor() as usize + 1;
+            let n = frames_covering(clips[0].1);
             let _ = writeln!(
                 w,
                 "animation = 0\nframes = {{ count = {n}, fps = 30 }}   # the first clip's length at 30 fps"
@@ -227,6 +228,11 @@ fn manifest(
         );
     }
     Ok(t)
+}
+
+/// Frames at 30 fps from 0 that cover a clip of `seconds`, its last pose included.
+fn frames_covering(seconds: f32) -> usize {
+    (seconds as f64 * 30.0 + 1e-4).floor() as usize + 1
 }
 
 fn up_note(note: &str) -> &'static str {

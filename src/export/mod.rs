@@ -257,7 +257,7 @@ pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Err
     };
     x.check_finite(&images)?;
     // What depends on the frame count (the rest of the consumers' caveats came with the manifest's diagnostics).
-    let frames = if writer.renders_images() { x.plan.frames_of(&images).len() } else { x.plan.frames };
+    let frames = x.plan.output_frames(out).map_err(|e| Error::Unplanned(e.to_string()))?;
     if let Some(d) = crate::manifest::consumers::frame_diagnostic(name, out, frames) {
         files.warn(d.message + &d.help.map(|h| format!(": {h}")).unwrap_or_default());
     }

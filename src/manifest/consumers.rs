@@ -2,8 +2,8 @@
 //! own consumers only (../shared/specs/consumer-formats.md §10 lists what was seen in their loaders' code).
 //!
 //! `diagnose` needs the manifest alone and runs inside [`super::parse`], so `vvgen check` and `build` raise
-//! the same errors and warnings. [`frame_diagnostics`] needs the scene's frame count (a glTF clip's length or a
-//! PLY sequence's file count), which `check` reads from the inputs and `build` from the scene it loads.
+//! the same errors and warnings. [`frame_diagnostic`] needs the number of frames an output shows (the frames its
+//! splits select of the scene's), which `check` and `build` both take from the plan.
 
 use super::diag::Diagnostic;
 use super::output::{Output, Writer};
@@ -41,12 +41,8 @@ pub(crate) fn diagnose(m: &Manifest, diags: &mut Vec<Diagnostic>) {
     }
 }
 
-/// The consumer problems that depend on the number of frames the scene has.
-pub fn frame_diagnostics(m: &Manifest, frames: usize) -> Vec<Diagnostic> {
-    m.outputs.iter().filter_map(|(name, out)| frame_diagnostic(name, out, frames)).collect()
-}
-
-/// The consumer problem of output `name` that depends on the scene's frame count, if any.
+/// The consumer problem of output `name` that depends on the number of frames it shows (its splits' frames,
+/// [`crate::plan::Plan::output_frames`]), if any.
 pub fn frame_diagnostic(name: &str, out: &Output, frames: usize) -> Option<Diagnostic> {
     let at = Some(out.writer.span());
     match *out.writer.get_ref() {

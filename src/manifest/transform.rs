@@ -99,6 +99,7 @@ enum FitWord {
 
 /// What `fit` accepts, for the schema.
 #[derive(schemars::JsonSchema)]
+#[serde(untagged)]
 #[allow(dead_code)]
 enum FitSchema {
     /// `fit = "frame"`.

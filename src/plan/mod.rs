@@ -295,6 +295,12 @@ impl Plan {
         Ok(v)
     }
 
+    /// The number of frames output `out` shows: those its splits' images select for a writer of images, the
+    /// scene's for point clouds. What the consumers' frame-count limits apply to.
+    pub fn output_frames(&self, out: &crate::manifest::Output) -> Result<usize, Error> {
+        Ok(if out.writer().renders_images() { self.frames_of(&self.images_of(out)?).len() } else { self.frames })
+    }
+
     /// Distinct frames of `images` (indices into [`Plan::images`]), ascending.
     pub fn frames_of(&self, images: &[usize]) -> Vec<usize> {
         let mut f: Vec<usize> = images.iter().map(|&i| self.images[i].frame).collect();

@@ -158,9 +158,10 @@ impl Scene {
             sources.push(LoadedSource::load(name, s, &m.dir)?);
         }
         let mut warnings = Vec::new();
-        for s in &sources {
-            if let SourceData::Gltf { asset, .. } = &s.data {
+        for (s, (_, cfg)) in sources.iter().zip(&m.sources) {
+            if let SourceData::Gltf { asset, clips, times } = &s.data {
                 warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", asset.path.display())));
+                warnings.extend(held_frames(&s.name, asset, clips, times, cfg.frames()));
             }
         }
         let mut scratch = PoseScratch::default();
@@ -309,6 +310,36 @@ impl Scene {
 }
 
 /// Accumulates the bounds of `src`'s frames (`over`) after `post`.
+/// A warning when frames run past the end of the clips they play (they would all hold its last pose), with the
+/// clip's length and the frame count that covers it.
+fn held_frames(
+    name: &str,
+    asset: &gltf::GltfAsset,
+    clips: &[usize],
+    times: &[f32],
+    frames: Option<&crate::manifest::frames::Frames>,
+) -> Option<String> {
+    let longest = clips
+        .iter()
+        .copied()
+        .max_by(|a, b| asset.animations[*a].duration().total_cmp(&asset.animations[*b].duration()))?;
+    let duration = asset.animations[longest].duration();
+    let f = frames.cloned().unwrap_or_default();
+    let (fps, start, step) = (f.fps(), f.start.unwrap_or(0), f.step() as i64);
+    // A frame a little past the end (the clip's length is rarely a whole number of frames) is not held.
+    let held = times.iter().filter(|&&t| t as f64 > duration as f64 + 1.0 / fps + 1e-6).count();
+    if held == 0 || duration <= 0.0 {
+        return None;
+    }
+    let covers = (((duration as f64 * fps + 1e-4).floor() as i64 - start).max(0) / step + 1).max(1);
+    let clip = asset.animations[longest].name.clone().unwrap_or_else(|| format!("#{longest}"));
+    Some(format!(
+        "source `{name}`: clip `{clip}` lasts {duration:.2} s, so {held} of its {} frames at {fps} fps hold its last \
+         pose; frames = {{ count = {covers}, fps = {fps} }} covers it",
+        times.len()
+    ))
+}
+
 /// The distance of the point of `points` farthest from `c`.
 fn farthest(points: &[glam::Vec3], c: glam::DVec3) -> f64 {
     points.iter().map(|p| p.as_dvec3().distance_squared(c)).fold(0.0, f64::max).sqrt()
