@@ -199,6 +199,8 @@ pub struct Report {
     pub after: Vec<(String, Written)>,
     /// Warnings from the scene and the plan.
     pub warnings: Vec<String>,
+    /// Files an earlier build of these outputs wrote that this plan no longer has, removed.
+    pub stale_removed: usize,
 }
 
 impl Report {
@@ -345,6 +347,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         outputs: Vec::new(),
         after: before,
         warnings,
+        stale_removed: 0,
     };
     if opts.shard.is_some() {
         // A shard only fills the cache; the final unsharded build writes the datasets.
@@ -361,6 +364,15 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         store: &p.store,
         stat: &p.stat,
     };
+    // What earlier builds of these outputs wrote: the cache's record of the last build here (renamed and removed
+    // outputs too), and each output's own `vvgen/dataset.json` (which holds even when the cache moved). Read
+    // before the outputs are written over.
+    let mut previous: BTreeSet<PathBuf> =
+        last.outputs.values().flat_map(|o| o.files.iter().map(move |(f, _)| o.root.join(f))).collect();
+    for out in m.outputs.values() {
+        let root = export::root(m, out);
+        previous.extend(export::previous_files(&root).into_iter().map(|f| root.join(f)));
+    }
     let mut record = LastBuild::new();
     let write_ids: Vec<_> = g.ids().filter(|id| g.node(*id).action.kind() == Kind::WriteOutput).collect();
     for ((name, out), id) in m.outputs.iter().zip(&write_ids) {
@@ -388,7 +400,9 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         record.outputs.insert(name.clone(), written);
         report.outputs.push((name.clone(), w));
     }
-    prune(&last, &record);
+    // Roots are written without `.` components (`export::root`); so is the boundary.
+    let out: PathBuf = m.out_dir().components().filter(|c| *c != std::path::Component::CurDir).collect();
+    report.stale_removed = prune(&previous, &record, &out);
     record.actions = g.ids().map(|id| (g.node(id).label.clone(), g.node(id).key.hex())).collect();
     let rendered = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
     record.render_rate = if report.renders > 0 && rendered.seconds > 0.0 {
@@ -439,18 +453,30 @@ pub(crate) fn pixel_samples(m: &Manifest) -> f64 {
     w as f64 * h as f64 * m.render.samples() as f64
 }
 
-/// Removes files the previous build produced and this one did not (a split that shrank, a renamed output).
-fn prune(previous: &LastBuild, now: &LastBuild) {
+/// Removes the files earlier builds wrote (`previous`) that this one did not (a split that shrank, a frame count
+/// cut, a renamed output, another writer), then the folders that leaves empty, up to the dataset's `out` (kept).
+/// Only listed files go, and only empty folders: nothing a user put there. Returns how many files it removed.
+fn prune(previous: &BTreeSet<PathBuf>, now: &LastBuild, out: &Path) -> usize {
     let keep: BTreeSet<PathBuf> =
         now.outputs.values().flat_map(|o| o.files.iter().map(move |(f, _)| o.root.join(f))).collect();
-    for o in previous.outputs.values() {
-        for (f, _) in &o.files {
-            let p = o.root.join(f);
-            if !keep.contains(&p) {
-                let _ = std::fs::remove_file(&p);
-            }
+    let mut removed = 0;
+    let mut emptied = BTreeSet::new();
+    for p in previous.difference(&keep) {
+        if std::fs::remove_file(p).is_ok() {
+            removed += 1;
+            emptied.extend(p.parent().map(Path::to_path_buf));
         }
     }
+    // Deepest first, so a folder whose only content was emptied folders goes too; `remove_dir` refuses a folder
+    // that still holds anything.
+    for dir in emptied.iter().rev() {
+        let mut d = dir.as_path();
+        while d.starts_with(out) && d != out && std::fs::remove_dir(d).is_ok() {
+            let Some(up) = d.parent() else { break };
+            d = up;
+        }
+    }
+    removed
 }
 
 /// Every cache entry `m`'s graph reaches: each action's record and blobs (intermediate ones included, so a

@@ -135,6 +135,9 @@ pub(super) fn build_and_report(
                 eprintln!("  preview: {}", w.root.join(&page).display());
             }
         }
+        if report.stale_removed > 0 {
+            eprintln!("removed {} stale file(s) an earlier build wrote", report.stale_removed);
+        }
         let render = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
         let rate = if render.seconds > 0.0 { report.renders as f64 / render.seconds } else { 0.0 };
         eprintln!(

@@ -88,5 +88,27 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
     for (k, v) in &files.meta {
         doc[k] = v.clone();
     }
+    // Every other file this output wrote: what the next build removes when its plan no longer has them, even
+    // with another cache (whose record of this build it would not find).
+    doc["written"] = json!(files.files.iter().map(|(f, _)| f.as_str()).collect::<Vec<_>>());
     files.json(META, &doc)
+}
+
+/// The files a previous build of the output at `root` wrote, from its `vvgen/dataset.json` (none when there is
+/// none, or it is not vvgen's): root-relative, with this file itself.
+pub fn previous_files(root: &std::path::Path) -> Vec<String> {
+    let Ok(bytes) = std::fs::read(root.join(META)) else { return Vec::new() };
+    let Ok(doc) = serde_json::from_slice::<Value>(&bytes) else { return Vec::new() };
+    if doc.get("tool").and_then(Value::as_str) != Some("vvgen") {
+        return Vec::new();
+    }
+    let listed = doc.get("written").and_then(Value::as_array).into_iter().flatten();
+    // Only plain relative names inside the root: a hand-edited list must not reach outside it.
+    let inside = |f: &&str| {
+        let p = std::path::Path::new(f);
+        p.components().all(|c| matches!(c, std::path::Component::Normal(_)))
+    };
+    let mut v: Vec<String> = listed.filter_map(Value::as_str).filter(inside).map(str::to_string).collect();
+    v.push(META.to_string());
+    v
 }

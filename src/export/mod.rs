@@ -6,6 +6,7 @@
 mod colmap;
 mod dynerf;
 mod meta;
+pub(crate) use meta::previous_files;
 mod nerf;
 mod points;
 mod preview;
@@ -236,15 +237,7 @@ impl<'a> Files<'a> {
 
 /// Runs the writer of `[output.name]`: places its actions' blobs and writes its metadata.
 pub(crate) fn write(x: &Export, name: &str, out: &Output) -> Result<Written, Error> {
-    // `dir = "."` (the dataset at `out` itself) and `a/./b` name plain directories: drop the `.` components,
-    // which directory creation would trip over.
-    let root: PathBuf = x
-        .manifest
-        .out_dir()
-        .join(dir_name(x.manifest, out))
-        .components()
-        .filter(|c| *c != std::path::Component::CurDir)
-        .collect();
+    let root = root(x.manifest, out);
     std::fs::create_dir_all(&root).map_err(|e| cache::Error::io(&root, e))?;
     atomic::clean_debris(&root);
     remove_old_meta(&root);
@@ -286,6 +279,13 @@ fn remove_old_meta(root: &std::path::Path) {
     if ours {
         let _ = std::fs::remove_file(&path);
     }
+}
+
+/// The output's dataset root.
+pub(crate) fn root(m: &Manifest, out: &Output) -> PathBuf {
+    // `dir = "."` (the dataset at `out` itself) and `a/./b` name plain directories: drop the `.` components,
+    // which directory creation would trip over.
+    m.out_dir().join(dir_name(m, out)).components().filter(|c| *c != std::path::Component::CurDir).collect()
 }
 
 /// The output's directory name under `[dataset] out`.
