@@ -82,7 +82,8 @@ fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
         };
         let first = files.iter().find(|p| ext(p) == e).expect("counted above");
         let frame = if e == "obj" { scene::obj::scene(first)? } else { scene::source::ply_scene(first)? };
-        let (up, why) = tallest(&frame, first);
+        drawable(&frame, first)?;
+        let (up, why) = if e == "obj" { obj_up() } else { tallest(&frame, first) };
         let n = count(e);
         let seq = Asset::Sequence { key, glob: format!("*.{e}"), frames: n };
         return Ok((seq, up, format!("{n} {e} frames; {why}")));
@@ -100,20 +101,43 @@ fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
                 Some((n, d)) => format!("{} clip(s), the first (`{n}`, {d:.2} s) selected", clips.len()),
                 None => "no animation: a static mesh".into(),
             };
+            let mut rest = scene::PosedScene::default();
+            a.pose(&[], 0.0, glam::Mat4::IDENTITY, &mut Default::default(), &mut rest);
+            drawable(&rest, asset)?;
             let kind = if clips.is_empty() { Asset::Mesh } else { Asset::Gltf { clips } };
             Ok((kind, "y", format!("{what}; up \"y\": glTF is +Y up by its specification")))
         }
         "ply" => {
-            let (up, why) = tallest(&scene::source::ply_scene(asset)?, asset);
+            let s = scene::source::ply_scene(asset)?;
+            drawable(&s, asset)?;
+            let (up, why) = tallest(&s, asset);
             Ok((Asset::Mesh, up, why))
         }
         "obj" => {
-            let (up, why) = tallest(&scene::obj::scene(asset)?, asset);
+            drawable(&scene::obj::scene(asset)?, asset)?;
+            let (up, why) = obj_up();
             let glob = asset.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
             Ok((Asset::Sequence { key: "mesh_sequence", glob, frames: 1 }, up, why))
         }
         _ => bail!("{}: not a glTF, PLY or OBJ file, nor a folder of frames", asset.display()),
     }
+}
+
+/// Refuses an asset with nothing the renderer draws (lines only, empty meshes): its manifest could not check.
+fn drawable(s: &scene::PosedScene, path: &Path) -> anyhow::Result<()> {
+    if s.triangle_count() + s.point_count() == 0 {
+        bail!(
+            "{}: nothing to render: no triangles or points (vvgen draws neither lines nor empty meshes)",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// OBJ's up axis: +Y, the convention of Blender's and most exporters. Not guessed from the extents, which a
+/// wide subject (a car, a plate) would get wrong.
+fn obj_up() -> (&'static str, String) {
+    ("y", "up \"y\": OBJ files are +Y up by convention (Blender's exporter and most others)".into())
 }
 
 /// The up axis of a scan: its tallest extent (a standing subject), said with the extents.
@@ -238,6 +262,8 @@ fn frames_covering(seconds: f32) -> usize {
 fn up_note(note: &str) -> &'static str {
     if note.contains("guessed") {
         "guessed from the first frame's extents: check it"
+    } else if note.contains("OBJ") {
+        "OBJ's usual up axis; the world is +Z up"
     } else {
         "glTF's own up axis; the world is +Z up"
     }

@@ -69,7 +69,7 @@ pub fn pre(t: &Transform, up: UpAxis) -> DMat4 {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum Error {
     /// Fitting or centring was asked of a source with no geometry.
-    #[error("cannot fit or centre: the source has no geometry")]
+    #[error("cannot fit or centre: the source has no triangles or points (lines are not drawn)")]
     NoGeometry,
     /// A frame fit has no camera to size the subject for.
     #[error(

@@ -5,6 +5,7 @@
 mod build;
 mod common;
 mod consumers;
+mod corpus;
 mod engine;
 mod fuzz;
 mod gltf_lights;
