@@ -1,0 +1,171 @@
+//! What a newcomer meets in the first hour, besides framing (`corpus.rs`): `vvgen new`'s edges, a cache that
+//! does not follow the working directory, outputs that remove what they no longer hold, and warnings about
+//! frames a clip does not cover.
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::common::data;
+
+fn vvgen(dir: &Path, args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(dir).args(args).output().unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// The walking long box's folder, copied into `dir`.
+fn longbox(dir: &Path) {
+    for f in ["longbox.gltf", "longbox.bin"] {
+        std::fs::copy(data("wide/longbox").join(f), dir.join(f)).unwrap();
+    }
+}
+
+/// Makes a manifest `new` wrote small: 48², one sample.
+fn small(path: &Path) {
+    let t = std::fs::read_to_string(path).unwrap();
+    let t = t
+        .lines()
+        .map(|l| match l {
+            l if l.starts_with("resolution") => "resolution = [48, 48]",
+            l if l.starts_with("samples") => "samples = 1",
+            l => l,
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(path, t).unwrap();
+}
+
+#[test]
+fn new_writes_where_asked_and_refuses_what_is_not_an_asset() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    // Into a folder that does not exist yet; the asset's path is relative to the manifest there.
+    let (code, err) = vvgen(d, &["new", "longbox.gltf", "-o", "sub/deeper/box.toml"]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("sub/deeper/box.toml")).unwrap();
+    assert!(text.contains("gltf   = \"../../longbox.gltf\""), "{text}");
+    // Each clip with the frame count that covers it.
+    assert!(text.contains("#   1: `Idle`, 0.500 s: frames = { count = 16, fps = 30 }"), "{text}");
+    let (code, err) = vvgen(d, &["check", "sub/deeper/box.toml"]);
+    assert_eq!(code, 0, "{err}");
+    // A manifest is not an asset, whether or not it exists.
+    let (code, err) = vvgen(d, &["new", "sub/deeper/box.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("not a glTF, PLY or OBJ file"), "{err}");
+    // `new .` in a folder of frames names the dataset after the folder.
+    let frames = d.join("torus frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    for f in 1000..1003 {
+        let name = format!("torus_vox10_{f}.ply");
+        std::fs::copy(data("seq").join(&name), frames.join(&name)).unwrap();
+    }
+    let (code, err) = vvgen(&frames, &["new", "."]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(frames.join("torus-frames.toml")).unwrap();
+    assert!(text.contains("name = \"torus-frames\""), "{text}");
+}
+
+#[test]
+fn the_cache_is_beside_the_manifest_wherever_the_command_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("project");
+    std::fs::create_dir_all(&d).unwrap();
+    longbox(&d);
+    assert_eq!(vvgen(&d, &["new", "longbox.gltf"]).0, 0);
+    small(&d.join("longbox.toml"));
+    let (code, err) = vvgen(&d, &["build", "longbox.toml"]);
+    assert_eq!(code, 0, "{err}");
+    // From the parent folder and from elsewhere: the same cache, so nothing runs again.
+    for (cwd, arg) in
+        [(tmp.path().to_path_buf(), "project/longbox.toml".to_string()), (d.join("out"), "../longbox.toml".into())]
+    {
+        let (code, err) = vvgen(&cwd, &["build", &arg]);
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("nothing to do"), "from {}: {err}", cwd.display());
+        assert!(!cwd.join("cache").exists(), "a second cache in {}", cwd.display());
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen"))
+        .current_dir(tmp.path())
+        .args(["status", "project/longbox.toml"])
+        .env_remove("VVGEN_CACHE")
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains("project/cache (the default: cache/ beside the manifest)"), "{said}");
+}
+
+#[test]
+fn an_output_removes_what_it_no_longer_holds_and_nothing_else() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    assert_eq!(vvgen(d, &["new", "longbox.gltf", "--writer", "colmap", "-o", "m.toml"]).0, 0);
+    small(&d.join("m.toml"));
+    let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
+    let set = |count: u32, writer: &str, cache: &str| {
+        let t = text
+            .replace("frames = { count = 31, fps = 30 }", &format!("frames = {{ count = {count}, fps = 30 }}"))
+            .replace("writer = \"colmap\"", &format!("writer = \"{writer}\""))
+            .replace("seed = 0", &format!("seed = 0\ncache = \"{cache}\""));
+        assert_ne!(t, text);
+        std::fs::write(d.join("m.toml"), t).unwrap();
+    };
+    set(8, "colmap", "cache-a");
+    assert_eq!(vvgen(d, &["-q", "build", "m.toml"]).0, 0);
+    let root = d.join("out/longbox/longbox_colmap");
+    assert!(root.join("frame_0007/sparse/0/images.txt").is_file());
+    // A file of the user's, inside a folder the build will empty: it stays, and so does its folder.
+    std::fs::write(root.join("frame_0006/notes.txt"), "mine").unwrap();
+    // Fewer frames, built through another cache (whose record knows nothing of the first build): the output's
+    // own list says what it wrote.
+    set(3, "colmap", "cache-b");
+    let (code, err) = vvgen(d, &["build", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("removed ") && err.contains(" stale file(s)"), "{err}");
+    for f in 3..8 {
+        let frame = root.join(format!("frame_{f:04}"));
+        assert_eq!(frame.exists(), f == 6, "{}", frame.display());
+    }
+    assert_eq!(std::fs::read_to_string(root.join("frame_0006/notes.txt")).unwrap(), "mine");
+    assert_eq!(std::fs::read_dir(root.join("frame_0006")).unwrap().count(), 1, "only the user's file is left");
+    assert!(root.join("frame_0002/sparse/0/images.txt").is_file());
+    // Another writer: the old output goes whole (but for the user's file).
+    set(3, "dnerf", "cache-b");
+    assert_eq!(vvgen(d, &["-q", "build", "m.toml"]).0, 0);
+    assert!(d.join("out/longbox/longbox_dnerf/transforms_train.json").is_file());
+    let left: Vec<_> = walk(&root);
+    assert_eq!(left, vec![root.join("frame_0006/notes.txt")], "the colmap output is gone but for the user's file");
+}
+
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            v.extend(walk(&p));
+        } else {
+            v.push(p);
+        }
+    }
+    v
+}
+
+#[test]
+fn frames_past_a_clip_are_warned_of_with_the_count_that_covers_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    assert_eq!(vvgen(d, &["new", "longbox.gltf", "-o", "m.toml"]).0, 0);
+    small(&d.join("m.toml"));
+    // `Idle` lasts 0.5 s; the manifest keeps Walk's 31 frames at 30 fps.
+    let t = std::fs::read_to_string(d.join("m.toml")).unwrap().replace("animation = 0", "animation = \"Idle\"");
+    std::fs::write(d.join("m.toml"), t).unwrap();
+    let want = "warning: source `longbox`: clip `Idle` lasts 0.50 s, so 14 of its 31 frames at 30 fps hold its last \
+                pose; frames = { count = 16, fps = 30 } covers it";
+    let (code, err) = vvgen(d, &["--color", "never", "check", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains(want), "{err}");
+    let (code, err) = vvgen(d, &["--color", "never", "build", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains(&want["warning: ".len()..]), "{err}");
+}
