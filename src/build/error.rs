@@ -133,7 +133,9 @@ impl Error {
                 execute::Error::Environment { source, .. } => {
                     !matches!(source, crate::render::light::environment::Error::Damaged(_))
                 }
-                execute::Error::Cache { .. } | execute::Error::Preview { .. } => false,
+                execute::Error::Cache { .. } | execute::Error::Preview { .. } | execute::Error::Interrupted { .. } => {
+                    false
+                }
             },
             Error::Export { source, .. } => {
                 matches!(**source, export::Error::Pattern(_) | export::Error::EmptyScene | export::Error::NonFinite(_))

@@ -499,8 +499,14 @@ pub fn reachable(m: &Manifest, cache: &Path, keep: &mut HashSet<Digest>) -> Resu
 }
 
 /// Collects the cache at `cache`: drops what none of `keep` reaches (when any is given), then the oldest
-/// beyond `max_bytes` (when given); nothing younger than [`gc::GRACE`].
-pub fn collect_garbage(keep: &[Manifest], cache: &Path, max_bytes: Option<u64>) -> Result<gc::Collected, Error> {
+/// beyond `max_bytes` (when given); nothing younger than `min_age` ([`gc::GRACE`] keeps a running build's
+/// unrecorded blobs).
+pub fn collect_garbage(
+    keep: &[Manifest],
+    cache: &Path,
+    max_bytes: Option<u64>,
+    min_age: std::time::Duration,
+) -> Result<gc::Collected, Error> {
     let reach = if keep.is_empty() {
         None
     } else {
@@ -510,5 +516,5 @@ pub fn collect_garbage(keep: &[Manifest], cache: &Path, max_bytes: Option<u64>) 
         }
         Some(set)
     };
-    Ok(gc::collect(cache, reach.as_ref(), max_bytes))
+    Ok(gc::collect(cache, reach.as_ref(), max_bytes, min_age))
 }

@@ -21,6 +21,8 @@ pub struct Collected {
     pub bytes: u64,
     /// Bytes left.
     pub left: u64,
+    /// Files that would have gone but were younger than the minimum age, and kept.
+    pub young: usize,
 }
 
 /// Every file under `dir`, with its size and modification time.
@@ -44,32 +46,36 @@ fn name_of(p: &Path) -> Option<Digest> {
 }
 
 /// Removes from the store at `root` every blob and record not in `keep` (when given) and then, oldest first,
-/// whatever exceeds `max_bytes` (when given).
-pub fn collect(root: &Path, keep: Option<&HashSet<Digest>>, max_bytes: Option<u64>) -> Collected {
+/// whatever exceeds `max_bytes` (when given); nothing younger than `min_age` ([`GRACE`] unless told).
+pub fn collect(root: &Path, keep: Option<&HashSet<Digest>>, max_bytes: Option<u64>, min_age: Duration) -> Collected {
     let mut files = Vec::new();
     walk(&root.join("objects"), &mut files);
     walk(&root.join("actions"), &mut files);
     let now = SystemTime::now();
-    let young = |t: SystemTime| now.duration_since(t).map_or(true, |age| age < GRACE);
+    let young = |t: SystemTime| now.duration_since(t).map_or(true, |age| age < min_age);
     let mut c = Collected::default();
     let mut left = Vec::new();
     for (p, size, t) in files {
         let needed = keep.is_none_or(|k| name_of(&p).is_some_and(|d| k.contains(&d)));
+        c.young += usize::from(!needed && young(t));
         if !needed && !young(t) && fs::remove_file(&p).is_ok() {
             c.files += 1;
             c.bytes += size;
         } else {
-            left.push((p, size, t));
+            // Whether it is already counted as kept for its age.
+            left.push((p, size, t, !needed));
         }
     }
     let mut total: u64 = left.iter().map(|f| f.1).sum();
     if let Some(max) = max_bytes {
         left.sort_by_key(|f| f.2);
-        for (p, size, t) in &left {
+        for (p, size, t, counted) in &left {
             if total <= max {
                 break;
             }
-            if !young(*t) && fs::remove_file(p).is_ok() {
+            if young(*t) {
+                c.young += usize::from(!counted);
+            } else if fs::remove_file(p).is_ok() {
                 c.files += 1;
                 c.bytes += size;
                 total -= size;

@@ -88,7 +88,18 @@ pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, preview: bool, u
         return Ok(ExitCode::from(EXIT_INVALID));
     }
     m.dataset.preview &= preview;
-    let report = build_and_report(&m, jobs, opts, ui)?;
+    let report = match build_and_report(&m, jobs, opts, ui) {
+        Ok(r) => r,
+        Err(e) => {
+            let stopped = e.downcast_ref::<build::Error>().and_then(interruption);
+            let Some((finished, work)) = stopped else { return Err(e) };
+            eprintln!(
+                "interrupted: {finished} of {work} actions finished and are kept in the cache, and no file was \
+                 left half-written; run the same command again to resume where it stopped"
+            );
+            return Ok(ExitCode::from(EXIT_INTERRUPTED));
+        }
+    };
     // What the writers warn of is known only once they have written: the datasets stay, the exit says so.
     let late: usize = report.after.iter().chain(&report.outputs).map(|(_, w)| w.warnings.len()).sum();
     if strict && late > 0 {
@@ -96,6 +107,36 @@ pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, preview: bool, u
         return Ok(ExitCode::from(EXIT_INVALID));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Ctrl-C during a build: the first asks the build to stop ([`crate::execute::INTERRUPT`]: what finished is
+/// committed, then the build says what it kept); a second leaves at once (what was committed is still whole:
+/// everything lands by rename). Only async-signal-safe calls here (an atomic store, `write`, `_exit`).
+#[cfg(unix)]
+extern "C" fn interrupted(_: libc::c_int) {
+    use std::sync::atomic::Ordering;
+    if crate::execute::INTERRUPT.swap(true, Ordering::Relaxed) {
+        const SAID: &[u8] = b"\ninterrupted again: leaving now; what was committed is kept\n";
+        unsafe {
+            libc::write(2, SAID.as_ptr().cast(), SAID.len());
+            libc::_exit(130);
+        }
+    }
+}
+
+/// The exit code of an interrupted build (128 + SIGINT, as shells report it).
+const EXIT_INTERRUPTED: u8 = 130;
+
+/// The counts of an interrupted build (this manifest's or an `after` one's).
+fn interruption(e: &build::Error) -> Option<(usize, usize)> {
+    match e {
+        build::Error::Execute { source, .. } => match **source {
+            crate::execute::Error::Interrupted { finished, work } => Some((finished, work)),
+            _ => None,
+        },
+        build::Error::After { source, .. } => interruption(source),
+        _ => None,
+    }
 }
 
 /// Builds `m` with a progress display and prints what the build did.
@@ -114,6 +155,10 @@ pub(super) fn build_and_report(
         b
     });
     let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGINT, interrupted as *const () as libc::sighandler_t);
+    }
     let cache = cache_dir(m);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.unwrap_or(0)).build()?;
     let result = pool.install(|| build::build(m, &cache, opts, &display));
@@ -140,10 +185,15 @@ pub(super) fn build_and_report(
         }
         let render = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
         let rate = if render.seconds > 0.0 { report.renders as f64 / render.seconds } else { 0.0 };
-        eprintln!(
-            "{} images: {} cached, {} rendered in {:.2} s ({rate:.1} images/s); {:.2} s in all",
-            report.images, report.hits, report.renders, render.seconds, report.total_seconds
-        );
+        if report.images > 0 {
+            let speed = if report.renders > 0 { format!(" ({rate:.1} images/s)") } else { String::new() };
+            eprintln!(
+                "{} images: {} cached, {} rendered in {:.2} s{speed}; {:.2} s in all",
+                report.images, report.hits, report.renders, render.seconds, report.total_seconds
+            );
+        } else {
+            eprintln!("{:.2} s in all", report.total_seconds);
+        }
         let kinds: Vec<String> = report
             .actions
             .iter()

@@ -23,7 +23,34 @@ pub(super) fn parse_size(s: &str) -> Result<u64, String> {
     Ok((v * mult as f64) as u64)
 }
 
-pub fn run(manifests: &[PathBuf], max_size: Option<u64>, cache: Option<PathBuf>, ui: Ui) -> anyhow::Result<ExitCode> {
+/// Parses an age like `0`, `90s`, `30m`, `2h` or `1d`.
+pub(super) fn parse_age(s: &str) -> Result<std::time::Duration, String> {
+    let s = s.trim();
+    let (num, unit) = match s.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => (&s[..i], c),
+        _ => (s, 's'),
+    };
+    let mult = match unit {
+        's' => 1.0,
+        'm' => 60.0,
+        'h' => 3600.0,
+        'd' => 86400.0,
+        _ => return Err(format!("`{s}`: give an age like 0, 90s, 30m, 2h or 1d")),
+    };
+    let v: f64 = num.parse().map_err(|_| format!("`{s}`: give an age like 0, 90s, 30m, 2h or 1d"))?;
+    if !(v.is_finite() && v >= 0.0 && v * mult < 1e12) {
+        return Err(format!("`{s}` is not an age"));
+    }
+    Ok(std::time::Duration::from_secs_f64(v * mult))
+}
+
+pub fn run(
+    manifests: &[PathBuf],
+    max_size: Option<u64>,
+    min_age: Option<std::time::Duration>,
+    cache: Option<PathBuf>,
+    ui: Ui,
+) -> anyhow::Result<ExitCode> {
     let mut loaded = Vec::new();
     for p in manifests {
         let Some(m) = load_manifest(p, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
@@ -33,13 +60,22 @@ pub fn run(manifests: &[PathBuf], max_size: Option<u64>, cache: Option<PathBuf>,
     if loaded.is_empty() && max_size.is_none() {
         anyhow::bail!("nothing to do: give --keep MANIFEST… and/or --max-size");
     }
-    let c = build::collect_garbage(&loaded, &cache, max_size)?;
+    let age = min_age.unwrap_or(crate::cache::gc::GRACE);
+    let c = build::collect_garbage(&loaded, &cache, max_size, age)?;
     println!(
-        "{}: removed {} files ({:.1} MB), {:.1} MB left",
+        "{}: removed {} files ({}), {} left",
         cache.display(),
         c.files,
-        c.bytes as f64 / 1e6,
-        c.left as f64 / 1e6
+        super::human_bytes(c.bytes),
+        super::human_bytes(c.left)
     );
+    if c.young > 0 {
+        println!(
+            "kept {} file(s) it would have removed, younger than {} s (a build may still be writing them): \
+             --min-age 0 removes them too",
+            c.young,
+            age.as_secs()
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }

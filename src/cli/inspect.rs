@@ -30,6 +30,17 @@ pub fn run(
     if frame >= scene.frames.max(1) {
         bail!("frame {frame} is out of range: the scene has {} frames", scene.frames);
     }
+    let only = match source {
+        Some(name) => match scene.source_index(name) {
+            Some(i) => Some(i),
+            None => {
+                let names: Vec<&str> = scene.sources.iter().map(|s| s.name.as_str()).collect();
+                eprintln!("error: no source `{name}` in {}: the sources are {}", path.display(), names.join(", "));
+                return Ok(ExitCode::from(super::EXIT_INVALID));
+            }
+        },
+        None => None,
+    };
     let mut out = String::new();
     use std::fmt::Write as _;
     for (i, s) in scene.sources.iter().enumerate() {
@@ -102,7 +113,11 @@ pub fn run(
             hi = hi.max(b);
         }
     }
-    let posed = scene.pose(frame, &mut poser)?;
+    // With `--source`, the frame's figures and `--ply` are that source's alone.
+    let posed = match only {
+        Some(i) => scene.pose_source(i, frame, &mut poser)?,
+        None => scene.pose(frame, &mut poser)?,
+    };
     let _ = writeln!(
         out,
         "scene: {} frame(s); bounds over all frames {:.4?} … {:.4?}",
@@ -115,7 +130,8 @@ pub fn run(
     }
     let _ = writeln!(
         out,
-        "frame {frame}: {} triangle(s), {} point(s), posed-geometry hash {}",
+        "frame {frame}{}: {} triangle(s), {} point(s), posed-geometry hash {}",
+        source.map(|n| format!(" of source `{n}`")).unwrap_or_default(),
         posed.triangle_count(),
         posed.point_count(),
         posed.digest()

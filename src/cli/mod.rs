@@ -146,7 +146,11 @@ pub enum Command {
         /// Size budget, e.g. 500M or 20G.
         #[arg(long, value_parser = gc::parse_size)]
         max_size: Option<u64>,
-        /// The cache (default: `VVGEN_CACHE`, else the first kept manifest's, else `cache/`).
+        /// Keep files younger than this, e.g. 0, 30m, 2h (default 1h: a build running now may not have
+        /// recorded its blobs yet).
+        #[arg(long, value_parser = gc::parse_age)]
+        min_age: Option<std::time::Duration>,
+        /// The cache (default: `VVGEN_CACHE`, else the first kept manifest's, else `cache/` here).
         #[arg(long)]
         cache: Option<PathBuf>,
     },
@@ -202,6 +206,12 @@ pub struct Ui {
 
 /// Parses the process arguments and runs the command.
 pub fn run() -> ExitCode {
+    // A closed pipe (`vvgen plan m.toml | head -3`) ends the process quietly, as it ends `cat`, instead of
+    // `println!` panicking on the write error.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let color = match cli.color {
         Color::Always => true,
@@ -221,7 +231,7 @@ pub fn run() -> ExitCode {
         Command::Status { manifest, verify } => plan::status(&manifest, verify, ui),
         Command::Release { manifest } => release::release(&manifest, ui),
         Command::Verify { dir } => release::verify(&dir, ui),
-        Command::Gc { keep, max_size, cache } => gc::run(&keep, max_size, cache, ui),
+        Command::Gc { keep, max_size, min_age, cache } => gc::run(&keep, max_size, min_age, cache, ui),
         Command::Schema => serde_json::to_string_pretty(&crate::manifest::schema::json_schema())
             .map(|text| {
                 println!("{text}");
@@ -244,6 +254,22 @@ pub fn run() -> ExitCode {
                 None => ExitCode::FAILURE,
             }
         }
+    }
+}
+
+/// A byte count for people: `1.2 GB`, `530 MB`, `12 kB` (decimal units, as `du -h --si`).
+pub(crate) fn human_bytes(n: u64) -> String {
+    let units = ["B", "kB", "MB", "GB", "TB", "PB"];
+    let mut v = n as f64;
+    let mut u = 0;
+    while v >= 1000.0 && u + 1 < units.len() {
+        v /= 1000.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{n} B")
+    } else {
+        format!("{v:.1} {}", units[u])
     }
 }
 

@@ -29,9 +29,9 @@ pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> 
             None => String::new(),
         };
         println!(
-            "{} images to render, at most {:.1} MB uncompressed{time}",
+            "{} images to render, at most {} uncompressed{time}",
             st.images_to_render,
-            st.bytes_upper_bound as f64 / 1e6
+            super::human_bytes(st.bytes_upper_bound)
         );
     }
     if explain {
@@ -63,7 +63,7 @@ pub fn status(manifest: &Path, verify: bool, ui: Ui) -> anyhow::Result<ExitCode>
         println!("  {}: {}", a.label, a.reasons.join("; "));
     }
     let (files, bytes) = dir_size(&cache);
-    println!("cache {} ({why}): {files} files, {:.1} MB", cache.display(), bytes as f64 / 1e6);
+    println!("cache {} ({why}): {files} files, {}", cache.display(), super::human_bytes(bytes));
     Ok(ExitCode::SUCCESS)
 }
 

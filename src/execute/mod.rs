@@ -24,9 +24,22 @@ use crate::plan::actions::{Action, Kind};
 use crate::plan::graph::{ActionId, Graph};
 use crate::scene::Scene;
 
+/// Set to stop a running build early (the CLI sets it on Ctrl-C; setting it is async-signal-safe): no action
+/// starts or hands over a result after it, what was handed over still commits, and [`run`] returns
+/// [`Error::Interrupted`]. The next build finds those results in the cache.
+pub static INTERRUPT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 /// What can go wrong running an action.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// [`INTERRUPT`] was set: the build stopped, keeping what had finished.
+    #[error("interrupted after {finished} of {work} actions")]
+    Interrupted {
+        /// Actions that finished (and are in the cache).
+        finished: usize,
+        /// Actions the build was to run.
+        work: usize,
+    },
     /// Posing the scene for an action failed (a source file that changed or broke since planning).
     #[error("{action}")]
     Scene {
@@ -339,8 +352,27 @@ pub(crate) fn run(
     let tick = || done(count.fetch_add(1, Ordering::Relaxed) + 1);
     let kinds = KindGraph::new(g, &here);
     let run = Running { g, x, here: &here, kinds: &kinds, tick: &tick, state: Mutex::new(Shared::new(blobs, &kinds)) };
-    rayon::scope(|s| kinds.roots().for_each(|kind| run.spawn(s, kind)));
+    let over = std::sync::atomic::AtomicBool::new(false);
+    std::thread::scope(|t| {
+        // An interruption stops the build as a failure does: the committer refuses what comes after it.
+        t.spawn(|| {
+            while !over.load(Ordering::Relaxed) {
+                if INTERRUPT.load(Ordering::Relaxed) {
+                    x.commit.refuse();
+                    return;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            }
+        });
+        rayon::scope(|s| kinds.roots().for_each(|kind| run.spawn(s, kind)));
+        over.store(true, Ordering::Relaxed);
+    });
     let Shared { blobs, seconds, failure, .. } = run.state.into_inner().unwrap_or_else(|p| p.into_inner());
+    if INTERRUPT.load(Ordering::Relaxed) {
+        // What was handed over commits as the committer drains; the echoes of its refusal are not failures.
+        let _ = x.commit.flush();
+        return Err(Error::Interrupted { finished: count.load(Ordering::Relaxed), work });
+    }
     if let Some(e) = failure {
         return Err(e);
     }

@@ -169,3 +169,70 @@ fn frames_past_a_clip_are_warned_of_with_the_count_that_covers_it() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains(&want["warning: ".len()..]), "{err}");
 }
+
+#[test]
+fn the_command_line_s_edges() {
+    use std::io::{BufRead, Read};
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    assert_eq!(vvgen(d, &["new", "longbox.gltf", "-o", "m.toml"]).0, 0);
+    // A reader that stops early (`| head`): the process ends quietly, as cat does, without a panic.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vvgen"))
+        .current_dir(d)
+        .args(["plan", "--json", "m.toml"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child.stdout.as_mut().unwrap().read_exact(&mut first).unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    // `inspect --source` with a name the manifest lacks is an error naming the sources.
+    let (code, err) = vvgen(d, &["inspect", "m.toml", "--source", "nope"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no source `nope`") && err.contains("the sources are longbox"), "{err}");
+    // Ctrl-C mid-build: it says what is kept, and the next build resumes instead of starting over.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vvgen"))
+        .current_dir(d)
+        .args(["build", "m.toml"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    let started = lines.by_ref().map(|l| l.unwrap()).find(|l| l.contains("running")).unwrap();
+    // Let a few renders finish.
+    let _ = lines.next();
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let rest: Vec<String> = lines.map(|l| l.unwrap()).collect();
+    let status = child.wait().unwrap();
+    if status.code() == Some(130) {
+        let said = rest.join("\n");
+        assert!(said.contains("actions finished and are kept in the cache"), "{started}\n{said}");
+        let (code, err) = vvgen(d, &["build", "m.toml"]);
+        assert_eq!(code, 0, "{err}");
+        assert!(!err.contains(" 0 cached"), "the build started over: {err}");
+    } else {
+        // The build won the race and finished first: nothing to check of the interruption.
+        assert!(status.success(), "{status:?}");
+    }
+    // gc says what it kept for its age, and how to collect it anyway.
+    let fewer = std::fs::read_to_string(d.join("m.toml")).unwrap().replace("count = 31,", "count = 5,");
+    std::fs::write(d.join("m.toml"), fewer).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["gc", "--keep", "m.toml"]).output().unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains("younger than 3600 s") && said.contains("--min-age 0"), "{said}");
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen"))
+        .current_dir(d)
+        .args(["gc", "--keep", "m.toml", "--min-age", "0"])
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(!said.contains("removed 0 files") && !said.contains("younger"), "{said}");
+}

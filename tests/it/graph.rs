@@ -149,14 +149,15 @@ fn gc_after_the_grace_period_keeps_everything_the_graph_reaches() {
     run(d, &text);
     backdate(&d.join("cache"), 2);
     let keep = [load(&d.join("m.toml"))];
-    let c = build::collect_garbage(&keep, &d.join("cache"), None).unwrap();
+    let c = build::collect_garbage(&keep, &d.join("cache"), None, vvgen::cache::gc::GRACE).unwrap();
     assert_eq!(c.files, 0, "everything is reachable");
     assert!(run(d, &text).nothing_to_do());
     // After an edit, what only the old manifest reached goes, and nothing the new one reaches.
     let edited = text.replace("points = 2000", "points = 2500");
     run(d, &edited);
     backdate(&d.join("cache"), 2);
-    let c = build::collect_garbage(&[load(&d.join("m.toml"))], &d.join("cache"), None).unwrap();
+    let c =
+        build::collect_garbage(&[load(&d.join("m.toml"))], &d.join("cache"), None, vvgen::cache::gc::GRACE).unwrap();
     // 2 sample and 2 point-frame records with their 4 blobs, the preview strip's record with its 2 blobs (the
     // picture and the viewer's frames), both outputs' old metadata (which record the manifest's digest) and the
     // point output's old viewer page (which embeds its frames).
