@@ -39,7 +39,7 @@ fn points(x: &Export, name: &str, title: &str, files: &mut Files) -> Result<Stri
             colors: &s.colors,
         })
         .collect();
-    Ok(viewer::html(title, &[], &shown, None))
+    Ok(viewer::html(title, &[], &shown, None, Some(x.plan.frames)))
 }
 
 /// An image output's contact sheets and rig plot; returns its viewer page (its cameras, linking the images the
@@ -85,5 +85,5 @@ fn pictures(x: &Export, images: &[usize], title: &str, files: &mut Files) -> Res
         positions: &samples.positions,
         colors: &samples.colors,
     };
-    Ok(viewer::html(title, &list, &[cloud], bounds))
+    Ok(viewer::html(title, &list, &[cloud], bounds, None))
 }

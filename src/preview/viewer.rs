@@ -50,8 +50,15 @@ pub struct Cloud<'a> {
 }
 
 /// The page for `images` (none for a point-cloud sequence) around `clouds` (the slider steps through the
-/// images' frames, or the clouds' when there are no images) and `bounds`.
-pub fn html(title: &str, images: &[ViewerImage], clouds: &[Cloud], bounds: Option<(Vec3, Vec3)>) -> String {
+/// images' frames, or the clouds' when there are no images) and `bounds`; `of_frames` is the sequence's frame
+/// count when the clouds shown are some of its frames (the status line says "24 of 103 frames").
+pub fn html(
+    title: &str,
+    images: &[ViewerImage],
+    clouds: &[Cloud],
+    bounds: Option<(Vec3, Vec3)>,
+    of_frames: Option<usize>,
+) -> String {
     // Cameras: one per (split, view), with the images it took.
     let mut cameras: BTreeMap<(usize, u32), (serde_json::Value, Vec<serde_json::Value>)> = BTreeMap::new();
     let mut splits: BTreeMap<usize, (&str, usize)> = BTreeMap::new();
@@ -117,6 +124,7 @@ pub fn html(title: &str, images: &[ViewerImage], clouds: &[Cloud], bounds: Optio
         "splits": split_list,
         "images": images.len(),
         "frames": frames.keys().collect::<Vec<_>>(),
+        "of_frames": of_frames,
         "time": frames.values().collect::<Vec<_>>(),
         "clouds": clouds.iter().map(|c| json!({
             "frame": c.frame,
@@ -194,7 +202,7 @@ mod tests {
             },
         ];
         let cloud = Cloud { frame: 1, time: 1.0, positions: &[[0.0, 0.0, 0.0]], colors: &[[255, 0, 0]] };
-        let page = html("a & b", &images, &[cloud], None);
+        let page = html("a & b", &images, &[cloud], None, None);
         assert!(page.contains("<title>vvgen · a &amp; b</title>"));
         assert_eq!(page.matches("</script>").count(), 3, "the data cannot close its script");
         assert!(page.contains(r#""frames":[0,1]"#) && page.contains(r#""images":3"#));
