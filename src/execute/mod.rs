@@ -25,7 +25,7 @@ use crate::plan::graph::{ActionId, Graph};
 use crate::scene::Scene;
 
 /// Set to stop a running build early (the CLI sets it on Ctrl-C; setting it is async-signal-safe): no action
-/// starts or hands over a result after it, what was handed over still commits, and [`run`] returns
+/// starts or hands over a result after it, what was handed over still commits, and the running build returns
 /// [`Error::Interrupted`]. The next build finds those results in the cache.
 pub static INTERRUPT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
