@@ -77,9 +77,50 @@ pub fn translate(message: &str, span: Range<usize>) -> Diagnostic {
             .with_help(format!("add `{key} = …` to this table"));
     }
     if let Some(rest) = message.strip_prefix("invalid type: ") {
-        return Diagnostic::error(format!("wrong type: {rest}"), Some(span));
+        let (found, expected) = rest.split_once(", expected ").unwrap_or((rest, ""));
+        let want = in_words(expected);
+        return Diagnostic::error(format!("wrong type: {found} where {want} is expected"), Some(span))
+            .with_help(format!("write {want} here"));
+    }
+    if let Some(name) = message.strip_prefix("data did not match any variant of untagged enum ") {
+        // serde names the Rust type; say what the key takes, in the manifest's words.
+        let (what, example) = match name.trim() {
+            "AnimationSel" => (
+                "`animation` takes a clip index, a clip name, a list of them, or \"all\"",
+                "animation = 0, animation = \"Walk\", animation = [0, \"Wave\"] or animation = \"all\"",
+            ),
+            "ClipRef" => ("a clip in an `animation` list is an index or a name", "animation = [0, \"Wave\"]"),
+            "Scale" => ("`scale` takes a number or one per axis", "scale = 2 or scale = [1, 1, 2]"),
+            "FrameSubset" => (
+                "a split's `frames` takes a list of positions or a range",
+                "frames = [0, 5, 10] or frames = { start = 0, end = 20, every = 2 }",
+            ),
+            "Background" => (
+                "`background` takes a name or an sRGB colour",
+                "background = \"white\" or background = [0.5, 0.5, 0.5]",
+            ),
+            other => return Diagnostic::error(format!("this value has none of the forms {other} takes"), Some(span)),
+        };
+        return Diagnostic::error(format!("{what}"), Some(span)).with_help(format!("e.g. {example}"));
     }
     Diagnostic::error(message.to_string(), Some(span))
+}
+
+/// serde's name of an expected type, in words a manifest's author knows.
+fn in_words(expected: &str) -> String {
+    let e = expected.trim();
+    match e {
+        "u8" | "u16" | "u32" | "u64" | "usize" => "a whole number, 0 or more (e.g. 80)".into(),
+        "i8" | "i16" | "i32" | "i64" | "isize" => "a whole number (e.g. 0)".into(),
+        "f32" | "f64" => "a number (e.g. 2.4)".into(),
+        "a boolean" => "true or false".into(),
+        "a string" => "a quoted string (e.g. \"name\")".into(),
+        "a sequence" => "a list (e.g. [1, 2, 3])".into(),
+        _ if e.starts_with("an array of length ") => format!("a list of {} numbers", &e["an array of length ".len()..]),
+        _ if e.starts_with("struct ") => "a table (e.g. { key = value })".into(),
+        "" => "another type".into(),
+        other => other.to_string(),
+    }
 }
 
 /// Splits "word`, expected one of `a`, `b`" into ("word", ["a", "b"]).

@@ -232,6 +232,39 @@ fn wrong_type_is_named() {
 }
 
 #[test]
+fn type_errors_say_what_the_key_takes_in_words_with_an_example() {
+    // (the line as written, as the test writes it, the exact message and help)
+    let cases = [
+        (
+            "seed = 42",
+            "seed = \"x\"",
+            "wrong type: string \"x\" where a whole number, 0 or more (e.g. 80) is expected",
+            "write a whole number, 0 or more (e.g. 80) here",
+        ),
+        (
+            "animation = 0",
+            "animation = true",
+            "`animation` takes a clip index, a clip name, a list of them, or \"all\"",
+            "e.g. animation = 0, animation = \"Walk\", animation = [0, \"Wave\"] or animation = \"all\"",
+        ),
+        (
+            "background = [1.0, 1.0, 1.0]",
+            "background = 3",
+            "`background` takes a name or an sRGB colour",
+            "e.g. background = \"white\" or background = [0.5, 0.5, 0.5]",
+        ),
+    ];
+    for (from, to, message, help) in cases {
+        let base = full_manifest();
+        assert!(base.lines().any(|l| l.trim() == from), "the full manifest has no line {from:?}");
+        let text = base.replacen(from, to, 1);
+        let line = text.lines().position(|l| l.trim() == to).unwrap() + 1;
+        let l = lines(&errors(&text));
+        assert!(l.contains(&(line, message.to_string(), help.to_string())), "{to}: {l:#?}");
+    }
+}
+
+#[test]
 fn dangling_reference_names_the_missing_rig() {
     let text = full_manifest().replace("rig = \"ring\"", "rig = \"rign\"");
     let line = text.lines().position(|l| l == "rig = \"rign\"").unwrap() + 1;
