@@ -101,7 +101,7 @@ pub fn translate(message: &str, span: Range<usize>) -> Diagnostic {
             ),
             other => return Diagnostic::error(format!("this value has none of the forms {other} takes"), Some(span)),
         };
-        return Diagnostic::error(format!("{what}"), Some(span)).with_help(format!("e.g. {example}"));
+        return Diagnostic::error(what, Some(span)).with_help(format!("e.g. {example}"));
     }
     Diagnostic::error(message.to_string(), Some(span))
 }
