@@ -259,8 +259,8 @@ pub(crate) fn prepare(m: &Manifest, cache: &Path, verify: bool) -> Result<Prepar
     let plan = Plan::new(m, scene.frames).map_err(|e| Error::plan(m, e))?;
     let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
     let stat = store.stat_cache(&m.out_dir(), verify);
-    let lit = m.render.shading == crate::manifest::render::Shading::Pbr;
-    let frame_keys = keys::frame_keys(&scene, &stat, lit).map_err(|e| Error::plan(m, e))?;
+    // Lit point colours read the lit materials too, whatever the images' shading.
+    let frame_keys = keys::frame_keys(&scene, &stat, m.lit()).map_err(|e| Error::plan(m, e))?;
     let environment = keys::environment_key(m, &stat).map_err(|e| Error::plan(m, e))?;
     Ok(Prepared { scene, plan, store, stat, frame_keys, environment })
 }

@@ -275,6 +275,8 @@ pub struct Keying<'a> {
     pub frame_keys: &'a [Digest],
     /// The key of the lights the sources bring at every frame, when they bring any (read by lit passes only).
     pub frame_lights: &'a [Option<Digest>],
+    /// What only lit shading reads of every frame besides its content ([`super::keys::FrameKeys::lit`]).
+    pub frame_lit: &'a [Option<Digest>],
     /// The renderer's settings.
     pub render: RenderSettings,
     /// How passes are encoded.
@@ -309,6 +311,9 @@ impl Action {
                 camera(w, &img.camera);
                 render_settings(w, &cx.render, *pass);
                 if *pass == Pass::Rgba && cx.render.shading == Shading::Pbr {
+                    if let Some(lit) = &cx.frame_lit[img.frame] {
+                        w.digest("lit materials", lit);
+                    }
                     if let Some(lights) = &cx.frame_lights[img.frame] {
                         w.digest("file lights", lights);
                     }
@@ -648,6 +653,9 @@ fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize, deps
         w.str("color", "lit");
         w.str("baking", crate::render::light::BAKE_SALT);
         lighting_fields(w, &cx.render.lighting);
+        if let Some(lit) = &cx.frame_lit[f] {
+            w.digest("lit materials", lit);
+        }
         if let Some(lights) = &cx.frame_lights[f] {
             w.digest("file lights", lights);
         }

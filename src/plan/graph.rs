@@ -64,6 +64,7 @@ impl<'a> Graph<'a> {
             plan,
             frame_keys: &frame_keys.content,
             frame_lights: &frame_keys.lights,
+            frame_lit: &frame_keys.lit,
             render: {
                 let mut r = m.render.renderer_settings(scene.voxel_size());
                 if !scene.has_points() {

@@ -17,13 +17,18 @@ pub struct FrameKeys {
     /// when the scene poses any: what lit shading reads besides the content. `None` when there are none, so
     /// builds without file lights keep their keys.
     pub lights: Vec<Option<Digest>>,
+    /// What only lit shading reads of frame `f` besides its content: every material field and texture (metalness,
+    /// roughness, normal textures…) and the tangents normal textures are read along. `None` for unlit builds.
+    /// Apart from `content` so that switching shading re-runs only what shading shapes (the lit `rgba` pass, lit
+    /// point colours), not depth, bounds or samples.
+    pub lit: Vec<Option<Digest>>,
 }
 
-/// The keys of every scene frame. `lit` keys what only lit shading reads of the materials too (metalness,
-/// roughness, their textures): unlit datasets keep the keys they had before lit shading existed.
+/// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
 pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKeys, Error> {
     let mut per_source: Vec<Vec<Digest>> = Vec::new();
     let mut lights_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
+    let mut lit_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
     let mut poser = Poser::default();
     for (i, src) in scene.sources.iter().enumerate() {
         let world = scene.world_from_source(i).to_cols_array();
@@ -54,16 +59,12 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 let n = src.frame_count();
                 let mut keys = Vec::with_capacity(n);
                 let mut materials = None;
+                let mut lit_materials = None;
                 let mut lights = Vec::new();
+                let mut lit_keys = Vec::new();
                 for f in 0..n {
                     let posed = scene.pose_source(i, f, &mut poser)?;
-                    let m = *materials.get_or_insert_with(|| {
-                        if lit {
-                            posed.lit_material_digest()
-                        } else {
-                            posed.material_digest()
-                        }
-                    });
+                    let m = *materials.get_or_insert_with(|| posed.material_digest());
                     let geometry = posed.geometry_digest();
                     let mut parts: Vec<&[u8]> = vec![geometry.as_bytes(), m.as_bytes()];
                     // Alpha BLEND surfaces have been composited in depth order since the renderer's "render 6"
@@ -71,16 +72,22 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     if posed.materials.iter().any(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend) {
                         parts.push(b"alpha blend composited");
                     }
-                    // Tangents (posed for normal textures) are read by lit shading only.
-                    let tangents = if lit { posed.tangents_digest() } else { None };
-                    if let Some(t) = &tangents {
-                        parts.push(t.as_bytes());
-                    }
                     keys.push(key("frame posed", &parts));
+                    // Every material field and the tangents (posed for normal textures): lit shading's alone.
+                    lit_keys.push(lit.then(|| {
+                        let all = *lit_materials.get_or_insert_with(|| posed.lit_material_digest());
+                        let tangents = posed.tangents_digest();
+                        let mut parts: Vec<&[u8]> = vec![all.as_bytes()];
+                        if let Some(t) = &tangents {
+                            parts.push(t.as_bytes());
+                        }
+                        key("frame lit", &parts)
+                    }));
                     // The file's lights, posed only for lit builds (see `Scene::file_lights`).
                     lights.push((!posed.lights.is_empty()).then(|| Digest(*posed.lights_digest().as_bytes())));
                 }
                 lights_per_source.push(lights);
+                lit_per_source.push(lit_keys);
                 keys
             }
         };
@@ -94,14 +101,19 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
             key("frame", &parts.iter().map(|d| &d.0[..]).collect::<Vec<_>>())
         })
         .collect();
-    let lights = (0..scene.frames)
-        .map(|f| {
-            let parts: Vec<Digest> =
-                lights_per_source.iter().filter_map(|l| l.get(f.min(l.len().max(1) - 1)).copied().flatten()).collect();
-            (!parts.is_empty()).then(|| key("frame lights", &parts.iter().map(|d| &d.0[..]).collect::<Vec<_>>()))
-        })
-        .collect();
-    Ok(FrameKeys { content, lights })
+    // Per frame, the parts some sources bring (shorter sources hold their last frame), or `None` when none does.
+    let gather = |per: &[Vec<Option<Digest>>], what: &str| -> Vec<Option<Digest>> {
+        (0..scene.frames)
+            .map(|f| {
+                let parts: Vec<Digest> =
+                    per.iter().filter_map(|l| l.get(f.min(l.len().max(1) - 1)).copied().flatten()).collect();
+                (!parts.is_empty()).then(|| key(what, &parts.iter().map(|d| &d.0[..]).collect::<Vec<_>>()))
+            })
+            .collect()
+    };
+    let lights = gather(&lights_per_source, "frame lights");
+    let lit = gather(&lit_per_source, "frame lit");
+    Ok(FrameKeys { content, lights, lit })
 }
 
 /// The content key of `m`'s `[environment] map`, when it names one.

@@ -202,7 +202,7 @@ fn each_setting_invalidates_exactly_the_actions_that_read_it() {
     // 6 images × 4 passes; colmap composites each image; every output's metadata records the manifest.
     /// What changed, the edited manifest, and what must run besides the three outputs.
     type Case = (&'static str, String, Vec<(Kind, usize)>);
-    let cases: [Case; 8] = [
+    let cases: [Case; 9] = [
         // The contact sheets (one per split) read the RGBA, depth and mask renders; the strip the point frames.
         (
             "background",
@@ -227,6 +227,13 @@ fn each_setting_invalidates_exactly_the_actions_that_read_it() {
             vec![(RenderPass, 24), (Composite, 6), (PreviewSheet, 2)],
         ),
         ("voxel", base.replace("voxel = 0.05", "voxel = 0.08"), vec![(PointFrame, 2), (PreviewStrip, 1)]),
+        // Lit shading: the map is prefiltered and the RGBA passes re-render (composited by colmap, shown by the
+        // sheets); depth, normals, masks, bounds, samples and clouds do not depend on shading.
+        (
+            "shading",
+            manifest(&lit(), outputs),
+            vec![(Environment, 1), (RenderPass, 6), (Composite, 6), (PreviewSheet, 2)],
+        ),
         ("init points", base.replace("init_points = 100", "init_points = 150"), vec![(InitCloud, 1)]),
     ];
     let dir = tempfile::tempdir().unwrap();
