@@ -44,8 +44,22 @@ pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<Exi
                     Ok((_, None)) => {}
                     Err(e) => {
                         invalid += 1;
-                        eprint!("{}", report.render(ui.color));
-                        eprintln!("error: {}: {e:#}", path.display());
+                        // A clip the file lacks is pointed at where the manifest names it.
+                        let at = match e.downcast_ref::<scene::Error>() {
+                            Some(scene::Error::Clip { name, message }) => {
+                                m.sources.get(name).and_then(|s| s.animation_span()).map(|span| (span, message))
+                            }
+                            _ => None,
+                        };
+                        if let Some((span, message)) = at {
+                            report.diagnostics.push(Diagnostic::error(message.clone(), Some(span)).with_help(
+                                "name one of the file's clips (by name or index), a list of them, or \"all\"",
+                            ));
+                            eprint!("{}", report.render(ui.color));
+                        } else {
+                            eprint!("{}", report.render(ui.color));
+                            eprintln!("error: {}: {e:#}", path.display());
+                        }
                         continue;
                     }
                 }

@@ -267,7 +267,10 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
         }
     }
 
-    let broken = Broken { sources: sources.1, rigs: rigs.1, splits: splits.1 };
+    // Keys written in each split, parsed or not: a key whose value was refused is not "missing" too.
+    let split_keys =
+        splits.0.iter().map(|(n, (_, _, keys))| (n.clone(), keys.iter().map(|(k, _)| k.clone()).collect())).collect();
+    let broken = Broken { sources: sources.1, rigs: rigs.1, splits: splits.1, split_keys };
     let manifest = Manifest {
         path: path.to_path_buf(),
         dir,
@@ -298,6 +301,8 @@ struct Broken {
     sources: BTreeSet<String>,
     rigs: BTreeSet<String>,
     splits: BTreeSet<String>,
+    /// Per split, the keys written in it (a refused value's key included).
+    split_keys: BTreeMap<String, BTreeSet<String>>,
 }
 
 /// Whether `name` is safe as a file or folder name on every platform: letters, digits, `-`, `_` and `.`, and not
@@ -491,7 +496,10 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                             Some(v.span()),
                         ));
                     }
-                } else if split.views.is_none() && split.time != TimeMode::Monocular {
+                } else if split.views.is_none()
+                    && split.time != TimeMode::Monocular
+                    && !broken.split_keys.get(name).is_some_and(|k| k.contains("views"))
+                {
                     diags.push(
                         Diagnostic::error(format!("split `{name}` needs `views`"), Some(split.rig.span()))
                             .with_help("e.g. views = 100"),

@@ -101,6 +101,13 @@ pub enum ClipRef {
 }
 
 impl Source {
+    /// Where `animation` is written, for an error about the clip it names.
+    pub fn animation_span(&self) -> Option<std::ops::Range<usize>> {
+        self.animation.as_ref().map(|a| a.span())
+    }
+}
+
+impl Source {
     /// The kind and the path string, if exactly one kind is set.
     pub(super) fn kind_spanned(&self) -> Option<(SourceKind, &Spanned<String>)> {
         match (&self.gltf, &self.mesh, &self.ply_sequence, &self.mesh_sequence) {

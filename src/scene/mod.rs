@@ -72,6 +72,14 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A source names a clip its file lacks.
+    #[error("source `{name}`: {message}")]
+    Clip {
+        /// The source.
+        name: String,
+        /// Which clip, and the clips there are.
+        message: String,
+    },
     /// A `[transform]` cannot be resolved (fitting a source with no extent).
     #[error("{table}")]
     Transform {

@@ -62,7 +62,8 @@ impl LoadedSource {
         let data = match kind {
             SourceKind::Gltf => {
                 let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
-                let clips = select_clips(&asset, s.animation()).map_err(invalid)?;
+                let clips = select_clips(&asset, s.animation())
+                    .map_err(|message| Error::Clip { name: name.to_string(), message })?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
                 let f = s.frames().cloned().unwrap_or_default();
                 let fps = f.fps();

@@ -236,3 +236,31 @@ fn the_command_line_s_edges() {
     let said = String::from_utf8_lossy(&out.stdout);
     assert!(!said.contains("removed 0 files") && !said.contains("younger"), "{said}");
 }
+
+#[test]
+fn a_refused_value_is_one_error_and_a_missing_clip_is_pointed_at() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    assert_eq!(vvgen(d, &["new", "longbox.gltf", "-o", "m.toml"]).0, 0);
+    let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
+    // `views = 1e7` is a wrong type, said once: not also "split needs `views`".
+    let t = text.replacen("time  = \"monocular\"", "views = 1e7", 1);
+    std::fs::write(d.join("a.toml"), &t).unwrap();
+    let (code, err) = vvgen(d, &["--color", "never", "check", "a.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("wrong type: floating point `10000000.0` where a whole number, 0 or more (e.g. 80) is expected")
+    );
+    assert!(!err.contains("needs `views`") && err.contains("a.toml: 1 error"), "{err}");
+    // A clip the file lacks: the line and column where the manifest names it, the clips there are, a fix.
+    let t = text.replace("animation = 0", "animation = \"Trot\"");
+    std::fs::write(d.join("b.toml"), &t).unwrap();
+    let line = t.lines().position(|l| l.starts_with("animation")).unwrap() + 1;
+    let (code, err) = vvgen(d, &["--color", "never", "check", "b.toml"]);
+    assert_eq!(code, 2, "{err}");
+    let want =
+        format!("error: ./longbox.gltf: no animation named `Trot` (clips: Walk, Idle)\n  --> b.toml:{line}:13\n");
+    assert!(err.starts_with(&want), "{err}");
+    assert!(err.contains("= help: name one of the file's clips (by name or index), a list of them, or \"all\""));
+}
