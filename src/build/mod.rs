@@ -403,6 +403,12 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     report.stale_removed = prune(&previous, &record, &record::absolute(&m.out_dir()));
     record.actions = g.ids().map(|id| (g.node(id).label.clone(), g.node(id).key.hex())).collect();
     let rendered = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
+    record.seconds_per_action = last.seconds_per_action.clone();
+    for (kind, c) in &report.actions {
+        if kind.cached() && *kind != Kind::RenderPass && c.ran > 0 && c.seconds > 0.0 {
+            record.seconds_per_action.insert(kind.name().to_string(), c.seconds / c.ran as f64);
+        }
+    }
     record.render_rate = if report.renders > 0 && rendered.seconds > 0.0 {
         Some(report.renders as f64 * pixel_samples(m) / rendered.seconds)
     } else {

@@ -27,6 +27,10 @@ pub struct LastBuild {
     /// from).
     #[serde(default)]
     pub render_rate: Option<f64>,
+    /// Per action kind other than renders (by name), the wall seconds per action the last build that ran some
+    /// measured (kinds run beside each other, so this is each kind's span over its count).
+    #[serde(default)]
+    pub seconds_per_action: BTreeMap<String, f64>,
 }
 
 impl LastBuild {

@@ -57,9 +57,11 @@ pub struct Status {
     pub images_to_render: usize,
     /// An upper bound of the bytes those images' passes take uncompressed (PNG files are smaller).
     pub bytes_upper_bound: u64,
-    /// Seconds rendering them would take at the rate the last build here measured (none before one has
-    /// rendered).
+    /// Seconds the actions to run would take at the rates the last builds here measured: rendering at its
+    /// pixel rate, every other kind at its seconds per action (none before a build has run any).
     pub seconds_estimate: Option<f64>,
+    /// Kinds with actions to run that no build here has timed yet, left out of the estimate.
+    pub not_estimated: Vec<Kind>,
 }
 
 impl Status {
@@ -107,8 +109,7 @@ pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> R
         .sum();
     let bytes_upper_bound = images_to_render as u64 * w as u64 * h as u64 * per_pixel;
     let last = record::read(&p.store, m);
-    let seconds_estimate = last.render_rate.map(|rate| images_to_render as f64 * super::pixel_samples(m) / rate);
-    let mut st = Status { images_to_render, bytes_upper_bound, seconds_estimate, ..Default::default() };
+    let mut st = Status { images_to_render, bytes_upper_bound, ..Default::default() };
     for id in g.ids() {
         let n = g.node(id);
         let kind = n.action.kind();
@@ -129,6 +130,21 @@ pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> R
         }
         st.actions.push(ActionStatus { kind, label: n.label.clone(), key: n.key.hex(), state, reasons });
     }
+    // Rendering at the last measured pixel rate, every other kind at its last seconds per action.
+    let mut estimate = None;
+    if images_to_render > 0 {
+        match last.render_rate {
+            Some(rate) => estimate = Some(images_to_render as f64 * super::pixel_samples(m) / rate),
+            None => st.not_estimated.push(Kind::RenderPass),
+        }
+    }
+    for (kind, k) in st.kinds.iter().filter(|(k, s)| k.cached() && **k != Kind::RenderPass && s.run > 0) {
+        match last.seconds_per_action.get(kind.name()) {
+            Some(s) => *estimate.get_or_insert(0.0) += s * k.run as f64,
+            None => st.not_estimated.push(*kind),
+        }
+    }
+    st.seconds_estimate = estimate;
     Ok(st)
 }
 

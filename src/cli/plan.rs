@@ -24,15 +24,20 @@ pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> 
         t.elapsed().as_secs_f64() * 1000.0
     );
     if st.images_to_render > 0 {
-        let time = match st.seconds_estimate {
-            Some(s) => format!(", about {s:.0} s at the rate the last build here rendered"),
-            None => String::new(),
-        };
         println!(
-            "{} images to render, at most {} uncompressed{time}",
+            "{} images to render, at most {} uncompressed",
             st.images_to_render,
             super::human_bytes(st.bytes_upper_bound)
         );
+    }
+    if let Some(s) = st.seconds_estimate {
+        let left_out: Vec<&str> = st.not_estimated.iter().map(|k| k.name()).collect();
+        let besides = if left_out.is_empty() {
+            String::new()
+        } else {
+            format!(", besides {} (not timed here yet)", left_out.join(", "))
+        };
+        println!("about {s:.1} s at the rates the last builds here measured{besides}");
     }
     if explain {
         for a in st.actions.iter().filter(|a| a.state == State::Run) {

@@ -264,3 +264,24 @@ fn a_refused_value_is_one_error_and_a_missing_clip_is_pointed_at() {
     assert!(err.starts_with(&want), "{err}");
     assert!(err.contains("= help: name one of the file's clips (by name or index), a list of them, or \"all\""));
 }
+
+#[test]
+fn plan_estimates_every_kind_it_has_timed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    assert_eq!(vvgen(d, &["new", "longbox.gltf", "--writer", "colmap", "-o", "m.toml"]).0, 0);
+    small(&d.join("m.toml"));
+    let plan = |d: &Path| {
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["plan", "m.toml"]).output().unwrap();
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    // Nothing timed yet: no estimate.
+    assert!(!plan(d).contains("about"), "{}", plan(d));
+    assert_eq!(vvgen(d, &["-q", "build", "m.toml"]).0, 0);
+    // A new seed re-samples every frame's COLMAP points and re-renders the training views: both are timed.
+    let t = std::fs::read_to_string(d.join("m.toml")).unwrap().replace("seed = 0", "seed = 1");
+    std::fs::write(d.join("m.toml"), t).unwrap();
+    let said = plan(d);
+    assert!(said.contains("colmap-points") && said.contains("about ") && !said.contains("besides"), "{said}");
+}
