@@ -285,3 +285,48 @@ fn plan_estimates_every_kind_it_has_timed() {
     let said = plan(d);
     assert!(said.contains("colmap-points") && said.contains("about ") && !said.contains("besides"), "{said}");
 }
+
+#[test]
+fn counts_and_places_are_the_ones_a_user_means() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    // The dynerf frame-count caveat counts the frames the output's splits select (24 of the clip's 31), in
+    // check as in build.
+    assert_eq!(vvgen(d, &["new", "longbox.gltf", "--writer", "dynerf", "-o", "m.toml"]).0, 0);
+    small(&d.join("m.toml"));
+    let t = std::fs::read_to_string(d.join("m.toml")).unwrap();
+    let t = t.replace("views = 1     # camera 00", "views = 1\nframes = { start = 0, end = 23 }     # camera 00");
+    let t = t.replace("rig   = \"front\"\nviews = 6", "rig   = \"front\"\nviews = 6\nframes = { start = 0, end = 23 }");
+    assert_eq!(t.matches("end = 23").count(), 2, "{t}");
+    std::fs::write(d.join("m.toml"), t).unwrap();
+    for cmd in ["check", "build"] {
+        let (code, err) = vvgen(d, &["--color", "never", cmd, "m.toml"]);
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("output `dynerf` (dynerf) has 24 frames"), "{cmd}: {err}");
+        assert!(!err.contains("has 31 frames"), "{cmd}: {err}");
+    }
+    // A warning with no place in the text names the file under its title, with no empty frame.
+    assert_eq!(vvgen(d, &["new", "longbox.gltf", "-o", "h.toml"]).0, 0);
+    let h =
+        std::fs::read_to_string(d.join("h.toml")).unwrap().replacen("fit    = \"frame\"", "fit = { height = 2.4 }", 1);
+    std::fs::write(d.join("h.toml"), h).unwrap();
+    let (_, err) = vvgen(d, &["--color", "never", "check", "h.toml"]);
+    let first = err.lines().position(|l| l.contains("images crop the subject")).unwrap_or_else(|| panic!("{err}"));
+    assert_eq!(err.lines().nth(first + 1), Some("  --> h.toml"), "{err}");
+    assert!(!err.contains(" |\n |"), "{err}");
+    // `inspect --source S --ply` writes S alone: the ground plane's two triangles stay out.
+    let g = std::fs::read_to_string(d.join("m.toml")).unwrap() + "\n[source.ground]\nplane = { size = [3, 3] }\n";
+    std::fs::write(d.join("g.toml"), g).unwrap();
+    let (code, err) = vvgen(d, &["inspect", "g.toml", "--source", "longbox", "--ply", "box.ply"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = vvgen(d, &["inspect", "g.toml", "--ply", "all.ply"]);
+    assert_eq!(code, 0, "{err}");
+    let faces = |f: &str| -> usize {
+        let text = std::fs::read(d.join(f)).unwrap();
+        let head =
+            String::from_utf8_lossy(&text[..text.windows(10).position(|w| w == b"end_header").unwrap()]).into_owned();
+        head.lines().find_map(|l| l.strip_prefix("element face ")).unwrap().trim().parse().unwrap()
+    };
+    assert_eq!(faces("all.ply"), faces("box.ply") + 2, "the ground's two triangles");
+}
