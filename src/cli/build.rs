@@ -112,7 +112,7 @@ pub fn run(manifest: &Path, jobs: Option<usize>, opts: Options, preview: bool, u
 /// Ctrl-C during a build: the first asks the build to stop ([`crate::execute::INTERRUPT`]: what finished is
 /// committed, then the build says what it kept); a second leaves at once (what was committed is still whole:
 /// everything lands by rename). Only async-signal-safe calls here (an atomic store, `write`, `_exit`).
-#[cfg(unix)]
+#[cfg(target_os = "linux")]
 extern "C" fn interrupted(_: libc::c_int) {
     use std::sync::atomic::Ordering;
     if crate::execute::INTERRUPT.swap(true, Ordering::Relaxed) {
@@ -155,7 +155,7 @@ pub(super) fn build_and_report(
         b
     });
     let display = Display { bar, quiet: ui.quiet, plain: Mutex::new((0, 0)) };
-    #[cfg(unix)]
+    #[cfg(target_os = "linux")]
     unsafe {
         libc::signal(libc::SIGINT, interrupted as *const () as libc::sighandler_t);
     }

@@ -208,7 +208,7 @@ pub struct Ui {
 pub fn run() -> ExitCode {
     // A closed pipe (`vvgen plan m.toml | head -3`) ends the process quietly, as it ends `cat`, instead of
     // `println!` panicking on the write error.
-    #[cfg(unix)]
+    #[cfg(target_os = "linux")]
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
