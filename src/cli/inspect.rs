@@ -49,6 +49,16 @@ pub fn run(
         }
         let _ = writeln!(out, "source `{}`: {} frame(s)", s.name, s.frame_count());
         match &s.data {
+            SourceData::Fbx { asset, take, times } => {
+                let _ = writeln!(out, "  file: {}", asset.path.display());
+                for (ti, t) in asset.takes.iter().enumerate() {
+                    let playing = if *take == Some(ti) { " (playing)" } else { "" };
+                    let _ = writeln!(out, "  take {ti} `{}`: {:.3} s{playing}", t.name, t.duration());
+                }
+                if let (Some(a), Some(b)) = (times.first(), times.last()) {
+                    let _ = writeln!(out, "  frame times: {a:.4} s … {b:.4} s");
+                }
+            }
             SourceData::Gltf { asset, clips, times } => {
                 let _ = writeln!(out, "  file: {}", asset.path.display());
                 for (ci, a) in asset.animations.iter().enumerate() {

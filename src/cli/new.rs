@@ -19,6 +19,8 @@ pub const WRITERS: [&str; 7] =
 enum Asset {
     /// A glTF file and its clips (name, seconds).
     Gltf { clips: Vec<(String, f32)> },
+    /// An FBX file and its takes (name, seconds).
+    Fbx { takes: Vec<(String, f32)> },
     /// One static mesh (glTF without clips, PLY).
     Mesh,
     /// One file per frame: `ply_sequence` or `mesh_sequence`, with the glob and the frame count.
@@ -107,6 +109,18 @@ fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
             let kind = if clips.is_empty() { Asset::Mesh } else { Asset::Gltf { clips } };
             Ok((kind, "y", format!("{what}; up \"y\": glTF is +Y up by its specification")))
         }
+        "fbx" => {
+            let a = scene::fbx::load(asset)?;
+            let takes: Vec<(String, f32)> = a.takes.iter().map(|t| (t.name.clone(), t.duration() as f32)).collect();
+            let mut rest = scene::PosedScene::default();
+            a.pose(None, 0.0, glam::Mat4::IDENTITY, &mut rest)?;
+            drawable(&rest, asset)?;
+            let what = match takes.first() {
+                Some((n, d)) => format!("{} take(s), the first (`{n}`, {d:.2} s) selected", takes.len()),
+                None => "no take: a static mesh".into(),
+            };
+            Ok((Asset::Fbx { takes }, "z", format!("{what}; in metres and +Z up, as vvgen loads FBX")))
+        }
         "ply" => {
             let s = scene::source::ply_scene(asset)?;
             drawable(&s, asset)?;
@@ -119,7 +133,7 @@ fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
             let glob = asset.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
             Ok((Asset::Sequence { key: "mesh_sequence", glob, frames: 1 }, up, why))
         }
-        _ => bail!("{}: not a glTF, PLY or OBJ file, nor a folder of frames", asset.display()),
+        _ => bail!("{}: not a glTF, FBX, PLY or OBJ file, nor a folder of frames", asset.display()),
     }
 }
 
@@ -179,6 +193,27 @@ fn manifest(
                 "animation = 0\nframes = {{ count = {n}, fps = 30 }}   # the first clip's length at 30 fps"
             );
             n
+        }
+        Asset::Fbx { takes } => {
+            let _ = writeln!(w, "fbx    = \"{}\"", rel(asset)?);
+            if takes.is_empty() {
+                1
+            } else {
+                let _ = writeln!(w, "# takes in the file (pick with `animation = N` or a name):");
+                for (i, (n, d)) in takes.iter().enumerate() {
+                    let _ = writeln!(
+                        w,
+                        "#   {i}: `{n}`, {d:.3} s: frames = {{ count = {}, fps = 30 }}",
+                        frames_covering(*d)
+                    );
+                }
+                let n = frames_covering(takes[0].1);
+                let _ = writeln!(
+                    w,
+                    "animation = 0\nframes = {{ count = {n}, fps = 30 }}   # the first take's length at 30 fps"
+                );
+                n
+            }
         }
         Asset::Mesh => {
             let _ = writeln!(w, "mesh   = \"{}\"", rel(asset)?);
@@ -264,6 +299,8 @@ fn up_note(note: &str) -> &'static str {
         "guessed from the first frame's extents: check it"
     } else if note.contains("OBJ") {
         "OBJ's usual up axis; the world is +Z up"
+    } else if note.contains("FBX") {
+        "FBX is loaded in the world's axes"
     } else {
         "glTF's own up axis; the world is +Z up"
     }

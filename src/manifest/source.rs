@@ -8,13 +8,17 @@ use super::diag::Diagnostic;
 use super::frames::Frames;
 use super::transform::Transform;
 
-/// One `[source.NAME]` table. Exactly one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence`, `plane` is set.
+/// One `[source.NAME]` table. Exactly one of `gltf`, `fbx`, `mesh`, `ply_sequence`, `mesh_sequence`, `plane` is
+/// set.
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Source {
     /// An animated (or static) glTF 2.0 file, `.gltf` or `.glb`.
     #[schemars(with = "Option<String>")]
     pub(super) gltf: Option<Spanned<String>>,
+    /// An animated (or static) FBX file, ascii or binary (6100–7700): skinning, blend shapes, takes.
+    #[schemars(with = "Option<String>")]
+    pub(super) fbx: Option<Spanned<String>>,
     /// A static mesh, glTF or PLY.
     #[schemars(with = "Option<String>")]
     pub(super) mesh: Option<Spanned<String>>,
@@ -63,6 +67,8 @@ fn grey() -> [f64; 3] {
 pub enum SourceKind {
     /// `gltf = …`
     Gltf,
+    /// `fbx = …`
+    Fbx,
     /// `mesh = …`
     Mesh,
     /// `ply_sequence = …`
@@ -110,27 +116,34 @@ impl Source {
 impl Source {
     /// The kind and the path string, if exactly one kind is set.
     pub(super) fn kind_spanned(&self) -> Option<(SourceKind, &Spanned<String>)> {
-        match (&self.gltf, &self.mesh, &self.ply_sequence, &self.mesh_sequence) {
-            (Some(p), None, None, None) => Some((SourceKind::Gltf, p)),
-            (None, Some(p), None, None) => Some((SourceKind::Mesh, p)),
-            (None, None, Some(p), None) => Some((SourceKind::PlySequence, p)),
-            (None, None, None, Some(p)) => Some((SourceKind::MeshSequence, p)),
+        let set = [
+            (SourceKind::Gltf, &self.gltf),
+            (SourceKind::Fbx, &self.fbx),
+            (SourceKind::Mesh, &self.mesh),
+            (SourceKind::PlySequence, &self.ply_sequence),
+            (SourceKind::MeshSequence, &self.mesh_sequence),
+        ];
+        let mut given = set.into_iter().filter_map(|(k, p)| p.as_ref().map(|p| (k, p)));
+        match (given.next(), given.next()) {
+            (Some(one), None) => Some(one),
             _ => None,
         }
     }
 
     pub(crate) fn validate(&self, name: &str, table_span: std::ops::Range<usize>, diags: &mut Vec<Diagnostic>) {
-        let mut set: Vec<std::ops::Range<usize>> = [&self.gltf, &self.mesh, &self.ply_sequence, &self.mesh_sequence]
-            .into_iter()
-            .flatten()
-            .map(|s| s.span())
-            .collect();
+        let mut set: Vec<std::ops::Range<usize>> =
+            [&self.gltf, &self.fbx, &self.mesh, &self.ply_sequence, &self.mesh_sequence]
+                .into_iter()
+                .flatten()
+                .map(|s| s.span())
+                .collect();
         set.extend(self.plane.as_ref().map(|p| p.span()));
         set.sort_by_key(|s| s.start);
         match set.len() {
             0 => diags.push(
                 Diagnostic::error(format!("source `{name}` names no file"), Some(table_span.clone())).with_help(
-                    "add one of `gltf = \"…\"`, `mesh = \"…\"`, `ply_sequence = \"…\"`, `mesh_sequence = \"…\"` or \
+                    "add one of `gltf = \"…\"`, `fbx = \"…\"`, `mesh = \"…\"`, `ply_sequence = \"…\"`, \
+                     `mesh_sequence = \"…\"` or \
                      `plane = { size = [w, d] }`",
                 ),
             ),
@@ -138,7 +151,8 @@ impl Source {
             _ => diags.push(
                 Diagnostic::error(
                     format!(
-                        "source `{name}` sets more than one of `gltf`, `mesh`, `ply_sequence`, `mesh_sequence`, `plane`"
+                        "source `{name}` sets more than one of `gltf`, `fbx`, `mesh`, `ply_sequence`, `mesh_sequence`, \
+                         `plane`"
                     ),
                     Some(set[1].clone()),
                 )
@@ -171,13 +185,16 @@ impl Source {
             }
         }
         if let Some((kind, _)) = self.kind() {
-            if kind != SourceKind::Gltf {
+            if !matches!(kind, SourceKind::Gltf | SourceKind::Fbx) {
                 if let Some(a) = &self.animation {
-                    diags.push(Diagnostic::error("`animation` applies only to `gltf` sources", Some(a.span())));
+                    diags.push(Diagnostic::error(
+                        "`animation` applies only to `gltf` and `fbx` sources",
+                        Some(a.span()),
+                    ));
                 }
-                if self.scene.is_some() {
-                    diags.push(Diagnostic::error("`scene` applies only to `gltf` sources", Some(table_span.clone())));
-                }
+            }
+            if kind != SourceKind::Gltf && self.scene.is_some() {
+                diags.push(Diagnostic::error("`scene` applies only to `gltf` sources", Some(table_span.clone())));
             }
             if kind == SourceKind::Mesh {
                 if let Some(f) = &self.frames {
@@ -230,6 +247,11 @@ impl Source {
     /// The glTF file, when given.
     pub fn gltf(&self) -> Option<&str> {
         self.gltf.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The FBX file, when given.
+    pub fn fbx(&self) -> Option<&str> {
+        self.fbx.as_ref().map(|f| f.get_ref().as_str())
     }
 
     /// The mesh file, when given.

@@ -55,7 +55,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     Ok(key("frame mesh", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?,
-            SourceData::Gltf { .. } | SourceData::Static(_) => {
+            SourceData::Gltf { .. } | SourceData::Fbx { .. } | SourceData::Static(_) => {
                 let n = src.frame_count();
                 let mut keys = Vec::with_capacity(n);
                 let mut materials = None;

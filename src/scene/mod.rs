@@ -2,6 +2,7 @@
 //! transforms. The transforms are resolved once per sequence when the scene opens ([`Scene::open`]), never per
 //! frame, so the subject does not jump or breathe between frames.
 
+pub mod fbx;
 pub mod gltf;
 pub mod light;
 pub mod material;
@@ -43,6 +44,14 @@ pub enum Error {
         /// The file.
         path: PathBuf,
         /// What is wrong, with the glTF object it is in (`accessor 3`, `animation 0 channel 2`).
+        message: String,
+    },
+    /// An FBX file is malformed, over a limit, or refers to a texture that is missing.
+    #[error("{}: {message}", path.display())]
+    Fbx {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
         message: String,
     },
     /// A PLY file is malformed.

@@ -16,7 +16,7 @@ use super::texture::{Texture, TextureRef};
 use super::Error;
 
 /// Largest texture side accepted (a corrupt header should not allocate gigabytes).
-const MAX_TEXTURE_SIDE: u32 = 16_384;
+pub(crate) const MAX_TEXTURE_SIDE: u32 = 16_384;
 
 fn at(path: &Path, line: usize, message: String) -> Error {
     Error::Mesh { path: path.to_path_buf(), line: Some(line), message }

@@ -26,6 +26,16 @@ pub enum SourceData {
         /// Frame times.
         times: Vec<f32>,
     },
+    /// An FBX file, the take that plays (none: the file at rest) and the times of its frames (seconds from the
+    /// take's start).
+    Fbx {
+        /// The file.
+        asset: Box<super::fbx::FbxAsset>,
+        /// The take.
+        take: Option<usize>,
+        /// Frame times.
+        times: Vec<f32>,
+    },
     /// A static mesh, posed once in source space.
     Static(PosedScene),
     /// A PLY sequence, read frame by frame.
@@ -65,17 +75,16 @@ impl LoadedSource {
                 let clips = select_clips(&asset, s.animation())
                     .map_err(|message| Error::Clip { name: name.to_string(), message })?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
-                let f = s.frames().cloned().unwrap_or_default();
-                let fps = f.fps();
-                let start = f.start.unwrap_or(0);
-                let step = f.step() as i64;
-                let end = match (f.end, f.count) {
-                    (Some(e), _) => e,
-                    (None, Some(c)) => start + (c as i64 - 1) * step,
-                    (None, None) => start.max((duration as f64 * fps + 1e-4).floor() as i64),
-                };
-                let times = (start..=end).step_by(step as usize).map(|n| (n as f64 / fps) as f32).collect();
+                let times = frame_times(s.frames(), duration as f64);
                 SourceData::Gltf { asset: Box::new(asset), clips, times }
+            }
+            SourceKind::Fbx => {
+                let asset = super::fbx::load(&full)?;
+                let take = super::fbx::select_take(&asset, s.animation())
+                    .map_err(|message| Error::Clip { name: name.to_string(), message })?;
+                let duration = take.map_or(0.0, |t| asset.takes[t].duration());
+                let times = frame_times(s.frames(), duration);
+                SourceData::Fbx { asset: Box::new(asset), take, times }
             }
             SourceKind::Mesh if is_ply => SourceData::Static(ply_scene(&full)?),
             SourceKind::Mesh => SourceData::Static(gltf_at_rest(&full, s.scene.map(|x| x as usize))?),
@@ -90,8 +99,9 @@ impl LoadedSource {
                 }
             }
         };
-        // PLY is a scanner's format (Z up); OBJ and glTF are Y up.
-        let default_up = if is_ply || kind == SourceKind::PlySequence { UpAxis::Z } else { UpAxis::Y };
+        // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes.
+        let default_up =
+            if is_ply || matches!(kind, SourceKind::PlySequence | SourceKind::Fbx) { UpAxis::Z } else { UpAxis::Y };
         Ok(LoadedSource { name: name.to_string(), data, default_up, ground: None })
     }
 
@@ -111,7 +121,7 @@ impl LoadedSource {
     /// Number of frames (1 for a static mesh).
     pub fn frame_count(&self) -> usize {
         match &self.data {
-            SourceData::Gltf { times, .. } => times.len(),
+            SourceData::Gltf { times, .. } | SourceData::Fbx { times, .. } => times.len(),
             SourceData::Static(_) => 1,
             SourceData::Sequence(f) | SourceData::MeshSequence(f) => f.len(),
         }
@@ -128,6 +138,9 @@ impl LoadedSource {
                 }
                 let t = times[frame.min(times.len() - 1)];
                 asset.pose(clips, t, post, scratch, out);
+            }
+            SourceData::Fbx { asset, take, times } => {
+                asset.pose(*take, times[frame.min(times.len() - 1)] as f64, post, out)?;
             }
             SourceData::Static(rest) => transform_into(rest, post, out),
             // A frame read from its file is transformed where it lies and becomes `out`: copying it into `out`'s
@@ -170,6 +183,21 @@ fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usi
         Some(AnimationSel::Index(i)) => Ok(vec![find(&ClipRef::Index(*i))?]),
         Some(AnimationSel::Many(v)) => v.iter().map(find).collect(),
     }
+}
+
+/// The times (seconds from the clip's start) of an animated source's frames: `frames`, else the clip's whole
+/// `duration` at its rate.
+fn frame_times(frames: Option<&crate::manifest::frames::Frames>, duration: f64) -> Vec<f32> {
+    let f = frames.cloned().unwrap_or_default();
+    let fps = f.fps();
+    let start = f.start.unwrap_or(0);
+    let step = f.step() as i64;
+    let end = match (f.end, f.count) {
+        (Some(e), _) => e,
+        (None, Some(c)) => start + (c as i64 - 1) * step,
+        (None, None) => start.max((duration * fps + 1e-4).floor() as i64),
+    };
+    (start..=end).step_by(step as usize).map(|n| (n as f64 / fps) as f32).collect()
 }
 
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has

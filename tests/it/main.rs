@@ -7,6 +7,7 @@ mod common;
 mod consumers;
 mod corpus;
 mod engine;
+mod fbx;
 mod first_try;
 mod fuzz;
 mod gltf_lights;

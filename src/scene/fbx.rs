@@ -1,0 +1,388 @@
+//! FBX sources (`fbx = "character.fbx"`), read and evaluated by ufbx (the C library, vendored by the `ufbx`
+//! crate): ascii and binary FBX 6100–7700, polygons triangulated, normals, UV set 0, vertex colours, node
+//! animation with FBX's pivots, pre/post rotations and rotation orders, linear-blend skinning and blend shapes,
+//! several takes. ufbx converts units to metres and axes to the world's (+Z up, −Y forward, as Blender's
+//! importer does), so an FBX source needs no `up`.
+//!
+//! What is loaded once: the file, and per mesh instance and material the triangle corners with their static
+//! attributes (UVs, colours). What each frame poses: ufbx evaluates the take at the frame's time (nodes, blend
+//! shapes, skinning) and the corners' positions and normals are read off the evaluated meshes.
+//!
+//! Hostile files: ufbx refuses malformed input with an error (never a crash), and both its allocators are
+//! capped ([`MAX_MEMORY`], [`MAX_ALLOCATIONS`]), so an absurd count is an error, not an unbounded allocation.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+
+use super::material::{AlphaMode, Material};
+use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use super::texture::{Texture, TextureRef};
+use super::Error;
+
+/// The most memory ufbx may take for one file or one evaluated frame.
+pub const MAX_MEMORY: usize = 1 << 30;
+/// The most allocations ufbx may make for one file or one evaluated frame.
+pub const MAX_ALLOCATIONS: usize = 50_000_000;
+/// The most triangles one FBX source may have (what the posed frame holds, three corners each).
+pub const MAX_TRIANGLES: usize = 50_000_000;
+
+/// One take (FBX animation stack).
+#[derive(Debug, Clone)]
+pub struct Take {
+    /// Its name (`Take 001`, `Armature|Walk`).
+    pub name: String,
+    /// Its first and last time, seconds.
+    pub begin: f64,
+    /// Its last time, seconds.
+    pub end: f64,
+}
+
+impl Take {
+    /// Its length in seconds.
+    pub fn duration(&self) -> f64 {
+        (self.end - self.begin).max(0.0)
+    }
+}
+
+/// One mesh instance's triangles of one material.
+#[derive(Debug)]
+struct Part {
+    /// The node, by its index among the scene's nodes.
+    node: usize,
+    /// The mesh's face-corner index of every triangle corner.
+    corners: Vec<u32>,
+    uvs: Arc<Vec<Vec2>>,
+    colors: Arc<Vec<Vec4>>,
+    indices: Arc<Vec<u32>>,
+    material: u32,
+    object: u32,
+}
+
+/// A loaded FBX file.
+pub struct FbxAsset {
+    /// The file.
+    pub path: PathBuf,
+    scene: ufbx::SceneRoot,
+    /// Its takes, in file order.
+    pub takes: Vec<Take>,
+    parts: Vec<Part>,
+    materials: Arc<Vec<Material>>,
+    textures: Arc<Vec<Texture>>,
+}
+
+impl std::fmt::Debug for FbxAsset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FbxAsset").field("path", &self.path).field("takes", &self.takes).finish_non_exhaustive()
+    }
+}
+
+fn capped() -> ufbx::AllocatorOpts {
+    ufbx::AllocatorOpts { memory_limit: MAX_MEMORY, allocation_limit: MAX_ALLOCATIONS, ..Default::default() }
+}
+
+fn err(path: &Path, message: impl Into<String>) -> Error {
+    Error::Fbx { path: path.to_path_buf(), message: message.into() }
+}
+
+fn v3(v: ufbx::Vec3) -> Vec3 {
+    Vec3::new(v.x as f32, v.y as f32, v.z as f32)
+}
+
+fn mat(m: &ufbx::Matrix) -> Mat4 {
+    Mat4::from_cols_array(&[
+        m.m00 as f32,
+        m.m10 as f32,
+        m.m20 as f32,
+        0.0,
+        m.m01 as f32,
+        m.m11 as f32,
+        m.m21 as f32,
+        0.0,
+        m.m02 as f32,
+        m.m12 as f32,
+        m.m22 as f32,
+        0.0,
+        m.m03 as f32,
+        m.m13 as f32,
+        m.m23 as f32,
+        1.0,
+    ])
+}
+
+/// Loads `path`: the scene in metres and the world's axes, its takes, materials and textures, and every mesh
+/// instance's triangles.
+pub fn load(path: &Path) -> Result<FbxAsset, Error> {
+    let opts = ufbx::LoadOpts {
+        temp_allocator: capped(),
+        result_allocator: capped(),
+        // Textures are read by vvgen itself (inside the file's folder); nothing else external is followed.
+        load_external_files: false,
+        ignore_missing_external_files: true,
+        generate_missing_normals: true,
+        target_axes: ufbx::CoordinateAxes {
+            right: ufbx::CoordinateAxis::PositiveX,
+            up: ufbx::CoordinateAxis::PositiveZ,
+            front: ufbx::CoordinateAxis::NegativeY,
+        },
+        target_unit_meters: 1.0,
+        ..Default::default()
+    };
+    let file = path.to_str().ok_or_else(|| err(path, "the path is not UTF-8"))?;
+    if !path.is_file() {
+        return Err(Error::Io { path: path.to_path_buf(), source: std::io::ErrorKind::NotFound.into() });
+    }
+    let scene =
+        ufbx::load_file(file, opts).map_err(|e| err(path, format!("not a readable FBX file: {}", e.description)))?;
+    let takes = scene
+        .anim_stacks
+        .iter()
+        .map(|s| Take { name: s.element.name.to_string(), begin: s.time_begin, end: s.time_end })
+        .collect();
+    let (materials, textures) = materials(path, &scene)?;
+    let fallback = materials.len() as u32 - 1;
+    let mut parts = Vec::new();
+    let mut triangles = 0usize;
+    for (ni, node) in scene.nodes.iter().enumerate() {
+        let Some(mesh) = node.mesh.as_ref() else { continue };
+        triangles += mesh.num_triangles;
+        if triangles > MAX_TRIANGLES {
+            return Err(err(path, format!("more than {MAX_TRIANGLES} triangles")));
+        }
+        // Triangles grouped by the material of their face, in face order.
+        let mut by_material: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+        let mut tri = vec![0u32; mesh.max_face_triangles * 3];
+        for (fi, face) in mesh.faces.iter().enumerate() {
+            let n = mesh.triangulate_face(&mut tri, *face) as usize;
+            let slot = mesh.face_material.get(fi).copied().unwrap_or(0);
+            by_material.entry(slot).or_default().extend_from_slice(&tri[..n * 3]);
+        }
+        for (slot, corners) in by_material {
+            // The node's material in that slot (instances may override the mesh's), else the mesh's.
+            let m = node.materials.get(slot as usize).or_else(|| mesh.materials.get(slot as usize));
+            let material = m.map_or(fallback, |m| m.element.typed_id);
+            let uvs: Vec<Vec2> = if mesh.vertex_uv.exists {
+                // FBX's v runs up, the renderer's (glTF's) down.
+                corners
+                    .iter()
+                    .map(|&c| mesh.vertex_uv[c as usize])
+                    .map(|t| Vec2::new(t.x as f32, 1.0 - t.y as f32))
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            let colors: Vec<Vec4> = if mesh.vertex_color.exists {
+                corners
+                    .iter()
+                    .map(|&c| mesh.vertex_color[c as usize])
+                    .map(|c| Vec4::new(c.x as f32, c.y as f32, c.z as f32, c.w as f32))
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            let n = corners.len() as u32;
+            parts.push(Part {
+                node: ni,
+                corners,
+                uvs: Arc::new(uvs),
+                colors: Arc::new(colors),
+                indices: Arc::new((0..n).collect()),
+                material,
+                object: ni as u32,
+            });
+        }
+    }
+    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures })
+}
+
+/// Materials and the textures they use.
+type Shading = (Arc<Vec<Material>>, Arc<Vec<Texture>>);
+
+/// The scene's materials as the renderer's (metallic-roughness, as ufbx maps Phong and the 3ds Max / Stingray
+/// PBR properties), with a default one last, and the textures they use.
+fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
+    let dir = crate::manifest::folder_of(path);
+    let mut textures: Vec<Texture> = Vec::new();
+    let mut cache: std::collections::HashMap<u32, u32> = Default::default();
+    let mut mats = Vec::new();
+    for m in scene.materials.iter() {
+        let pbr = &m.pbr;
+        let factor = if pbr.base_factor.has_value { pbr.base_factor.value_vec4.x as f32 } else { 1.0 };
+        let c = pbr.base_color.value_vec4;
+        let opacity = if pbr.opacity.has_value { pbr.opacity.value_vec4.x as f32 } else { 1.0 };
+        let mut mat = Material {
+            base_color: Vec4::new(c.x as f32 * factor, c.y as f32 * factor, c.z as f32 * factor, opacity),
+            metallic: if pbr.metalness.has_value { pbr.metalness.value_vec4.x as f32 } else { 0.0 },
+            roughness: if pbr.roughness.has_value { pbr.roughness.value_vec4.x as f32 } else { 0.5 },
+            ..Material::default()
+        };
+        if opacity < 1.0 {
+            mat.alpha_mode = AlphaMode::Blend;
+        }
+        let e = pbr.emission_color.value_vec4;
+        let strength = if pbr.emission_factor.has_value { pbr.emission_factor.value_vec4.x as f32 } else { 1.0 };
+        mat.emissive = Vec3::new(e.x as f32, e.y as f32, e.z as f32) * strength;
+        if let Some(t) = pbr.base_color.texture.as_ref().filter(|_| pbr.base_color.texture_enabled) {
+            let id = t.element.typed_id;
+            let index = match cache.get(&id) {
+                Some(i) => *i,
+                None => {
+                    textures.push(texture(path, dir, t)?);
+                    let i = textures.len() as u32 - 1;
+                    cache.insert(id, i);
+                    i
+                }
+            };
+            mat.base_color_texture = Some(TextureRef::new(index));
+        }
+        mat.base_color = mat.base_color.clamp(Vec4::ZERO, Vec4::splat(f32::MAX));
+        if !mat.base_color.is_finite() {
+            return Err(err(path, format!("material `{}` has a colour that is not a number", m.element.name)));
+        }
+        mats.push(mat);
+    }
+    mats.push(Material::default());
+    Ok((Arc::new(mats), Arc::new(textures)))
+}
+
+/// A texture: embedded in the file, or a file beside it that stays inside its folder (as glTF URIs must).
+fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Texture, Error> {
+    let bytes: Vec<u8> = if t.content.size > 0 {
+        t.content.to_vec()
+    } else {
+        let rel = if t.relative_filename.is_empty() { t.filename.to_string() } else { t.relative_filename.to_string() };
+        let rel = rel.replace('\\', "/");
+        let full = dir.join(&rel);
+        let inside = match (std::fs::canonicalize(dir), std::fs::canonicalize(&full)) {
+            (Ok(d), Ok(f)) => f.starts_with(&d),
+            _ => {
+                // Exporters often keep only an absolute path from another machine: try the name beside the file.
+                let name = Path::new(&rel).file_name().map(|n| dir.join(n));
+                match name.filter(|n| n.is_file()) {
+                    Some(n) => return crate::scene::obj::texture(&n),
+                    None => return Err(err(path, format!("texture `{rel}` is not in the file nor beside it"))),
+                }
+            }
+        };
+        if !inside {
+            return Err(err(path, format!("texture `{rel}` points outside the FBX file's folder")));
+        }
+        return crate::scene::obj::texture(&full);
+    };
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| err(path, format!("embedded texture `{}`: {e}", t.element.name)))?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(crate::scene::obj::MAX_TEXTURE_SIDE);
+    limits.max_image_height = Some(crate::scene::obj::MAX_TEXTURE_SIDE);
+    reader.limits(limits);
+    let img = reader
+        .decode()
+        .map_err(|e| err(path, format!("embedded texture `{}` does not decode: {e}", t.element.name)))?
+        .into_rgba8();
+    Ok(Texture::new(img.width(), img.height(), img.into_raw(), true))
+}
+
+impl FbxAsset {
+    /// Poses take `take` (none: the file at rest) at `t` seconds from the take's start, through `post`, into
+    /// `out`.
+    pub fn pose(&self, take: Option<usize>, t: f64, post: Mat4, out: &mut PosedScene) -> Result<(), Error> {
+        let evaluated;
+        let scene: &ufbx::Scene = match take {
+            Some(i) => {
+                let stack = &self.scene.anim_stacks[i];
+                let opts = ufbx::EvaluateOpts {
+                    temp_allocator: capped(),
+                    result_allocator: capped(),
+                    evaluate_skinning: true,
+                    ..Default::default()
+                };
+                evaluated =
+                    ufbx::evaluate_scene(&self.scene, &stack.anim, stack.time_begin + t, opts).map_err(|e| {
+                        err(&self.path, format!("take `{}` at {t} s: {}", stack.element.name, e.description))
+                    })?;
+                &evaluated
+            }
+            None => &self.scene,
+        };
+        out.materials = Arc::clone(&self.materials);
+        out.textures = Arc::clone(&self.textures);
+        out.lights.clear();
+        out.primitives.resize_with(self.parts.len(), || PosedPrimitive {
+            kind: PrimKind::Triangles,
+            positions: Vec::new(),
+            normals: Vec::new(),
+            tangents: Vec::new(),
+            uvs: Arc::default(),
+            colors: Arc::default(),
+            indices: Arc::default(),
+            material: 0,
+            object: 0,
+        });
+        let normal_post = Mat4::from_mat3(glam::Mat3::from_mat4(post).inverse().transpose());
+        for (p, part) in out.primitives.iter_mut().zip(&self.parts) {
+            let node = &scene.nodes[part.node];
+            let mesh = node.mesh.as_ref().ok_or_else(|| err(&self.path, "a mesh node lost its mesh"))?;
+            // Skinned positions are in world space; a mesh ufbx did not skin keeps its own, placed by the node.
+            let (to_world, local) = (mat(&node.geometry_to_world), mesh.skinned_is_local);
+            let (place, turn) = if local {
+                (post * to_world, normal_post * Mat4::from_mat3(glam::Mat3::from_mat4(to_world).inverse().transpose()))
+            } else {
+                (post, normal_post)
+            };
+            let (pos, nrm) = if mesh.skinned_position.exists {
+                (&mesh.skinned_position, &mesh.skinned_normal)
+            } else {
+                (&mesh.vertex_position, &mesh.vertex_normal)
+            };
+            p.positions.clear();
+            p.positions.extend(part.corners.iter().map(|&c| place.transform_point3(v3(pos[c as usize]))));
+            p.normals.clear();
+            if nrm.exists {
+                p.normals.extend(
+                    part.corners.iter().map(|&c| turn.transform_vector3(v3(nrm[c as usize])).normalize_or_zero()),
+                );
+            } else {
+                p.normals.resize(part.corners.len(), Vec3::ZERO);
+            }
+            if let Some(bad) = p.positions.iter().position(|v| !v.is_finite()) {
+                return Err(err(&self.path, format!("node `{}`: vertex {bad} is not finite", node.element.name)));
+            }
+            p.kind = PrimKind::Triangles;
+            p.tangents.clear();
+            p.uvs = Arc::clone(&part.uvs);
+            p.colors = Arc::clone(&part.colors);
+            p.indices = Arc::clone(&part.indices);
+            p.material = part.material;
+            p.object = part.object;
+        }
+        Ok(())
+    }
+}
+
+/// Which takes play: the manifest's `animation` as an index or a name; the first take by default.
+pub fn select_take(
+    asset: &FbxAsset,
+    sel: Option<&crate::manifest::source::AnimationSel>,
+) -> Result<Option<usize>, String> {
+    use crate::manifest::source::AnimationSel;
+    let n = asset.takes.len();
+    let names = || asset.takes.iter().map(|t| format!("`{}`", t.name)).collect::<Vec<_>>().join(", ");
+    match sel {
+        None => Ok((n > 0).then_some(0)),
+        Some(AnimationSel::Index(i)) if (*i as usize) < n => Ok(Some(*i as usize)),
+        Some(AnimationSel::Index(i)) => {
+            Err(format!("{}: there is no take {i} (the file has {n}: {})", asset.path.display(), names()))
+        }
+        Some(AnimationSel::Name(s)) => asset
+            .takes
+            .iter()
+            .position(|t| t.name == *s)
+            .map(Some)
+            .ok_or_else(|| format!("{}: no take named `{s}` (takes: {})", asset.path.display(), names())),
+        Some(AnimationSel::Many(_)) => {
+            Err(format!("{}: an FBX source plays one take: name one (takes: {})", asset.path.display(), names()))
+        }
+    }
+}
