@@ -288,24 +288,8 @@ impl FbxAsset {
     /// Poses take `take` (none: the file at rest) at `t` seconds from the take's start, through `post`, into
     /// `out`.
     pub fn pose(&self, take: Option<usize>, t: f64, post: Mat4, out: &mut PosedScene) -> Result<(), Error> {
-        let evaluated;
-        let scene: &ufbx::Scene = match take {
-            Some(i) => {
-                let stack = &self.scene.anim_stacks[i];
-                let opts = ufbx::EvaluateOpts {
-                    temp_allocator: capped(),
-                    result_allocator: capped(),
-                    evaluate_skinning: true,
-                    ..Default::default()
-                };
-                evaluated =
-                    ufbx::evaluate_scene(&self.scene, &stack.anim, stack.time_begin + t, opts).map_err(|e| {
-                        err(&self.path, format!("take `{}` at {t} s: {}", stack.element.name, e.description))
-                    })?;
-                &evaluated
-            }
-            None => &self.scene,
-        };
+        let evaluated = self.evaluated(take, t)?;
+        let scene: &ufbx::Scene = evaluated.as_deref().unwrap_or(&self.scene);
         out.materials = Arc::clone(&self.materials);
         out.textures = Arc::clone(&self.textures);
         out.lights.clear();
@@ -358,6 +342,46 @@ impl FbxAsset {
             p.object = part.object;
         }
         Ok(())
+    }
+}
+
+impl FbxAsset {
+    /// Every mesh node's control points (the file's own vertices, which Blender's importer keeps as its mesh
+    /// vertices, in order) posed at `t` seconds into take `take`, in the world's axes and metres before any
+    /// `[transform]`: what a comparison with another importer matches vertex for vertex. By node name, in node
+    /// order.
+    pub fn control_points(&self, take: Option<usize>, t: f64) -> Result<Vec<(String, Vec<Vec3>)>, Error> {
+        let evaluated = self.evaluated(take, t)?;
+        let scene: &ufbx::Scene = evaluated.as_deref().unwrap_or(&self.scene);
+        let mut out = Vec::new();
+        for node in scene.nodes.iter() {
+            let Some(mesh) = node.mesh.as_ref() else { continue };
+            let place = if mesh.skinned_is_local { mat(&node.geometry_to_world) } else { Mat4::IDENTITY };
+            let pos = if mesh.skinned_position.exists { &mesh.skinned_position } else { &mesh.vertex_position };
+            let mut points = vec![Vec3::ZERO; mesh.num_vertices];
+            for (corner, &v) in mesh.vertex_indices.iter().enumerate() {
+                if let Some(p) = points.get_mut(v as usize) {
+                    *p = place.transform_point3(v3(pos[corner]));
+                }
+            }
+            out.push((node.element.name.to_string(), points));
+        }
+        Ok(out)
+    }
+
+    /// The scene evaluated at `t` seconds into take `take` (none: the file at rest, nothing to evaluate).
+    fn evaluated(&self, take: Option<usize>, t: f64) -> Result<Option<ufbx::SceneRoot>, Error> {
+        let Some(i) = take else { return Ok(None) };
+        let stack = &self.scene.anim_stacks[i];
+        let opts = ufbx::EvaluateOpts {
+            temp_allocator: capped(),
+            result_allocator: capped(),
+            evaluate_skinning: true,
+            ..Default::default()
+        };
+        ufbx::evaluate_scene(&self.scene, &stack.anim, stack.time_begin + t, opts)
+            .map(Some)
+            .map_err(|e| err(&self.path, format!("take `{}` at {t} s: {}", stack.element.name, e.description)))
     }
 }
 
