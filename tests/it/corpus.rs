@@ -69,6 +69,13 @@ fn assets(root: &Path) -> Vec<PathBuf> {
         }
     }
     v.push(root.join("seq"));
+    // FBX files lie in their folder's root (its subfolders hold fuzz cases and Blender's reference arrays).
+    for e in std::fs::read_dir(root.join("fbx")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "fbx") {
+            v.push(p);
+        }
+    }
     v.sort();
     v
 }
@@ -126,7 +133,7 @@ fn images_are_framed(dir: &Path, may_be_empty: bool, ctx: &str) -> usize {
 #[test]
 fn every_asset_in_tests_data_builds_whole_from_a_bare_relative_name() {
     let tmp = tempfile::tempdir().unwrap();
-    for group in ["gltf", "wide", "seq"] {
+    for group in ["gltf", "wide", "seq", "fbx"] {
         copy_dir(&data(group), &tmp.path().join(group));
     }
     let mut built = 0;
@@ -172,8 +179,9 @@ fn every_asset_in_tests_data_builds_whole_from_a_bare_relative_name() {
             std::fs::remove_dir_all(cwd.join("out")).unwrap();
         }
     }
-    // 15 glTF folders' files less the three line-only ones, the three wide subjects, the PLY sequence: twice.
-    assert!(built >= 2 * 20, "only {built} builds");
+    // 15 glTF folders' files less the three line-only ones, the three wide subjects, the PLY sequence and four
+    // FBX files: twice.
+    assert!(built >= 2 * 24, "only {built} builds");
 }
 
 #[test]
