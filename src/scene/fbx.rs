@@ -114,7 +114,25 @@ fn mat(m: &ufbx::Matrix) -> Mat4 {
 /// Loads `path`: the scene in metres and the world's axes, its takes, materials and textures, and every mesh
 /// instance's triangles.
 pub fn load(path: &Path) -> Result<FbxAsset, Error> {
-    let opts = ufbx::LoadOpts {
+    let file = path.to_str().ok_or_else(|| err(path, "the path is not UTF-8"))?;
+    if !path.is_file() {
+        return Err(Error::Io { path: path.to_path_buf(), source: std::io::ErrorKind::NotFound.into() });
+    }
+    let scene = ufbx::load_file(file, options())
+        .map_err(|e| err(path, format!("not a readable FBX file: {}", e.description)))?;
+    finish(path, scene)
+}
+
+/// [`load`] of a file's bytes (`path` names it and locates the textures beside it).
+pub fn load_slice(bytes: &[u8], path: &Path) -> Result<FbxAsset, Error> {
+    let scene = ufbx::load_memory(bytes, options())
+        .map_err(|e| err(path, format!("not a readable FBX file: {}", e.description)))?;
+    finish(path, scene)
+}
+
+/// How ufbx loads: capped, in the world's axes and metres, no external files but textures (read by vvgen).
+fn options() -> ufbx::LoadOpts<'static> {
+    ufbx::LoadOpts {
         temp_allocator: capped(),
         result_allocator: capped(),
         // Textures are read by vvgen itself (inside the file's folder); nothing else external is followed.
@@ -128,13 +146,11 @@ pub fn load(path: &Path) -> Result<FbxAsset, Error> {
         },
         target_unit_meters: 1.0,
         ..Default::default()
-    };
-    let file = path.to_str().ok_or_else(|| err(path, "the path is not UTF-8"))?;
-    if !path.is_file() {
-        return Err(Error::Io { path: path.to_path_buf(), source: std::io::ErrorKind::NotFound.into() });
     }
-    let scene =
-        ufbx::load_file(file, opts).map_err(|e| err(path, format!("not a readable FBX file: {}", e.description)))?;
+}
+
+/// The asset of a loaded scene.
+fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
     let takes = scene
         .anim_stacks
         .iter()

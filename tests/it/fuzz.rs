@@ -1,7 +1,7 @@
 //! A mutation fuzzer that runs on stable Rust, under `cargo test` (issue 15). Seeds are the files in `tests/data`
 //! and the shipped manifests; a fixed-seed stream mutates them (bit flips, interesting bytes, chunk deletes and
 //! duplicates, splices between seeds, numbers swapped for extreme ones) and each mutant goes through a target
-//! under `catch_unwind`: PLY reading and rendering, glTF/GLB loading (as `inspect` loads), posing and rendering,
+//! under `catch_unwind`: PLY reading and rendering, glTF/GLB and FBX loading (as `inspect` loads), posing and rendering,
 //! and the manifest checker. Any panic fails the test; the mutants that panicked are kept in
 //! `target/fuzz-crashes/` to reproduce.
 //!
@@ -288,4 +288,35 @@ fn fuzz_environment_maps() {
             }
         }
     });
+}
+
+#[test]
+fn fuzz_fbx_loading_posing_and_rendering() {
+    // The small FBX files under tests/data (the y-up and z-up scenes, the blend-shape animation), ufbx's fuzz
+    // cases and an ASCII file, loaded from memory as a build loads them from disk, posed at rest and in their first take, rendered.
+    let mut seeds = seeds("fbx", &["fbx"]);
+    // An ASCII FBX (6100, skinned, one take): text mutates into files that still parse, and so reaches posing;
+    // binary FBX keeps its arrays deflated, where most mutants stop.
+    // It is drawn as often as all the binary files together.
+    let ascii = crate::common::data("fbx/blender_279_sausage_6100_ascii.fbx");
+    let text = std::fs::read(&ascii).unwrap();
+    seeds.extend(std::iter::repeat_n((ascii, text), seeds.len()));
+    let loaded = std::sync::atomic::AtomicUsize::new(0);
+    let n = fuzz("fbx", &seeds, 6, |path, bytes| {
+        let Ok(asset) = vvgen::scene::fbx::load_slice(bytes, path) else { return };
+        loaded.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let mut posed = PosedScene::default();
+        for (take, t) in [(None, 0.0), (Some(0), 0.0), (Some(0), 0.5)] {
+            let take = take.filter(|_| !asset.takes.is_empty());
+            if asset.pose(take, t, glam::Mat4::IDENTITY, &mut posed).is_ok() {
+                render_small(&posed);
+            }
+        }
+        let _ = asset.control_points(None, 0.0);
+    });
+    // Mutants that still load are what reach posing and rendering: a target that rejects everything would test
+    // only the header check.
+    let loaded = loaded.into_inner();
+    eprintln!("fuzz fbx: {loaded} of {n} mutants loaded");
+    assert!(loaded * 20 >= n, "only {loaded} of {n} mutants loaded");
 }
