@@ -1,6 +1,7 @@
 """Blender's own FBX import as the reference for vvgen's FBX sources: posed vertices per mesh object.
 
     blender -b --factory-startup -P benches/blender_fbx.py -- FILE.fbx OUT.json [TIME_S ...]
+    blender -b --factory-startup -P benches/blender_fbx.py -- --time FILE.fbx
 
 Imports FILE.fbx with Blender's defaults but for `anim_offset = 0` (Blender shifts animation by one frame by
 default; vvgen's frame 0 is the take's start), plays the first take, and for every TIME_S (seconds from the take's
@@ -14,6 +15,18 @@ import sys
 import bpy
 
 args = sys.argv[sys.argv.index("--") + 1:]
+if args[0] == "--time":
+    # Blender's import of the file alone, median of 5 after one untimed, in a fresh scene each time.
+    import time
+    runs = []
+    for i in range(6):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        t0 = time.perf_counter()
+        bpy.ops.import_scene.fbx(filepath=args[1], anim_offset=0.0)
+        runs.append(time.perf_counter() - t0)
+    runs = sorted(runs[1:])
+    print(f"{args[1]}: Blender import {runs[2] * 1e3:.1f} ms (median of 5)")
+    sys.exit(0)
 path, out = args[0], args[1]
 times = [float(t) for t in args[2:]] or [0.0]
 

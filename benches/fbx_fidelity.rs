@@ -8,13 +8,22 @@
 //! blender -b --factory-startup -P benches/blender_fbx.py -- FILE.fbx ref.json 0 0.5 1.0
 //! cargo bench --bench fbx_fidelity -- FILE.fbx ref.json
 //! ```
+//!
+//! `--time FILE.fbx` times what a build does with the file instead: load it, then pose 60 frames of its first
+//! take at 30 fps into the renderer's buffers (median of 5 runs, after one untimed); `benches/blender_fbx.py`
+//! with `--time` times Blender's import of the same file in the same session.
 
 use std::path::Path;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    if let [flag, fbx] = &args[..] {
+        if flag == "--time" {
+            return time(Path::new(fbx));
+        }
+    }
     let [fbx, reference] = &args[..] else {
-        eprintln!("usage: cargo bench --bench fbx_fidelity -- FILE.fbx REF.json");
+        eprintln!("usage: cargo bench --bench fbx_fidelity -- FILE.fbx REF.json | --time FILE.fbx");
         std::process::exit(2);
     };
     let asset = vvgen::scene::fbx::load(Path::new(fbx)).unwrap_or_else(|e| panic!("{e}"));
@@ -64,4 +73,30 @@ fn main() {
             );
         }
     }
+}
+
+/// Load and pose 60 frames of `fbx`, as a build does: the median of 5 runs after one untimed.
+fn time(fbx: &Path) {
+    let run = || {
+        let t0 = std::time::Instant::now();
+        let asset = vvgen::scene::fbx::load(fbx).unwrap_or_else(|e| panic!("{e}"));
+        let loaded = t0.elapsed();
+        let take = (!asset.takes.is_empty()).then_some(0);
+        let mut posed = vvgen::scene::PosedScene::default();
+        for f in 0..60 {
+            asset.pose(take, f as f64 / 30.0, glam::Mat4::IDENTITY, &mut posed).unwrap();
+        }
+        (loaded, t0.elapsed(), posed.triangle_count())
+    };
+    run();
+    let mut runs: Vec<_> = (0..5).map(|_| run()).collect();
+    runs.sort_by_key(|r| r.1);
+    let (loaded, total, triangles) = runs[2];
+    println!(
+        "{}: {triangles} triangles; load {:.1} ms, load + 60 frames posed {:.1} ms ({:.2} ms a frame)",
+        fbx.display(),
+        loaded.as_secs_f64() * 1e3,
+        total.as_secs_f64() * 1e3,
+        (total - loaded).as_secs_f64() * 1e3 / 60.0
+    );
 }
