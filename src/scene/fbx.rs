@@ -70,6 +70,8 @@ pub struct FbxAsset {
     parts: Vec<Part>,
     materials: Arc<Vec<Material>>,
     textures: Arc<Vec<Texture>>,
+    /// Whether some mesh has blend shapes (ufbx then evaluates the skinning, with them).
+    blend_shapes: bool,
 }
 
 impl std::fmt::Debug for FbxAsset {
@@ -209,7 +211,8 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
             });
         }
     }
-    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures })
+    let blend_shapes = scene.meshes.iter().any(|m| !m.blend_deformers.is_empty());
+    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes })
 }
 
 /// Materials and the textures they use.
@@ -320,29 +323,25 @@ impl FbxAsset {
             material: 0,
             object: 0,
         });
-        let normal_post = Mat4::from_mat3(glam::Mat3::from_mat4(post).inverse().transpose());
+        let normal_post = glam::Mat3::from_mat4(post).inverse().transpose();
+        // One mesh node may hold several parts (one per material): pose its vertices once.
+        let mut posed_node = usize::MAX;
+        let (mut points, mut turns) = (Vec::new(), Vec::new());
         for (p, part) in out.primitives.iter_mut().zip(&self.parts) {
             let node = &scene.nodes[part.node];
             let mesh = node.mesh.as_ref().ok_or_else(|| err(&self.path, "a mesh node lost its mesh"))?;
-            // Skinned positions are in world space; a mesh ufbx did not skin keeps its own, placed by the node.
-            let (to_world, local) = (mat(&node.geometry_to_world), mesh.skinned_is_local);
-            let (place, turn) = if local {
-                (post * to_world, normal_post * Mat4::from_mat3(glam::Mat3::from_mat4(to_world).inverse().transpose()))
-            } else {
-                (post, normal_post)
-            };
-            let (pos, nrm) = if mesh.skinned_position.exists {
-                (&mesh.skinned_position, &mesh.skinned_normal)
-            } else {
-                (&mesh.vertex_position, &mesh.vertex_normal)
-            };
+            if posed_node != part.node {
+                posed_vertices(node, mesh, self.blend_shapes && take.is_some(), &mut points, &mut turns);
+                posed_node = part.node;
+            }
+            let vertex = |c: u32| mesh.vertex_indices[c as usize] as usize;
             p.positions.clear();
-            p.positions.extend(part.corners.iter().map(|&c| place.transform_point3(v3(pos[c as usize]))));
+            p.positions.extend(part.corners.iter().map(|&c| post.transform_point3(points[vertex(c)])));
             p.normals.clear();
-            if nrm.exists {
-                p.normals.extend(
-                    part.corners.iter().map(|&c| turn.transform_vector3(v3(nrm[c as usize])).normalize_or_zero()),
-                );
+            if mesh.vertex_normal.exists {
+                p.normals.extend(part.corners.iter().map(|&c| {
+                    (normal_post * (turns[vertex(c)] * v3(mesh.vertex_normal[c as usize]))).normalize_or_zero()
+                }));
             } else {
                 p.normals.resize(part.corners.len(), Vec3::ZERO);
             }
@@ -370,16 +369,11 @@ impl FbxAsset {
         let evaluated = self.evaluated(take, t)?;
         let scene: &ufbx::Scene = evaluated.as_deref().unwrap_or(&self.scene);
         let mut out = Vec::new();
+        let mut turns = Vec::new();
         for node in scene.nodes.iter() {
             let Some(mesh) = node.mesh.as_ref() else { continue };
-            let place = if mesh.skinned_is_local { mat(&node.geometry_to_world) } else { Mat4::IDENTITY };
-            let pos = if mesh.skinned_position.exists { &mesh.skinned_position } else { &mesh.vertex_position };
-            let mut points = vec![Vec3::ZERO; mesh.num_vertices];
-            for (corner, &v) in mesh.vertex_indices.iter().enumerate() {
-                if let Some(p) = points.get_mut(v as usize) {
-                    *p = place.transform_point3(v3(pos[corner]));
-                }
-            }
+            let mut points = Vec::new();
+            posed_vertices(node, mesh, self.blend_shapes && take.is_some(), &mut points, &mut turns);
             out.push((node.element.name.to_string(), points));
         }
         Ok(out)
@@ -392,12 +386,46 @@ impl FbxAsset {
         let opts = ufbx::EvaluateOpts {
             temp_allocator: capped(),
             result_allocator: capped(),
-            evaluate_skinning: true,
+            // Skinning is done here (`posed_vertices`): ufbx's evaluates every attribute of a whole copy of each
+            // mesh, 25 times the cost of the rest of the frame. Blend shapes are left to it, in-betweens and all.
+            evaluate_skinning: self.blend_shapes,
             ..Default::default()
         };
         ufbx::evaluate_scene(&self.scene, &stack.anim, stack.time_begin + t, opts)
             .map(Some)
             .map_err(|e| err(&self.path, format!("take `{}` at {t} s: {}", stack.element.name, e.description)))
+    }
+}
+
+/// Every vertex of `node`'s `mesh` posed in world space, and in `turns` each vertex's normal matrix: its skin's
+/// linear blend of its clusters' evaluated matrices (as Blender's importer skins), or the node's placement when
+/// it has none. Where ufbx evaluated the skinning (`skinned`: files with blend shapes, whose in-between shapes
+/// it interpolates), the positions are ufbx's.
+fn posed_vertices(
+    node: &ufbx::Node,
+    mesh: &ufbx::Mesh,
+    skinned: bool,
+    points: &mut Vec<Vec3>,
+    turns: &mut Vec<glam::Mat3>,
+) {
+    points.clear();
+    turns.clear();
+    let skin = mesh.skin_deformers.first();
+    for v in 0..mesh.num_vertices {
+        let m = match skin {
+            Some(s) => mat(&ufbx::get_skin_vertex_matrix(s, v, &node.geometry_to_world)),
+            None => mat(&node.geometry_to_world),
+        };
+        points.push(m.transform_point3(v3(mesh.vertices[v])));
+        turns.push(glam::Mat3::from_mat4(m).inverse().transpose());
+    }
+    if skinned && mesh.skinned_position.exists {
+        let place = if mesh.skinned_is_local { mat(&node.geometry_to_world) } else { Mat4::IDENTITY };
+        for (corner, &v) in mesh.vertex_indices.iter().enumerate() {
+            if let Some(p) = points.get_mut(v as usize) {
+                *p = place.transform_point3(v3(mesh.skinned_position[corner]));
+            }
+        }
     }
 }
 
