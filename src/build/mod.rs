@@ -370,7 +370,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     let mut previous: BTreeSet<PathBuf> =
         last.outputs.values().flat_map(|o| o.files.iter().map(move |(f, _)| o.root.join(f))).collect();
     for out in m.outputs.values() {
-        let root = record::absolute(&export::root(m, out));
+        let root = crate::manifest::lexical(&export::root(m, out));
         previous.extend(export::previous_files(&root).into_iter().map(|f| root.join(f)));
     }
     let mut record = LastBuild::new();
@@ -383,7 +383,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
             source: Box::new(source),
         })?;
         let written = OutputRecord {
-            root: record::absolute(&w.root),
+            root: crate::manifest::lexical(&w.root),
             key: g.node(*id).key.hex(),
             manifest: g.keying.manifest.hex(),
             files: w.files.iter().map(|(f, d)| (f.clone(), d.hex())).collect(),
@@ -400,7 +400,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         record.outputs.insert(name.clone(), written);
         report.outputs.push((name.clone(), w));
     }
-    report.stale_removed = prune(&previous, &record, &record::absolute(&m.out_dir()));
+    report.stale_removed = prune(&previous, &record, &crate::manifest::lexical(&m.out_dir()));
     record.actions = g.ids().map(|id| (g.node(id).label.clone(), g.node(id).key.hex())).collect();
     let rendered = report.actions.get(&Kind::RenderPass).copied().unwrap_or_default();
     record.seconds_per_action = last.seconds_per_action.clone();

@@ -4,7 +4,7 @@
 //! fields it was keyed by, recorded beside its result in the action cache).
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
@@ -56,28 +56,11 @@ pub struct OutputRecord {
 /// One record per (dataset directory, manifest): two manifests may share an `out` directory (a point-cloud
 /// sequence and the renders made from it), and neither may prune the other's files.
 fn path(store: &Store, m: &Manifest) -> PathBuf {
-    let abs = |p: PathBuf| absolute(&p).to_string_lossy().into_owned();
+    // `.` and `..` resolved by name: a build from another folder (`vvgen build ../m.toml`) finds the same record.
+    let abs = |p: PathBuf| crate::manifest::lexical(&p).to_string_lossy().into_owned();
     let id = format!("{}\0{}", abs(m.out_dir()), abs(m.path.clone()));
     let name = blake3::hash(id.as_bytes()).to_hex();
     store.root().join("builds").join(format!("{}.json", &name[..32]))
-}
-
-/// `p` from the working directory, with `.` and `..` resolved by name: the record's roots and the pruning
-/// boundary are compared and joined as such, so a build from another folder (`vvgen build ../m.toml`) neither
-/// misses nor misplaces them.
-pub(crate) fn absolute(p: &Path) -> PathBuf {
-    use std::path::Component;
-    let mut out = PathBuf::new();
-    for c in std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf()).components() {
-        match c {
-            Component::CurDir => {}
-            Component::ParentDir => {
-                out.pop();
-            }
-            c => out.push(c),
-        }
-    }
-    out
 }
 
 /// Reads the last build record of `m`'s dataset (empty when none, damaged or of another version).

@@ -38,6 +38,7 @@ pub use source::{Source, SourceKind};
 pub use split::{Split, TimeMode};
 pub use transform::Transform;
 
+pub(crate) use after::lexical;
 use suggest::did_you_mean;
 
 /// The top-level tables, in the order the reference documents them.

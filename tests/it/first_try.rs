@@ -34,6 +34,17 @@ fn small(path: &Path) {
     std::fs::write(path, t).unwrap();
 }
 
+/// A folder holding the walking long box and the manifest `vvgen new` writes for it with `writer`, made small
+/// (`m.toml`).
+fn project(writer: &str) -> tempfile::TempDir {
+    let tmp = tempfile::tempdir().unwrap();
+    longbox(tmp.path());
+    let (code, err) = vvgen(tmp.path(), &["new", "longbox.gltf", "--writer", writer, "-o", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    small(&tmp.path().join("m.toml"));
+    tmp
+}
+
 #[test]
 fn new_writes_where_asked_and_refuses_what_is_not_an_asset() {
     let tmp = tempfile::tempdir().unwrap();
@@ -96,11 +107,8 @@ fn the_cache_is_beside_the_manifest_wherever_the_command_runs() {
 
 #[test]
 fn an_output_removes_what_it_no_longer_holds_and_nothing_else() {
-    let tmp = tempfile::tempdir().unwrap();
+    let tmp = project("colmap");
     let d = tmp.path();
-    longbox(d);
-    assert_eq!(vvgen(d, &["new", "longbox.gltf", "--writer", "colmap", "-o", "m.toml"]).0, 0);
-    small(&d.join("m.toml"));
     let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
     let set = |count: u32, writer: &str, cache: &str| {
         let t = text
@@ -152,11 +160,8 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
 
 #[test]
 fn frames_past_a_clip_are_warned_of_with_the_count_that_covers_it() {
-    let tmp = tempfile::tempdir().unwrap();
+    let tmp = project("dnerf");
     let d = tmp.path();
-    longbox(d);
-    assert_eq!(vvgen(d, &["new", "longbox.gltf", "-o", "m.toml"]).0, 0);
-    small(&d.join("m.toml"));
     // `Idle` lasts 0.5 s; the manifest keeps Walk's 31 frames at 30 fps.
     let t = std::fs::read_to_string(d.join("m.toml")).unwrap().replace("animation = 0", "animation = \"Idle\"");
     std::fs::write(d.join("m.toml"), t).unwrap();
@@ -250,10 +255,8 @@ fn gc_says_what_it_kept(d: &Path) {
 
 #[test]
 fn a_refused_value_is_one_error_and_a_missing_clip_is_pointed_at() {
-    let tmp = tempfile::tempdir().unwrap();
+    let tmp = project("dnerf");
     let d = tmp.path();
-    longbox(d);
-    assert_eq!(vvgen(d, &["new", "longbox.gltf", "-o", "m.toml"]).0, 0);
     let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
     // `views = 1e7` is a wrong type, said once: not also "split needs `views`".
     let t = text.replacen("time  = \"monocular\"", "views = 1e7", 1);
@@ -278,11 +281,8 @@ fn a_refused_value_is_one_error_and_a_missing_clip_is_pointed_at() {
 
 #[test]
 fn plan_estimates_every_kind_it_has_timed() {
-    let tmp = tempfile::tempdir().unwrap();
+    let tmp = project("colmap");
     let d = tmp.path();
-    longbox(d);
-    assert_eq!(vvgen(d, &["new", "longbox.gltf", "--writer", "colmap", "-o", "m.toml"]).0, 0);
-    small(&d.join("m.toml"));
     let plan = |d: &Path| {
         let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["plan", "m.toml"]).output().unwrap();
         String::from_utf8_lossy(&out.stdout).into_owned()
@@ -299,13 +299,10 @@ fn plan_estimates_every_kind_it_has_timed() {
 
 #[test]
 fn counts_and_places_are_the_ones_a_user_means() {
-    let tmp = tempfile::tempdir().unwrap();
-    let d = tmp.path();
-    longbox(d);
     // The dynerf frame-count caveat counts the frames the output's splits select (24 of the clip's 31), in
     // check as in build.
-    assert_eq!(vvgen(d, &["new", "longbox.gltf", "--writer", "dynerf", "-o", "m.toml"]).0, 0);
-    small(&d.join("m.toml"));
+    let tmp = project("dynerf");
+    let d = tmp.path();
     let t = std::fs::read_to_string(d.join("m.toml")).unwrap();
     let t = t.replace("views = 1     # camera 00", "views = 1\nframes = { start = 0, end = 23 }     # camera 00");
     let t = t.replace("rig   = \"front\"\nviews = 6", "rig   = \"front\"\nviews = 6\nframes = { start = 0, end = 23 }");
