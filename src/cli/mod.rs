@@ -308,3 +308,15 @@ pub(crate) fn load_manifest_warned(path: &std::path::Path, ui: Ui) -> Option<(cr
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn byte_counts_read_as_people_write_them() {
+        assert_eq!(super::human_bytes(0), "0 B");
+        assert_eq!(super::human_bytes(999), "999 B");
+        assert_eq!(super::human_bytes(1_500), "1.5 kB");
+        assert_eq!(super::human_bytes(494_696_600_000), "494.7 GB");
+        assert_eq!(super::human_bytes(u64::MAX), "18446.7 PB");
+    }
+}

@@ -338,3 +338,23 @@ fn counts_and_places_are_the_ones_a_user_means() {
     };
     assert_eq!(faces("all.ply"), faces("box.ply") + 2, "the ground's two triangles");
 }
+
+#[test]
+fn a_rig_kind_typo_is_one_error_and_a_points_build_prints_no_image_rate() {
+    let tmp = project("dnerf");
+    let d = tmp.path();
+    let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
+    let t = text.replacen("kind = \"hemisphere\"", "kind = \"hemisphre\"", 1);
+    std::fs::write(d.join("a.toml"), &t).unwrap();
+    let (code, err) = vvgen(d, &["--color", "never", "check", "a.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.starts_with("error: unknown value `hemisphre`, did you mean `hemisphere`?"), "{err}");
+    // Nothing follows from it: not the splits that use the rig, not the outputs.
+    assert!(err.ends_with("a.toml: 1 error\n") && !err.contains("warning"), "{err}");
+    // A point-cloud-only build renders no image and says no image rate.
+    let (code, err) = vvgen(d, &["new", "longbox.gltf", "--writer", "ply-sequence", "-o", "p.toml"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = vvgen(d, &["build", "p.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("images") && err.contains(" s in all"), "{err}");
+}
