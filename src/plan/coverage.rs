@@ -61,7 +61,8 @@ pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<C
                 }
             }
             let reach = points.iter().map(|p| p.as_dvec3().length_squared()).fold(0.0, f64::max).sqrt();
-            Ok((list.into_iter().filter_map(|i| crop(plan, i, &points)).collect(), reach))
+            let bounds = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
+            Ok((list.into_iter().filter_map(|i| crop(plan, i, &points, bounds)).collect(), reach))
         })
         .collect();
     let mut out = Coverage { measured: images.len(), ..Coverage::default() };
@@ -74,14 +75,13 @@ pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<C
     Ok(out)
 }
 
-/// Whether image `i` crops `points`, and by how much.
-fn crop(plan: &Plan, i: usize, points: &[Vec3]) -> Option<Crop> {
+/// Whether image `i` crops `points` (whose bounds are `(lo, hi)`, found once per frame), and by how much.
+fn crop(plan: &Plan, i: usize, points: &[Vec3], (lo, hi): (Vec3, Vec3)) -> Option<Crop> {
     if points.is_empty() {
         return None;
     }
     let cam = &plan.images[i].camera;
     let w2c = cam.w2c();
-    let (lo, hi) = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
     let corners = (0..8).map(|k| {
         DVec3::new(
             if k & 1 == 0 { lo.x } else { hi.x } as f64,
