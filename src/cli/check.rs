@@ -21,10 +21,11 @@ pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<Exi
                     // Its `after` manifests write its inputs: `build` plans it once they exist.
                     Ok((0, None))
                 } else {
-                    scene::frame_count(&m).map_err(anyhow::Error::from).and_then(|frames| {
+                    scene::Scene::open(&m).map_err(anyhow::Error::from).and_then(|scene| {
                         // The scene as the build opens it (transforms resolved, a frame fit sized), so the
-                        // framing of every planned image is measured here too.
-                        let scene = scene::Scene::open(&m)?;
+                        // framing of every planned image is measured here too; and every frame file checked.
+                        scene.check_frame_files()?;
+                        let frames = scene.frames;
                         let plan = Plan::new(&m, frames)?;
                         let crops = coverage::measure(&scene, &plan, None)?;
                         let mut warnings = scene.warnings.clone();

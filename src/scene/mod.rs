@@ -136,36 +136,6 @@ pub struct Poser {
     out: PosedScene,
 }
 
-/// The number of frames a build of `m` has (the longest source's), from loading each source without posing it:
-/// what `vvgen check` needs to judge the consumers' frame-count limits before anything renders.
-///
-/// A mesh sequence's frames are scanned too (an OBJ's face indices, its MTL files and textures; a PLY's header and
-/// texture), as the build's keying will, so their errors name file and line before anything renders; and a PLY
-/// sequence's frames have their headers checked, and their sizes against the rows they declare.
-pub fn frame_count(m: &Manifest) -> Result<usize, Error> {
-    let mut frames = 0;
-    for (name, s) in &m.sources {
-        let src = LoadedSource::load(name, s, &m.dir)?;
-        // Every frame's header (and what its size says of its rows), as the build would find them when it
-        // reaches the frame.
-        match &src.data {
-            SourceData::MeshSequence(files) => {
-                for f in files {
-                    source::mesh_frame_deps(&f.path)?;
-                }
-            }
-            SourceData::Sequence(files) => {
-                for f in files {
-                    source::checked_ply(&f.path)?;
-                }
-            }
-            _ => {}
-        }
-        frames = frames.max(src.frame_count());
-    }
-    Ok(frames)
-}
-
 impl Scene {
     /// Loads every source and resolves the transforms (reading every frame once when a transform needs the
     /// bounds of all frames).
@@ -234,6 +204,29 @@ impl Scene {
         let mut scene = Scene { sources, locals, global, frames, warnings, file_lights };
         scene.place_ground(&mut scratch, &mut posed)?;
         Ok(scene)
+    }
+
+    /// Checks every frame file of the sequences as the build will find it, without posing: a mesh sequence's
+    /// frames are scanned (an OBJ's face indices, its MTL files and textures; a PLY's header and texture), as the
+    /// build's keying will, and a PLY sequence's frames have their headers checked and their sizes against the
+    /// rows they declare; so `vvgen check` names a broken frame's file and line before anything renders.
+    pub fn check_frame_files(&self) -> Result<(), Error> {
+        for src in &self.sources {
+            match &src.data {
+                SourceData::MeshSequence(files) => {
+                    for f in files {
+                        source::mesh_frame_deps(&f.path)?;
+                    }
+                }
+                SourceData::Sequence(files) => {
+                    for f in files {
+                        source::checked_ply(&f.path)?;
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     /// Makes the ground planes' geometry: at their `z`, or at the lowest point of the other sources over all
