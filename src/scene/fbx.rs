@@ -429,28 +429,32 @@ fn posed_vertices(
     }
 }
 
-/// Which takes play: the manifest's `animation` as an index or a name; the first take by default.
-pub fn select_take(
+/// Which take plays for source `name`: the manifest's `animation` as an index or a name; the first take by
+/// default (none when the file has no take).
+pub(crate) fn select_take(
     asset: &FbxAsset,
+    name: &str,
     sel: Option<&crate::manifest::source::AnimationSel>,
-) -> Result<Option<usize>, String> {
+) -> Result<Option<usize>, Error> {
     use crate::manifest::source::AnimationSel;
     let n = asset.takes.len();
     let names = || asset.takes.iter().map(|t| format!("`{}`", t.name)).collect::<Vec<_>>().join(", ");
+    let refuse = |message: String| Error::Clip { name: name.to_string(), message };
+    let file = asset.path.display();
     match sel {
         None => Ok((n > 0).then_some(0)),
         Some(AnimationSel::Index(i)) if (*i as usize) < n => Ok(Some(*i as usize)),
         Some(AnimationSel::Index(i)) => {
-            Err(format!("{}: there is no take {i} (the file has {n}: {})", asset.path.display(), names()))
+            Err(refuse(format!("{file}: there is no take {i} (the file has {n}: {})", names())))
         }
         Some(AnimationSel::Name(s)) => asset
             .takes
             .iter()
             .position(|t| t.name == *s)
             .map(Some)
-            .ok_or_else(|| format!("{}: no take named `{s}` (takes: {})", asset.path.display(), names())),
+            .ok_or_else(|| refuse(format!("{file}: no take named `{s}` (takes: {})", names()))),
         Some(AnimationSel::Many(_)) => {
-            Err(format!("{}: an FBX source plays one take: name one (takes: {})", asset.path.display(), names()))
+            Err(refuse(format!("{file}: an FBX source plays one take: name one (takes: {})", names())))
         }
     }
 }

@@ -80,8 +80,7 @@ impl LoadedSource {
             }
             SourceKind::Fbx => {
                 let asset = super::fbx::load(&full)?;
-                let take = super::fbx::select_take(&asset, s.animation())
-                    .map_err(|message| Error::Clip { name: name.to_string(), message })?;
+                let take = super::fbx::select_take(&asset, name, s.animation())?;
                 let duration = take.map_or(0.0, |t| asset.takes[t].duration());
                 let times = frame_times(s.frames(), duration);
                 SourceData::Fbx { asset: Box::new(asset), take, times }
