@@ -45,6 +45,14 @@ fn project(writer: &str) -> tempfile::TempDir {
     tmp
 }
 
+/// `vvgen check` of `d/m.toml` with the first `from` replaced by `to`, written as `d/a.toml`.
+fn check_edited(d: &Path, from: &str, to: &str) -> (i32, String) {
+    let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
+    assert!(text.contains(from), "{from:?} not in\n{text}");
+    std::fs::write(d.join("a.toml"), text.replacen(from, to, 1)).unwrap();
+    vvgen(d, &["--color", "never", "check", "a.toml"])
+}
+
 #[test]
 fn new_writes_where_asked_and_refuses_what_is_not_an_asset() {
     let tmp = tempfile::tempdir().unwrap();
@@ -259,9 +267,7 @@ fn a_refused_value_is_one_error_and_a_missing_clip_is_pointed_at() {
     let d = tmp.path();
     let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
     // `views = 1e7` is a wrong type, said once: not also "split needs `views`".
-    let t = text.replacen("time  = \"monocular\"", "views = 1e7", 1);
-    std::fs::write(d.join("a.toml"), &t).unwrap();
-    let (code, err) = vvgen(d, &["--color", "never", "check", "a.toml"]);
+    let (code, err) = check_edited(d, "time  = \"monocular\"", "views = 1e7");
     assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("wrong type: floating point `10000000.0` where a whole number, 0 or more (e.g. 80) is expected")
@@ -343,10 +349,7 @@ fn counts_and_places_are_the_ones_a_user_means() {
 fn a_rig_kind_typo_is_one_error_and_a_points_build_prints_no_image_rate() {
     let tmp = project("dnerf");
     let d = tmp.path();
-    let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
-    let t = text.replacen("kind = \"hemisphere\"", "kind = \"hemisphre\"", 1);
-    std::fs::write(d.join("a.toml"), &t).unwrap();
-    let (code, err) = vvgen(d, &["--color", "never", "check", "a.toml"]);
+    let (code, err) = check_edited(d, "kind = \"hemisphere\"", "kind = \"hemisphre\"");
     assert_eq!(code, 2, "{err}");
     assert!(err.starts_with("error: unknown value `hemisphre`, did you mean `hemisphere`?"), "{err}");
     // Nothing follows from it: not the splits that use the rig, not the outputs.
