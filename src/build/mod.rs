@@ -148,6 +148,10 @@ pub trait Progress: Sync {
     fn waiting(&self, what: &str) {
         let _ = what;
     }
+    /// Blender is importing a `.blend` source (seconds, once per content: the cache keeps it).
+    fn importing(&self, what: &str) {
+        let _ = what;
+    }
 }
 
 /// A progress sink that ignores everything.
@@ -233,6 +237,8 @@ pub(crate) struct Prepared {
     pub stat: StatCache,
     /// Key of every scene frame.
     pub frame_keys: keys::FrameKeys,
+    /// The import actions' keys and blobs (`.blend` sources), which a garbage collection keeps.
+    pub imported: Vec<Digest>,
     /// Content key of the environment map, when there is one.
     pub environment: Option<Digest>,
 }
@@ -246,8 +252,17 @@ impl Prepared {
 
 /// Opens the scene, plans the images and keys every frame.
 /// With `verify`, every cached file is hashed again instead of trusted by its metadata.
-pub(crate) fn prepare(m: &Manifest, cache: &Path, verify: bool) -> Result<Prepared, Error> {
-    let scene = Scene::open(m).map_err(|source| Error::Scene {
+/// `note` hears when a `.blend` import starts Blender.
+pub(crate) fn prepare(
+    m: &Manifest,
+    cache: &Path,
+    verify: bool,
+    note: Option<&(dyn Fn(&str) + Sync)>,
+) -> Result<Prepared, Error> {
+    let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
+    let stat = store.stat_cache(&m.out_dir(), verify);
+    let importer = crate::scene::blend::Importer::new(&store, &stat, note);
+    let scene = Scene::open_importing(m, Some(&importer)).map_err(|source| Error::Scene {
         manifest: m.path.clone(),
         source: Box::new(source),
         hint: if m.after.is_empty() {
@@ -256,13 +271,12 @@ pub(crate) fn prepare(m: &Manifest, cache: &Path, verify: bool) -> Result<Prepar
             " (an `after` manifest may write it: `vvgen build` builds those first)"
         },
     })?;
+    let imported = importer.used();
     let plan = Plan::new(m, scene.frames).map_err(|e| Error::plan(m, e))?;
-    let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
-    let stat = store.stat_cache(&m.out_dir(), verify);
     // Lit point colours read the lit materials too, whatever the images' shading.
     let frame_keys = keys::frame_keys(&scene, &stat, m.lit()).map_err(|e| Error::plan(m, e))?;
     let environment = keys::environment_key(m, &stat).map_err(|e| Error::plan(m, e))?;
-    Ok(Prepared { scene, plan, store, stat, frame_keys, environment })
+    Ok(Prepared { scene, plan, store, stat, frame_keys, environment, imported })
 }
 
 /// Builds every output of `m`, using the store at `cache`: runs only the actions the cache lacks. The
@@ -282,7 +296,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
         }
         before.extend(r.after.into_iter().chain(r.outputs.into_iter().map(|(name, w)| (format!("{file}/{name}"), w))));
     }
-    let p = match prepare(m, cache, opts.verify) {
+    let p = match prepare(m, cache, opts.verify, Some(&|what: &str| progress.importing(what))) {
         Ok(p) => p,
         // This manifest's sources are its prerequisites' outputs, which only the final unsharded build writes:
         // this shard's part is the prerequisites' work.
@@ -489,7 +503,8 @@ pub fn reachable(m: &Manifest, cache: &Path, keep: &mut HashSet<Digest>) -> Resu
     for a in &m.after {
         reachable(a, cache, keep)?;
     }
-    let p = prepare(m, cache, false)?;
+    let p = prepare(m, cache, false, None)?;
+    keep.extend(p.imported.iter().copied());
     let g = p.graph(m)?;
     for id in g.ids() {
         let n = g.node(id);

@@ -89,7 +89,7 @@ pub fn status(m: &Manifest, cache: &Path, explain: bool) -> Result<Status, Error
 
 /// [`status`]; with `verify`, every cached file is hashed again instead of trusted by its metadata.
 pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> Result<Status, Error> {
-    let p = prepare(m, cache, verify)?;
+    let p = prepare(m, cache, verify, None)?;
     let g = p.graph(m)?;
     let look = execute::lookup(&g, &p.store, &p.stat);
     let images_to_render = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, None)).len();

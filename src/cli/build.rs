@@ -44,6 +44,14 @@ impl Progress for Display {
         }
     }
 
+    fn importing(&self, what: &str) {
+        match &self.bar {
+            Some(b) => b.println(what),
+            None if !self.quiet => eprintln!("{what}"),
+            None => {}
+        }
+    }
+
     fn waiting(&self, what: &str) {
         if !self.quiet {
             eprintln!("waiting for another build of {what} to finish (its work will be reused)");

@@ -21,7 +21,7 @@ pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<Exi
                     // Its `after` manifests write its inputs: `build` plans it once they exist.
                     Ok((0, None))
                 } else {
-                    scene::Scene::open(&m).map_err(anyhow::Error::from).and_then(|scene| {
+                    super::open_scene(&m, ui).and_then(|scene| {
                         // The scene as the build opens it (transforms resolved, a frame fit sized), so the
                         // framing of every planned image is measured here too; and every frame file checked.
                         scene.check_frame_files()?;

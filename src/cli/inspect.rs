@@ -10,7 +10,7 @@ use glam::Vec2;
 use super::{load_manifest, Ui};
 use crate::scene::material::linear_to_srgb;
 use crate::scene::ply::{self, PlyOut};
-use crate::scene::{Poser, PrimKind, Scene, SourceData};
+use crate::scene::{Poser, PrimKind, SourceData};
 
 /// Prints the scene summary; with `ply`, writes the posed geometry of `frame`.
 pub fn run(
@@ -23,7 +23,7 @@ pub fn run(
     let Some(m) = load_manifest(path, ui) else {
         return Ok(ExitCode::from(super::EXIT_INVALID));
     };
-    let scene = Scene::open(&m)?;
+    let scene = super::open_scene(&m, ui)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

@@ -288,6 +288,23 @@ pub(crate) fn cache_choice(m: &crate::manifest::Manifest) -> (PathBuf, &'static 
     }
 }
 
+/// Opens `m`'s scene as `build` will, importing `.blend` sources through the cache `build` uses (so a later
+/// build finds the import done), and saying so when Blender starts.
+pub(crate) fn open_scene(m: &crate::manifest::Manifest, ui: Ui) -> anyhow::Result<crate::scene::Scene> {
+    use crate::scene::{blend, Scene};
+    if !m.sources.values().any(|s| s.blend().is_some()) {
+        return Ok(Scene::open(m)?);
+    }
+    let store = crate::cache::Store::open(&cache_choice(m).0)?;
+    let stat = store.stat_cache(&m.out_dir(), false);
+    let say = |what: &str| eprintln!("{what}");
+    let importer = blend::Importer::new(&store, &stat, (!ui.quiet).then_some(&say as &(dyn Fn(&str) + Sync)));
+    let scene = Scene::open_importing(m, Some(&importer))?;
+    // Blender's version, remembered per executable, and the digests hashed: the next command need not redo them.
+    let _ = stat.save();
+    Ok(scene)
+}
+
 /// Loads a manifest, printing its diagnostics; `None` when it is invalid.
 pub(crate) fn load_manifest(path: &std::path::Path, ui: Ui) -> Option<crate::manifest::Manifest> {
     load_manifest_warned(path, ui).map(|(m, _)| m)

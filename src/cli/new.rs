@@ -21,6 +21,8 @@ enum Asset {
     Gltf { clips: Vec<(String, f32)> },
     /// An FBX file and its takes (name, seconds).
     Fbx { takes: Vec<(String, f32)> },
+    /// A `.blend` file as Blender exported it.
+    Blend { info: scene::blend::Info },
     /// One static mesh (glTF without clips, PLY).
     Mesh,
     /// One file per frame: `ply_sequence` or `mesh_sequence`, with the glob and the frame count.
@@ -47,9 +49,13 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
         .map(|s| s.to_string_lossy().chars().map(|c| if c.is_alphanumeric() || c == '-' { c } else { '-' }).collect())
         .filter(|s: &String| !s.is_empty())
         .unwrap_or_else(|| "dataset".into());
-    // What the asset is comes first: `vvgen new base.toml` is "not an asset", not "base.toml exists".
-    let (kind, up, note) = describe(asset)?;
     let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
+    // What the asset is comes first: `vvgen new base.toml` is "not an asset", not "base.toml exists". A .blend
+    // is imported into the cache the manifest will use (`cache/` beside it), so its build starts from there.
+    let cache = std::env::var_os("VVGEN_CACHE")
+        .filter(|p| !p.is_empty())
+        .map_or_else(|| crate::manifest::folder_of(&out).join("cache"), PathBuf::from);
+    let (kind, up, note) = describe(asset, &cache, ui)?;
     if out.exists() {
         bail!("{} exists: choose another with -o", out.display());
     }
@@ -67,7 +73,7 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
 }
 
 /// The asset's kind, its up axis and a line saying how that was decided.
-fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
+fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'static str, String)> {
     let ext = |p: &Path| p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     if asset.is_dir() {
         let mut files: Vec<PathBuf> = std::fs::read_dir(asset)
@@ -121,6 +127,31 @@ fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
             };
             Ok((Asset::Fbx { takes }, "z", format!("{what}; in metres and +Z up, as vvgen loads FBX")))
         }
+        "blend" => {
+            let store = crate::cache::Store::open(cache)?;
+            let stat = crate::cache::StatCache::load(&store.root().join("stat").join("new"));
+            let say = |what: &str| eprintln!("{what}");
+            let note = (!ui.quiet).then_some(&say as &(dyn Fn(&str) + Sync));
+            let importer = scene::blend::Importer::new(&store, &stat, note);
+            let got = importer.import(asset, &crate::manifest::Source::default())?;
+            let _ = stat.save();
+            let a = scene::gltf::load_slice(&got.glb, asset, None)?;
+            let mut rest = scene::PosedScene::default();
+            a.pose(&[], 0.0, glam::Mat4::IDENTITY, &mut Default::default(), &mut rest);
+            drawable(&rest, asset)?;
+            let i = &got.info;
+            let what = if a.animations.is_empty() {
+                format!("scene `{}`, no animation: one frame", i.scene)
+            } else {
+                format!("scene `{}`, frames {}–{} at {} fps", i.scene, i.frame_start, i.frame_end, i.fps)
+            };
+            let info = if a.animations.is_empty() {
+                scene::blend::Info { frame_end: i.frame_start, ..i.clone() }
+            } else {
+                i.clone()
+            };
+            Ok((Asset::Blend { info }, "z", format!("{what}; +Z up, as Blender shows it")))
+        }
         "ply" => {
             let s = scene::source::ply_scene(asset)?;
             drawable(&s, asset)?;
@@ -133,7 +164,7 @@ fn describe(asset: &Path) -> anyhow::Result<(Asset, &'static str, String)> {
             let glob = asset.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
             Ok((Asset::Sequence { key: "mesh_sequence", glob, frames: 1 }, up, why))
         }
-        _ => bail!("{}: not a glTF, FBX, PLY or OBJ file, nor a folder of frames", asset.display()),
+        _ => bail!("{}: not a glTF, FBX, .blend, PLY or OBJ file, nor a folder of frames", asset.display()),
     }
 }
 
@@ -214,6 +245,23 @@ fn manifest(
                 );
                 n
             }
+        }
+        Asset::Blend { info } => {
+            let _ = writeln!(w, "blend  = \"{}\"   # Blender exports it, once (the cache keeps it)", rel(asset)?);
+            let _ = writeln!(
+                w,
+                "# objects: {} (pick one with `object = \"…\"`, or `collection = \"…\"`)",
+                info.objects.join(", ")
+            );
+            if info.scenes.len() > 1 {
+                let _ = writeln!(w, "# scenes: {} (pick with `scene = \"…\"`)", info.scenes.join(", "));
+            }
+            let _ = writeln!(
+                w,
+                "frames = {{ start = {}, end = {}, fps = {} }}   # Blender's frame numbers: the file's range and rate",
+                info.frame_start, info.frame_end, info.fps
+            );
+            (info.frame_end - info.frame_start + 1).max(1) as usize
         }
         Asset::Mesh => {
             let _ = writeln!(w, "mesh   = \"{}\"", rel(asset)?);
@@ -301,6 +349,8 @@ fn up_note(note: &str) -> &'static str {
         "OBJ's usual up axis; the world is +Z up"
     } else if note.contains("FBX") {
         "FBX is loaded in the world's axes"
+    } else if note.contains("as Blender shows it") {
+        "Blender's own axes: the world is +Z up, as Blender's"
     } else {
         "glTF's own up axis; the world is +Z up"
     }

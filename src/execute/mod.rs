@@ -568,7 +568,7 @@ mod tests {
         std::fs::write(dir.path().join("m.toml"), text).unwrap();
         let (m, _) =
             crate::manifest::load(&dir.path().join("m.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
-        let p = crate::build::prepare(&m, &dir.path().join("cache"), false).unwrap();
+        let p = crate::build::prepare(&m, &dir.path().join("cache"), false, None).unwrap();
         let g = p.graph(&m).unwrap();
         let look = lookup(&g, &p.store, &p.stat);
         let kinds = KindGraph::new(&g, &runs_here(&g, &look.state, None));

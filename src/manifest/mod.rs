@@ -366,7 +366,7 @@ fn named<T: serde::de::DeserializeOwned>(
 fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut Vec<Diagnostic>) {
     let Some((kind, p)) = s.kind_spanned() else { return };
     match kind {
-        SourceKind::Gltf | SourceKind::Fbx | SourceKind::Mesh => {
+        SourceKind::Gltf | SourceKind::Fbx | SourceKind::Blend | SourceKind::Mesh => {
             let full = dir.join(p.get_ref());
             if !full.is_file() {
                 diags.push(

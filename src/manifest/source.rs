@@ -8,9 +8,9 @@ use super::diag::Diagnostic;
 use super::frames::Frames;
 use super::transform::Transform;
 
-/// One `[source.NAME]` table. Exactly one of `gltf`, `fbx`, `mesh`, `ply_sequence`, `mesh_sequence`, `plane` is
-/// set.
-#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
+/// One `[source.NAME]` table. Exactly one of `gltf`, `fbx`, `blend`, `mesh`, `ply_sequence`, `mesh_sequence`,
+/// `plane` is set.
+#[derive(Debug, Clone, Default, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Source {
     /// An animated (or static) glTF 2.0 file, `.gltf` or `.glb`.
@@ -19,6 +19,15 @@ pub struct Source {
     /// An animated (or static) FBX file, ascii or binary (6100–7700): skinning, blend shapes, takes.
     #[schemars(with = "Option<String>")]
     pub(super) fbx: Option<Spanned<String>>,
+    /// A Blender file, imported by running Blender headless (`VVGEN_BLENDER`, else `blender` on the PATH) once
+    /// per content of the file and what it links, through the cache; animation baked per frame.
+    #[schemars(with = "Option<String>")]
+    pub(super) blend: Option<Spanned<String>>,
+    /// A `.blend` source's object to import (with its children and the armatures that deform them); default:
+    /// every object the scene renders.
+    pub object: Option<String>,
+    /// A `.blend` source's collection to import (with its child collections).
+    pub collection: Option<String>,
     /// A static mesh, glTF or PLY.
     #[schemars(with = "Option<String>")]
     pub(super) mesh: Option<Spanned<String>>,
@@ -36,8 +45,9 @@ pub struct Source {
     /// Which glTF animation clips play: an index, a name, a list of them, or `"all"`. Default: the first clip.
     #[schemars(with = "Option<AnimationSel>")]
     pub(super) animation: Option<Spanned<AnimationSel>>,
-    /// Which glTF scene (default: the file's default scene, else all scenes).
-    pub scene: Option<u32>,
+    /// Which scene: a glTF scene by index (default: the file's default scene, else all scenes), or a `.blend`
+    /// file's scene by name (default: the scene the file was saved with).
+    pub scene: Option<SceneSel>,
     /// Frame times (glTF) or frame numbers (PLY sequences).
     #[schemars(with = "Option<Frames>")]
     pub(super) frames: Option<Spanned<Frames>>,
@@ -62,6 +72,16 @@ fn grey() -> [f64; 3] {
     [0.8; 3]
 }
 
+/// `scene = 0` (glTF) or `scene = "Scene.001"` (`.blend`).
+#[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum SceneSel {
+    /// A scene by index (glTF).
+    Index(u32),
+    /// A scene by name (`.blend`).
+    Name(String),
+}
+
 /// What kind of source a table describes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SourceKind {
@@ -69,6 +89,8 @@ pub enum SourceKind {
     Gltf,
     /// `fbx = …`
     Fbx,
+    /// `blend = …`
+    Blend,
     /// `mesh = …`
     Mesh,
     /// `ply_sequence = …`
@@ -119,6 +141,7 @@ impl Source {
         let set = [
             (SourceKind::Gltf, &self.gltf),
             (SourceKind::Fbx, &self.fbx),
+            (SourceKind::Blend, &self.blend),
             (SourceKind::Mesh, &self.mesh),
             (SourceKind::PlySequence, &self.ply_sequence),
             (SourceKind::MeshSequence, &self.mesh_sequence),
@@ -132,7 +155,7 @@ impl Source {
 
     pub(crate) fn validate(&self, name: &str, table_span: std::ops::Range<usize>, diags: &mut Vec<Diagnostic>) {
         let mut set: Vec<std::ops::Range<usize>> =
-            [&self.gltf, &self.fbx, &self.mesh, &self.ply_sequence, &self.mesh_sequence]
+            [&self.gltf, &self.fbx, &self.blend, &self.mesh, &self.ply_sequence, &self.mesh_sequence]
                 .into_iter()
                 .flatten()
                 .map(|s| s.span())
@@ -142,7 +165,7 @@ impl Source {
         match set.len() {
             0 => diags.push(
                 Diagnostic::error(format!("source `{name}` names no file"), Some(table_span.clone())).with_help(
-                    "add one of `gltf = \"…\"`, `fbx = \"…\"`, `mesh = \"…\"`, `ply_sequence = \"…\"`, \
+                    "add one of `gltf = \"…\"`, `fbx = \"…\"`, `blend = \"…\"`, `mesh = \"…\"`, `ply_sequence = \"…\"`, \
                      `mesh_sequence = \"…\"` or \
                      `plane = { size = [w, d] }`",
                 ),
@@ -151,8 +174,8 @@ impl Source {
             _ => diags.push(
                 Diagnostic::error(
                     format!(
-                        "source `{name}` sets more than one of `gltf`, `fbx`, `mesh`, `ply_sequence`, `mesh_sequence`, \
-                         `plane`"
+                        "source `{name}` sets more than one of `gltf`, `fbx`, `blend`, `mesh`, `ply_sequence`, \
+                         `mesh_sequence`, `plane`"
                     ),
                     Some(set[1].clone()),
                 )
@@ -187,14 +210,55 @@ impl Source {
         if let Some((kind, _)) = self.kind() {
             if !matches!(kind, SourceKind::Gltf | SourceKind::Fbx) {
                 if let Some(a) = &self.animation {
-                    diags.push(Diagnostic::error(
-                        "`animation` applies only to `gltf` and `fbx` sources",
-                        Some(a.span()),
-                    ));
+                    let help = if kind == SourceKind::Blend {
+                        "a `.blend` plays every action its objects have, as Blender does; choose the frames with \
+                         `frames = { start = …, end = … }` (Blender's frame numbers)"
+                    } else {
+                        "remove it"
+                    };
+                    diags.push(
+                        Diagnostic::error("`animation` applies only to `gltf` and `fbx` sources", Some(a.span()))
+                            .with_help(help),
+                    );
                 }
             }
-            if kind != SourceKind::Gltf && self.scene.is_some() {
-                diags.push(Diagnostic::error("`scene` applies only to `gltf` sources", Some(table_span.clone())));
+            match (&self.scene, kind) {
+                (None, _)
+                | (Some(SceneSel::Index(_)), SourceKind::Gltf)
+                | (Some(SceneSel::Name(_)), SourceKind::Blend) => {}
+                (Some(SceneSel::Name(n)), SourceKind::Gltf) => diags.push(
+                    Diagnostic::error(
+                        format!("`scene = \"{n}\"`: a glTF file's scene is chosen by index"),
+                        Some(table_span.clone()),
+                    )
+                    .with_help("e.g. scene = 0 (`vvgen inspect` lists the file's scenes)"),
+                ),
+                (Some(SceneSel::Index(i)), SourceKind::Blend) => diags.push(
+                    Diagnostic::error(
+                        format!("`scene = {i}`: a `.blend` file's scene is chosen by name"),
+                        Some(table_span.clone()),
+                    )
+                    .with_help("e.g. scene = \"Scene\" (the vvgen error for a wrong name lists the file's scenes)"),
+                ),
+                (Some(_), _) => diags.push(Diagnostic::error(
+                    "`scene` applies only to `gltf` and `blend` sources",
+                    Some(table_span.clone()),
+                )),
+            }
+            if kind != SourceKind::Blend {
+                for (key, set) in [("object", self.object.is_some()), ("collection", self.collection.is_some())] {
+                    if set {
+                        diags.push(Diagnostic::error(
+                            format!("`{key}` applies only to `blend` sources"),
+                            Some(table_span.clone()),
+                        ));
+                    }
+                }
+            } else if self.object.is_some() && self.collection.is_some() {
+                diags.push(
+                    Diagnostic::error("set `object` or `collection`, not both", Some(table_span.clone()))
+                        .with_help("an object brings its children; a collection brings its child collections"),
+                );
             }
             if kind == SourceKind::Mesh {
                 if let Some(f) = &self.frames {
@@ -252,6 +316,27 @@ impl Source {
     /// The FBX file, when given.
     pub fn fbx(&self) -> Option<&str> {
         self.fbx.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The `.blend` file, when given.
+    pub fn blend(&self) -> Option<&str> {
+        self.blend.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// The glTF scene index, when given.
+    pub fn scene_index(&self) -> Option<usize> {
+        match self.scene {
+            Some(SceneSel::Index(i)) => Some(i as usize),
+            _ => None,
+        }
+    }
+
+    /// The `.blend` scene name, when given.
+    pub fn scene_name(&self) -> Option<&str> {
+        match &self.scene {
+            Some(SceneSel::Name(n)) => Some(n),
+            _ => None,
+        }
     }
 
     /// The mesh file, when given.

@@ -2,6 +2,7 @@
 //! transforms. The transforms are resolved once per sequence when the scene opens ([`Scene::open`]), never per
 //! frame, so the subject does not jump or breathe between frames.
 
+pub mod blend;
 pub mod fbx;
 pub mod gltf;
 pub mod light;
@@ -52,6 +53,14 @@ pub enum Error {
         /// The file.
         path: PathBuf,
         /// What is wrong.
+        message: String,
+    },
+    /// A `.blend` file cannot be imported: no Blender, or Blender refused it or what the manifest selects.
+    #[error("{}: {message}", path.display())]
+    Blend {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and the ways out.
         message: String,
     },
     /// A PLY file is malformed.
@@ -138,11 +147,16 @@ pub struct Poser {
 
 impl Scene {
     /// Loads every source and resolves the transforms (reading every frame once when a transform needs the
-    /// bounds of all frames).
+    /// bounds of all frames). A `.blend` source needs [`Scene::open_importing`].
     pub fn open(m: &Manifest) -> Result<Scene, Error> {
+        Scene::open_importing(m, None)
+    }
+
+    /// [`Scene::open`], importing `.blend` sources through `importer` (a cache).
+    pub fn open_importing(m: &Manifest, importer: Option<&blend::Importer>) -> Result<Scene, Error> {
         let mut sources = Vec::new();
         for (name, s) in &m.sources {
-            sources.push(LoadedSource::load(name, s, &m.dir)?);
+            sources.push(LoadedSource::load(name, s, &m.dir, importer)?);
         }
         let mut warnings = Vec::new();
         for (s, (_, cfg)) in sources.iter().zip(&m.sources) {

@@ -59,8 +59,13 @@ pub struct LoadedSource {
 }
 
 impl LoadedSource {
-    /// Loads a manifest source; `dir` is the manifest's folder.
-    pub fn load(name: &str, s: &Source, dir: &std::path::Path) -> Result<LoadedSource, Error> {
+    /// Loads a manifest source; `dir` is the manifest's folder; `importer` imports a `.blend`.
+    pub fn load(
+        name: &str,
+        s: &Source,
+        dir: &std::path::Path,
+        importer: Option<&super::blend::Importer>,
+    ) -> Result<LoadedSource, Error> {
         let invalid = |message: String| Error::Source { name: name.to_string(), message };
         if let Some(p) = s.plane() {
             let data = SourceData::Static(PosedScene::default());
@@ -71,7 +76,7 @@ impl LoadedSource {
         let is_ply = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
         let data = match kind {
             SourceKind::Gltf => {
-                let asset = super::gltf::load(&full, s.scene.map(|x| x as usize))?;
+                let asset = super::gltf::load(&full, s.scene_index())?;
                 let clips = select_clips(&asset, s.animation())
                     .map_err(|message| Error::Clip { name: name.to_string(), message })?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
@@ -85,8 +90,21 @@ impl LoadedSource {
                 let times = frame_times(s.frames(), duration);
                 SourceData::Fbx { asset: Box::new(asset), take, times }
             }
+            SourceKind::Blend => {
+                let importer = importer.ok_or_else(|| Error::Blend {
+                    path: full.clone(),
+                    message: "a .blend is imported through a cache: open the scene with an importer".into(),
+                })?;
+                let got = importer.import(&full, s)?;
+                // Errors in what Blender wrote name the .blend: it is the file the user has.
+                let mut asset = super::gltf::load_slice(&got.glb, &full, None)?;
+                asset.warnings.extend(got.info.warnings.iter().cloned());
+                let clips: Vec<usize> = (0..asset.animations.len()).collect();
+                let times = blend_times(s.frames(), &got.info, !clips.is_empty());
+                SourceData::Gltf { asset: Box::new(asset), clips, times }
+            }
             SourceKind::Mesh if is_ply => SourceData::Static(ply_scene(&full)?),
-            SourceKind::Mesh => SourceData::Static(gltf_at_rest(&full, s.scene.map(|x| x as usize))?),
+            SourceKind::Mesh => SourceData::Static(gltf_at_rest(&full, s.scene_index())?),
             SourceKind::PlySequence | SourceKind::MeshSequence => {
                 let frames = s.frames().cloned().unwrap_or_default();
                 let sequence = sequence::resolve(dir, path, &frames)
@@ -98,9 +116,13 @@ impl LoadedSource {
                 }
             }
         };
-        // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes.
-        let default_up =
-            if is_ply || matches!(kind, SourceKind::PlySequence | SourceKind::Fbx) { UpAxis::Z } else { UpAxis::Y };
+        // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
+        // .blend in Blender's (exported +Z up).
+        let default_up = if is_ply || matches!(kind, SourceKind::PlySequence | SourceKind::Fbx | SourceKind::Blend) {
+            UpAxis::Z
+        } else {
+            UpAxis::Y
+        };
         Ok(LoadedSource { name: name.to_string(), data, default_up, ground: None })
     }
 
@@ -197,6 +219,23 @@ fn frame_times(frames: Option<&crate::manifest::frames::Frames>, duration: f64) 
         (None, None) => start.max((duration * fps + 1e-4).floor() as i64),
     };
     (start..=end).step_by(step as usize).map(|n| (n as f64 / fps) as f32).collect()
+}
+
+/// Frame times of a `.blend` source: Blender's frame numbers at the file's rate, over the file's frame range,
+/// each overridable by `frames` (`start`/`end` are Blender frame numbers). A file with no animation has one
+/// frame, the first, unless `frames` asks for more.
+fn blend_times(
+    frames: Option<&crate::manifest::frames::Frames>,
+    info: &super::blend::Info,
+    animated: bool,
+) -> Vec<f32> {
+    let mut f = frames.cloned().unwrap_or_default();
+    f.fps = f.fps.or(Some(info.fps));
+    f.start = f.start.or(Some(info.frame_start));
+    if f.end.is_none() && f.count.is_none() {
+        f.end = Some(if animated { info.frame_end.max(f.start.unwrap_or(0)) } else { f.start.unwrap_or(0) });
+    }
+    frame_times(Some(&f), 0.0)
 }
 
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has

@@ -1,0 +1,180 @@
+//! `.blend` sources: a file Blender writes (a keyframed, textured cube; an armature-skinned cylinder with an
+//! animated shape key) imports through Blender's glTF export and poses as Blender's own evaluation does; the
+//! import runs once per content of the file and what it names; without Blender, `check` says the two ways out.
+//! These tests need Blender and numpy (`apt install blender python3-numpy`; `.ci/run` installs both) and skip
+//! visibly without them.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use vvgen::cache::{StatCache, Store};
+use vvgen::scene::{blend::Importer, Poser, Scene};
+
+fn vvgen(dir: &Path, args: &[&str], blender: &Path) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen"))
+        .current_dir(dir)
+        .env("VVGEN_BLENDER", blender)
+        .env_remove("VVGEN_CACHE")
+        .args(args)
+        .output()
+        .unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// Blender on the PATH, or why the test skips.
+fn blender() -> Option<PathBuf> {
+    match vvgen::scene::blend::blender_exe() {
+        Ok(p) => Some(p),
+        Err(why) => {
+            eprintln!("skipping: {why} (.ci/run installs Blender)");
+            None
+        }
+    }
+}
+
+/// Writes the test scene and Blender's posed vertices of it (`posed.json`) into `dir`; `None` (said) when this
+/// Blender cannot export glTF.
+fn make_scene(blender: &Path, dir: &Path) -> Option<()> {
+    let script = crate::common::data("blend/make_scene.py");
+    let out = Command::new(blender)
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(script)
+        .arg("--")
+        .arg(dir)
+        .output()
+        .unwrap();
+    if out.status.code() == Some(5) {
+        eprintln!("skipping: Blender's Python lacks numpy, which its glTF exporter needs (apt install python3-numpy)");
+        return None;
+    }
+    assert!(out.status.success() && dir.join("posed.json").is_file(), "{}", String::from_utf8_lossy(&out.stderr));
+    Some(())
+}
+
+/// A manifest with the scene's `.blend` as its one source, as written (no transform: Blender's world).
+fn write_manifest(dir: &Path, extra: &str) {
+    let text = format!(
+        "[dataset]\nname = \"b\"\nout = \"out\"\n[source.s]\nblend = \"scene.blend\"\n{extra}\n\
+         [render]\nresolution = [48, 48]\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 3\n\
+         [output.d]\nwriter = \"nerfstudio\"\n"
+    );
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+}
+
+/// Largest distance from a point of `a` to the nearest of `b`, both ways (vertices split at seams by the glTF
+/// export sit on Blender's, so the sets match without a correspondence).
+fn hausdorff(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    let d2 = |p: &[f32; 3], q: &[f32; 3]| (0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f32>();
+    let one = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter().map(|p| b.iter().map(|q| d2(p, q)).fold(f32::INFINITY, f32::min)).fold(0.0, f32::max)
+    };
+    one(a, b).max(one(b, a)).sqrt()
+}
+
+#[test]
+fn blend_poses_as_blender_evaluates_it_and_imports_once() {
+    let Some(blender) = blender() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    if make_scene(&blender, d).is_none() {
+        return;
+    }
+    let reference: std::collections::BTreeMap<String, Vec<[f32; 3]>> =
+        serde_json::from_slice(&std::fs::read(d.join("posed.json")).unwrap()).unwrap();
+    write_manifest(d, "");
+    let m = crate::common::load(&d.join("m.toml"));
+    let store = Store::open(&d.join("library-cache")).unwrap();
+    let stat = StatCache::load(&d.join("stat"));
+    let importer = Importer::new(&store, &stat, None);
+    let scene = Scene::open_importing(&m, Some(&importer)).unwrap();
+    // The file's frame range, 1–24: scene frame i is Blender's frame 1 + i.
+    assert_eq!(scene.frames, 24);
+    let mut poser = Poser::default();
+    let all = &reference["1"];
+    let height = all.iter().map(|p| p[2]).fold(f32::MIN, f32::max) - all.iter().map(|p| p[2]).fold(f32::MAX, f32::min);
+    for (frame, want) in &reference {
+        let f: usize = frame.parse().unwrap();
+        let posed = scene.pose(f - 1, &mut poser).unwrap();
+        let got: Vec<[f32; 3]> =
+            posed.primitives.iter().flat_map(|p| p.positions.iter().map(|v| v.to_array())).collect();
+        let off = hausdorff(&got, want);
+        assert!(off < 1e-4 * height, "Blender frame {f}: {off} from Blender's evaluated vertices (height {height})");
+    }
+    // The bend and the bulge moved it: a pose that ignored the animation would fail above, and this says so.
+    assert!(hausdorff(&reference["1"], &reference["24"]) > 0.1 * height);
+
+    // The CLI through a Blender that logs its runs: the first build imports once; the second starts no
+    // Blender at all; a changed texture the file names imports again.
+    let log = d.join("runs.log");
+    let wrapper = d.join("blender-logged");
+    std::fs::write(
+        &wrapper,
+        format!("#!/bin/sh\necho \"$*\" >> '{}'\nexec '{}' \"$@\"\n", log.display(), blender.display()),
+    )
+    .unwrap();
+    Command::new("chmod").arg("755").arg(&wrapper).status().unwrap();
+    // Older than the stat cache's racy window, as installed programs and saved files are.
+    Command::new("touch").args(["-d", "2026-01-01"]).arg(&wrapper).arg(d.join("scene.blend")).status().unwrap();
+    let runs = || std::fs::read_to_string(&log).unwrap_or_default().lines().filter(|l| l.contains("--python")).count();
+    let starts = || std::fs::read_to_string(&log).unwrap_or_default().lines().count();
+    let (code, err) = vvgen(d, &["build", "m.toml"], &wrapper);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(runs(), 1, "{err}");
+    assert!(err.contains("importing") && err.contains("scene.blend"), "{err}");
+    let before = starts();
+    let (code, err) = vvgen(d, &["build", "m.toml"], &wrapper);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(starts(), before, "a second build started Blender: {err}");
+    assert!(!err.contains("importing"), "{err}");
+    let png = image::RgbaImage::from_pixel(8, 8, image::Rgba([200, 30, 30, 255]));
+    png.save(d.join("checker.png")).unwrap();
+    let (code, err) = vvgen(d, &["build", "m.toml"], &wrapper);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(runs(), 2, "the texture changed: {err}");
+}
+
+#[test]
+fn blend_errors_name_the_file_and_the_way_out() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // Without Blender (whatever this machine has): `check` refuses with exit 2, naming both ways out.
+    std::fs::write(d.join("scene.blend"), b"BLENDER-v304 not really").unwrap();
+    write_manifest(d, "");
+    let (code, err) = vvgen(d, &["check", "m.toml"], &d.join("no-blender-here"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("scene.blend") && err.contains("install Blender") && err.contains("glTF 2.0"), "{err}");
+    // Settings that do not fit a `.blend` are manifest errors, before any Blender runs.
+    for (extra, says) in [
+        ("animation = 0", "`animation` applies only to"),
+        ("scene = 1", "chosen by name"),
+        ("object = \"A\"\ncollection = \"B\"", "not both"),
+    ] {
+        write_manifest(d, extra);
+        let (code, err) = vvgen(d, &["check", "m.toml"], &d.join("no-blender-here"));
+        assert_eq!(code, 2, "{extra}: {err}");
+        assert!(err.contains(says), "{extra}: {err}");
+    }
+    let Some(blender) = blender() else { return };
+    // A file Blender cannot read, and a selection the file lacks: Blender's word, said as vvgen's error.
+    write_manifest(d, "");
+    let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("scene.blend"), "{err}");
+    if make_scene(&blender, d).is_none() {
+        return;
+    }
+    for (extra, says) in [
+        ("object = \"Nope\"", "has no object `Nope`; its objects: Arm, Cube, Rig"),
+        ("scene = \"Nope\"", "has no scene `Nope`; its scenes: Scene"),
+        ("collection = \"Nope\"", "has no collection `Nope`"),
+    ] {
+        write_manifest(d, extra);
+        let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
+        assert_eq!(code, 2, "{extra}: {err}");
+        assert!(err.contains(says), "{extra}: {err}");
+    }
+    // One object, with the armature that deforms it.
+    write_manifest(d, "object = \"Arm\"");
+    let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
+    assert_eq!(code, 0, "{err}");
+}
