@@ -259,10 +259,14 @@ pub(crate) fn prepare(
     verify: bool,
     note: Option<&(dyn Fn(&str) + Sync)>,
 ) -> Result<Prepared, Error> {
-    let store = Store::open(cache).map_err(|e| Error::cache(m, e))?;
-    let stat = store.stat_cache(&m.out_dir(), verify);
-    let importer = crate::scene::blend::Importer::new(&store, &stat, note);
-    let scene = Scene::open_importing(m, Some(&importer)).map_err(|source| Error::Scene {
+    // The store is created before the scene opens only for a `.blend` (imported into it): a manifest whose
+    // sources are broken leaves no empty cache behind.
+    let blend = m.sources.values().any(|s| s.blend().is_some());
+    let early = if blend { Some(Store::open(cache).map_err(|e| Error::cache(m, e))?) } else { None };
+    let early_stat = early.as_ref().map(|s| s.stat_cache(&m.out_dir(), verify));
+    let importer =
+        early.as_ref().zip(early_stat.as_ref()).map(|(s, st)| crate::scene::blend::Importer::new(s, st, note));
+    let scene = Scene::open_importing(m, importer.as_ref()).map_err(|source| Error::Scene {
         manifest: m.path.clone(),
         source: Box::new(source),
         hint: if m.after.is_empty() {
@@ -271,8 +275,13 @@ pub(crate) fn prepare(
             " (an `after` manifest may write it: `vvgen build` builds those first)"
         },
     })?;
-    let imported = importer.used();
+    let imported = importer.map(|i| i.used()).unwrap_or_default();
     let plan = Plan::new(m, scene.frames).map_err(|e| Error::plan(m, e))?;
+    let store = match early {
+        Some(s) => s,
+        None => Store::open(cache).map_err(|e| Error::cache(m, e))?,
+    };
+    let stat = early_stat.unwrap_or_else(|| store.stat_cache(&m.out_dir(), verify));
     // Lit point colours read the lit materials too, whatever the images' shading.
     let frame_keys = keys::frame_keys(&scene, &stat, m.lit()).map_err(|e| Error::plan(m, e))?;
     let environment = keys::environment_key(m, &stat).map_err(|e| Error::plan(m, e))?;

@@ -83,5 +83,26 @@ pub fn collect(root: &Path, keep: Option<&HashSet<Digest>>, max_bytes: Option<u6
         }
     }
     c.left = total;
+    // A `.blend` import's placed files (`blend/<import key>/`, hard links of its blobs) go with its record, and
+    // an interrupted import's scratch folder (`tmp/`) once it is old.
+    let record = |d: &Digest| {
+        let hex = d.hex();
+        root.join("actions").join(&hex[..2]).join(&hex[2..])
+    };
+    for (dir, gone) in [("blend", true), ("tmp", false)] {
+        let Ok(entries) = fs::read_dir(root.join(dir)) else { continue };
+        for e in entries.flatten() {
+            let p = e.path();
+            let stale = if gone {
+                Digest::from_hex(&e.file_name().to_string_lossy()).is_none_or(|d| !record(&d).exists())
+            } else {
+                true
+            };
+            let t = e.metadata().and_then(|m| m.modified()).unwrap_or(SystemTime::UNIX_EPOCH);
+            if stale && !young(t) && fs::remove_dir_all(&p).is_ok() {
+                c.files += 1;
+            }
+        }
+    }
     c
 }

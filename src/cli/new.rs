@@ -135,21 +135,15 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             let importer = scene::blend::Importer::new(&store, &stat, note);
             let got = importer.import(asset, &crate::manifest::Source::default())?;
             let _ = stat.save();
-            let a = scene::gltf::load_slice(&got.glb, asset, None)?;
-            let mut rest = scene::PosedScene::default();
-            a.pose(&[], 0.0, glam::Mat4::IDENTITY, &mut Default::default(), &mut rest);
-            drawable(&rest, asset)?;
+            let first = scene::source::mesh_frame(&got.dir.join("frame_00000.gltf"))?;
+            drawable(&first, asset)?;
             let i = &got.info;
-            let what = if a.animations.is_empty() {
+            let what = if i.frames.len() < 2 {
                 format!("scene `{}`, no animation: one frame", i.scene)
             } else {
                 format!("scene `{}`, frames {}–{} at {} fps", i.scene, i.frame_start, i.frame_end, i.fps)
             };
-            let info = if a.animations.is_empty() {
-                scene::blend::Info { frame_end: i.frame_start, ..i.clone() }
-            } else {
-                i.clone()
-            };
+            let info = i.clone();
             Ok((Asset::Blend { info }, "z", format!("{what}; +Z up, as Blender shows it")))
         }
         "ply" => {
@@ -256,12 +250,14 @@ fn manifest(
             if info.scenes.len() > 1 {
                 let _ = writeln!(w, "# scenes: {} (pick with `scene = \"…\"`)", info.scenes.join(", "));
             }
+            let (first, last) = (info.frames.first().copied().unwrap_or(1), info.frames.last().copied().unwrap_or(1));
             let _ = writeln!(
                 w,
-                "frames = {{ start = {}, end = {}, fps = {} }}   # Blender's frame numbers: the file's range and rate",
-                info.frame_start, info.frame_end, info.fps
+                "frames = {{ start = {first}, end = {last}, fps = {} }}   # Blender's frame numbers: the file's range \
+                 and rate",
+                info.fps
             );
-            (info.frame_end - info.frame_start + 1).max(1) as usize
+            info.frames.len().max(1)
         }
         Asset::Mesh => {
             let _ = writeln!(w, "mesh   = \"{}\"", rel(asset)?);

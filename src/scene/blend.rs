@@ -1,7 +1,10 @@
 //! `.blend` sources. Blender itself reads them: run headless (`VVGEN_BLENDER`, else `blender` on the PATH), it
-//! exports what the manifest selects as one binary glTF with every animation baked per frame
-//! (`blend_export.py`), which then loads like any glTF. Nothing else reads the Blender format as Blender does
-//! (drivers, constraints, linked libraries, its own evaluation), so vvgen does not try.
+//! evaluates every frame asked for and exports what the manifest selects at that frame as a static glTF
+//! (`blend_export.py`); the frames then load as a mesh sequence. Baking per frame, rather than exporting a glTF
+//! animation, is what makes each frame what Blender shows: Blender's glTF animation export misses NLA-only
+//! actions, some drivers and parent-inverse cases, and every modifier but armatures (measured on the
+//! glTF-Blender-IO test scenes, README). Nothing else reads the Blender format as Blender does, so vvgen does
+//! not try.
 //!
 //! The import is an action of the cache, keyed in two steps because some of its inputs are only known once
 //! Blender has read the file (the libraries it links and the images it names, like a compiler's header
@@ -9,7 +12,8 @@
 //! - the *listing* key: the `.blend`'s bytes, Blender's version, the export script's bytes and the selection
 //!   (`scene`, `object`, `collection`). Its record holds the list of external files that import read;
 //! - the *import* key: the listing key and each listed file's content (or its absence). Its record holds the
-//!   glTF and the import's facts (frame range, rate, warnings).
+//!   import's facts (frame range, rate, the files written, warnings) and the files themselves, which are placed
+//!   (hard-linked) in `blend/<import key>/` of the cache for the mesh-sequence reader.
 //!
 //! A later build hashes the same files (through the stat cache: unchanged files are not read) and never starts
 //! Blender while both keys hold; even Blender's version is remembered per content of its executable.
@@ -44,17 +48,23 @@ pub struct Info {
     pub frame_start: i64,
     /// The scene's last frame (inclusive).
     pub frame_end: i64,
+    /// Whether anything in the file is animated (an action, an NLA track or a driver).
+    pub animated: bool,
+    /// The Blender frames exported, one file `frame_NNNNN.gltf` each (N counting from 0).
+    pub frames: Vec<i64>,
+    /// Every file written, relative to the import's folder (`/`-separated).
+    pub files: Vec<String>,
     /// The external files the file reads (absolute).
     pub deps: Vec<PathBuf>,
     /// What the user should know (modifiers the export does not apply, missing files).
     pub warnings: Vec<String>,
 }
 
-/// An imported `.blend`: the glTF Blender exported, and what the import found out.
+/// An imported `.blend`: the folder of glTF frames Blender exported, and what the import found out.
 #[derive(Debug)]
 pub struct Imported {
-    /// A binary glTF, +Z up, in metres.
-    pub glb: Vec<u8>,
+    /// The folder holding `frame_NNNNN.gltf` (+Z up, in metres) for each of [`Info::frames`].
+    pub dir: PathBuf,
     /// The facts.
     pub info: Info,
     /// Whether Blender ran for it (false: the cache held it).
@@ -94,6 +104,13 @@ impl<'a> Importer<'a> {
         let content = self.stat.digest(blend).map_err(|e| io(blend, e))?;
         let exe = blender_exe().map_err(|message| Error::Blend { path: blend.to_path_buf(), message })?;
         let version = self.version(&exe).map_err(|message| Error::Blend { path: blend.to_path_buf(), message })?;
+        let f = s.frames();
+        let spec = FrameSpec {
+            start: f.and_then(|f| f.start),
+            end: f.and_then(|f| f.end),
+            count: f.and_then(|f| f.count),
+            step: f.and_then(|f| f.step),
+        };
         let selection = Selection {
             scene: s.scene_name().map(str::to_string),
             object: s.object.clone(),
@@ -107,7 +124,7 @@ impl<'a> Importer<'a> {
             ("selection".to_string(), selection_json.clone()),
         ];
         let listing = key_of("blend listing", &listing_fields);
-        if let Some(got) = self.cached(&listing)? {
+        if let Some(got) = self.cached(&listing, &spec)? {
             return Ok(got);
         }
         if let Some(note) = self.note {
@@ -118,29 +135,66 @@ impl<'a> Importer<'a> {
         let tmp =
             abs(self.store.root()).join("tmp").join(format!("blend-{}-{}", std::process::id(), &listing.hex()[..16]));
         std::fs::create_dir_all(&tmp).map_err(|e| io(&tmp, e))?;
-        let result = self.run(&exe, &abs(blend), &tmp, &selection_json, &listing, &listing_fields);
+        // The script's arguments: the selection, and the frames as the manifest gives them.
+        let mut args = serde_json::to_value(&selection).expect("strings serialize");
+        args["frames"] = serde_json::to_value(&spec).expect("numbers serialize");
+        let result = self.run(&exe, &abs(blend), &tmp, args, &listing, &listing_fields);
         let _ = std::fs::remove_dir_all(&tmp);
         result
     }
 
     /// The import recorded under `listing`, when its listed files still hold what they held.
-    fn cached(&self, listing: &Digest) -> Result<Option<Imported>, Error> {
+    fn cached(&self, listing: &Digest, spec: &FrameSpec) -> Result<Option<Imported>, Error> {
         let Some(blobs) = self.store.hit(listing, self.stat) else { return Ok(None) };
         let [deps_blob] = blobs[..] else { return Ok(None) };
-        let Ok(deps) = self.store.get(&deps_blob) else { return Ok(None) };
-        let Ok(deps) = serde_json::from_slice::<Vec<PathBuf>>(&deps) else { return Ok(None) };
-        let (import, _) = self.import_key(listing, &deps);
+        let Ok(facts) = self.store.get(&deps_blob) else { return Ok(None) };
+        let Ok(facts) = serde_json::from_slice::<Listing>(&facts) else { return Ok(None) };
+        let frames = spec.resolve(&facts);
+        let (import, _) = self.import_key(listing, &facts.deps, &frames);
         let Some(blobs) = self.store.hit(&import, self.stat) else { return Ok(None) };
-        let [glb, info] = blobs[..] else { return Ok(None) };
-        let (Ok(glb_bytes), Ok(info_bytes)) = (self.store.get(&glb), self.store.get(&info)) else { return Ok(None) };
-        let Ok(info_value) = serde_json::from_slice::<Info>(&info_bytes) else { return Ok(None) };
-        self.used.lock().unwrap().extend([*listing, deps_blob, import, glb, info]);
-        Ok(Some(Imported { glb: glb_bytes, info: info_value, ran: false }))
+        let Some((&info_blob, files)) = blobs.split_first() else { return Ok(None) };
+        let Ok(info_bytes) = self.store.get(&info_blob) else { return Ok(None) };
+        let Ok(info) = serde_json::from_slice::<Info>(&info_bytes) else { return Ok(None) };
+        if info.files.len() != files.len() {
+            return Ok(None);
+        }
+        let dir = self.place(&import, &info, files)?;
+        let mut used = self.used.lock().unwrap();
+        used.extend([*listing, deps_blob, import, info_blob]);
+        used.extend(files);
+        Ok(Some(Imported { dir, info, ran: false }))
     }
 
-    /// The import key: the listing key and each listed file's content, or its absence.
-    fn import_key(&self, listing: &Digest, deps: &[PathBuf]) -> (Digest, Vec<(String, String)>) {
-        let mut fields = vec![("listing".to_string(), listing.hex())];
+    /// Places the import's files (`blobs`, in the order of `info.files`) in `blend/<import key>/` of the cache.
+    fn place(&self, import: &Digest, info: &Info, blobs: &[Digest]) -> Result<PathBuf, Error> {
+        let dir = self.store.root().join("blend").join(import.hex());
+        for (rel, d) in info.files.iter().zip(blobs) {
+            // Written by the export script, but checked: a name never leaves the folder.
+            let safe = Path::new(rel).components().all(|c| matches!(c, std::path::Component::Normal(_)));
+            if !safe {
+                return Err(Error::Blend {
+                    path: dir.clone(),
+                    message: format!("the import names `{rel}`, outside its folder"),
+                });
+            }
+            let dest = dir.join(rel);
+            if let Some(parent) = dest.parent() {
+                std::fs::create_dir_all(parent).map_err(|e| Error::Io { path: parent.to_path_buf(), source: e })?;
+            }
+            self.store.materialize(d, &dest, self.stat).map_err(|e| Error::Blend {
+                path: dest.clone(),
+                message: format!("cannot place the imported file from the cache: {e}"),
+            })?;
+        }
+        Ok(dir)
+    }
+
+    /// The import key: the listing key, each listed file's content (or its absence), and the frames exported.
+    fn import_key(&self, listing: &Digest, deps: &[PathBuf], frames: &[i64]) -> (Digest, Vec<(String, String)>) {
+        // The frames as first, count and step: the same list however the manifest spelled it.
+        let step = if frames.len() > 1 { frames[1] - frames[0] } else { 1 };
+        let span = format!("{} + {} x {step}", frames.first().copied().unwrap_or(0), frames.len());
+        let mut fields = vec![("listing".to_string(), listing.hex()), ("frames".to_string(), span)];
         for p in deps {
             let d = self.stat.digest(p).map_or_else(|_| "missing".to_string(), |d| d.hex());
             fields.push((format!("reads {}", p.display()), d));
@@ -154,15 +208,17 @@ impl<'a> Importer<'a> {
         exe: &Path,
         blend: &Path,
         tmp: &Path,
-        selection_json: &str,
+        mut args: serde_json::Value,
         listing: &Digest,
         listing_fields: &[(String, String)],
     ) -> Result<Imported, Error> {
         let fail = |message: String| Error::Blend { path: blend.to_path_buf(), message };
+        // The script beside the export folder, not in it: everything in `out` is the import.
         let script = tmp.join("blend_export.py");
+        let out_dir = tmp.join("out");
+        std::fs::create_dir_all(&out_dir).map_err(|e| Error::Io { path: out_dir.clone(), source: e })?;
         std::fs::write(&script, SCRIPT).map_err(|e| Error::Io { path: script.clone(), source: e })?;
-        let mut args: serde_json::Value = serde_json::from_str(selection_json).expect("written above");
-        args["out"] = serde_json::Value::String(tmp.to_string_lossy().into_owned());
+        args["out"] = serde_json::Value::String(out_dir.to_string_lossy().into_owned());
         // `--factory-startup`: no user preferences or add-ons shape the export. `--disable-autoexec`: a file's
         // own Python (startup scripts, scripted drivers) never runs; Blender's simple driver expressions still do.
         let out = Command::new(exe)
@@ -175,31 +231,42 @@ impl<'a> Importer<'a> {
             .stdin(Stdio::null())
             .output()
             .map_err(|e| fail(format!("cannot run Blender ({}): {e}", exe.display())))?;
-        let glb_path = tmp.join("scene.glb");
-        let info_path = tmp.join("info.json");
-        if !out.status.success() || !glb_path.is_file() || !info_path.is_file() {
-            return Err(fail(blender_failure(&out)));
+        let info_path = out_dir.join("info.json");
+        if !out.status.success() || !info_path.is_file() {
+            return Err(fail(blender_failure(&out) + &newer_hint(blend, &self.version(exe).unwrap_or_default())));
         }
         let read = |p: &Path| std::fs::read(p).map_err(|e| Error::Io { path: p.to_path_buf(), source: e });
-        let (glb, info_bytes) = (read(&glb_path)?, read(&info_path)?);
+        let info_bytes = read(&info_path)?;
         let info: Info = serde_json::from_slice(&info_bytes)
             .map_err(|e| fail(format!("the export script wrote an unreadable info.json: {e}")))?;
         let cache_err = |e: cache::Error| fail(format!("cannot store the import in the cache: {e}"));
-        let deps_bytes = serde_json::to_vec(&info.deps).expect("paths serialize");
+        let facts = Listing {
+            deps: info.deps.clone(),
+            frame_start: info.frame_start,
+            frame_end: info.frame_end,
+            animated: info.animated,
+        };
+        let deps_bytes = serde_json::to_vec(&facts).expect("paths serialize");
         let deps_blob = self.store.put(&deps_bytes, self.stat).map_err(cache_err)?;
-        let (import, import_fields) = self.import_key(listing, &info.deps);
-        let glb_blob = self.store.put(&glb, self.stat).map_err(cache_err)?;
+        let (import, import_fields) = self.import_key(listing, &info.deps, &info.frames);
         let info_blob = self.store.put(&info_bytes, self.stat).map_err(cache_err)?;
+        let mut blobs = vec![info_blob];
+        for rel in &info.files {
+            blobs.push(self.store.put(&read(&out_dir.join(rel))?, self.stat).map_err(cache_err)?);
+        }
         // The import's record first: a listing record always names an import that was recorded.
         for (key, blobs, fields) in
-            [(import, vec![glb_blob, info_blob], import_fields.as_slice()), (*listing, vec![deps_blob], listing_fields)]
+            [(import, blobs.clone(), import_fields.as_slice()), (*listing, vec![deps_blob], listing_fields)]
         {
             let staged = self.store.stage_action(&key, &blobs, fields).map_err(cache_err)?;
             let dest = staged.dest().to_path_buf();
             staged.commit().map_err(|e| Error::Io { path: dest, source: e })?;
         }
-        self.used.lock().unwrap().extend([*listing, deps_blob, import, glb_blob, info_blob]);
-        Ok(Imported { glb, info, ran: true })
+        let dir = self.place(&import, &info, &blobs[1..])?;
+        let mut used = self.used.lock().unwrap();
+        used.extend([*listing, deps_blob, import]);
+        used.extend(blobs);
+        Ok(Imported { dir, info, ran: true })
     }
 
     /// Blender's version (`blender --version`), remembered per content of the executable.
@@ -234,6 +301,46 @@ struct Selection {
     collection: Option<String>,
 }
 
+/// The manifest's `frames`, in Blender's frame numbers; the rest comes from the file's range.
+#[derive(serde::Serialize)]
+struct FrameSpec {
+    start: Option<i64>,
+    end: Option<i64>,
+    count: Option<u64>,
+    step: Option<u64>,
+}
+
+impl FrameSpec {
+    /// The Blender frames exported, as `blend_export.py` resolves them (the import key is computed from the
+    /// script's list after a run; a disagreement here would only make later lookups miss, never reuse a wrong
+    /// import): the manifest's `start` (else the file's first frame), to its `end`, or `count` frames, else the
+    /// file's last frame when anything in it is animated (its first otherwise), every `step`.
+    fn resolve(&self, facts: &Listing) -> Vec<i64> {
+        let step = self.step.unwrap_or(1).max(1) as i64;
+        let first = self.start.unwrap_or(facts.frame_start);
+        let last = match (self.end, self.count) {
+            (Some(e), _) => e,
+            (None, Some(c)) => first.saturating_add((c as i64).saturating_sub(1).saturating_mul(step)),
+            (None, None) if facts.animated => facts.frame_end,
+            (None, None) => first,
+        };
+        // Bounded as the script bounds it: beyond the limit the script refuses, and so nothing is found here.
+        (first..=last).step_by(step as usize).take(MAX_FRAMES + 1).collect()
+    }
+}
+
+/// What a listing run found out about the file: the files it reads, and its frame range.
+#[derive(serde::Serialize, Deserialize)]
+struct Listing {
+    deps: Vec<PathBuf>,
+    frame_start: i64,
+    frame_end: i64,
+    animated: bool,
+}
+
+/// Frames one import may export (`MAX_FRAMES` in `blend_export.py`).
+const MAX_FRAMES: usize = 100_000;
+
 /// A key over named fields (the names are keyed too, so no value can pose as another's).
 fn key_of(kind: &str, fields: &[(String, String)]) -> Digest {
     let parts: Vec<&[u8]> = fields.iter().flat_map(|(k, v)| [k.as_bytes(), v.as_bytes()]).collect();
@@ -254,6 +361,41 @@ fn blender_failure(out: &std::process::Output) -> String {
     let tail: Vec<&str> = stdout.lines().chain(stderr.lines()).filter(|l| !l.trim().is_empty()).collect();
     let tail = tail[tail.len().saturating_sub(6)..].join("\n    ");
     format!("Blender could not export it ({}):\n    {tail}", out.status)
+}
+
+/// The Blender release (major, minor) that saved a `.blend`, from its header: `BLENDER-v304` (pointer size,
+/// endianness, version) or, from Blender 5, `BLENDER17-01v0500` (header size, format, version). `None` for a
+/// compressed file (gzip or zstd: the header is inside) or one that is not a `.blend`.
+pub fn saved_by(head: &[u8]) -> Option<(u32, u32)> {
+    let rest = head.strip_prefix(b"BLENDER")?;
+    let digits = |b: &[u8]| -> Option<u32> {
+        b.iter().all(u8::is_ascii_digit).then(|| b.iter().fold(0, |n, d| n * 10 + u32::from(d - b'0')))
+    };
+    let v = match rest {
+        [b'_' | b'-', b'v' | b'V', d @ ..] if d.len() >= 3 => digits(&d[..3])?,
+        [_, _, b'-', _, _, b'v' | b'V', d @ ..] if d.len() >= 4 => digits(&d[..4])?,
+        _ => return None,
+    };
+    Some((v / 100, v % 100))
+}
+
+/// When Blender failed on a file a newer Blender saved, the way out.
+fn newer_hint(blend: &Path, version: &str) -> String {
+    let mut head = [0u8; 17];
+    let read = std::fs::File::open(blend).and_then(|mut f| std::io::Read::read(&mut f, &mut head));
+    let file = read.ok().and_then(|n| saved_by(&head[..n]));
+    let ours = version.strip_prefix("Blender ").and_then(|v| {
+        let mut it = v.split(|c: char| !c.is_ascii_digit()).filter_map(|n| n.parse::<u32>().ok());
+        Some((it.next()?, it.next()?))
+    });
+    match (file, ours) {
+        (Some(f), Some(o)) if f > o => format!(
+            "\n  the file was saved by Blender {}.{} and this is Blender {}.{}: run a Blender at least as new \
+             (VVGEN_BLENDER=/path/to/blender)",
+            f.0, f.1, o.0, o.1
+        ),
+        _ => String::new(),
+    }
 }
 
 /// The Blender to run: `VVGEN_BLENDER`, else `blender` on the PATH; the error names the ways out.
@@ -284,4 +426,19 @@ fn executable(p: &Path) -> bool {
 #[cfg(not(unix))]
 fn executable(_: &Path) -> bool {
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_header_says_which_blender_saved_the_file() {
+        assert_eq!(saved_by(b"BLENDER-v304REND"), Some((3, 4)));
+        assert_eq!(saved_by(b"BLENDER_V278REND"), Some((2, 78)));
+        assert_eq!(saved_by(b"BLENDER17-01v0500"), Some((5, 0)));
+        assert_eq!(saved_by(b"BLENDER-v30"), None);
+        assert_eq!(saved_by(b"\x28\xb5\x2f\xfd compressed"), None);
+        assert_eq!(saved_by(b"BLENDER-vabc"), None);
+    }
 }

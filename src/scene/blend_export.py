@@ -1,16 +1,32 @@
 # vvgen's `.blend` import, run inside Blender:
 #   blender -b --factory-startup --disable-autoexec FILE.blend --python blend_export.py -- '{"out": DIR, ...}'
-# It exports what the manifest selects as one binary glTF with every animation baked per frame (object and bone
-# transforms sampled after constraints and drivers, shape-key weights sampled), in Blender's own axes (+Z up,
-# metres), and writes `info.json`: the scene's frame range and rate, the external files the .blend reads (the
-# import's discovered inputs: linked libraries, images), and what vvgen should warn about. Any failure is one line
-# on stderr starting `vvgen:`, with exit status 3.
+# Every frame asked for is evaluated by Blender (frame_set: actions, NLA, drivers, constraints, shape keys,
+# armatures, every modifier) and exported as a static glTF of what the manifest selects, in Blender's own axes
+# (+Z up, metres): `frame_NNNNN.gltf` + `.bin`, textures once in `textures/`. So each frame is what Blender shows,
+# not what a glTF animation can express. `info.json` says the file's frame range and rate, the frames exported,
+# the files written, the external files the .blend reads (the import's discovered inputs: linked libraries,
+# images) and what vvgen should warn about. Any failure is one line on stderr starting `vvgen:`, exit status 3.
 #
 # Deliberately dependency-free and deterministic: vvgen keys the import by this file's bytes, so editing it
 # re-imports every .blend.
 import json
 import os
 import sys
+
+
+MAX_FRAMES = 100000
+
+
+def animated():
+    """Whether anything in the file moves over time: an action, an NLA track or a driver on any datablock."""
+    import bpy
+    for coll in (bpy.data.objects, bpy.data.shape_keys, bpy.data.armatures, bpy.data.meshes, bpy.data.materials,
+                 bpy.data.node_groups, bpy.data.scenes, bpy.data.cameras, bpy.data.lights):
+        for idb in coll:
+            a = getattr(idb, "animation_data", None)
+            if a is not None and (a.action is not None or len(a.nla_tracks) or len(a.drivers)):
+                return True
+    return False
 
 
 def fail(message):
@@ -47,8 +63,8 @@ def main():
         bpy.context.window.scene = scene
     view_layer = scene.view_layers[0]
 
-    # What is exported: an object (with its children and the armatures that deform them), a collection (with
-    # its children), or every object the scene renders.
+    # What is exported: an object (with its children), a collection (with its child collections), or every
+    # object the scene renders.
     chosen = None
     if args.get("object") is not None:
         o = scene.objects.get(args["object"])
@@ -63,73 +79,91 @@ def main():
                  % (args["collection"], ", ".join(sorted(x.name for x in bpy.data.collections))))
         chosen = list(c.all_objects)
     if chosen is not None:
-        more = []
-        for o in chosen:
-            for m in getattr(o, "modifiers", []):
-                if m.type == "ARMATURE" and m.object is not None:
-                    more.append(m.object)
-            if o.parent is not None and o.parent.type == "ARMATURE":
-                more.append(o.parent)
+        # Armatures, hooks and the like need not be exported: each frame is the evaluated mesh.
         for o in scene.objects:
             o.select_set(False, view_layer=view_layer)
-        for o in chosen + more:
+        for o in chosen:
             o.select_set(True, view_layer=view_layer)
-        exported = chosen + more
+        exported = chosen
     else:
         exported = [o for o in scene.objects if not o.hide_render]
     names = sorted({o.name for o in exported})
-    if not any(o.type in ("MESH", "CURVE", "SURFACE", "META", "FONT") for o in exported):
-        fail("scene `%s` has nothing to draw%s" % (scene.name, "" if chosen is None else " in what was selected"))
 
-    # What the glTF exporter leaves out, said once per object so the user knows why the render differs.
-    warnings = []
-    for o in sorted(exported, key=lambda x: x.name):
-        kept = [m for m in getattr(o, "modifiers", []) if m.type != "ARMATURE" and m.show_render]
-        if kept:
-            warnings.append("object `%s`: modifier(s) %s are not applied (only armatures deform it): apply them "
-                            "in Blender, or export glTF with \"Apply Modifiers\""
-                            % (o.name, ", ".join("`%s` (%s)" % (m.name, m.type.lower()) for m in kept)))
+    # The frames: the manifest's `frames` (Blender's frame numbers), the file's range for what it leaves out
+    # (vvgen resolves them alike from `info.json`'s facts: `FrameSpec::resolve`).
+    is_animated = animated()
+    spec = args.get("frames") or {}
+    step = max(1, int(spec.get("step") or 1))
+    first = spec.get("start")
+    first = scene.frame_start if first is None else int(first)
+    if spec.get("end") is not None:
+        last = int(spec["end"])
+    elif spec.get("count") is not None:
+        last = first + (int(spec["count"]) - 1) * step
+    else:
+        last = scene.frame_end if is_animated else first
+    frames = list(range(first, last + 1, step))
+    if not frames:
+        fail("frames %d to %d select no frame of scene `%s` (its range is %d to %d)"
+             % (first, last, scene.name, scene.frame_start, scene.frame_end))
+    if len(frames) > MAX_FRAMES:
+        fail("%d frames asked for, over vvgen's limit of %d: choose fewer with `frames`" % (len(frames), MAX_FRAMES))
+
+    # The exporter writes an object's own mesh, without its shape keys' mix, unless the object has modifiers
+    # (then it writes the evaluated mesh). A modifier that does nothing (an armature with no armature) makes
+    # every mesh take the evaluated path, so each frame is exactly what Blender shows. The file is never saved.
+    for o in bpy.data.objects:
+        if o.type == "MESH" and len(o.modifiers) == 0 and o.library is None:
+            o.modifiers.new("vvgen-evaluate", "ARMATURE")
 
     # The files the import reads besides the .blend: its key's discovered inputs.
     deps = set()
     for p in bpy.utils.blend_paths(absolute=True, packed=False, local=False):
-        p = os.path.normpath(bpy.path.abspath(p))
-        deps.add(p)
-    missing = sorted(p for p in deps if not os.path.isfile(p))
-    for p in missing:
+        deps.add(os.path.normpath(bpy.path.abspath(p)))
+    warnings = []
+    for p in sorted(p for p in deps if not os.path.isfile(p)):
         warnings.append("names `%s`, which is missing (Blender draws it magenta): restore it, or pack the "
                         "file's resources (File > External Data > Pack Resources)" % p)
 
-    glb = os.path.join(out, "scene.glb")
-    result = bpy.ops.export_scene.gltf(
-        filepath=glb,
-        export_format="GLB",
-        # Blender's own axes: vvgen loads the result +Z up, as Blender shows it.
-        export_yup=False,
-        use_selection=chosen is not None,
-        use_renderable=chosen is None,
-        use_active_scene=True,
-        export_apply=False,
-        export_animations=True,
-        export_frame_range=True,
-        export_frame_step=1,
-        export_force_sampling=True,
-        export_nla_strips=False,
-        export_nla_strips_merged_animation_name="Animation",
-        export_optimize_animation_size=False,
-        export_def_bones=False,
-        export_skins=True,
-        export_all_influences=True,
-        export_morph=True,
-        export_morph_normal=True,
-        export_colors=True,
-        export_cameras=False,
-        export_lights=False,
-        export_extras=False,
-        export_image_format="AUTO",
-    )
-    if "FINISHED" not in result or not os.path.isfile(glb):
-        fail("Blender's glTF exporter failed")
+    for i, f in enumerate(frames):
+        scene.frame_set(f)
+        path = os.path.join(out, "frame_%05d.gltf" % i)
+        result = bpy.ops.export_scene.gltf(
+            filepath=path,
+            export_format="GLTF_SEPARATE",
+            export_texture_dir="textures",
+            # Blender's own axes: vvgen loads the result +Z up, as Blender shows it.
+            export_yup=False,
+            use_selection=chosen is not None,
+            use_renderable=chosen is None,
+            use_active_scene=True,
+            # The evaluated mesh (modifiers, shape keys and armatures applied) at this frame, and each object's
+            # evaluated world matrix: nothing is left for glTF animation to express.
+            export_apply=True,
+            # Without it the exporter evaluates frame 0 (and bones at rest), whatever frame is set.
+            export_current_frame=True,
+            export_animations=False,
+            export_skins=False,
+            export_morph=False,
+            export_colors=True,
+            export_cameras=False,
+            export_lights=False,
+            export_extras=False,
+            export_image_format="AUTO",
+        )
+        if "FINISHED" not in result or not os.path.isfile(path):
+            fail("Blender's glTF exporter failed at frame %d" % f)
+        if i == 0:
+            with open(path) as fh:
+                if not json.load(fh).get("meshes"):
+                    fail("scene `%s` has nothing to draw%s"
+                         % (scene.name, "" if chosen is None else " in what was selected"))
+    files = []
+    for base, _, names_here in os.walk(out):
+        for n in names_here:
+            rel = os.path.relpath(os.path.join(base, n), out).replace(os.sep, "/")
+            if rel != "info.json":
+                files.append(rel)
     info = {
         "blender": bpy.app.version_string,
         "scene": scene.name,
@@ -138,6 +172,9 @@ def main():
         "fps": scene.render.fps / scene.render.fps_base,
         "frame_start": scene.frame_start,
         "frame_end": scene.frame_end,
+        "animated": is_animated,
+        "frames": frames,
+        "files": sorted(files),
         "deps": sorted(deps),
         "warnings": warnings,
     }

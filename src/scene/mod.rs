@@ -158,7 +158,7 @@ impl Scene {
         for (name, s) in &m.sources {
             sources.push(LoadedSource::load(name, s, &m.dir, importer)?);
         }
-        let mut warnings = Vec::new();
+        let mut warnings: Vec<String> = sources.iter().flat_map(|s| s.warnings.iter().cloned()).collect();
         for (s, (_, cfg)) in sources.iter().zip(&m.sources) {
             if let SourceData::Gltf { asset, clips, times } = &s.data {
                 warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", asset.path.display())));

@@ -56,6 +56,8 @@ pub struct LoadedSource {
     pub default_up: UpAxis,
     /// A built-in ground plane, placed in world units ([`super::Scene::open`] makes its geometry).
     pub ground: Option<crate::manifest::source::Plane>,
+    /// What the user should know about how it loaded (a `.blend`'s import notes).
+    pub warnings: Vec<String>,
 }
 
 impl LoadedSource {
@@ -69,11 +71,13 @@ impl LoadedSource {
         let invalid = |message: String| Error::Source { name: name.to_string(), message };
         if let Some(p) = s.plane() {
             let data = SourceData::Static(PosedScene::default());
-            return Ok(LoadedSource { name: name.to_string(), data, default_up: UpAxis::Z, ground: Some(*p) });
+            let ground = Some(*p);
+            return Ok(LoadedSource { name: name.to_string(), data, default_up: UpAxis::Z, ground, warnings: vec![] });
         }
         let (kind, path) = s.kind().ok_or_else(|| invalid("names no file".into()))?;
         let full: PathBuf = dir.join(path);
         let is_ply = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+        let mut warnings = Vec::new();
         let data = match kind {
             SourceKind::Gltf => {
                 let asset = super::gltf::load(&full, s.scene_index())?;
@@ -96,12 +100,13 @@ impl LoadedSource {
                     message: "a .blend is imported through a cache: open the scene with an importer".into(),
                 })?;
                 let got = importer.import(&full, s)?;
-                // Errors in what Blender wrote name the .blend: it is the file the user has.
-                let mut asset = super::gltf::load_slice(&got.glb, &full, None)?;
-                asset.warnings.extend(got.info.warnings.iter().cloned());
-                let clips: Vec<usize> = (0..asset.animations.len()).collect();
-                let times = blend_times(s.frames(), &got.info, !clips.is_empty());
-                SourceData::Gltf { asset: Box::new(asset), clips, times }
+                warnings.extend(got.info.warnings.iter().map(|w| format!("{}: {w}", full.display())));
+                let frames = got.info.frames.iter().enumerate();
+                SourceData::MeshSequence(
+                    frames
+                        .map(|(i, &number)| SequenceFrame { number, path: got.dir.join(format!("frame_{i:05}.gltf")) })
+                        .collect(),
+                )
             }
             SourceKind::Mesh if is_ply => SourceData::Static(ply_scene(&full)?),
             SourceKind::Mesh => SourceData::Static(gltf_at_rest(&full, s.scene_index())?),
@@ -123,7 +128,7 @@ impl LoadedSource {
         } else {
             UpAxis::Y
         };
-        Ok(LoadedSource { name: name.to_string(), data, default_up, ground: None })
+        Ok(LoadedSource { name: name.to_string(), data, default_up, ground: None, warnings })
     }
 
     /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
@@ -221,23 +226,6 @@ fn frame_times(frames: Option<&crate::manifest::frames::Frames>, duration: f64) 
     (start..=end).step_by(step as usize).map(|n| (n as f64 / fps) as f32).collect()
 }
 
-/// Frame times of a `.blend` source: Blender's frame numbers at the file's rate, over the file's frame range,
-/// each overridable by `frames` (`start`/`end` are Blender frame numbers). A file with no animation has one
-/// frame, the first, unless `frames` asks for more.
-fn blend_times(
-    frames: Option<&crate::manifest::frames::Frames>,
-    info: &super::blend::Info,
-    animated: bool,
-) -> Vec<f32> {
-    let mut f = frames.cloned().unwrap_or_default();
-    f.fps = f.fps.or(Some(info.fps));
-    f.start = f.start.or(Some(info.frame_start));
-    if f.end.is_none() && f.count.is_none() {
-        f.end = Some(if animated { info.frame_end.max(f.start.unwrap_or(0)) } else { f.start.unwrap_or(0) });
-    }
-    frame_times(Some(&f), 0.0)
-}
-
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has
 /// `texture_u/v` or `s/t` and a `comment TextureFile`), or glTF posed at rest.
 pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
@@ -262,14 +250,25 @@ fn gltf_at_rest(path: &std::path::Path, scene: Option<usize>) -> Result<PosedSce
 }
 
 /// The files one mesh-sequence frame is read from besides itself (an OBJ's MTL files and textures, a PLY's
-/// `TextureFile`): they key the frame with it.
+/// `TextureFile`, a glTF's buffers and images): they key the frame with it.
 pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => super::obj::scan(path),
         "ply" => Ok(texture_file(&checked_ply(path)?.comments, path)?.into_iter().collect()),
-        _ => Ok(Vec::new()),
+        _ => Ok(beside(path, gltf_side_files(path)?)),
     }
+}
+
+/// A glTF frame's buffers and images beside it, relative to its folder (an error in the glTF's errors' form).
+fn gltf_side_files(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+    super::gltf::side_files(path).map_err(|message| Error::Gltf { path: path.to_path_buf(), message })
+}
+
+/// `rel` (a glTF's side files) placed in the glTF's folder.
+fn beside(path: &std::path::Path, rel: Vec<PathBuf>) -> Vec<PathBuf> {
+    let dir = crate::manifest::folder_of(path);
+    rel.into_iter().map(|r| dir.join(r)).collect()
 }
 
 /// [`mesh_frame_deps`] for keying: what a frame's own content decides (an OBJ's face indices and the libraries it
@@ -290,7 +289,18 @@ pub fn mesh_frame_deps_cached(path: &std::path::Path, stat: &crate::cache::StatC
                 .map_err(io)??;
             Ok(texture_file(&[name], path)?.into_iter().collect())
         }
-        _ => Ok(Vec::new()),
+        _ => {
+            // The names a glTF frame's JSON gives its buffers and images, remembered for that content (as
+            // relative names: the same content elsewhere names the files beside it there).
+            let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+            let names = stat
+                .derived("gltf side files 2", path, || {
+                    let files = gltf_side_files(path)?;
+                    Ok::<_, Error>(serde_json::to_string(&files).expect("paths serialize"))
+                })
+                .map_err(io)??;
+            Ok(beside(path, serde_json::from_str(&names).unwrap_or_default()))
+        }
     }
 }
 

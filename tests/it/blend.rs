@@ -131,6 +131,31 @@ fn blend_poses_as_blender_evaluates_it_and_imports_once() {
     let (code, err) = vvgen(d, &["build", "m.toml"], &wrapper);
     assert_eq!(code, 0, "{err}");
     assert_eq!(runs(), 2, "the texture changed: {err}");
+    // The frames rendered again: each frame's glTF names the texture, which keys the frame.
+    assert!(err.contains("render-pass 72/72"), "{err}");
+
+    // `vvgen new` writes the file's frame range and rate, through the cache its manifest uses (which holds the
+    // import already); what it writes names the same frames another way, and checks without importing again.
+    let (code, err) = vvgen(d, &["new", "scene.blend", "-o", "fresh.toml"], &wrapper);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("fresh.toml")).unwrap();
+    assert!(text.contains("blend  = \"scene.blend\"") && text.contains("start = 1, end = 24, fps = 24"), "{text}");
+    let before = starts();
+    let (code, err) = vvgen(d, &["check", "fresh.toml"], &wrapper);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(runs(), 2, "{err}");
+    // `gc` keeps what the manifest reaches (the current import and its placed files) and drops the import the
+    // texture change left behind; the next build starts no Blender.
+    let placed = || std::fs::read_dir(d.join("cache/blend")).unwrap().count();
+    assert_eq!(placed(), 2);
+    let (code, err) = vvgen(d, &["gc", "--keep", "m.toml", "--min-age", "0"], &wrapper);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(placed(), 1, "{err}");
+    let (code, err) = vvgen(d, &["build", "m.toml"], &wrapper);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("importing") && err.contains("nothing to do"), "{err}");
+    // At most `blender --version`: Blender's version is remembered per dataset's stat file, and this is a new one.
+    assert!(starts() <= before + 1, "check imported again: {err}");
 }
 
 #[test]
@@ -173,7 +198,7 @@ fn blend_errors_name_the_file_and_the_way_out() {
         assert_eq!(code, 2, "{extra}: {err}");
         assert!(err.contains(says), "{extra}: {err}");
     }
-    // One object, with the armature that deforms it.
+    // One object, as its armature deforms it.
     write_manifest(d, "object = \"Arm\"");
     let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
     assert_eq!(code, 0, "{err}");

@@ -246,3 +246,30 @@ fn a_gltf_per_frame_sequence_builds() {
     };
     assert!(covered(0) > 20 && covered(2) > 3 * covered(0), "{} {}", covered(0), covered(2));
 }
+
+#[test]
+fn a_gltf_frame_is_keyed_by_the_buffers_beside_it() {
+    // Two frames (two sizes) naming one external buffer: editing the .bin alone (the JSON unchanged) renders
+    // them again.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::create_dir_all(d.join("seq")).unwrap();
+    let triangle = |x: f32| -> Vec<u8> {
+        [[-0.5f32, -0.5, 0.0], [x, -0.5, 0.0], [0.0, 0.5, 0.0]].iter().flatten().flat_map(|v| v.to_le_bytes()).collect()
+    };
+    let gltf = r#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "scale": [SZ, SZ, SZ]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [-0.5, -0.5, 0.0], "max": [1.0, 0.5, 0.0]}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}], "buffers": [{"uri": "tri.bin", "byteLength": 36}]}"#;
+    for f in 0..2 {
+        std::fs::write(d.join(format!("seq/f_{f:03}.gltf")), gltf.replace("SZ", &format!("{}", 1 + f))).unwrap();
+    }
+    std::fs::write(d.join("seq/tri.bin"), triangle(0.5)).unwrap();
+    let text = manifest("mesh_sequence = \"seq/f_*.gltf\"").replace("frames = { start = 0, end = 2, fps = 10 }\n", "");
+    std::fs::write(d.join("m.toml"), text).unwrap();
+    assert_eq!(run(d).ran(Kind::RenderPass), 2);
+    assert_eq!(run(d).ran(Kind::RenderPass), 0);
+    std::fs::write(d.join("seq/tri.bin"), triangle(1.0)).unwrap();
+    assert_eq!(run(d).ran(Kind::RenderPass), 2, "the buffer changed, the JSON did not");
+}

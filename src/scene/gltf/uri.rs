@@ -33,6 +33,31 @@ pub(super) fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
     std::fs::read(&full).map_err(|e| format!("cannot read `{}`: {e}", full.display()))
 }
 
+/// The files beside the glTF at `path` that its buffers and images name (not `data:` URIs), relative to the
+/// glTF's folder: what the file's content depends on besides itself (a mesh-sequence frame is keyed by them
+/// too). Relative, so the list is a fact of the content alone, wherever the file lies. Containment and
+/// existence are judged when they are read (`fetch_uri`).
+pub fn side_files(path: &Path) -> Result<Vec<std::path::PathBuf>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    let json: std::borrow::Cow<'_, [u8]> = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(&bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?.json
+    } else {
+        bytes.as_slice().into()
+    };
+    let doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
+    let mut out = Vec::new();
+    for list in ["buffers", "images"] {
+        for item in doc.get(list).and_then(|v| v.as_array()).map_or(&[][..], |v| v.as_slice()) {
+            if let Some(uri) = item.get("uri").and_then(|u| u.as_str()).filter(|u| !u.starts_with("data:")) {
+                out.push(std::path::PathBuf::from(percent_decode(uri)));
+            }
+        }
+    }
+    out.sort();
+    out.dedup();
+    Ok(out)
+}
+
 fn percent_decode(s: &str) -> String {
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
