@@ -74,6 +74,14 @@ pub struct FbxAsset {
     blend_shapes: bool,
 }
 
+impl FbxAsset {
+    /// The file's materials as the renderer's, by name, in file order (the default material for faces with
+    /// none is not listed).
+    pub fn named_materials(&self) -> Vec<(String, &Material)> {
+        self.scene.materials.iter().map(|m| m.element.name.to_string()).zip(self.materials.iter()).collect()
+    }
+}
+
 impl std::fmt::Debug for FbxAsset {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("FbxAsset").field("path", &self.path).field("takes", &self.takes).finish_non_exhaustive()
@@ -218,45 +226,71 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
 /// Materials and the textures they use.
 type Shading = (Arc<Vec<Material>>, Arc<Vec<Texture>>);
 
-/// The scene's materials as the renderer's (metallic-roughness, as ufbx maps Phong and the 3ds Max / Stingray
-/// PBR properties), with a default one last, and the textures they use.
+/// The scene's materials as the renderer's metallic-roughness, mapped from the FBX material's classic properties
+/// as Blender's importer maps them (`blen_read_material` in io_scene_fbx, 3.4 to 4.5): base colour
+/// `DiffuseColor` (its factor ignored), roughness `1 − √Shininess / 10`, metallic `ReflectionFactor`, specular
+/// `2 × SpecularFactor`, alpha `1 − TransparencyFactor` (else the material's own `Opacity`, else
+/// `1 − TransparentColor.r`), emission `EmissiveColor × EmissiveFactor`; the `DiffuseColor` texture is the base
+/// colour's. Each property comes from the material, else its file's template, else Blender's default. The PBR
+/// properties some exporters add (Stingray, 3ds Max physical) are ignored, as Blender ignores them. A default
+/// material is last.
 fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
     let dir = crate::manifest::folder_of(path);
     let mut textures: Vec<Texture> = Vec::new();
-    let mut cache: std::collections::HashMap<u32, u32> = Default::default();
+    let mut cache: std::collections::HashMap<u32, (u32, bool)> = Default::default();
     let mut mats = Vec::new();
     for m in scene.materials.iter() {
-        let pbr = &m.pbr;
-        let factor = if pbr.base_factor.has_value { pbr.base_factor.value_vec4.x as f32 } else { 1.0 };
-        let c = pbr.base_color.value_vec4;
-        let opacity = if pbr.opacity.has_value { pbr.opacity.value_vec4.x as f32 } else { 1.0 };
+        let props = &m.element.props;
+        // `find_prop` looks in the template (`props.defaults`) too, as Blender's `elem_props_get_*` do.
+        let real = |name: &str, default: f64| props.find_prop(name).map_or(default, |p| p.value_vec4.x);
+        let rgb = |name: &str, default: f64| {
+            props.find_prop(name).map_or(Vec3::splat(default as f32), |p| {
+                let v = p.value_vec4;
+                Vec3::new(v.x as f32, v.y as f32, v.z as f32)
+            })
+        };
+        let mut alpha = 1.0 - real("TransparencyFactor", 0.0);
+        if alpha == 1.0 || alpha == 0.0 {
+            // The material's own `Opacity` only, not the template's (3ds Max writes it there).
+            let own = props.props.iter().find(|p| p.name == "Opacity").map(|p| p.value_vec4.x);
+            alpha = own.unwrap_or_else(|| 1.0 - f64::from(rgb("TransparentColor", 0.0).x));
+        }
+        // Blender's shader inputs hold these in 0 … 1.
+        let unit = |v: f64| v.clamp(0.0, 1.0) as f32;
+        let diffuse = rgb("DiffuseColor", 1.0);
         let mut mat = Material {
-            base_color: Vec4::new(c.x as f32 * factor, c.y as f32 * factor, c.z as f32 * factor, opacity),
-            metallic: if pbr.metalness.has_value { pbr.metalness.value_vec4.x as f32 } else { 0.0 },
-            roughness: if pbr.roughness.has_value { pbr.roughness.value_vec4.x as f32 } else { 0.5 },
+            base_color: diffuse.extend(unit(alpha)),
+            metallic: unit(real("ReflectionFactor", 0.0)),
+            roughness: unit(1.0 - real("Shininess", 20.0).max(0.0).sqrt() / 10.0),
+            specular: unit(real("SpecularFactor", 0.25) * 2.0),
+            emissive: rgb("EmissiveColor", 0.0) * real("EmissiveFactor", 1.0) as f32,
             ..Material::default()
         };
-        if opacity < 1.0 {
+        if mat.base_color.w < 1.0 {
             mat.alpha_mode = AlphaMode::Blend;
         }
-        let e = pbr.emission_color.value_vec4;
-        let strength = if pbr.emission_factor.has_value { pbr.emission_factor.value_vec4.x as f32 } else { 1.0 };
-        mat.emissive = Vec3::new(e.x as f32, e.y as f32, e.z as f32) * strength;
-        if let Some(t) = pbr.base_color.texture.as_ref().filter(|_| pbr.base_color.texture_enabled) {
+        let diffuse_map = &m.fbx.diffuse_color;
+        if let Some(t) = diffuse_map.texture.as_ref().filter(|_| diffuse_map.texture_enabled) {
             let id = t.element.typed_id;
-            let index = match cache.get(&id) {
-                Some(i) => *i,
+            let (index, alpha) = match cache.get(&id) {
+                Some(got) => *got,
                 None => {
-                    textures.push(texture(path, dir, t)?);
-                    let i = textures.len() as u32 - 1;
-                    cache.insert(id, i);
-                    i
+                    let (tex, alpha) = texture(path, dir, t)?;
+                    textures.push(tex);
+                    let got = (textures.len() as u32 - 1, alpha);
+                    cache.insert(id, got);
+                    got
                 }
             };
             mat.base_color_texture = Some(TextureRef::new(index));
+            // Blender takes alpha from a diffuse image that has an alpha channel, and blends.
+            if alpha {
+                mat.alpha_mode = AlphaMode::Blend;
+            }
         }
         mat.base_color = mat.base_color.clamp(Vec4::ZERO, Vec4::splat(f32::MAX));
-        if !mat.base_color.is_finite() {
+        mat.emissive = mat.emissive.max(Vec3::ZERO);
+        if !mat.base_color.is_finite() || !mat.emissive.is_finite() {
             return Err(err(path, format!("material `{}` has a colour that is not a number", m.element.name)));
         }
         mats.push(mat);
@@ -266,7 +300,8 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
 }
 
 /// A texture: embedded in the file, or a file beside it that stays inside its folder (as glTF URIs must).
-fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Texture, Error> {
+/// With it, whether the image has an alpha channel.
+fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<(Texture, bool), Error> {
     let bytes: Vec<u8> = if t.content.size > 0 {
         t.content.to_vec()
     } else {
@@ -279,7 +314,7 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Texture, Error>
                 // Exporters often keep only an absolute path from another machine: try the name beside the file.
                 let name = Path::new(&rel).file_name().map(|n| dir.join(n));
                 match name.filter(|n| n.is_file()) {
-                    Some(n) => return crate::scene::obj::texture(&n),
+                    Some(n) => return crate::scene::obj::texture_and_alpha(&n),
                     None => return Err(err(path, format!("texture `{rel}` is not in the file nor beside it"))),
                 }
             }
@@ -287,7 +322,7 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Texture, Error>
         if !inside {
             return Err(err(path, format!("texture `{rel}` points outside the FBX file's folder")));
         }
-        return crate::scene::obj::texture(&full);
+        return crate::scene::obj::texture_and_alpha(&full);
     };
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
@@ -298,9 +333,10 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Texture, Error>
     reader.limits(limits);
     let img = reader
         .decode()
-        .map_err(|e| err(path, format!("embedded texture `{}` does not decode: {e}", t.element.name)))?
-        .into_rgba8();
-    Ok(Texture::new(img.width(), img.height(), img.into_raw(), true))
+        .map_err(|e| err(path, format!("embedded texture `{}` does not decode: {e}", t.element.name)))?;
+    let alpha = img.color().has_alpha();
+    let img = img.into_rgba8();
+    Ok((Texture::new(img.width(), img.height(), img.into_raw(), true), alpha))
 }
 
 impl FbxAsset {

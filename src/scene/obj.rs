@@ -223,6 +223,11 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
 
 /// An image file as an sRGB base-colour texture.
 pub fn texture(path: &Path) -> Result<Texture, Error> {
+    texture_and_alpha(path).map(|(t, _)| t)
+}
+
+/// [`texture`], and whether the image has an alpha channel (used or not: importers decide by the channel).
+pub fn texture_and_alpha(path: &Path) -> Result<(Texture, bool), Error> {
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
     let mut reader = image::ImageReader::open(path)
         .map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?
@@ -232,6 +237,8 @@ pub fn texture(path: &Path) -> Result<Texture, Error> {
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     reader.limits(limits);
-    let img = reader.decode().map_err(|e| fail(format!("cannot decode the texture: {e}")))?.into_rgba8();
-    Ok(Texture::new(img.width(), img.height(), img.into_raw(), true))
+    let img = reader.decode().map_err(|e| fail(format!("cannot decode the texture: {e}")))?;
+    let alpha = img.color().has_alpha();
+    let img = img.into_rgba8();
+    Ok((Texture::new(img.width(), img.height(), img.into_raw(), true), alpha))
 }
