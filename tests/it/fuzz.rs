@@ -123,7 +123,7 @@ fn seeds(dir: &str, exts: &[&str]) -> Vec<(PathBuf, Vec<u8>)> {
 }
 
 /// Renders `scene` small from a camera that frames its bounds (when it has any).
-fn render_small(scene: &PosedScene) {
+pub(crate) fn render_small(scene: &PosedScene) {
     let Some((lo, hi)) = scene.bounds() else { return };
     let (c, r) = ((lo + hi) * 0.5, (hi - lo).length().max(1e-3));
     if !(c.is_finite() && r.is_finite()) {

@@ -175,9 +175,11 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
             let bytes = match t.source().source() {
                 gltf::image::Source::View { view, .. } => {
                     let buf = &buffers[view.buffer().index()];
-                    let end = view.offset() + view.length();
+                    // Offsets come from the file: a sum that wraps is a range past the buffer, not a small one.
+                    let end = view.offset().saturating_add(view.length());
                     if end > buf.len() {
-                        return Err(err(path, format!("image {img_index} runs past its buffer")));
+                        let v = view.index();
+                        return Err(err(path, format!("images[{img_index}]: bufferView {v} runs past its buffer")));
                     }
                     buf[view.offset()..end].to_vec()
                 }

@@ -205,8 +205,19 @@ impl<'a> Checker<'a> {
             }
         }
         for (i, c) in items(root, "cameras").iter().enumerate() {
-            self.one_of(c, "type", &format!("cameras[{i}]"), &strs(&["perspective", "orthographic"]));
+            let p = format!("cameras[{i}]");
+            self.one_of(c, "type", &p, &strs(&["perspective", "orthographic"]));
+            // The type names the object that holds the projection (the gltf crate unwraps it).
+            if let Some(t) =
+                c.get("type").and_then(Value::as_str).filter(|t| ["perspective", "orthographic"].contains(t))
+            {
+                if !c.get(t).is_some_and(Value::is_object) {
+                    self.problems.push(format!("{p}.type is \"{t}\" but {p}.{t} is missing"));
+                }
+            }
         }
+        self.attribute_shapes();
+        self.accessor_budget();
         for (i, a) in items(root, "animations").iter().enumerate() {
             let samplers = items(a, "samplers").len();
             for (j, ch) in items(a, "channels").iter().enumerate() {
@@ -228,7 +239,110 @@ impl<'a> Checker<'a> {
     }
 }
 
+/// Components an accessor with no bufferView may declare (all zeros, then its sparse values): the file's bytes
+/// justify none of them, so this documented limit bounds what they allocate (2^24 components: 64 MiB of f32, a
+/// 5.6-million-vertex VEC3). Accessors with a bufferView are bounded by the bytes it holds.
+pub(crate) const MAX_UNBACKED_COMPONENTS: u64 = 1 << 24;
+
+/// Components of an accessor `type`.
+fn components(ty: &str) -> Option<u64> {
+    Some(match ty {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" | "MAT2" => 4,
+        "MAT3" => 9,
+        "MAT4" => 16,
+        _ => return None,
+    })
+}
+
+/// The accessor `i` of `root`, when it exists.
+fn accessor<'v>(root: &'v Value, i: &Value) -> Option<&'v Value> {
+    items(root, "accessors").get(usize::try_from(i.as_u64()?).ok()?)
+}
+
 impl Checker<'_> {
+    /// Each attribute's accessor has the type its semantic needs (glTF 2.0, 3.7.2.1) and as many elements as
+    /// POSITION; indices are unsigned integer scalars. The loader indexes attributes by vertex, so a NORMAL of
+    /// fewer elements, or a COLOR_0 of fewer components, would read past them.
+    fn attribute_shapes(&mut self) {
+        let root = self.root;
+        for (i, m) in items(root, "meshes").iter().enumerate() {
+            for (j, prim) in items(m, "primitives").iter().enumerate() {
+                let p = format!("meshes[{i}].primitives[{j}]");
+                let attributes = prim.get("attributes").and_then(Value::as_object);
+                let count_of = |x: &Value| accessor(root, x).and_then(|a| a.get("count")).and_then(Value::as_u64);
+                let position = attributes.and_then(|a| a.get("POSITION")).and_then(count_of);
+                let mut sets = vec![(format!("{p}.attributes"), attributes, false)];
+                for (k, t) in items(prim, "targets").iter().enumerate() {
+                    sets.push((format!("{p}.targets[{k}]"), t.as_object(), true));
+                }
+                for (at, map, target) in sets {
+                    let Some(map) = map else { continue };
+                    for (name, x) in map {
+                        let Some(acc) = accessor(root, x) else { continue };
+                        let ty = acc.get("type").and_then(Value::as_str).unwrap_or("");
+                        let base = name.split('_').next().unwrap_or(name);
+                        let allowed: &[&str] = match (base, target) {
+                            ("POSITION" | "NORMAL", _) | ("TANGENT", true) => &["VEC3"],
+                            ("TANGENT", false) | ("JOINTS" | "WEIGHTS", _) => &["VEC4"],
+                            ("TEXCOORD", _) => &["VEC2"],
+                            ("COLOR", _) => &["VEC3", "VEC4"],
+                            _ => &[],
+                        };
+                        if !allowed.is_empty() && !allowed.contains(&ty) {
+                            self.problems.push(format!(
+                                "{at}.{name}: accessor {x} is {ty}, where {name} must be {}",
+                                allowed.join(" or ")
+                            ));
+                        }
+                        let count = acc.get("count").and_then(Value::as_u64);
+                        if let (Some(c), Some(pc)) = (count, position) {
+                            if c != pc {
+                                self.problems.push(format!(
+                                    "{at}.{name}: accessor {x} has {c} elements, POSITION has {pc}: every attribute \
+                                     needs one per vertex"
+                                ));
+                            }
+                        }
+                    }
+                }
+                if let Some(acc) = prim.get("indices").and_then(|x| accessor(root, x)) {
+                    let ty = acc.get("type").and_then(Value::as_str).unwrap_or("");
+                    let ct = acc.get("componentType").and_then(Value::as_u64).unwrap_or(0);
+                    if ty != "SCALAR" || ![5121, 5123, 5125].contains(&ct) {
+                        self.problems.push(format!(
+                            "{p}.indices: accessor {} is {ty} of componentType {ct}, where indices are SCALAR \
+                             unsigned bytes, shorts or ints (5121, 5123, 5125)",
+                            prim["indices"]
+                        ));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Accessors with no bufferView declare at most [`MAX_UNBACKED_COMPONENTS`] components; sparse counts fit
+    /// their accessor's.
+    fn accessor_budget(&mut self) {
+        for (i, a) in items(self.root, "accessors").iter().enumerate() {
+            let p = format!("accessors[{i}]");
+            let count = a.get("count").and_then(Value::as_u64).unwrap_or(0);
+            let n = a.get("type").and_then(Value::as_str).and_then(components).unwrap_or(1);
+            if a.get("bufferView").is_none() && count.saturating_mul(n) > MAX_UNBACKED_COMPONENTS {
+                self.problems.push(format!(
+                    "{p}.count = {count} ({n} components each) with no bufferView: over vvgen's limit of \
+                     {MAX_UNBACKED_COMPONENTS} components for data the file does not hold"
+                ));
+            }
+            let sparse = a.get("sparse").and_then(|s| s.get("count")).and_then(Value::as_u64);
+            if sparse.is_some_and(|k| k > count) {
+                self.problems.push(format!("{p}.sparse.count = {} exceeds {p}.count = {count}", sparse.unwrap_or(0)));
+            }
+        }
+    }
+
     /// The node hierarchy must be a forest (the spec: no node has two parents, no node is its own ancestor);
     /// a cycle would otherwise pose nothing, or loop.
     fn forest(&mut self) {
