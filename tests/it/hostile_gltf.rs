@@ -154,3 +154,32 @@ fn counts_the_file_cannot_back_are_refused_before_anything_is_allocated() {
     doc["accessors"][4] = json!({"componentType": 5125, "count": 268_435_456u64, "type": "SCALAR"});
     refused(d, &doc, "accessors[4].count = 268435456 (1 components each) with no bufferView");
 }
+
+/// CRC-32 (PNG's), to forge a chunk.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xFFFF_FFFFu32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+        }
+    }
+    !c
+}
+
+#[test]
+fn an_image_whose_header_declares_gigapixels_is_refused() {
+    // A PNG of a few bytes whose header says 100 000 × 100 000: decoding it whole would ask for 40 GB.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let doc = base(d);
+    let mut bin = std::fs::read(d.join("model.bin")).unwrap();
+    let png_at = doc["bufferViews"][5]["byteOffset"].as_u64().unwrap() as usize;
+    // IHDR: length (4), "IHDR" (4), width (4), height (4), … ; its CRC covers "IHDR" and the 13 data bytes.
+    let ihdr = png_at + 8;
+    bin[ihdr + 8..ihdr + 16].copy_from_slice(&[0, 1, 0x86, 0xA0, 0, 1, 0x86, 0xA0]);
+    let crc = crc32(&bin[ihdr + 4..ihdr + 21]);
+    bin[ihdr + 21..ihdr + 25].copy_from_slice(&crc.to_be_bytes());
+    std::fs::write(d.join("model.bin"), &bin).unwrap();
+    refused(d, &doc, "images[0]: cannot decode");
+}
