@@ -553,15 +553,37 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
         // Default directories too (two `ply-sequence` outputs both default to `<name>_points`).
         let dataset = m.dataset.name.get_ref();
         let here = out.dir_name(dataset);
+        // Directories as their plain components (`.` and trailing slashes dropped), to compare and nest.
+        let parts = |d: &str| -> Vec<String> {
+            Path::new(d)
+                .components()
+                .filter(|c| *c != std::path::Component::CurDir)
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect()
+        };
+        let span = out.dir.as_ref().map_or(out.writer.span(), |d| d.span());
         for (other, o2) in &m.outputs {
-            if other > name && o2.dir_name(dataset).trim_end_matches('/') == here.trim_end_matches('/') {
-                let span = out.dir.as_ref().map_or(out.writer.span(), |d| d.span());
+            let there = o2.dir_name(dataset);
+            let (a, b) = (parts(&here), parts(&there));
+            if other > name && a == b {
                 diags.push(
                     Diagnostic::error(
                         format!("outputs `{name}` and `{other}` write to the same directory `{here}`"),
-                        Some(span),
+                        Some(span.clone()),
                     )
                     .with_help("give one of them its own `dir`"),
+                );
+            } else if other != name && b.len() > a.len() && b.starts_with(&a) {
+                // A released dataset must verify: the outer output's lock would list the inner one's files as
+                // extra (and a stale-file sweep of one would reach into the other).
+                diags.push(
+                    Diagnostic::error(
+                        format!("output `{name}`'s directory `{here}` holds output `{other}`'s (`{there}`)"),
+                        Some(span.clone()),
+                    )
+                    .with_help(
+                        "give each output a directory of its own beside the others, e.g. dir = \"a\" and dir = \"b\"",
+                    ),
                 );
             }
         }

@@ -127,6 +127,16 @@ fn two_outputs_in_one_directory_are_refused() {
         ]
     );
     assert!(!dir.path().join("out").exists(), "refused before anything was written");
+    // One output's folder inside another's: the outer dataset's lock would count the inner files as extra, and
+    // `vvgen verify` of a released dataset would fail.
+    let extra = "[output.e]\nwriter = \"nerfstudio\"\ndir = \".\"\n";
+    let report = vvgen::manifest::load(&write_manifest(dir.path(), extra)).unwrap_err();
+    let errors: Vec<&str> = report.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.message.as_str()).collect();
+    assert_eq!(errors, ["output `e`'s directory `.` holds output `d`'s (`m_dnerf`)"]);
+    let extra = "[output.e]\nwriter = \"nerfstudio\"\ndir = \"m_dnerf/./nested/\"\n";
+    let report = vvgen::manifest::load(&write_manifest(dir.path(), extra)).unwrap_err();
+    let errors: Vec<&str> = report.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.message.as_str()).collect();
+    assert_eq!(errors, ["output `d`'s directory `m_dnerf` holds output `e`'s (`m_dnerf/./nested/`)"]);
 }
 
 #[test]
