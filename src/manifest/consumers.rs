@@ -57,10 +57,13 @@ pub fn frame_diagnostic(name: &str, out: &Output, frames: usize) -> Option<Diagn
             if frames != 24 {
                 said.push("Deformable-3DGS reads the first 24 frames and maps frame i to i/23");
             }
-            Some(
-                Diagnostic::warning(format!("output `{name}` (dynerf) has {frames} frames"), at)
-                    .with_help(format!("{}: their times will be off", said.join("; "))),
-            )
+            let mut help = format!("{}: their times will be off", said.join("; "));
+            // What the user sees first: run on our sets, K-Planes' `dynerf_ist_weight` stops with a size mismatch
+            // below 25 frames (issue 46).
+            if frames < 25 {
+                help = format!("K-Planes crashes on fewer than 25 frames (dynerf_ist_weight: a size mismatch); {help}");
+            }
+            Some(Diagnostic::warning(format!("output `{name}` (dynerf) has {frames} frames"), at).with_help(help))
         }
         Writer::InstantNgp if frames > 1 => {
             Some(Diagnostic::warning(format!("output `{name}` (instant-ngp) has {frames} frames"), at).with_help(
@@ -131,7 +134,7 @@ impl Writing<'_, '_> {
             self.warn(
                 format!("with non-square {w}×{h} images"),
                 "K-Planes swaps W and H when resizing, Deformable-3DGS swaps FovX and FovY, 4DGaussians resizes to \
-                 800×800 and D-NeRF's half_res resizes wrongly: use square images",
+                 800×800 and D-NeRF's half_res (its configs' default) stops with a ValueError: use square images",
             );
         }
         self.one_focal_and_centre(DNERF_ONE_FOCAL);

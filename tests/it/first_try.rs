@@ -318,6 +318,7 @@ fn counts_and_places_are_the_ones_a_user_means() {
         let (code, err) = vvgen(d, &["--color", "never", cmd, "m.toml"]);
         assert_eq!(code, 0, "{err}");
         assert!(err.contains("output `dynerf` (dynerf) has 24 frames"), "{cmd}: {err}");
+        assert!(err.contains("K-Planes crashes on fewer than 25 frames"), "{cmd}: {err}");
         assert!(!err.contains("has 31 frames"), "{cmd}: {err}");
     }
     // A warning with no place in the text names the file under its title, with no empty frame.
