@@ -160,7 +160,7 @@ pub enum Command {
         after_help = "Examples:\n  vvgen new CesiumMan.glb\n  vvgen new frames/ --writer nerfstudio -o scan.toml"
     )]
     New {
-        /// The asset: a .gltf/.glb, .ply or .obj file, or a folder of .ply or .obj frames.
+        /// The asset: a .gltf/.glb, .fbx, .blend, .ply or .obj file, or a folder of .ply or .obj frames.
         asset: PathBuf,
         /// The output's writer.
         #[arg(long, default_value = "dnerf", value_parser = clap::builder::PossibleValuesParser::new(new::WRITERS))]

@@ -10,10 +10,12 @@
 //! Blender has read the file (the libraries it links and the images it names, like a compiler's header
 //! dependencies):
 //! - the *listing* key: the `.blend`'s bytes, Blender's version, the export script's bytes and the selection
-//!   (`scene`, `object`, `collection`). Its record holds the list of external files that import read;
-//! - the *import* key: the listing key and each listed file's content (or its absence). Its record holds the
-//!   import's facts (frame range, rate, the files written, warnings) and the files themselves, which are placed
-//!   (hard-linked) in `blend/<import key>/` of the cache for the mesh-sequence reader.
+//!   (`scene`, `object`, `collection`). Its record holds the external files that import read and the file's
+//!   frame range (whether anything is animated);
+//! - the *import* key: the listing key, each listed file's content (or its absence) and the frames exported
+//!   (the manifest's `frames` resolved against that range: the same list however it is spelled). Its record
+//!   holds the import's facts (frames, rate, the files written, warnings) and the files themselves, which are
+//!   placed (hard-linked) in `blend/<import key>/` of the cache for the mesh-sequence reader.
 //!
 //! A later build hashes the same files (through the stat cache: unchanged files are not read) and never starts
 //! Blender while both keys hold; even Blender's version is remembered per content of its executable.
