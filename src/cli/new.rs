@@ -137,13 +137,12 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             let _ = stat.save();
             let first = scene::source::mesh_frame(&got.dir.join("frame_00000.gltf"))?;
             drawable(&first, asset)?;
-            let i = &got.info;
-            let what = if i.frames.len() < 2 {
-                format!("scene `{}`, no animation: one frame", i.scene)
+            let info = got.info;
+            let what = if info.frames.len() < 2 {
+                format!("scene `{}`, no animation: one frame", info.scene)
             } else {
-                format!("scene `{}`, frames {}–{} at {} fps", i.scene, i.frame_start, i.frame_end, i.fps)
+                format!("scene `{}`, frames {}–{} at {} fps", info.scene, info.frame_start, info.frame_end, info.fps)
             };
-            let info = i.clone();
             Ok((Asset::Blend { info }, "z", format!("{what}; +Z up, as Blender shows it")))
         }
         "ply" => {

@@ -61,14 +61,11 @@ fn write_manifest(dir: &Path, extra: &str) {
     std::fs::write(dir.join("m.toml"), text).unwrap();
 }
 
-/// Largest distance from a point of `a` to the nearest of `b`, both ways (vertices split at seams by the glTF
-/// export sit on Blender's, so the sets match without a correspondence).
+/// Largest distance between the point sets, both ways (vertices split at seams by the glTF export sit on
+/// Blender's, so the sets match without a correspondence).
 fn hausdorff(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
-    let d2 = |p: &[f32; 3], q: &[f32; 3]| (0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f32>();
-    let one = |a: &[[f32; 3]], b: &[[f32; 3]]| {
-        a.iter().map(|p| b.iter().map(|q| d2(p, q)).fold(f32::INFINITY, f32::min)).fold(0.0, f32::max)
-    };
-    one(a, b).max(one(b, a)).sqrt()
+    let v = |s: &[[f32; 3]]| s.iter().map(|p| glam::Vec3::from_array(*p)).collect::<Vec<_>>();
+    crate::common::hausdorff(&v(a), &v(b))
 }
 
 #[test]

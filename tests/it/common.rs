@@ -100,3 +100,11 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
     }
     s
 }
+
+/// Largest distance from a point of either set to the nearest of the other (symmetric Hausdorff).
+pub fn hausdorff(a: &[glam::Vec3], b: &[glam::Vec3]) -> f32 {
+    let one = |a: &[glam::Vec3], b: &[glam::Vec3]| {
+        a.iter().map(|p| b.iter().map(|q| p.distance(*q)).fold(f32::INFINITY, f32::min)).fold(0.0, f32::max)
+    };
+    one(a, b).max(one(b, a))
+}

@@ -219,14 +219,6 @@ fn obj_points(path: &Path) -> Vec<glam::Vec3> {
         .collect()
 }
 
-/// Largest distance from a point of either set to the nearest of the other.
-fn hausdorff(a: &[glam::Vec3], b: &[glam::Vec3]) -> f32 {
-    let one = |a: &[glam::Vec3], b: &[glam::Vec3]| {
-        a.iter().map(|p| b.iter().map(|q| p.distance(*q)).fold(f32::INFINITY, f32::min)).fold(0.0, f32::max)
-    };
-    one(a, b).max(one(b, a))
-}
-
 #[test]
 fn fbx_poses_as_ufbxs_reference_meshes_where_blender_cannot_read_the_file() {
     // Blender refuses ASCII FBX, and loads Maya's animation layers without applying them: for those, ufbx's own
@@ -261,7 +253,7 @@ fn fbx_poses_as_ufbxs_reference_meshes_where_blender_cannot_read_the_file() {
         let lo = theirs.iter().copied().fold(glam::Vec3::MAX, glam::Vec3::min);
         let hi = theirs.iter().copied().fold(glam::Vec3::MIN, glam::Vec3::max);
         let size = (hi - lo).max_element();
-        let off = hausdorff(&ours, &theirs);
+        let off = crate::common::hausdorff(&ours, &theirs);
         assert!(off < 1e-4 * size, "{fbx} ({take:?}, frame {frame}): {off} from ufbx's {obj}.obj (size {size})");
     }
 }

@@ -19,34 +19,16 @@ use std::process::Command;
 
 use serde_json::{json, Value};
 
+use crate::fuzz::Rng;
+
 /// The address space a worker may use: beyond it an allocation fails and the worker aborts (a finding).
 const ADDRESS_SPACE: u64 = 4 << 30;
 
-/// splitmix64 keyed by (key, execution): every mutant replays from its index alone.
-struct Rng(u64);
-
-impl Rng {
-    fn new(key: u64, exec: u64) -> Rng {
-        let mut r = Rng(key.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ exec);
-        r.next();
-        r
-    }
-
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-
-    fn pick<'a, T>(&mut self, from: &'a [T]) -> &'a T {
-        &from[self.below(from.len())]
-    }
+/// The fuzzers' splitmix stream, keyed by (key, execution): every mutant replays from its index alone.
+fn keyed(key: u64, exec: u64) -> Rng {
+    let mut r = Rng(key.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ exec);
+    r.next();
+    r
 }
 
 /// Numbers a file may declare where a count, offset, stride or index goes.
@@ -293,7 +275,7 @@ fn seeds() -> Vec<Seed> {
 
 /// Execution `exec`'s input: a seed with one to three structural changes, as file bytes.
 fn input(seeds: &[Seed], key: u64, exec: u64) -> (PathBuf, Vec<u8>) {
-    let mut rng = Rng::new(key, exec);
+    let mut rng = keyed(key, exec);
     let seed = &seeds[rng.below(seeds.len())];
     let mut doc = seed.json.clone();
     for _ in 0..1 + rng.below(3) {

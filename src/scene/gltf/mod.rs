@@ -10,5 +10,5 @@ mod uri;
 
 pub use load::{load, load_slice, GltfAsset};
 pub use pose::PoseScratch;
-pub use uri::side_files;
+pub(crate) use uri::side_files;
 mod validate;

@@ -37,7 +37,7 @@ pub(super) fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
 /// glTF's folder: what the file's content depends on besides itself (a mesh-sequence frame is keyed by them
 /// too). Relative, so the list is a fact of the content alone, wherever the file lies. Containment and
 /// existence are judged when they are read (`fetch_uri`).
-pub fn side_files(path: &Path) -> Result<Vec<std::path::PathBuf>, String> {
+pub(crate) fn side_files(path: &Path) -> Result<Vec<std::path::PathBuf>, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
     let json: std::borrow::Cow<'_, [u8]> = if bytes.starts_with(b"glTF") {
         gltf::Glb::from_slice(&bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?.json
