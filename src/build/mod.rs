@@ -443,7 +443,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
     Ok(report)
 }
 
-/// The crop warnings of a build: over every image when the scene poses from memory (cheap), over the images
+/// The crop warnings of a build (and the misread poses of [`crate::plan::coverage::Misread`]): over every image when the scene poses from memory (cheap), over the images
 /// this build renders when frames are files (their frames are read for rendering anyway, and a build with
 /// nothing to render reads none). `vvgen check` measures every image.
 fn crop_warnings(m: &Manifest, p: &Prepared, to_render: &[usize]) -> Result<Vec<String>, Error> {
@@ -454,7 +454,9 @@ fn crop_warnings(m: &Manifest, p: &Prepared, to_render: &[usize]) -> Result<Vec<
         source: Box::new(source),
         hint: "",
     })?;
-    Ok(coverage::warnings(m, &p.plan, &c))
+    let mut said = coverage::warnings(m, &p.plan, &c);
+    said.extend(coverage::misread_warnings(m, &p.plan, &c));
+    Ok(said)
 }
 
 /// Images planned, found whole in the cache, and rendered (some pass ran), from the render-pass actions.

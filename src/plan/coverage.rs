@@ -6,6 +6,9 @@
 //! image's frame. A view crops it when some vertex or point is outside the image or behind the camera; the
 //! share outside is counted over vertices. A frame's bounding box inside the frustum (its eight corners, the
 //! frustum being convex) settles a view without looking at its vertices.
+//!
+//! The same pass measures how far 4DGaussians' and Deformable-3DGS' Blender readers misplace the subject in
+//! each view (see [`Misread`]), since only the posed vertices can say it in pixels.
 
 use std::collections::BTreeMap;
 
@@ -13,7 +16,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Plan;
-use crate::manifest::{framing, transform::FRAME_MARGIN, Manifest};
+use crate::manifest::{framing, transform::FRAME_MARGIN, Manifest, Writer};
 use crate::scene::{self, Poser, Scene};
 
 /// One view that crops the subject.
@@ -25,6 +28,27 @@ pub struct Crop {
     pub outside: f64,
 }
 
+/// How far 4DGaussians' and Deformable-3DGS' Blender readers (`readCamerasFromTransforms`) draw the subject
+/// from where it is in one image.
+///
+/// Both take `T = -inv(c2w)[:3, 3]` after flipping the camera's axes (4DGaussians
+/// `scene/dataset_readers.py` l.275, Deformable-3DGS l.238) where 3DGS takes `diag(1, -1, -1) · inv(c2w)[:3, 3]`:
+/// the rotation agrees and the x translation has the wrong sign. Every point then sits `2·t_x` to the side in
+/// camera space, `2·fx·|t_x| / z` pixels in the image at depth `z`; `t_x` is zero exactly when the camera's
+/// optical axis and up vector span a plane through the world origin (any camera aimed at the origin).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Misread {
+    /// The image (index into [`Plan::images`]).
+    pub image: usize,
+    /// The shift averaged over the subject's vertices in front of the camera, pixels.
+    pub mean_px: f64,
+    /// The shift of the nearest vertex, pixels.
+    pub max_px: f64,
+}
+
+/// A shift below this is not reported (an eighth of a pixel).
+const MISREAD_PX: f64 = 0.125;
+
 /// What [`measure`] found.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Coverage {
@@ -34,6 +58,9 @@ pub struct Coverage {
     pub measured: usize,
     /// How far from the origin the subject reaches over the measured frames, world units.
     pub reach: f64,
+    /// The images whose subject 4DGaussians and Deformable-3DGS would draw at least [`MISREAD_PX`] off, in
+    /// image order.
+    pub misread: Vec<Misread>,
 }
 
 /// Measures `images` (all when `None`), posing each frame they show once, frames in parallel.
@@ -51,7 +78,8 @@ pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<C
         by_frame.entry(plan.images[i].frame).or_default().push(i);
     }
     let subject: Vec<usize> = (0..scene.sources.len()).filter(|&i| scene.sources[i].ground.is_none()).collect();
-    let per_frame: Vec<Result<(Vec<Crop>, f64), scene::Error>> = by_frame
+    type Found = (Vec<Crop>, Vec<Misread>, f64);
+    let per_frame: Vec<Result<Found, scene::Error>> = by_frame
         .into_par_iter()
         .map_init(Poser::default, |poser, (frame, list)| {
             let mut points: Vec<Vec3> = Vec::new();
@@ -62,17 +90,43 @@ pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<C
             }
             let reach = points.iter().map(|p| p.as_dvec3().length_squared()).fold(0.0, f64::max).sqrt();
             let bounds = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
-            Ok((list.into_iter().filter_map(|i| crop(plan, i, &points, bounds)).collect(), reach))
+            let misread = list.iter().filter_map(|&i| misread(plan, i, &points)).collect();
+            Ok((list.into_iter().filter_map(|i| crop(plan, i, &points, bounds)).collect(), misread, reach))
         })
         .collect();
     let mut out = Coverage { measured: images.len(), ..Coverage::default() };
     for r in per_frame {
-        let (crops, reach) = r?;
+        let (crops, misread, reach) = r?;
         out.crops.extend(crops);
+        out.misread.extend(misread);
         out.reach = out.reach.max(reach);
     }
     out.crops.sort_by_key(|c| c.image);
+    out.misread.sort_by_key(|m| m.image);
     Ok(out)
+}
+
+/// [`Misread`] of image `i` showing `points`, when at least [`MISREAD_PX`].
+fn misread(plan: &Plan, i: usize, points: &[Vec3]) -> Option<Misread> {
+    let cam = &plan.images[i].camera;
+    let w2c = cam.w2c();
+    let per_depth = 2.0 * cam.fx * w2c.w_axis.x.abs();
+    // Under this, no vertex beyond the near plane can shift by MISREAD_PX: skip the vertices (aimed rigs land
+    // here, t_x being rounding noise).
+    if per_depth < MISREAD_PX * cam.near {
+        return None;
+    }
+    let (mut sum, mut n, mut max) = (0.0, 0usize, 0.0f64);
+    for p in points {
+        let z = -w2c.transform_point3(p.as_dvec3()).z;
+        if z > 0.0 {
+            let px = per_depth / z;
+            sum += px;
+            n += 1;
+            max = max.max(px);
+        }
+    }
+    (n > 0 && max >= MISREAD_PX).then(|| Misread { image: i, mean_px: sum / n as f64, max_px: max })
 }
 
 /// Whether image `i` crops `points` (whose bounds are `(lo, hi)`, found once per frame), and by how much.
@@ -136,4 +190,47 @@ pub fn warnings(m: &Manifest, plan: &Plan, c: &Coverage) -> Vec<String> {
             )
         })
         .collect()
+}
+
+/// One warning per `dnerf` output whose images 4DGaussians and Deformable-3DGS would misread (see [`Misread`]):
+/// how many, by how much, the worst, and what makes them exact. Only the measured images count (see
+/// [`measure`]).
+pub fn misread_warnings(m: &Manifest, plan: &Plan, c: &Coverage) -> Vec<String> {
+    if c.misread.is_empty() {
+        return Vec::new();
+    }
+    let by_image: BTreeMap<usize, &Misread> = c.misread.iter().map(|r| (r.image, r)).collect();
+    let mut said = Vec::new();
+    for (name, out) in &m.outputs {
+        if out.writer() != Writer::Dnerf {
+            continue;
+        }
+        // A split the plan lacks was reported when the plan was made.
+        let Ok(images) = plan.images_of(out) else { continue };
+        let hit: Vec<&Misread> = images.iter().filter_map(|i| by_image.get(i).copied()).collect();
+        let Some(worst) = hit.iter().max_by(|a, b| a.max_px.total_cmp(&b.max_px)) else { continue };
+        let mean = hit.iter().map(|r| r.mean_px).sum::<f64>() / hit.len() as f64;
+        let img = &plan.images[worst.image];
+        let split = &plan.splits[img.split].name;
+        let rigs: std::collections::BTreeSet<&str> = hit
+            .iter()
+            .filter_map(|r| m.splits.get(&plan.splits[plan.images[r.image].split].name).map(|s| s.rig()))
+            .collect();
+        let rigs: Vec<String> = rigs.into_iter().map(|r| format!("`{r}`")).collect();
+        said.push(format!(
+            "output `{name}` (dnerf): 4DGaussians and Deformable-3DGS draw the subject up to {:.1} px off ({:.1} px \
+             on average) in {} of {} images (worst: `{split}` view {}, frame {}): their Blender readers negate the \
+             camera's x translation (T = -inv(c2w)[:3, 3] after the axis flip), which is exact only for cameras aimed \
+             through the world origin; aim rig {} at target = [0, 0, 0] without target jitter, with the subject \
+             there ([transform] fit = \"frame\" centres it)",
+            worst.max_px,
+            mean,
+            hit.len(),
+            images.len(),
+            img.view,
+            img.frame,
+            rigs.join(", "),
+        ));
+    }
+    said
 }

@@ -4,6 +4,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+use glam::{DMat3, DMat4, DVec2, DVec3, DVec4};
+
 use crate::common::animated_triangle;
 
 /// A 4-frame triangle dataset with `render` lines, train/val/test splits (or `splits`) and one output.
@@ -166,4 +168,80 @@ fn check_plans_and_opens_the_inputs() {
         .unwrap();
     let out = vvgen(dir.path(), &["check", "m.toml"]);
     assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// 4DGaussians' and Deformable-3DGS' Blender readers negate the camera's x translation: `check` says by how many
+/// pixels they misplace the subject, and that figure is what their reader, replayed on the built dataset, does to
+/// the subject's posed vertices. Cameras aimed at the origin are read exactly and not warned of.
+#[test]
+fn off_origin_targets_say_how_far_4dgs_and_deformable_misplace_the_subject() {
+    let splits = "[split.train]\nrig = \"h\"\nviews = 6\n[split.val]\nrig = \"h\"\nviews = 2\nseed = 3\n\
+                  [split.test]\nrig = \"h\"\nviews = 2\nseed = 4\n";
+    for (target, warned) in [("[0.3, 0.2, 0.1]", true), ("[0.0, 0.0, 0.0]", false)] {
+        let text = manifest("", splits, "writer = \"dnerf\"\ninit_points = 0\ndir = \"tri_dnerf\"")
+            .replace("[render]\nresolution = [32, 32]", "[render]\nresolution = [64, 64]")
+            .replace("[rig.o]\nkind = \"orbit\"", &format!("[rig.h]\nkind = \"hemisphere\"\ntarget = {target}"));
+        let (code, err, dir) = check(&text);
+        assert_eq!(code, Some(0), "{err}");
+        let said = err.split("draw the subject up to ").nth(1).map(|s| s.split(' ').next().unwrap().to_string());
+        assert_eq!(said.is_some(), warned, "{err}");
+        let out = vvgen(dir.path(), &["build", "m.toml"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let posed: Vec<Vec<[f32; 3]>> = (0..4)
+            .map(|f| {
+                let p = dir.path().join(format!("f{f}.ply"));
+                let args = ["inspect", "m.toml", "--frame", &f.to_string(), "--ply", p.to_str().unwrap()];
+                assert!(vvgen(dir.path(), &args).status.success());
+                vvgen::scene::ply::read(&std::fs::read(&p).unwrap()).unwrap().positions
+            })
+            .collect();
+        let mut worst = 0.0f64;
+        for split in ["train", "val", "test"] {
+            let path = dir.path().join(format!("out/tri_dnerf/transforms_{split}.json"));
+            let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+            let fovx = json["camera_angle_x"].as_f64().unwrap();
+            for frame in json["frames"].as_array().unwrap() {
+                let m: Vec<Vec<f64>> = serde_json::from_value(frame["transform_matrix"].clone()).unwrap();
+                let c2w = DMat4::from_cols_array_2d(&[0, 1, 2, 3].map(|c| [0, 1, 2, 3].map(|r| m[r][c])));
+                let f = (frame["time"].as_f64().unwrap() * 3.0).round() as usize;
+                for p in &posed[f] {
+                    let (a, b) = (project(&gaussians_3dgs(c2w), fovx, p), project(&gaussians_4dgs(c2w), fovx, p));
+                    worst = worst.max((a - b).length());
+                }
+            }
+        }
+        match said {
+            Some(px) => {
+                assert!(worst > 1.0, "an off-origin target misplaces by pixels, not {worst}");
+                assert_eq!(format!("{worst:.1}"), px, "check's figure is the replayed reader's: {err}");
+            }
+            None => assert!(worst < 1e-6, "aimed at the origin, the readers agree ({worst} px)"),
+        }
+    }
+}
+
+/// 3DGS's `readCamerasFromTransforms`: flip the camera's Y and Z, invert, `R = w2c[:3, :3]ᵀ`, `T = w2c[:3, 3]`;
+/// returned as world→camera (OpenCV axes), as `getWorld2View2(R, T)` builds it.
+fn gaussians_3dgs(c2w: DMat4) -> DMat4 {
+    (c2w * DMat4::from_diagonal(DVec4::new(1.0, -1.0, -1.0, 1.0))).inverse()
+}
+
+/// 4DGaussians' (dataset_readers.py l.272-275) and Deformable-3DGS' (l.235-238) version of it:
+/// `matrix = inv(c2w)`, `R = -matrix[:3, :3]ᵀ`, `R[:, 0] = -R[:, 0]`, `T = -matrix[:3, 3]`.
+fn gaussians_4dgs(c2w: DMat4) -> DMat4 {
+    let m = c2w.inverse();
+    let mut r = -DMat3::from_mat4(m).transpose();
+    r.x_axis = -r.x_axis;
+    let t = -m.w_axis.truncate();
+    // getWorld2View2: Rt[:3, :3] = Rᵀ, Rt[:3, 3] = T.
+    let rt = r.transpose();
+    DMat4::from_cols(rt.x_axis.extend(0.0), rt.y_axis.extend(0.0), rt.z_axis.extend(0.0), t.extend(1.0))
+}
+
+/// Pixel position of `p` through world→camera `w2c` (OpenCV axes) with the readers' symmetric 64² frustum of
+/// horizontal field of view `fovx`.
+fn project(w2c: &DMat4, fovx: f64, p: &[f32; 3]) -> DVec2 {
+    let v = w2c.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+    let f = 32.0 / (fovx / 2.0).tan();
+    DVec2::new(32.0 + f * v.x / v.z, 32.0 + f * v.y / v.z)
 }
