@@ -3,6 +3,11 @@
 //! `sparse/0/cameras.txt` (one PINHOLE camera), `images.txt` (two lines per image; world→camera quaternion and
 //! translation in OpenCV axes) and `points3D.txt` (surface samples of that frame). A single-frame dataset is
 //! written at the root; a dynamic one gets a model per frame under `frame_<NNNN>/`.
+//!
+//! Images are named by number (`0000.png`, … in split order, the image's id less one): Deformable-3DGS'
+//! COLMAP reader takes `int(name)` of every image (`scene/dataset_readers.py` l.136) and stops with a
+//! ValueError on any other name; 3DGS, 4DGaussians and nerfstudio take the name as a file name. Which split and
+//! view each image is stays in `vvgen/dataset.json`.
 
 use std::fmt::Write;
 
@@ -43,11 +48,10 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
             "# Image list with two lines of data per image:\n#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n\
              #   POINTS2D[] as (X, Y, POINT3D_ID)\n",
         );
-        let vpad = pad_for(in_frame.len());
+        let pad = pad_for(in_frame.len());
         for (id, &i) in in_frame.iter().enumerate() {
             let img = &x.plan.images[i];
-            let split = &x.plan.splits[img.split].name;
-            let name = format!("{split}_{:0vpad$}.png", img.view);
+            let name = format!("{id:0pad$}.png");
             files.image_blob(i, "rgb", &format!("{prefix}images/{name}"), x.opaque_rgb(i)?)?;
             let (q, t) = colmap_pose(&img.camera);
             let _ = writeln!(

@@ -381,6 +381,9 @@ fn colmap_text_model_per_frame_reprojects() {
             assert!(points_line.trim().is_empty());
             let e: Vec<&str> = l.split_whitespace().collect();
             assert_eq!(e.len(), 10, "{l}");
+            // Deformable-3DGS takes `int(name.split(".")[0])` of every image as its frame number.
+            let number: usize = e[9].split('.').next().unwrap().parse().expect("a numeric image name");
+            assert_eq!((number + 1).to_string(), e[0], "the name is the image id less one");
             let [qw, qx, qy, qz, tx, ty, tz] = [1, 2, 3, 4, 5, 6, 7].map(|i| e[i].parse::<f64>().unwrap());
             let r = DMat3::from_quat(DQuat::from_xyzw(qx, qy, qz, qw));
             let t = DVec3::new(tx, ty, tz);
