@@ -12,17 +12,39 @@ pub(super) fn place(x: &Export, name: &str, out: &Output, images: &[usize], file
         return Ok(());
     }
     let title = format!("{} · {name}", x.manifest.dataset.name());
+    let load = loading(out.writer());
     let page = if out.writer() == Writer::PlySequence {
-        points(x, name, &title, files)?
+        points(x, name, &title, load, files)?
     } else {
-        pictures(x, images, &title, files)?
+        pictures(x, images, &title, load, files)?
     };
     files.bytes(&format!("{DIR}/index.html"), page.as_bytes())?;
     files.bytes(&format!("{DIR}/three.min.js"), viewer::THREE_JS)
 }
 
+/// How the writer's consumers load this folder (DIR), as the page says it: the step a user gets wrong first.
+fn loading(writer: Writer) -> &'static str {
+    match writer {
+        Writer::Dnerf => {
+            "Load DIR with D-NeRF, K-Planes (its path must contain \"dnerf\"), 3DGS, 4DGaussians or Deformable-3DGS \
+             (-s DIR), or nerfstudio: ns-train … dnerf-data --data DIR."
+        }
+        Writer::Nerfstudio => "Load with nerfstudio: ns-train nerfacto --data DIR (transforms.json).",
+        Writer::InstantNgp => {
+            "Load with instant-ngp: ./instant-ngp DIR/transforms_train.json (the folder itself trains on every split)."
+        }
+        Writer::StaticFrames => "Each t_NNNN/ is one static NeRF-synthetic set (3DGS -s DIR/t_NNNN, instant-ngp, nerfstudio).",
+        Writer::Colmap => {
+            "Load with 3DGS (-s DIR, or DIR/frame_NNNN when the scene moves), or nerfstudio: ns-train … colmap --data DIR \
+             --colmap-path sparse/0 (its default, colmap/sparse/0, does not exist here)."
+        }
+        Writer::Dynerf => "Load DIR with K-Planes (DyNeRF config), 4DGaussians (dynerf) or Deformable-3DGS (plenoptic).",
+        Writer::PlySequence => "One PLY per frame: Open3D, plyfile, trimesh and the codecs' tools read them.",
+    }
+}
+
 /// A point-cloud output's strip; returns its viewer page (the frames thinned by the strip action).
-fn points(x: &Export, name: &str, title: &str, files: &mut Files) -> Result<String, Error> {
+fn points(x: &Export, name: &str, title: &str, load: &str, files: &mut Files) -> Result<String, Error> {
     let strip = Action::PreviewStrip { output: name.to_string() };
     let (png, thinned) = match x.blobs_of(&strip)? {
         &[png, thinned] => (png, thinned),
@@ -39,12 +61,12 @@ fn points(x: &Export, name: &str, title: &str, files: &mut Files) -> Result<Stri
             colors: &s.colors,
         })
         .collect();
-    Ok(viewer::html(title, &[], &shown, None, Some(x.plan.frames)))
+    Ok(viewer::html(title, load, &[], &shown, None, Some(x.plan.frames)))
 }
 
 /// An image output's contact sheets and rig plot; returns its viewer page (its cameras, linking the images the
 /// writer placed, around the subject's samples).
-fn pictures(x: &Export, images: &[usize], title: &str, files: &mut Files) -> Result<String, Error> {
+fn pictures(x: &Export, images: &[usize], title: &str, load: &str, files: &mut Files) -> Result<String, Error> {
     let plan = x.plan;
     let splits = splits_of(plan, images);
     let extras = sheet::extra_passes(x.manifest.render.passes());
@@ -85,5 +107,5 @@ fn pictures(x: &Export, images: &[usize], title: &str, files: &mut Files) -> Res
         positions: &samples.positions,
         colors: &samples.colors,
     };
-    Ok(viewer::html(title, &list, &[cloud], bounds, None))
+    Ok(viewer::html(title, load, &list, &[cloud], bounds, None))
 }

@@ -54,6 +54,7 @@ pub struct Cloud<'a> {
 /// count when the clouds shown are some of its frames (the status line says "24 of 103 frames").
 pub fn html(
     title: &str,
+    load: &str,
     images: &[ViewerImage],
     clouds: &[Cloud],
     bounds: Option<(Vec3, Vec3)>,
@@ -138,7 +139,7 @@ pub fn html(
     });
     // Inside a <script>, `</` would end it early: JSON allows `<\/` for the same string.
     let data = data.to_string().replace("</", "<\\/");
-    TEMPLATE.replace("__TITLE__", &escape(title)).replace("__DATA__", &data)
+    TEMPLATE.replace("__TITLE__", &escape(title)).replace("__LOAD__", &escape(load)).replace("__DATA__", &data)
 }
 
 /// The page, with the dataset's files found at `root` (a path or URL) instead of beside the `preview/` folder.

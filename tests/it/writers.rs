@@ -361,6 +361,9 @@ fn instant_ngp_reads_focal_and_its_box_holds_the_content() {
 #[test]
 fn colmap_text_model_per_frame_reprojects() {
     let root = built_opaque().out.join("man_colmap");
+    // nerfstudio looks in colmap/sparse/0 unless told: the preview page says how to point it here.
+    let page = std::fs::read_to_string(root.join("preview/index.html")).unwrap();
+    assert!(page.contains("--colmap-path sparse/0"), "the page says nerfstudio's flag");
     for frame in 0..FRAMES {
         let model = root.join(format!("frame_{frame:04}"));
         let cams = std::fs::read_to_string(model.join("sparse/0/cameras.txt")).unwrap();
