@@ -107,34 +107,55 @@ impl Writing<'_, '_> {
         self.m.out_dir().join(dir).to_string_lossy().into_owned()
     }
 
-    /// fx ≠ fy (when `focal` says why it matters) and an off-centre principal point, for writers whose consumers
-    /// read one focal length or assume the image centre.
-    fn focal_and_centre(&mut self, focal: Option<String>, centre: impl Into<String>) {
+    /// fx ≠ fy and an off-centre principal point, for writers whose consumers read one focal length (`focal`
+    /// names them and the key they read, when that applies) or assume the image centre (`centre` names them, and
+    /// `fix` says what to do): each said with the pixels the reader will be off by.
+    fn focal_and_centre(&mut self, focal: Option<&str>, centre: &str, fix: &str) {
         let (fx, fy, cx, cy) = self.m.render.intrinsics();
         let (w, h) = self.m.render.size();
-        if let Some(help) = focal.filter(|_| (fx - fy).abs() > 1e-9 * fx.abs().max(1.0)) {
-            self.warn(format!("with fx = {fx} ≠ fy = {fy} (non-square pixels)"), help);
+        if let Some(loaders) = focal.filter(|_| (fx - fy).abs() > 1e-9 * fx.abs().max(1.0)) {
+            // A point v px from the principal point vertically projects to v·fx/fy: worst at the farther edge.
+            let off = cy.max(h as f64 - cy) * (fx - fy).abs() / fy;
+            self.warn(
+                format!("with fx = {fx} ≠ fy = {fy} (non-square pixels)"),
+                format!("{loaders}: points land up to {off:.1} px off at the top or bottom edge; set `fy` equal to fx"),
+            );
         }
-        if (cx - w as f64 / 2.0).abs() > 1e-9 || (cy - h as f64 / 2.0).abs() > 1e-9 {
-            self.warn(format!("with an off-centre principal point ({cx}, {cy}) in a {w}×{h} image"), centre);
+        let (dx, dy) = (w as f64 / 2.0 - cx, h as f64 / 2.0 - cy);
+        if dx.abs() > 1e-9 || dy.abs() > 1e-9 {
+            self.warn(
+                format!("with an off-centre principal point ({cx}, {cy}) in a {w}×{h} image"),
+                format!("{centre}: every point lands ({dx:+.1}, {dy:+.1}) px from where it is; {fix}"),
+            );
         }
     }
 
     /// [`Writing::focal_and_centre`] for the loaders of a NeRF-synthetic transforms file.
     fn one_focal_and_centre(&mut self, loaders: &str) {
         self.focal_and_centre(
-            Some(format!("{loaders} take one focal length for both axes and ignore fl_y: set `fy` equal to fx")),
-            format!("{loaders} project about the image centre and ignore cx, cy: leave `cx`, `cy` unset"),
+            Some(&format!("{loaders} take one focal length for both axes (from camera_angle_x) and ignore fl_y")),
+            &format!("{loaders} project about the image centre and ignore cx, cy"),
+            "leave `cx`, `cy` unset",
         );
     }
 
     fn dnerf(&mut self) {
         let (w, h) = self.m.render.size();
         if w != h {
+            let (w, h) = (w as f64, h as f64);
+            // Deformable-3DGS: FovX ↔ FovY scales x by W/H and y by H/W about the centre (worst at a corner);
+            // 4DGaussians: the 800×800 image keeps FovX for both axes, so y is scaled by H/W (docs/consumers.md).
+            let deformable = (w / 2.0 * (w / h - 1.0)).hypot(h / 2.0 * (h / w - 1.0));
+            let gaussians = h / 2.0 * (w - h).abs() / w;
             self.warn(
                 format!("with non-square {w}×{h} images"),
-                "K-Planes swaps W and H when resizing, Deformable-3DGS swaps FovX and FovY, 4DGaussians resizes to \
-                 800×800 and D-NeRF's half_res (its configs' default) stops with a ValueError: use square images",
+                format!(
+                    "K-Planes resizes each {w}×{h} image to {h}×{w} (its rays take that shape: the images are \
+                     stretched); Deformable-3DGS swaps FovX and FovY: points land up to {deformable:.1} px off at the \
+                     corners; 4DGaussians resizes to 800×800 and takes FovY = FovX: up to {gaussians:.1} px off (of \
+                     these images) at the top and bottom; D-NeRF's half_res (its configs' default) stops with a \
+                     ValueError (cv2.resize to (H, W)): use square images"
+                ),
             );
         }
         self.one_focal_and_centre(DNERF_ONE_FOCAL);
@@ -169,7 +190,8 @@ impl Writing<'_, '_> {
         if w != h {
             self.warn(
                 format!("with non-square {w}×{h} images"),
-                "NeRF's load_blender.py with half_res resizes non-square images wrongly",
+                "NeRF's load_blender.py (bmild/nerf) with half_res resizes every image to 400×400 while its rays \
+                 keep H/2 × W/2: it trains on the wrong pixels",
             );
         }
         self.one_focal_and_centre(STATIC_ONE_FOCAL);
@@ -207,22 +229,29 @@ impl Writing<'_, '_> {
         self.focal_and_centre(
             None,
             "3DGS's COLMAP reader (and 4DGaussians' and Deformable-3DGS' copies) use only the focal lengths and \
-             project about the image centre; nerfstudio's colmap parser reads cx, cy: leave `cx`, `cy` unset for 3DGS",
+             project about the image centre",
+            "nerfstudio's colmap parser reads cx, cy: leave `cx`, `cy` unset for 3DGS",
         );
     }
 
     fn dynerf(&mut self) {
         self.focal_and_centre(
-            Some(format!("poses_bounds.npy holds one focal length (fx): {DYNERF_LOADERS} use it for both axes")),
-            format!("poses_bounds.npy has no principal point: {DYNERF_LOADERS} assume the image centre"),
+            Some(&format!("poses_bounds.npy holds one focal length (fx): {DYNERF_LOADERS} use it for both axes")),
+            &format!("poses_bounds.npy has no principal point: {DYNERF_LOADERS} assume the image centre"),
+            "leave `cx`, `cy` unset",
         );
         let (w, h) = self.m.render.size();
         if (w, h) != (2704, 2028) {
+            // It resizes every frame to 1352×1014 and takes focal / 2 (the file's focal over 2704 / 1352): a point
+            // u px from the centre of those frames projects to u·W/2704 across and v·H/2028 down (worst at a corner).
+            let off = (676.0 * (1.0 - w as f64 / 2704.0)).hypot(507.0 * (1.0 - h as f64 / 2028.0));
             self.warn(
                 format!("with {w}×{h} images"),
-                "4DGaussians hard-codes DyNeRF's 2704×2028 (resized to 1352×1014, focal halved): its cameras are \
-                 right only at a 4:3 aspect with the focal given for 2704 px; K-Planes and Deformable-3DGS read any \
-                 size",
+                format!(
+                    "4DGaussians hard-codes DyNeRF's 2704×2028 (every frame resized to 1352×1014, the focal halved): \
+                     at {w}×{h} its cameras are off by up to {off:.0} px of those frames at the corners; K-Planes and \
+                     Deformable-3DGS read any size"
+                ),
             );
         }
         if w % 2 == 1 || h % 2 == 1 {

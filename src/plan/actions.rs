@@ -28,7 +28,8 @@ const SELECTION: &str = "at most n points 1";
 pub const ENCODE_SALT: &str = "encode 1";
 /// Version of the video encoding (codec, its settings, colour conversion and container): see
 /// [`crate::execute::video`].
-pub const VIDEO_SALT: &str = "video 2: openh264 0.9, qp 12, bt601 limited 4:2:0 (block-mean chroma, least-squares luma), mp4";
+pub const VIDEO_SALT: &str =
+    "video 2: openh264 0.9, qp 12, bt601 limited 4:2:0 (block-mean chroma, least-squares luma), mp4";
 
 /// What an action does; each kind has its own executor and its own keyed walk.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]

@@ -245,3 +245,108 @@ fn project(w2c: &DMat4, fovx: f64, p: &[f32; 3]) -> DVec2 {
     let f = 32.0 / (fovx / 2.0).tan();
     DVec2::new(32.0 + f * v.x / v.z, 32.0 + f * v.y / v.z)
 }
+
+/// The pixels `check` says a reader is off by are what the reader's own projection does: every pixel centre of
+/// the image, cast at depth 1 through the written camera and projected as each loader projects it (see
+/// docs/consumers.md for the lines), on the non-square 120×90 set and its fx 100 / fy 105, cx 66 / cy 41.
+#[test]
+fn the_pixels_check_says_are_the_readers_own() {
+    // The first number after `after` in `text`.
+    let figure = |text: &str, after: &str| -> f64 {
+        let rest = text.split(after).nth(1).unwrap_or_else(|| panic!("no {after:?} in {text}"));
+        let num: String =
+            rest.chars().take_while(|c| c.is_ascii_digit() || *c == '.' || *c == '-' || *c == '+').collect();
+        num.parse().unwrap_or_else(|_| panic!("{num:?} after {after:?}"))
+    };
+    let (w, h) = (120.0f64, 90.0f64);
+    let check_with = |render: &str| {
+        let text = manifest("", SPLITS, "writer = \"dnerf\"\ninit_points = 0\ndir = \"x_dnerf\"");
+        check(&text.replace("resolution = [32, 32]", &format!("resolution = [120, 90]\n{render}"))).1
+    };
+    // (fx, fy, cx, cy) → the largest offset of a reader's projection `proj(x, y)` (x, y = ray at depth 1).
+    let worst = |k: (f64, f64, f64, f64), proj: &dyn Fn(f64, f64) -> (f64, f64)| -> f64 {
+        let mut m = 0.0f64;
+        for j in 0..h as usize {
+            for i in 0..w as usize {
+                let (u, v) = (i as f64 + 0.5, j as f64 + 0.5);
+                let (pu, pv) = proj((u - k.2) / k.0, (v - k.3) / k.1);
+                m = m.max((pu - u).hypot(pv - v));
+            }
+        }
+        m
+    };
+    let angle_x = |fx: f64| 2.0 * (w / 2.0 / fx).atan();
+    // D-NeRF, 3DGS, nerfstudio's blender parser: focal = .5·W / tan(.5·camera_angle_x) for both axes, centred.
+    let one_focal = |fx: f64| {
+        move |x: f64, y: f64| {
+            let f = 0.5 * w / (0.5 * angle_x(fx)).tan();
+            (w / 2.0 + f * x, h / 2.0 + f * y)
+        }
+    };
+
+    let err = check_with("fx = 100.0\nfy = 105.0");
+    let said = figure(&err, "ignore fl_y: points land up to ");
+    // The loaders' own vertical error at cy = 45: what check says, to its 0.1 px.
+    let k = (100.0, 105.0, 60.0, 45.0);
+    assert!((worst(k, &one_focal(100.0)) - said).abs() < 0.6, "{said} vs replay {}", worst(k, &one_focal(100.0)));
+
+    let err = check_with("cx = 66.0\ncy = 41.0");
+    let (dx, dy) = (figure(&err, "every point lands ("), figure(&err, "every point lands (-6.0, "));
+    let f = 0.5 * w / (0.5 * 0.6911112070083618f64).tan();
+    let replay = worst((f, f, 66.0, 41.0), &one_focal(f));
+    assert!(((dx * dx + dy * dy).sqrt() - replay).abs() < 1e-6, "({dx}, {dy}) vs replay {replay}");
+
+    let err = check_with("");
+    assert!(err.contains("resizes each 120×90 image to 90×120") && err.contains("stops with a ValueError"), "{err}");
+    let fovx = 0.6911112070083618f64;
+    let f = 0.5 * w / (0.5 * fovx).tan();
+    let k = (f, f, 60.0, 45.0);
+    // Deformable-3DGS: fovy = focal2fov(fov2focal(fovx, W), H); FovY = fovx; FovX = fovy.
+    let fovy = 2.0 * ((h / 2.0) / f).atan();
+    let deformable =
+        move |x: f64, y: f64| (w / 2.0 + w / 2.0 * x / (fovy / 2.0).tan(), h / 2.0 + h / 2.0 * y / (fovx / 2.0).tan());
+    let said = figure(&err, "swaps FovX and FovY: points land up to ");
+    assert!((worst(k, &deformable) - said).abs() < 0.6, "Deformable {said} vs replay {}", worst(k, &deformable));
+    // 4DGaussians: PILtoTorch(image, (800, 800)); FovY = focal2fov(fov2focal(fovx, 800), 800) = fovx; back in
+    // this image's pixels.
+    let gaussians = move |x: f64, y: f64| {
+        let (pu, pv) = (400.0 + 400.0 * x / (fovx / 2.0).tan(), 400.0 + 400.0 * y / (fovx / 2.0).tan());
+        (pu * w / 800.0, pv * h / 800.0)
+    };
+    let said = figure(&err, "takes FovY = FovX: up to ");
+    assert!((worst(k, &gaussians) - said).abs() < 0.6, "4DGaussians {said} vs replay {}", worst(k, &gaussians));
+
+    // 4DGaussians' Neural3D reader at 320×240: frames resized to 1352×1014, focal = poses_bounds' focal / 2
+    // (downsample = 2704 / 1352), projected about the centre; measured in those frames' pixels.
+    let (w, h) = (320.0f64, 240.0f64);
+    let text = manifest("", "[split.train]\nrig = \"o\"\nviews = 2\n", "writer = \"dynerf\"\ninit_points = 0");
+    let (_, err, _d) = check(&text.replace("resolution = [32, 32]", "resolution = [320, 240]"));
+    let f = 0.5 * w / (0.5 * fovx).tan();
+    let mut replay = 0.0f64;
+    for (u, v) in [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)] {
+        let (x, y) = ((u - w / 2.0) / f, (v - h / 2.0) / f);
+        let (pu, pv) = (676.0 + f / 2.0 * x, 507.0 + f / 2.0 * y);
+        replay = replay.max((pu - u * 1352.0 / w).hypot(pv - v * 1014.0 / h));
+    }
+    let said = figure(&err, "its cameras are off by up to ");
+    assert!((replay - said).abs() < 0.6, "4DGaussians Neural3D {said} vs replay {replay}");
+}
+
+/// What a loader reads from a path or a size it does not expect is said, by what the user will see.
+#[test]
+fn paths_and_sizes_the_loaders_misread_are_said() {
+    let one = "[split.train]\nrig = \"o\"\nviews = 2\n";
+    let cases: &[(&str, &str, &str)] = &[
+        ("writer = \"dnerf\"\ndir = \"plain\"", "", "directory `plain` does not contain \"dnerf\""),
+        ("writer = \"dynerf\"\ndir = \"my.set\"", "", "contains a `.`"),
+        ("writer = \"dynerf\"\ndir = \"my_dnerf_set\"", "", "contains `dnerf` or `lego`"),
+        ("writer = \"static-frames\"", "resolution = [48, 32]", "resizes every image to 400×400"),
+    ];
+    for (output, render, says) in cases {
+        let text = manifest("", one, &format!("{output}\ninit_points = 0"));
+        let text = if render.is_empty() { text } else { text.replace("resolution = [32, 32]", render) };
+        let (code, err, _d) = check(&text);
+        assert_eq!(code, Some(0), "{err}");
+        assert!(err.contains(says), "missing {says:?}:\n{err}");
+    }
+}
