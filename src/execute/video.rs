@@ -269,3 +269,55 @@ fn luma_for(rgb: [f32; 3], u: u8, v: u8) -> u8 {
     }
     best as u8
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// I420 back to packed RGB as a decoder without chroma filtering does (each chroma sample over its 2×2
+    /// block), BT.601 limited range, clipped.
+    fn i420_to_rgb(yuv: &[u8], w: usize, h: usize) -> Vec<f32> {
+        let cw = w / 2;
+        let (luma, chroma) = yuv.split_at(w * h);
+        let (u, v) = chroma.split_at(cw * (h / 2));
+        let mut out = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                let (yy, du, dv) = (
+                    luma[y * w + x] as f32 - 16.0,
+                    u[y / 2 * cw + x / 2] as f32 - 128.0,
+                    v[y / 2 * cw + x / 2] as f32 - 128.0,
+                );
+                let rgb = [
+                    1.164_383 * yy + 1.596_027 * dv,
+                    1.164_383 * yy - 0.391_762 * du - 0.812_968 * dv,
+                    1.164_383 * yy + 2.017_232 * du,
+                ];
+                out.extend(rgb.map(|c| c.round().clamp(0.0, 255.0)));
+            }
+        }
+        out
+    }
+
+    /// Least-squares luma decodes colour edges nearer their RGB than BT.601's own luma does with the same chroma
+    /// (on this checker, where chroma dominates the error, by 15 %).
+    #[test]
+    fn luma_takes_back_what_shared_chroma_loses() {
+        // A saturated checker of red, green, blue and grey, one pixel per cell: every block mixes colours.
+        let (w, h) = (16, 16);
+        let colours = [[230u8, 20, 20], [20, 200, 40], [30, 40, 220], [128, 128, 128]];
+        let rgb: Vec<u8> = (0..w * h).flat_map(|i| colours[(i % w + i / w * 3) % 4]).collect();
+        let ours = rgb_to_i420(&rgb, w, h);
+        let mut plain = ours.clone();
+        for (i, p) in rgb.chunks(3).enumerate() {
+            let [r, g, b] = [p[0], p[1], p[2]].map(f32::from);
+            plain[i] = (16.0 + 0.256_788 * r + 0.504_129 * g + 0.097_906 * b).round() as u8;
+        }
+        let mse = |yuv: &[u8]| -> f32 {
+            let back = i420_to_rgb(yuv, w, h);
+            back.iter().zip(&rgb).map(|(a, &b)| (a - b as f32).powi(2)).sum::<f32>() / back.len() as f32
+        };
+        let (ours, plain) = (mse(&ours), mse(&plain));
+        assert!(ours < 0.9 * plain, "least-squares luma {ours} vs BT.601 luma {plain}");
+    }
+}

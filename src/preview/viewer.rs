@@ -203,7 +203,7 @@ mod tests {
             },
         ];
         let cloud = Cloud { frame: 1, time: 1.0, positions: &[[0.0, 0.0, 0.0]], colors: &[[255, 0, 0]] };
-        let page = html("a & b", &images, &[cloud], None, None);
+        let page = html("a & b", "load it", &images, &[cloud], None, None);
         assert!(page.contains("<title>vvgen · a &amp; b</title>"));
         assert_eq!(page.matches("</script>").count(), 3, "the data cannot close its script");
         assert!(page.contains(r#""frames":[0,1]"#) && page.contains(r#""images":3"#));
