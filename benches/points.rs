@@ -4,7 +4,7 @@
 //!
 //! Run: `cargo bench --bench points [-- OUT_DIR] [--quick]`. The sampled 1M-point cloud is left in OUT_DIR
 //! (default `target/bench-data`) as `points_1m.ply`, so Open3D can downsample the same points in the same run
-//! (see `benches/README.md`). `--quick` skips the 60-frame sequence.
+//! (see docs/benchmarks.md). `--quick` skips the 60-frame sequence.
 
 use std::hint::black_box;
 use std::path::PathBuf;

@@ -4,7 +4,7 @@
 //! 60-frame point-cloud sequence (1M surface samples per frame, 5 mm voxels). Previews off (the workload as
 //! the issue defines it). Prints the wall time, per-kind times and ms per image. `benches/seed_peers.sh` builds
 //! the same set with `vvgen` binaries (today's beside an older one) and times Blender on the same images in the
-//! same run (see README).
+//! same run (see docs/benchmarks.md).
 //!
 //! Run: `cargo bench --bench seed [-- OUT_DIR]` (default `target/bench-seed`; about 2 GB written).
 

@@ -112,7 +112,7 @@ impl Staged {
 /// Makes the bytes of every staged file in `files` durable, for [`Staged::commit_synced`]: a group commit. On
 /// Linux, one `syncfs` per file system the files are on: the disk's write cache is flushed once for the batch,
 /// where a `sync_all` per file flushes it once per file (a build's cache takes two files per image; on a cut of
-/// the seed-scale set the machine's busy CPU time fell by a sixth, README). `syncfs` writes back whatever else
+/// the seed-scale set the machine's busy CPU time fell by a sixth, docs/benchmarks.md). `syncfs` writes back whatever else
 /// on that file system is dirty too: the price of the one flush, paid on the committer's thread. (Linux reports
 /// a failed writeback through `syncfs` from 5.8 on; older kernels return success regardless.) Elsewhere each
 /// file's `sync_all`.

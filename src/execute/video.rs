@@ -11,7 +11,7 @@
 //! silhouette against the background) lose what no quantizer gives back, the more the smaller the image. Chroma
 //! is each 2×2 block's mean; luma is then chosen per pixel so that, with the block's chroma, the pixel decodes
 //! nearest its RGB (least squares, the decoder's clipping included), which takes back 0.3–0.6 dB of RGB PSNR.
-//! Measured per size by `benches/video_psnr.sh` (the README's table): 38.7 dB at 64², 44.6 dB at 676×508 on
+//! Measured per size by `benches/video_psnr.sh` (docs/benchmarks.md): 38.7 dB at 64², 44.6 dB at 676×508 on
 //! CesiumMan, within 0.1–1.3 dB of what 4:2:0 alone allows. The PNG frames stay in the dataset (4DGaussians and
 //! Deformable-3DGS read them); only K-Planes trains on the video.
 

@@ -3,7 +3,7 @@
 //! (`blend_export.py`); the frames then load as a mesh sequence. Baking per frame, rather than exporting a glTF
 //! animation, is what makes each frame what Blender shows: Blender's glTF animation export misses NLA-only
 //! actions, some drivers and parent-inverse cases, and every modifier but armatures (measured on the
-//! glTF-Blender-IO test scenes, README). Nothing else reads the Blender format as Blender does, so vvgen does
+//! glTF-Blender-IO test scenes, docs/benchmarks.md). Nothing else reads the Blender format as Blender does, so vvgen does
 //! not try.
 //!
 //! The import is an action of the cache, keyed in two steps because some of its inputs are only known once

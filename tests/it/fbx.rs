@@ -228,7 +228,7 @@ fn fbx_poses_as_ufbxs_reference_meshes_where_blender_cannot_read_the_file() {
     // three bones, in three takes at frames 0, 15 and 20 (24 fps, from time 0; its `Spin` take starts a frame
     // early). (ufbx's `maya_anim_layers_over_acc_orders_18.obj`, Maya's layered animation over six rotation
     // orders, is matched by its XYZ cube only, to 3e-6 of its size; the five other orders are off by up to 0.14
-    // of it, in ufbx's evaluation, which no ufbx test checks against that file: README.)
+    // of it, in ufbx's evaluation, which no ufbx test checks against that file: docs/benchmarks.md.)
     for (fbx, take, frame, obj, unit) in [
         ("blender_279_sausage_6100_ascii", Some("Base"), 0.0, "blender_279_sausage_base_0", 0.01),
         ("blender_279_sausage_6100_ascii", Some("Spin"), 15.0, "blender_279_sausage_spin_15", 0.01),
