@@ -6,7 +6,8 @@
 //!
 //! What is loaded once: the file, and per mesh instance and material the triangle corners with their static
 //! attributes (UVs, colours). What each frame poses: ufbx evaluates the take at the frame's time (nodes, blend
-//! shapes, skinning) and the corners' positions and normals are read off the evaluated meshes.
+//! shapes, skinning) and the corners' positions and normals are read off the evaluated meshes. Rotations that
+//! animation layers blend as quaternions are blended as Maya blends them first ([`super::fbx_layers`]).
 //!
 //! Hostile files: ufbx refuses malformed input with an error (never a crash), and both its allocators are
 //! capped ([`MAX_MEMORY`], [`MAX_ALLOCATIONS`]), so an absurd count is an error, not an unbounded allocation.
@@ -72,6 +73,8 @@ pub struct FbxAsset {
     textures: Arc<Vec<Texture>>,
     /// Whether some mesh has blend shapes (ufbx then evaluates the skinning, with them).
     blend_shapes: bool,
+    /// Nodes whose layered rotation is blended as Maya blends it, not as ufbx does ([`super::fbx_layers`]).
+    layered: Vec<super::fbx_layers::Layered>,
 }
 
 impl FbxAsset {
@@ -220,7 +223,8 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
         }
     }
     let blend_shapes = scene.meshes.iter().any(|m| !m.blend_deformers.is_empty());
-    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes })
+    let layered = super::fbx_layers::find(&scene);
+    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes, layered })
 }
 
 /// Materials and the textures they use.
@@ -427,9 +431,35 @@ impl FbxAsset {
             evaluate_skinning: self.blend_shapes,
             ..Default::default()
         };
-        ufbx::evaluate_scene(&self.scene, &stack.anim, stack.time_begin + t, opts)
-            .map(Some)
-            .map_err(|e| err(&self.path, format!("take `{}` at {t} s: {}", stack.element.name, e.description)))
+        let time = stack.time_begin + t;
+        let failed =
+            |e: ufbx::Error| err(&self.path, format!("take `{}` at {t} s: {}", stack.element.name, e.description));
+        let overrides = super::fbx_layers::overrides(&self.scene, &self.layered, i, time);
+        if overrides.is_empty() {
+            return ufbx::evaluate_scene(&self.scene, &stack.anim, time, opts).map(Some).map_err(failed);
+        }
+        // Maya's blend of layered rotations, handed to ufbx as this instant's property values.
+        let descs: Vec<ufbx::PropOverrideDesc> = overrides
+            .into_iter()
+            .map(|(element_id, r)| ufbx::PropOverrideDesc {
+                element_id,
+                prop_name: ufbx::StringOpt::Ref("Lcl Rotation"),
+                value: ufbx::Vec4 { x: r.x, y: r.y, z: r.z, w: 0.0 },
+                ..Default::default()
+            })
+            .collect();
+        let layer_ids: Vec<u32> = stack.layers.iter().map(|l| l.element.typed_id).collect();
+        let anim = ufbx::create_anim(
+            &self.scene,
+            ufbx::AnimOpts {
+                layer_ids: ufbx::ListOpt::Ref(&layer_ids),
+                prop_overrides: ufbx::ListOpt::Ref(&descs),
+                result_allocator: capped(),
+                ..Default::default()
+            },
+        )
+        .map_err(failed)?;
+        ufbx::evaluate_scene(&self.scene, &anim, time, opts).map(Some).map_err(failed)
     }
 }
 

@@ -4,6 +4,7 @@
 
 pub mod blend;
 pub mod fbx;
+mod fbx_layers;
 pub mod gltf;
 pub mod light;
 pub mod material;
