@@ -58,7 +58,7 @@ pub struct Coverage {
     pub measured: usize,
     /// How far from the origin the subject reaches over the measured frames, world units.
     pub reach: f64,
-    /// The images whose subject 4DGaussians and Deformable-3DGS would draw at least [`MISREAD_PX`] off, in
+    /// The images whose subject 4DGaussians and Deformable-3DGS would draw at least an eighth of a pixel off, in
     /// image order.
     pub misread: Vec<Misread>,
 }

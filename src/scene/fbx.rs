@@ -7,7 +7,7 @@
 //! What is loaded once: the file, and per mesh instance and material the triangle corners with their static
 //! attributes (UVs, colours). What each frame poses: ufbx evaluates the take at the frame's time (nodes, blend
 //! shapes, skinning) and the corners' positions and normals are read off the evaluated meshes. Rotations that
-//! animation layers blend as quaternions are blended as Maya blends them first ([`super::fbx_layers`]).
+//! animation layers blend as quaternions are blended as Maya blends them first (`fbx_layers`).
 //!
 //! Hostile files: ufbx refuses malformed input with an error (never a crash), and both its allocators are
 //! capped ([`MAX_MEMORY`], [`MAX_ALLOCATIONS`]), so an absurd count is an error, not an unbounded allocation.
