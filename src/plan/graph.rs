@@ -8,8 +8,9 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use super::actions::{pass_name, Action, Keying, PointSettings};
+use super::actions::{pass_name, Action, PointSettings};
 use super::key::{Explaining, Hashing};
+use super::walk::Keying;
 use super::{Error, Plan};
 use crate::cache::Digest;
 use crate::manifest::output::{Output, Writer};
