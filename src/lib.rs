@@ -8,6 +8,8 @@
 //! ([`build::Build`]); [`camera`] is the one camera model; [`cli`] is the command-line front end.
 
 #![deny(missing_docs)]
+// Outside tests, a value that cannot be missing says why (`expect`), and one that can is an error.
+#![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
 pub mod alloc;
 pub mod atomic;

@@ -108,7 +108,7 @@ impl StatCache {
     /// blake3 of the file at `p`, from the cache when its size, mtime and inode are unchanged.
     pub fn digest(&self, p: &Path) -> std::io::Result<Digest> {
         let m = meta(p)?;
-        if let Some((cm, d, is_racy)) = self.entries.lock().unwrap().get(p) {
+        if let Some((cm, d, is_racy)) = self.entries.lock().expect("BUG: poisoned only by a panic elsewhere").get(p) {
             if *cm == m && !is_racy {
                 return Ok(*d);
             }
@@ -116,7 +116,7 @@ impl StatCache {
         let d = Digest::of(&fs::read(p)?);
         // Metadata read before the content: a write racing the read leaves a stale entry that the next stat
         // rejects, never a wrong one that looks current.
-        self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d, racy(&m)));
+        self.entries.lock().expect("BUG: poisoned only by a panic elsewhere").insert(p.to_path_buf(), (m, d, racy(&m)));
         self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
         Ok(d)
     }
@@ -129,7 +129,10 @@ impl StatCache {
     /// Records that `p` (just written by us) holds `d`.
     pub fn record(&self, p: &Path, d: Digest) {
         if let Ok(m) = meta(p) {
-            self.entries.lock().unwrap().insert(p.to_path_buf(), (m, d, racy(&m)));
+            self.entries
+                .lock()
+                .expect("BUG: poisoned only by a panic elsewhere")
+                .insert(p.to_path_buf(), (m, d, racy(&m)));
             self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
         }
     }
@@ -145,14 +148,14 @@ impl StatCache {
     ) -> std::io::Result<Result<String, E>> {
         let d = self.digest(p)?;
         let key = (kind.to_string(), d);
-        if let Some(v) = self.derived.lock().unwrap().get(&key) {
+        if let Some(v) = self.derived.lock().expect("BUG: poisoned only by a panic elsewhere").get(&key) {
             return Ok(Ok(v.clone()));
         }
         let v = match derive() {
             Ok(v) => v,
             Err(e) => return Ok(Err(e)),
         };
-        self.derived.lock().unwrap().insert(key, v.clone());
+        self.derived.lock().expect("BUG: poisoned only by a panic elsewhere").insert(key, v.clone());
         self.dirty.store(true, std::sync::atomic::Ordering::Relaxed);
         Ok(Ok(v))
     }
@@ -163,7 +166,7 @@ impl StatCache {
         if !self.dirty.load(std::sync::atomic::Ordering::Relaxed) && self.path.exists() {
             return Ok(());
         }
-        let entries = self.entries.lock().unwrap();
+        let entries = self.entries.lock().expect("BUG: poisoned only by a panic elsewhere");
         let mut lines: Vec<String> = entries
             .iter()
             // Racy entries are not saved: the next build hashes those files once more (git's "smudging").
@@ -171,7 +174,13 @@ impl StatCache {
             .map(|(p, (m, d, _))| format!("{}\t{}\t{}\t{}\t{}", d.hex(), m.size, m.mtime_ns, m.ino, p.display()))
             .collect();
         let held: std::collections::HashSet<Digest> = entries.values().map(|(_, d, _)| *d).collect();
-        for ((kind, d), v) in self.derived.lock().unwrap().iter().filter(|((_, d), _)| held.contains(d)) {
+        for ((kind, d), v) in self
+            .derived
+            .lock()
+            .expect("BUG: poisoned only by a panic elsewhere")
+            .iter()
+            .filter(|((_, d), _)| held.contains(d))
+        {
             let value = serde_json::Value::String(v.clone());
             lines.push(format!("{DERIVED}\t{kind}\t{}\t{value}", d.hex()));
         }

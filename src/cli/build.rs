@@ -28,7 +28,7 @@ impl Progress for Display {
         } else if !self.quiet {
             eprintln!("{hits} actions cached, running {work}");
         }
-        self.plain.lock().unwrap().0 = work;
+        self.plain.lock().expect("BUG: poisoned only by a panic elsewhere").0 = work;
     }
 
     fn ran(&self, done: usize) {
@@ -36,7 +36,7 @@ impl Progress for Display {
             b.set_position(done as u64);
             return;
         }
-        let mut p = self.plain.lock().unwrap();
+        let mut p = self.plain.lock().expect("BUG: poisoned only by a panic elsewhere");
         let tenth = (done * 10).checked_div(p.0).unwrap_or(10);
         if tenth > p.1 && !self.quiet {
             p.1 = tenth;

@@ -119,7 +119,7 @@ pub fn dnerf(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
             }));
         }
         let first = x.plan.images[list[0]].time;
-        let last = x.plan.images[*list.last().unwrap()].time;
+        let last = x.plan.images[*list.last().expect("BUG: by_split lists no empty split")].time;
         if first != 0.0 {
             files.warn(format!("split `{split}` starts at time {first}: D-NeRF asserts every split starts at 0"));
         }

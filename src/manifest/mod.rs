@@ -159,8 +159,8 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
     let mut tables: BTreeMap<&str, &walk::Raw<'_>> = BTreeMap::new();
     for (key, value) in root.iter() {
         let name: &str = key.get_ref().as_ref();
-        if TABLES.contains(&name) {
-            tables.insert(TABLES.iter().find(|t| **t == name).unwrap(), value);
+        if let Some(table) = TABLES.iter().find(|t| **t == name) {
+            tables.insert(table, value);
         } else {
             let mut d = Diagnostic::error(format!("unknown table `{name}`"), Some(key.span()));
             d = match did_you_mean(name, TABLES.iter().copied()) {

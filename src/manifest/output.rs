@@ -259,12 +259,12 @@ impl Output {
                 );
             }
         }
-        if let Some(a) = &self.aabb_scale {
-            let a = *a.get_ref();
+        if let Some(spanned) = &self.aabb_scale {
+            let a = *spanned.get_ref();
             if !a.is_power_of_two() || a > 128 {
                 diags.push(Diagnostic::error(
                     format!("aabb_scale = {a} must be a power of two in 1..=128"),
-                    Some(self.aabb_scale.as_ref().unwrap().span()),
+                    Some(spanned.span()),
                 ));
             }
         }

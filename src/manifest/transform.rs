@@ -199,16 +199,13 @@ impl Transform {
                 diags.push(Diagnostic::error(format!("fit size {v} must be a positive number"), Some(fit.span())));
             }
         }
-        if let Some(m) = &self.matrix {
-            let m = m.get_ref();
+        if let Some(spanned) = &self.matrix {
+            let m = spanned.get_ref();
             let finite = m.iter().flatten().all(|v| v.is_finite());
             if !finite || m[3] != [0.0, 0.0, 0.0, 1.0] {
                 diags.push(
-                    Diagnostic::error(
-                        "`matrix` must be finite with a last row of [0, 0, 0, 1]",
-                        Some(self.matrix.as_ref().unwrap().span()),
-                    )
-                    .with_help("rows are listed top to bottom; the translation is the last column"),
+                    Diagnostic::error("`matrix` must be finite with a last row of [0, 0, 0, 1]", Some(spanned.span()))
+                        .with_help("rows are listed top to bottom; the translation is the last column"),
                 );
             }
         }

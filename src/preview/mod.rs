@@ -108,7 +108,9 @@ pub fn encode_clouds(clouds: &[(usize, Samples)]) -> Vec<u8> {
 /// The clouds of [`encode_clouds`]; `None` for bytes it did not write (a damaged cache).
 pub fn decode_clouds(mut b: &[u8]) -> Option<Vec<(usize, Samples)>> {
     let mut out = Vec::new();
-    let u32_at = |b: &[u8], at: usize| b.get(at..at + 4).map(|x| u32::from_le_bytes(x.try_into().unwrap()) as usize);
+    let u32_at = |b: &[u8], at: usize| {
+        b.get(at..at + 4).map(|x| u32::from_le_bytes(x.try_into().expect("BUG: 4 bytes")) as usize)
+    };
     while !b.is_empty() {
         let (frame, n) = (u32_at(b, 0)?, u32_at(b, 4)?);
         let body = b.get(8..8 + n.checked_mul(15)?)?;

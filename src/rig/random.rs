@@ -34,7 +34,7 @@ impl Keyed {
             self.reader.fill(&mut self.buf);
             self.pos = 0;
         }
-        let b: [u8; N] = self.buf[self.pos..self.pos + N].try_into().unwrap();
+        let b: [u8; N] = self.buf[self.pos..self.pos + N].try_into().expect("BUG: a slice of N bytes");
         self.pos += N;
         b
     }

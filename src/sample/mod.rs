@@ -90,7 +90,7 @@ impl Points {
     /// Reads [`Points::to_bytes`].
     pub fn from_bytes(b: &[u8]) -> Result<Points, Error> {
         let n = b.strip_prefix(RAW_MAGIC).and_then(|r| r.get(..8)).ok_or(Error::Damaged)?;
-        let n = u64::from_le_bytes(n.try_into().unwrap()) as usize;
+        let n = u64::from_le_bytes(n.try_into().expect("BUG: 8 bytes taken above")) as usize;
         let body = &b[16..];
         if Some(body.len()) != n.checked_mul(POINT_BYTES) {
             return Err(Error::Damaged);
@@ -103,7 +103,7 @@ impl Points {
         #[cfg(not(target_endian = "little"))]
         let positions: Vec<[f32; 3]> = positions
             .chunks_exact(12)
-            .map(|c| [0, 1, 2].map(|j| f32::from_le_bytes(c[4 * j..4 * j + 4].try_into().unwrap())))
+            .map(|c| [0, 1, 2].map(|j| f32::from_le_bytes(c[4 * j..4 * j + 4].try_into().expect("BUG: 4 bytes"))))
             .collect();
         Ok(Points { positions, normals: get_halves(normals, n), colors: get_halves(colors, n) })
     }

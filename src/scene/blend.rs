@@ -97,7 +97,7 @@ impl<'a> Importer<'a> {
 
     /// The action keys and blobs the imports so far used: what a garbage collection must keep.
     pub fn used(&self) -> Vec<Digest> {
-        self.used.lock().unwrap().clone()
+        self.used.lock().expect("BUG: poisoned only by a panic elsewhere").clone()
     }
 
     /// Imports `blend` as source `s` selects, from the cache when both keys hold, else by running Blender.
@@ -161,7 +161,7 @@ impl<'a> Importer<'a> {
             return Ok(None);
         }
         let dir = self.place(&import, &info, files)?;
-        let mut used = self.used.lock().unwrap();
+        let mut used = self.used.lock().expect("BUG: poisoned only by a panic elsewhere");
         used.extend([*listing, deps_blob, import, info_blob]);
         used.extend(files);
         Ok(Some(Imported { dir, info, ran: false }))
@@ -265,7 +265,7 @@ impl<'a> Importer<'a> {
             staged.commit().map_err(|e| Error::Io { path: dest, source: e })?;
         }
         let dir = self.place(&import, &info, &blobs[1..])?;
-        let mut used = self.used.lock().unwrap();
+        let mut used = self.used.lock().expect("BUG: poisoned only by a panic elsewhere");
         used.extend([*listing, deps_blob, import]);
         used.extend(blobs);
         Ok(Imported { dir, info, ran: true })

@@ -325,8 +325,7 @@ fn prefilter_rows(map: &EnvMap, min_rows: usize) -> Prefiltered {
     // A pyramid of the map to read the lobes from (filtered importance sampling: wide, unlikely samples read
     // coarse levels, so few samples suffice without speckle from a small bright sun).
     let mut pyramid = vec![map.clone()];
-    while pyramid.last().is_some_and(|m| m.width > 8) {
-        let next = pyramid.last().unwrap().half();
+    while let Some(next) = pyramid.last().filter(|m| m.width > 8).map(EnvMap::half) {
         pyramid.push(next);
     }
     let levels = (0..LEVELS)

@@ -183,12 +183,9 @@ fn assemble(
     // inside the triangle, and a triangle between sample centres is dropped here.
     let first = |a: i64| -(SUBPIXEL / 2 - a).div_euclid(SUBPIXEL);
     let last = |b: i64| (b - SUBPIXEL / 2).div_euclid(SUBPIXEL);
-    let bbox = [
-        first(*x.iter().min().unwrap()).max(0),
-        first(*y.iter().min().unwrap()).max(0),
-        last(*x.iter().max().unwrap()).min(p.size.0 - 1),
-        last(*y.iter().max().unwrap()).min(p.size.1 - 1),
-    ];
+    let (min, max) = (|a: [i64; 3]| a[0].min(a[1]).min(a[2]), |a: [i64; 3]| a[0].max(a[1]).max(a[2]));
+    let bbox =
+        [first(min(x)).max(0), first(min(y)).max(0), last(max(x)).min(p.size.0 - 1), last(max(y)).min(p.size.1 - 1)];
     if bbox[0] > bbox[2] || bbox[1] > bbox[3] {
         return None;
     }

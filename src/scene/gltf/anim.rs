@@ -89,7 +89,7 @@ impl Sampler {
 
     /// Time of the last key.
     pub fn end(&self) -> f32 {
-        *self.times.last().unwrap()
+        *self.times.last().expect("BUG: a sampler has keys (Sampler::new refuses none)")
     }
 
     /// Time of the first key.

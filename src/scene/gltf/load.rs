@@ -198,7 +198,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
             let decoded = reader.decode().map_err(|e| err(path, format!("images[{img_index}]: cannot decode: {e}")))?;
             images[img_index] = Some(decoded.to_rgba8());
         }
-        let img = images[img_index].as_ref().unwrap();
+        let img = images[img_index].as_ref().expect("BUG: decoded just above when missing");
         textures.push(Texture::new(img.width(), img.height(), img.as_raw().clone(), true));
     }
 
@@ -524,7 +524,8 @@ fn primitive(
     let influences = sets as usize * 4;
     let (mut joints, mut weights) = (vec![0u16; n * influences], vec![0f32; n * influences]);
     for s in 0..sets as usize {
-        let j = read_u32(&p.get(&gltf::Semantic::Joints(s as u32)).unwrap(), buffers)?;
+        let joints_of = p.get(&gltf::Semantic::Joints(s as u32)).expect("BUG: counted among the sets above");
+        let j = read_u32(&joints_of, buffers)?;
         let w = attr(gltf::Semantic::Weights(s as u32))?.unwrap_or_default();
         if j.len() != n * 4 || w.len() != n * 4 {
             return Err(format!("JOINTS_{s}/WEIGHTS_{s} must be VEC4 with one element per vertex"));

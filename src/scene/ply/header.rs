@@ -69,7 +69,7 @@ impl Scalar {
     pub(super) fn read(self, b: &[u8], be: bool) -> f64 {
         macro_rules! rd {
             ($t:ty, $n:expr) => {{
-                let a: [u8; $n] = b[..$n].try_into().unwrap();
+                let a: [u8; $n] = b[..$n].try_into().expect("BUG: a slice of $n bytes");
                 (if be { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f64
             }};
         }
