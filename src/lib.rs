@@ -27,3 +27,4 @@ pub mod render;
 pub mod rig;
 pub mod sample;
 pub mod scene;
+pub mod settings;

@@ -84,7 +84,7 @@ impl Build {
 
     /// A build of the manifest file at `path`.
     pub fn from_manifest_file(path: &Path) -> Result<Build, Error> {
-        let (m, _) = crate::manifest::load(path).map_err(|r| Error::Manifest(Box::new(r)))?;
+        let (m, _) = crate::settings::load(path).map_err(|r| Error::Manifest(Box::new(r)))?;
         Ok(Build::new(m))
     }
 
@@ -293,6 +293,12 @@ pub(crate) fn prepare(
 /// their outputs), through the same cache.
 pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress) -> Result<Report, Error> {
     let t0 = Instant::now();
+    // What only the renderer's readers check of the inputs (a manifest may come here without `settings::load`).
+    let found = crate::settings::diagnose(m);
+    if found.iter().any(|d| d.is_error()) {
+        let report = crate::manifest::Report { path: m.path.clone(), source: m.text.clone(), diagnostics: found };
+        return Err(Error::Manifest(Box::new(report)));
+    }
     let mut before = Vec::new();
     let mut before_actions: BTreeMap<Kind, Counts> = BTreeMap::new();
     for a in &m.after {

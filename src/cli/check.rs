@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::{Ui, EXIT_INVALID};
-use crate::manifest::{self, consumers, Diagnostic};
+use crate::manifest::{consumers, Diagnostic};
 use crate::plan::{coverage, Plan};
 use crate::scene;
 
@@ -12,7 +12,7 @@ use crate::scene;
 pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let mut invalid = 0;
     for path in paths {
-        match manifest::load(path) {
+        match crate::settings::load(path) {
             Ok((m, mut report)) => {
                 // What the inputs decide, as the build would find it: each source loads (a malformed file is
                 // an error here, not mid-build), the planner places every camera of every split, and the frame

@@ -312,7 +312,7 @@ pub(crate) fn load_manifest(path: &std::path::Path, ui: Ui) -> Option<crate::man
 
 /// [`load_manifest`], with the number of warnings it printed.
 pub(crate) fn load_manifest_warned(path: &std::path::Path, ui: Ui) -> Option<(crate::manifest::Manifest, usize)> {
-    match crate::manifest::load(path) {
+    match crate::settings::load(path) {
         Ok((m, report)) => {
             if !ui.quiet && !report.diagnostics.is_empty() {
                 eprint!("{}", report.render(ui.color));

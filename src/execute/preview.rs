@@ -33,7 +33,7 @@ fn make(g: &Graph, x: &Inputs, blobs: &[Option<Vec<Digest>>], id: ActionId) -> R
     let dataset = &g.keying.dataset;
     match &n.action {
         Action::PreviewSheet { split, extras } => {
-            let layout = sheet::layout(plan, *split);
+            let layout = crate::plan::preview::layout(plan, *split);
             let per = 1 + extras.len();
             let mut cells = Vec::with_capacity(layout.images.len());
             for (k, &i) in layout.images.iter().enumerate() {

@@ -4,7 +4,7 @@
 use super::{Error, Export, Files};
 use crate::manifest::output::{Output, Writer};
 use crate::plan::actions::{rig_frames, rig_subject_frame, splits_of, Action};
-use crate::preview::{self, sheet, viewer, DIR};
+use crate::preview::{self, viewer, DIR};
 
 /// Writes `preview/` for output `name` over `images`, when the manifest asks for previews.
 pub(super) fn place(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
@@ -69,7 +69,7 @@ fn points(x: &Export, name: &str, title: &str, load: &str, files: &mut Files) ->
 fn pictures(x: &Export, images: &[usize], title: &str, load: &str, files: &mut Files) -> Result<String, Error> {
     let plan = x.plan;
     let splits = splits_of(plan, images);
-    let extras = sheet::extra_passes(x.manifest.render.passes());
+    let extras = crate::plan::preview::extra_passes(x.manifest.render.passes());
     for &s in &splits {
         // Sheets exist where RGBA is rendered.
         let a = Action::PreviewSheet { split: s, extras: extras.clone() };

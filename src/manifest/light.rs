@@ -1,13 +1,11 @@
 //! `[environment]` and `[light.NAME]`: what lights `[render] shading = "pbr"`, in Blender's units.
 
 use std::ops::Range;
-use std::path::Path;
 
 use serde::Deserialize;
 use toml::Spanned;
 
 use super::diag::Diagnostic;
-use crate::render::light as rl;
 
 /// `[environment]`: an HDR equirectangular map lighting the scene (absent: the built-in studio environment).
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
@@ -16,10 +14,10 @@ pub struct Environment {
     /// An equirectangular map, `.hdr` (Radiance) or `.exr`, relative to the manifest; absent: the built-in
     /// studio environment.
     #[schemars(with = "Option<String>")]
-    pub(super) map: Option<Spanned<String>>,
+    pub(crate) map: Option<Spanned<String>>,
     /// Radiance multiplier (Blender's Background Strength; default 1).
     #[schemars(with = "Option<f64>")]
-    pub(super) strength: Option<Spanned<f64>>,
+    pub(crate) strength: Option<Spanned<f64>>,
     /// Rotation about world +Z in degrees (a Mapping node's Z rotation in Blender; default 0).
     #[serde(default)]
     pub rotation_deg: f64,
@@ -34,35 +32,35 @@ pub struct Environment {
 pub struct Light {
     /// `"sun"`, `"point"` or `"spot"`.
     #[schemars(with = "LightKind")]
-    pub(super) kind: Spanned<LightKind>,
+    pub(crate) kind: Spanned<LightKind>,
     /// Sun: the direction the light travels (world, +Z up), e.g. `[0.3, 0.2, -1]`.
     #[schemars(with = "Option<[f64; 3]>")]
-    pub(super) direction: Option<Spanned<[f64; 3]>>,
+    pub(crate) direction: Option<Spanned<[f64; 3]>>,
     /// Point, spot: where the light is.
     #[schemars(with = "Option<[f64; 3]>")]
-    pub(super) position: Option<Spanned<[f64; 3]>>,
+    pub(crate) position: Option<Spanned<[f64; 3]>>,
     /// Spot: the point it aims at (default: the world origin).
     #[schemars(with = "Option<[f64; 3]>")]
-    pub(super) target: Option<Spanned<[f64; 3]>>,
+    pub(crate) target: Option<Spanned<[f64; 3]>>,
     /// Linear RGB colour (Blender's light Color), default white.
     #[serde(default = "white")]
     #[schemars(with = "[f64; 3]")]
-    pub(super) color: Spanned<[f64; 3]>,
+    pub(crate) color: Spanned<[f64; 3]>,
     /// Sun: irradiance in W/m² (Blender's Strength); point, spot: power in W (Blender's Power).
     #[schemars(with = "f64")]
-    pub(super) intensity: Spanned<f64>,
+    pub(crate) intensity: Spanned<f64>,
     /// Sun: angular diameter in degrees (soft shadows; default 0.526, Blender's and the real sun's).
     #[schemars(with = "Option<f64>")]
-    pub(super) angle_deg: Option<Spanned<f64>>,
+    pub(crate) angle_deg: Option<Spanned<f64>>,
     /// Point, spot: radius in world units (soft shadows; default 0.1, Blender's).
     #[schemars(with = "Option<f64>")]
-    pub(super) radius: Option<Spanned<f64>>,
+    pub(crate) radius: Option<Spanned<f64>>,
     /// Spot: full cone angle in degrees (Blender's Spot Size; default 45).
     #[schemars(with = "Option<f64>")]
-    pub(super) cone_deg: Option<Spanned<f64>>,
+    pub(crate) cone_deg: Option<Spanned<f64>>,
     /// Spot: the fraction of the cone over which it fades (Blender's Blend; default 0.15).
     #[schemars(with = "Option<f64>")]
-    pub(super) blend: Option<Spanned<f64>>,
+    pub(crate) blend: Option<Spanned<f64>>,
     /// Whether it casts shadows (default true).
     #[serde(default = "yes")]
     pub shadows: bool,
@@ -101,7 +99,7 @@ impl LightKind {
 type KeyUse<'a> = (&'a str, Option<Range<usize>>, &'a [LightKind]);
 
 /// Blender's default sun angle (degrees).
-const SUN_ANGLE: f64 = 0.526;
+pub(crate) const SUN_ANGLE: f64 = 0.526;
 
 impl Environment {
     /// The map file (manifest-relative), when given.
@@ -114,26 +112,12 @@ impl Environment {
         self.strength.as_ref().map_or(1.0, |s| *s.get_ref())
     }
 
-    pub(super) fn validate(&self, dir: &Path, diags: &mut Vec<Diagnostic>) {
+    /// The table's own checks; the map file is checked where inputs are opened (`crate::settings::diagnose`).
+    pub(super) fn validate(&self, diags: &mut Vec<Diagnostic>) {
         if let Some(s) = &self.strength {
             if *s.get_ref() < 0.0 {
                 diags.push(Diagnostic::error("strength must be ≥ 0", Some(s.span())));
             }
-        }
-        let Some(m) = &self.map else { return };
-        let path = dir.join(m.get_ref());
-        if !rl::environment::is_map_path(&path) {
-            diags.push(
-                Diagnostic::error(format!("`{}` is not an environment map vvgen reads", m.get_ref()), Some(m.span()))
-                    .with_help("use an equirectangular `.hdr` (Radiance) or `.exr` (OpenEXR) file"),
-            );
-        } else if !path.is_file() {
-            diags.push(
-                Diagnostic::error(format!("file not found: {}", path.display()), Some(m.span()))
-                    .with_help("paths are relative to the manifest's folder"),
-            );
-        } else if let Err(e) = rl::environment::header(&path) {
-            diags.push(Diagnostic::error(format!("environment map: {e}"), Some(m.span())));
         }
     }
 }
@@ -219,39 +203,6 @@ impl Light {
                     );
                 }
             }
-        }
-    }
-
-    /// The renderer's light.
-    pub fn resolve(&self) -> rl::Light {
-        let v = |a: [f64; 3]| glam::DVec3::from(a).as_vec3();
-        let kind = match self.kind.get_ref() {
-            LightKind::Sun => rl::LightKind::Sun {
-                direction: v(self.direction.as_ref().map_or([0.0, 0.0, -1.0], |d| *d.get_ref()))
-                    .normalize_or(glam::Vec3::NEG_Z),
-                angle: self.angle_deg.as_ref().map_or(SUN_ANGLE, |a| *a.get_ref()).to_radians() as f32,
-            },
-            LightKind::Point => rl::LightKind::Point {
-                position: v(self.position.as_ref().map_or([0.0; 3], |p| *p.get_ref())),
-                radius: self.radius.as_ref().map_or(0.1, |r| *r.get_ref()) as f32,
-            },
-            LightKind::Spot => {
-                let position = v(self.position.as_ref().map_or([0.0; 3], |p| *p.get_ref()));
-                let target = v(self.target.as_ref().map_or([0.0; 3], |t| *t.get_ref()));
-                rl::LightKind::Spot {
-                    position,
-                    direction: (target - position).normalize_or(glam::Vec3::NEG_Z),
-                    cone: self.cone_deg.as_ref().map_or(45.0, |c| *c.get_ref()).to_radians() as f32,
-                    blend: self.blend.as_ref().map_or(0.15, |b| *b.get_ref()) as f32,
-                    radius: self.radius.as_ref().map_or(0.1, |r| *r.get_ref()) as f32,
-                }
-            }
-        };
-        rl::Light {
-            kind,
-            color: v(*self.color.get_ref()),
-            intensity: *self.intensity.get_ref() as f32,
-            shadows: self.shadows,
         }
     }
 }

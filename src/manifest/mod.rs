@@ -231,7 +231,7 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
         }
     }
     if let Some(e) = &environment {
-        e.validate(&dir, diags);
+        e.validate(diags);
     }
     for (name, (l, span, _)) in &lights.0 {
         l.validate(name, span.clone(), diags);

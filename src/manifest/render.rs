@@ -3,8 +3,6 @@
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::render::{self, encode};
-
 use super::diag::Diagnostic;
 
 /// Largest image side accepted.
@@ -45,21 +43,21 @@ pub struct Render {
     /// Supersampling: 1, 4, 9 or 16 samples per pixel.
     #[serde(default = "one")]
     #[schemars(with = "u32")]
-    pub(super) samples: Spanned<u32>,
+    pub(crate) samples: Spanned<u32>,
     /// Pixel filter of the colour passes: `"box"` (default: a pixel is the mean of its samples) or
     /// `"blackman-harris"` (Cycles' default, soft as Blender's renders).
     #[serde(default)]
     pub filter: PixelFilter,
     /// The Blackman-Harris filter's width in pixels, Blender's Film ▸ Pixel Filter ▸ Width (default 1.5).
     #[schemars(with = "Option<f64>")]
-    pub(super) filter_width: Option<Spanned<f64>>,
+    pub(crate) filter_width: Option<Spanned<f64>>,
     /// `"unlit"` (albedo), `"lambert"` or `"pbr"` (lit by `[light.NAME]` and `[environment]`).
     #[serde(default)]
     pub shading: Shading,
     /// `"transparent"` (default), `"white"`, `"black"` or `[r, g, b]` in 0..1 sRGB.
     #[serde(default)]
     #[schemars(with = "Option<Background>")]
-    pub(super) background: Option<Spanned<Background>>,
+    pub(crate) background: Option<Spanned<Background>>,
     /// Which images to write per view: `rgba`, `depth`, `normal`, `mask`.
     #[serde(default = "default_passes")]
     #[schemars(with = "Vec<Pass>")]
@@ -156,6 +154,9 @@ pub enum PixelFilter {
 
 /// Cycles' default pixel filter width.
 pub const DEFAULT_FILTER_WIDTH: f64 = 1.5;
+
+/// The widest Blackman-Harris filter accepted, pixels (the renderer's own limit, `render::filter::MAX_WIDTH`).
+pub const MAX_FILTER_WIDTH: f64 = 10.0;
 
 /// Background of the RGBA pass.
 #[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
@@ -290,84 +291,6 @@ pub enum PngCompression {
 }
 
 impl Render {
-    /// The renderer's settings for this `[render]`. `voxel` is the world size of one voxel of a point-cloud
-    /// source, the default splat size; without it, splats default to 1.5 px.
-    pub fn renderer_settings(&self, voxel: Option<f32>) -> render::RenderSettings {
-        use crate::scene::material::srgb_to_linear;
-        use render::{SplatShape as R, SplatSize};
-        let lin = |c: [f64; 3]| {
-            glam::Vec3::new(srgb_to_linear(c[0] as f32), srgb_to_linear(c[1] as f32), srgb_to_linear(c[2] as f32))
-        };
-        let background = match self.background.as_ref().map(|b| b.get_ref()) {
-            Some(Background::Named(n)) if n == "white" => Some(glam::Vec3::ONE),
-            Some(Background::Named(n)) if n == "black" => Some(glam::Vec3::ZERO),
-            Some(Background::Rgb(c)) => Some(lin(*c)),
-            _ => None,
-        };
-        let size = match (self.splat.size, self.splat.size_px, voxel) {
-            (Some(w), _, _) => SplatSize::World(w as f32),
-            (None, Some(px), _) => SplatSize::Pixels(px as f32),
-            (None, None, Some(v)) => SplatSize::World(v),
-            (None, None, None) => SplatSize::Pixels(1.5),
-        };
-        let shape = match self.splat.shape {
-            SplatShape::Cube => R::Cube,
-            SplatShape::Square => R::Square,
-            SplatShape::Disk => R::Disk,
-            SplatShape::Surfel => R::Surfel,
-        };
-        render::RenderSettings {
-            samples: *self.samples.get_ref(),
-            filter: match self.filter {
-                PixelFilter::Box => render::PixelFilter::Box,
-                PixelFilter::BlackmanHarris => render::PixelFilter::BlackmanHarris {
-                    width: self.filter_width.as_ref().map_or(DEFAULT_FILTER_WIDTH, |w| *w.get_ref()) as f32,
-                },
-            },
-            shading: match self.shading {
-                Shading::Unlit => render::Shading::Unlit,
-                Shading::Lambert => render::Shading::Lambert,
-                Shading::Pbr => render::Shading::Pbr,
-            },
-            // Filled in by the caller, which knows the manifest's lights and environment.
-            lighting: render::Lighting::default(),
-            lights: self
-                .lights
-                .iter()
-                .map(|l| (glam::DVec3::from(l.direction).as_vec3(), l.intensity as f32))
-                .collect(),
-            ambient: self.ambient.unwrap_or(0.3) as f32,
-            background,
-            depth: match self.depth.kind {
-                DepthKind::Planar => render::DepthKind::Planar,
-                DepthKind::Ray => render::DepthKind::Ray,
-            },
-            splat: render::SplatSettings { shape, size, min_px: self.splat.min_px.unwrap_or(1.0) as f32 },
-            buffers: render::Buffers {
-                depth: self.has_pass(Pass::Depth),
-                normal: self.has_pass(Pass::Normal),
-                object: self.has_pass(Pass::Instance),
-            },
-        }
-    }
-
-    /// How this `[render]` encodes its passes.
-    pub fn encoding(&self) -> encode::Encoding {
-        encode::Encoding {
-            png: match self.png_compression {
-                PngCompression::Fast => encode::PngCompression::Fast,
-                PngCompression::Default => encode::PngCompression::Default,
-                PngCompression::Best => encode::PngCompression::Best,
-            },
-            normal_space: match self.normal.space {
-                NormalSpace::World => encode::NormalSpace::World,
-                NormalSpace::Camera => encode::NormalSpace::Camera,
-            },
-            depth_exr: self.depth.exr,
-            normal_exr: self.normal.exr,
-        }
-    }
-
     /// `(width, height)`.
     pub fn size(&self) -> (u32, u32) {
         let [w, h] = *self.resolution.get_ref();
@@ -446,7 +369,7 @@ impl Render {
         }
         if let Some(fw) = &self.filter_width {
             let v = *fw.get_ref();
-            let max = render::filter::MAX_WIDTH as f64;
+            let max = MAX_FILTER_WIDTH;
             if self.filter != PixelFilter::BlackmanHarris {
                 diags.push(
                     Diagnostic::error("`filter_width` is the width of the Blackman-Harris filter", Some(fw.span()))

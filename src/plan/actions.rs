@@ -173,7 +173,7 @@ pub enum Action {
         /// Scene frame.
         frame: usize,
     },
-    /// Split `split`'s contact sheet. Deps: per image of [`crate::preview::sheet::layout`], its RGBA pass, then
+    /// Split `split`'s contact sheet. Deps: per image of [`super::preview::layout`], its RGBA pass, then
     /// its `extras` passes (depth, mask) in that order.
     PreviewSheet {
         /// Index into [`Plan::splits`].
@@ -182,13 +182,13 @@ pub enum Action {
         extras: Vec<Pass>,
     },
     /// The rig plot of `splits`' cameras. Deps: the [`Action::Bounds`] of their frames, then the subject's
-    /// samples ([`Action::InitCloud`] of [`crate::preview::subject_frame`], [`crate::preview::POINTS`]).
+    /// samples ([`Action::InitCloud`] of [`super::preview::subject_frame`], [`super::preview::POINTS`]).
     PreviewRig {
         /// Indices into [`Plan::splits`], ascending.
         splits: Vec<usize>,
     },
     /// Point output `output`'s strip (and its viewer's thinned frames, a second blob). Deps: the
-    /// [`Action::PointFrame`]s of [`crate::preview::point_frames`].
+    /// [`Action::PointFrame`]s of [`super::preview::point_frames`].
     PreviewStrip {
         /// The `[output.NAME]`.
         output: String,
@@ -279,7 +279,7 @@ pub fn rig_frames(plan: &Plan, splits: &[usize]) -> Vec<usize> {
 
 /// The frame whose samples stand for the subject in a rig plot of `splits`.
 pub fn rig_subject_frame(plan: &Plan, splits: &[usize]) -> usize {
-    crate::preview::subject_frame(&rig_frames(plan, splits))
+    super::preview::subject_frame(&rig_frames(plan, splits))
 }
 
 /// The manifest spelling of a pass.

@@ -67,15 +67,15 @@ impl<'a> Graph<'a> {
             frame_lights: &frame_keys.lights,
             frame_lit: &frame_keys.lit,
             render: {
-                let mut r = m.render.renderer_settings(scene.voxel_size());
+                let mut r = crate::settings::renderer(&m.render, scene.voxel_size());
                 if !scene.has_points() {
                     // Splat settings shape nothing without points: no minimum footprint to key.
                     r.splat.min_px = 0.0;
                 }
-                r.lighting = super::keys::lighting(m, environment);
+                r.lighting = crate::settings::lighting(m, environment);
                 r
             },
-            encoding: m.render.encoding(),
+            encoding: crate::settings::encoding(&m.render),
             seed: m.dataset.seed,
             manifest: Digest::of(m.text.as_bytes()),
             dataset: m.dataset.name().to_string(),
@@ -177,7 +177,7 @@ impl<'a> Graph<'a> {
             deps.extend(&frame_ids);
             deps.extend(bounds);
             if m.dataset.preview {
-                let shown = crate::preview::point_frames(plan.frames).iter().map(|&f| frame_ids[f]).collect();
+                let shown = super::preview::point_frames(plan.frames).iter().map(|&f| frame_ids[f]).collect();
                 let a = Action::PreviewStrip { output: name.to_string() };
                 deps.push(self.add(a, format!("preview-strip {name}"), shown));
             }
@@ -269,15 +269,15 @@ impl<'a> Graph<'a> {
     /// The preview of an image output over `images`: a contact sheet per split (when RGBA is rendered), the
     /// rig plot, and the bounds and subject samples the viewer reads; appended to `deps`.
     fn plan_preview(&mut self, m: &Manifest, name: &str, images: &[usize], deps: &mut Vec<ActionId>) {
-        use crate::preview::{self, sheet};
+        use super::preview;
         let plan = self.keying.plan;
         let splits = super::actions::splits_of(plan, images);
         let passes = m.render.passes();
         if passes.contains(&Pass::Rgba) {
-            let extras = sheet::extra_passes(passes);
+            let extras = preview::extra_passes(passes);
             for &s in &splits {
                 let mut inputs = Vec::new();
-                for i in sheet::layout(plan, s).images {
+                for i in preview::layout(plan, s).images {
                     inputs.push(self.render_pass(i, Pass::Rgba));
                     for &p in &extras {
                         inputs.push(self.render_pass(i, p));

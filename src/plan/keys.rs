@@ -122,17 +122,3 @@ pub fn environment_key(m: &Manifest, stat: &StatCache) -> Result<Option<Digest>,
     let path = m.resolve(map);
     stat.digest(&path).map(Some).map_err(|e| Error::Input { path, source: e })
 }
-
-/// The renderer's lighting for `m`: its lights, and its environment with the map's content key.
-pub fn lighting(m: &Manifest, environment: Option<Digest>) -> crate::render::Lighting {
-    let e = m.environment.as_ref();
-    crate::render::Lighting {
-        lights: m.lights.values().map(|l| l.resolve()).collect(),
-        environment: crate::render::Environment {
-            map: environment.map(|d| d.hex()),
-            strength: e.map_or(1.0, |e| e.strength()) as f32,
-            rotation_deg: e.map_or(0.0, |e| e.rotation_deg) as f32,
-            visible: e.is_some_and(|e| e.visible),
-        },
-    }
-}

@@ -8,6 +8,7 @@ pub mod coverage;
 pub mod graph;
 pub mod key;
 pub mod keys;
+pub mod preview;
 pub mod walk;
 
 use std::collections::BTreeSet;

@@ -126,8 +126,8 @@ impl Action {
             }
             Action::PreviewSheet { split, extras } => {
                 let sp = &cx.plan.splits[*split];
-                let layout = crate::preview::sheet::layout(cx.plan, *split);
-                w.str("preview", crate::preview::SALT);
+                let layout = super::preview::layout(cx.plan, *split);
+                w.str("preview", super::preview::SALT);
                 png(w, PngCompression::Fast);
                 w.str("dataset", &cx.dataset);
                 w.str("split", &sp.name);
@@ -149,7 +149,7 @@ impl Action {
                 }
             }
             Action::PreviewRig { splits } => {
-                w.str("preview", crate::preview::SALT);
+                w.str("preview", super::preview::SALT);
                 png(w, PngCompression::Fast);
                 w.str("dataset", &cx.dataset);
                 w.digest("bounds", &deps[0]);
@@ -168,11 +168,11 @@ impl Action {
                 }
             }
             Action::PreviewStrip { output } => {
-                w.str("preview", crate::preview::SALT);
+                w.str("preview", super::preview::SALT);
                 png(w, PngCompression::Fast);
                 w.str("dataset", &cx.dataset);
                 w.str("output", output);
-                for (f, d) in crate::preview::point_frames(cx.plan.frames).iter().zip(deps) {
+                for (f, d) in super::preview::point_frames(cx.plan.frames).iter().zip(deps) {
                     w.u64("frame", *f as u64);
                     w.digest("points", d);
                 }

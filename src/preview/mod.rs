@@ -11,14 +11,11 @@ pub mod sheet;
 pub mod strip;
 pub mod viewer;
 
+// What each preview shows is the plan's to decide (it keys the preview actions by it).
+pub use crate::plan::preview::{point_frames, strip_frames, subject_frame, viewer_frames, POINTS, SALT};
+
 /// The folder, dataset-root-relative, the preview is written to.
 pub const DIR: &str = "preview";
-
-/// Surface samples of the subject drawn in the rig plot and the viewer (at the middle frame).
-pub const POINTS: u64 = 20_000;
-
-/// Version of the preview pictures: bump when a change moves their bytes.
-pub const SALT: &str = "preview 3";
 
 /// Why a preview picture cannot be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -46,34 +43,8 @@ pub enum Error {
     },
 }
 
-/// The frame whose surface samples stand for the subject: the middle of `frames` (ascending).
-pub fn subject_frame(frames: &[usize]) -> usize {
-    frames.get(frames.len() / 2).copied().unwrap_or(0)
-}
-
-/// The frames of an `n`-frame point sequence its strip shows.
-pub fn strip_frames(n: usize) -> Vec<usize> {
-    sheet::evenly(n, strip::MOST)
-}
-
-/// Frames of a point sequence its viewer steps through, at most.
-const VIEWER_FRAMES: usize = 24;
-/// Points of each of those frames the viewer draws, at most (every k-th point of the file).
+/// Points of each frame the viewer draws, at most (every k-th point of the file).
 const VIEWER_POINTS: usize = 8_000;
-
-/// The frames of an `n`-frame point sequence its viewer steps through.
-pub fn viewer_frames(n: usize) -> Vec<usize> {
-    sheet::evenly(n, VIEWER_FRAMES)
-}
-
-/// The frames a point sequence's preview reads: the strip's and the viewer's, ascending.
-pub fn point_frames(n: usize) -> Vec<usize> {
-    let mut f = strip_frames(n);
-    f.extend(viewer_frames(n));
-    f.sort_unstable();
-    f.dedup();
-    f
-}
 
 /// A point-cloud frame thinned for the viewer: every k-th point, at most 8 000 (`VIEWER_POINTS`).
 pub fn thin(ply: &[u8]) -> Result<Samples, crate::scene::ply::PlyError> {
@@ -150,13 +121,5 @@ mod tests {
         assert_eq!(back[0].1.colors[1], [4, 5, 6]);
         assert!(decode_clouds(&bytes[..bytes.len() - 9]).is_none());
         assert!(decode_clouds(&[0xff; 8]).is_none(), "an absurd count is refused, not allocated");
-    }
-
-    #[test]
-    fn the_viewer_reads_the_strips_frames_and_its_own() {
-        assert_eq!(point_frames(3), [0, 1, 2]);
-        let f = point_frames(300);
-        assert!(strip_frames(300).iter().chain(&viewer_frames(300)).all(|x| f.contains(x)));
-        assert_eq!(viewer_frames(300).len(), 24);
     }
 }

@@ -4,61 +4,9 @@
 //! transparency and crops show), with depth and mask below when those passes exist, and a label.
 
 use super::canvas::{shrink, shrink_depth, shrink_rgba, viridis, Canvas, Pixels, Rgb, RgbaPixels};
-use crate::manifest::render::Pass;
-use crate::manifest::split::TimeMode;
-use crate::plan::Plan;
 
-/// Most thumbnails on a sheet.
-const MOST: usize = 32;
-/// Most frames (columns) and views (rows) of a multi-view video sheet.
-const MOST_FRAMES: usize = 8;
-const MOST_VIEWS: usize = 4;
 /// Thumbnail width in pixels.
 const THUMB: u32 = 160;
-
-/// What a sheet shows: images of the plan in reading order, and the number of columns.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Layout {
-    /// Plan image indices, row by row.
-    pub images: Vec<usize>,
-    /// Columns of the grid.
-    pub columns: usize,
-}
-
-/// `k` indices spread evenly over `0..n`, first and last included (all of them when `n ≤ k`).
-pub fn evenly(n: usize, k: usize) -> Vec<usize> {
-    if n <= k {
-        return (0..n).collect();
-    }
-    if k <= 1 {
-        return vec![0];
-    }
-    (0..k).map(|i| i * (n - 1) / (k - 1)).collect()
-}
-
-/// The images split `s`'s sheet shows.
-pub fn layout(plan: &Plan, s: usize) -> Layout {
-    let split = &plan.splits[s];
-    if split.time == TimeMode::All && split.frames.len() > 1 {
-        // Rows are views, columns frames; images of a synchronized split are frame-major.
-        let views = split.poses.len();
-        let rows = evenly(views, MOST_VIEWS);
-        let cols = evenly(split.frames.len(), MOST_FRAMES);
-        let images = rows.iter().flat_map(|&v| cols.iter().map(move |&f| split.images[f * views + v])).collect();
-        return Layout { images, columns: cols.len() };
-    }
-    let mut order = split.images.clone();
-    // Time-major: by frame, then view (a random split's pairs come in draw order).
-    order.sort_by_key(|&i| (plan.images[i].frame, plan.images[i].view, i));
-    let images: Vec<usize> = evenly(order.len(), MOST).into_iter().map(|k| order[k]).collect();
-    let columns = images.len().clamp(1, MOST_FRAMES);
-    Layout { images, columns }
-}
-
-/// The passes a sheet shows besides RGBA, of those rendered.
-pub fn extra_passes(passes: &[Pass]) -> Vec<Pass> {
-    [Pass::Depth, Pass::Mask].into_iter().filter(|p| passes.contains(p)).collect()
-}
 
 /// One thumbnail's decoded passes.
 pub struct Cell {
@@ -198,16 +146,4 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
         c.text(width as f32 - pad as f32 - w, 22.0, 12.0, &note, [170, 170, 170]);
     }
     Ok(c.png())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn evenly_keeps_both_ends() {
-        assert_eq!(evenly(3, 8), vec![0, 1, 2]);
-        assert_eq!(evenly(60, 8), vec![0, 8, 16, 25, 33, 42, 50, 59]);
-        assert_eq!(evenly(10, 1), vec![0]);
-    }
 }

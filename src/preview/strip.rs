@@ -11,8 +11,6 @@ use crate::scene::material::{srgb_to_linear, Material};
 use crate::scene::ply::{self, PlyData};
 use crate::scene::{PosedScene, PrimKind};
 
-/// Frames a strip shows, at most.
-pub const MOST: usize = 6;
 /// Each frame's picture, square, in pixels.
 const SIDE: u32 = 240;
 

@@ -369,11 +369,27 @@ fn lighting_mistakes_are_named_with_their_place_and_fix() {
         );
         let path = d.join("m.toml");
         std::fs::write(&path, &text).unwrap();
-        let report = vvgen::manifest::load(&path).expect_err(extra);
+        // As `check` and the CLI load it: the manifest, then what only the renderer's readers check.
+        let report = vvgen::settings::load(&path).expect_err(extra);
         let shown = report.render(false);
         assert!(shown.contains(want), "{extra}: {shown}");
         assert!(shown.contains("m.toml:"), "names the file and line: {shown}");
     }
+    // A manifest parsed without those checks still cannot build with a broken map: `build` makes them first.
+    let text = format!(
+        "[dataset]\nname = \"m\"\nout = \"out\"\n[source.a]\nmesh = \"{}\"\n[render]\nshading = \"pbr\"\n\
+         [environment]\nmap = \"broken.hdr\"\n[rig.h]\nkind = \"hemisphere\"\n[split.t]\nrig = \"h\"\nviews = 1\n\
+         [output.o]\nwriter = \"dnerf\"\n",
+        crate::common::data("gltf/BoxTextured/BoxTextured.glb").display()
+    );
+    std::fs::write(d.join("m.toml"), text).unwrap();
+    let (m, _) = vvgen::manifest::load(&d.join("m.toml")).unwrap();
+    let e = vvgen::build::build(&m, &d.join("cache"), Default::default(), &vvgen::build::Silent).unwrap_err();
+    match e {
+        vvgen::build::Error::Manifest(r) => assert!(r.render(false).contains("not a readable Radiance HDR")),
+        other => panic!("{other}"),
+    }
+    assert!(!d.join("out").exists(), "nothing was written");
 }
 
 #[test]

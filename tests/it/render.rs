@@ -631,7 +631,7 @@ fn vox10_cubes_leave_no_holes_with_the_default_footprint() {
             path.clone()
         });
         let plan = vvgen::plan::Plan::new(&m, 1).unwrap();
-        let defaults = m.render.renderer_settings(scene.voxel_size());
+        let defaults = vvgen::settings::renderer(&m.render, scene.voxel_size());
         assert_eq!(defaults.splat.min_px, 1.0);
         let true_size = RenderSettings { splat: SplatSettings { min_px: 0.0, ..defaults.splat }, ..defaults.clone() };
         let (mut covered, mut holes_true, mut seen) = (0usize, 0usize, 0usize);
