@@ -15,6 +15,7 @@ mod fuzz_structure;
 mod gltf_lights;
 mod graph;
 mod hostile_gltf;
+mod layers;
 mod lit;
 mod manifest;
 mod meshseq;

@@ -1,0 +1,65 @@
+//! The house's layering, read off the sources (ARCHITECTURE.md): `manifest` is the vocabulary and imports
+//! nothing of the crate above it, `render` knows no manifest, and no import circle spans two top-level modules.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// Top-level module → the top-level modules its non-test code names as `crate::…`.
+fn imports() -> BTreeMap<String, BTreeSet<String>> {
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut stack = vec![src.clone()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+                continue;
+            }
+            if path.extension().is_none_or(|e| e != "rs") {
+                continue;
+            }
+            let rel = path.strip_prefix(&src).unwrap();
+            let top = rel.iter().next().unwrap().to_string_lossy().trim_end_matches(".rs").to_string();
+            let text = std::fs::read_to_string(&path).unwrap();
+            // Unit tests may reach anywhere: only the code above them counts.
+            let code = text.split("#[cfg(test)]").next().unwrap();
+            for line in code.lines().map(str::trim).filter(|l| !l.starts_with("//")) {
+                for (at, _) in line.match_indices("crate::") {
+                    let name: String =
+                        line[at + 7..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').collect();
+                    if !name.is_empty() && name != top {
+                        edges.entry(top.clone()).or_default().insert(name);
+                    }
+                }
+            }
+        }
+    }
+    edges
+}
+
+#[test]
+fn layers_import_downward_only() {
+    let edges = imports();
+    assert_eq!(edges.get("manifest"), None, "manifest imports {:?}", edges.get("manifest"));
+    assert!(!edges.get("render").is_some_and(|e| e.contains("manifest")), "render imports the manifest");
+    // A module reaching itself through another is a circle.
+    let reaches = |from: &str, to: &str| {
+        let (mut seen, mut todo) = (BTreeSet::new(), vec![from.to_string()]);
+        while let Some(m) = todo.pop() {
+            for n in edges.get(&m).into_iter().flatten() {
+                if n == to {
+                    return true;
+                }
+                if seen.insert(n.clone()) {
+                    todo.push(n.clone());
+                }
+            }
+        }
+        false
+    };
+    for (from, to) in edges.iter().flat_map(|(f, ts)| ts.iter().map(move |t| (f, t))) {
+        assert!(!reaches(to, from), "an import circle: {from} → {to} → … → {from}");
+    }
+    assert!(edges.len() > 10, "the walk found the modules: {edges:?}");
+}
