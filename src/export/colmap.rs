@@ -1,7 +1,8 @@
 //! `colmap`: a COLMAP text model per frame, as 3DGS's and nerfstudio's COLMAP readers parse it:
 //! `images/<name>.png` (RGB, background baked in: the COLMAP path does no alpha compositing),
 //! `sparse/0/cameras.txt` (one PINHOLE camera), `images.txt` (two lines per image; world→camera quaternion and
-//! translation in OpenCV axes) and `points3D.txt` (surface samples of that frame). A single-frame dataset is
+//! translation in OpenCV axes) and `points3D.txt` (surface samples of that frame), the same model again in
+//! `colmap/sparse/0/` for nerfstudio. A single-frame dataset is
 //! written at the root; a dynamic one gets a model per frame under `frame_<NNNN>/`.
 //!
 //! Images are named by number (`0000.png`, … in split order, the image's id less one): Deformable-3DGS'
@@ -25,6 +26,12 @@ pub fn colmap_pose(c: &Camera) -> ([f64; 4], [f64; 3]) {
     let q = if q.w < 0.0 { -q } else { q };
     ([q.w, q.x, q.y, q.z], w2c.w_axis.truncate().to_array())
 }
+
+/// Where the model goes, each a copy of the other: `sparse/0` is where 3DGS (and 4DGaussians' and
+/// Deformable-3DGS' copies of its reader) look, `colmap/sparse/0` where nerfstudio's colmap parser looks by
+/// default (`colmap_path`, colmap_dataparser.py l.88), so both train on the folder as written. The points are the
+/// same cache blob, linked twice.
+const MODELS: [&str; 2] = ["sparse/0", "colmap/sparse/0"];
 
 pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
     let frames = x.plan.frames_of(images);
@@ -68,9 +75,11 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
             );
         }
         let pts = x.blob(&Action::ColmapPoints { frame: f, points: n_points })?;
-        files.bytes(&format!("{prefix}sparse/0/cameras.txt"), cameras.as_bytes())?;
-        files.bytes(&format!("{prefix}sparse/0/images.txt"), imgs.as_bytes())?;
-        files.blob(&format!("{prefix}sparse/0/points3D.txt"), pts)?;
+        for model in MODELS {
+            files.bytes(&format!("{prefix}{model}/cameras.txt"), cameras.as_bytes())?;
+            files.bytes(&format!("{prefix}{model}/images.txt"), imgs.as_bytes())?;
+            files.blob(&format!("{prefix}{model}/points3D.txt"), pts)?;
+        }
     }
     Ok(())
 }

@@ -33,12 +33,16 @@ fn loading(writer: Writer) -> &'static str {
         Writer::InstantNgp => {
             "Load with instant-ngp: ./instant-ngp DIR/transforms_train.json (the folder itself trains on every split)."
         }
-        Writer::StaticFrames => "Each t_NNNN/ is one static NeRF-synthetic set (3DGS -s DIR/t_NNNN, instant-ngp, nerfstudio).",
-        Writer::Colmap => {
-            "Load with 3DGS (-s DIR, or DIR/frame_NNNN when the scene moves), or nerfstudio: ns-train … colmap --data DIR \
-             --colmap-path sparse/0 (its default, colmap/sparse/0, does not exist here)."
+        Writer::StaticFrames => {
+            "Each t_NNNN/ is one static NeRF-synthetic set (3DGS -s DIR/t_NNNN, instant-ngp, nerfstudio)."
         }
-        Writer::Dynerf => "Load DIR with K-Planes (DyNeRF config), 4DGaussians (dynerf) or Deformable-3DGS (plenoptic).",
+        Writer::Colmap => {
+            "Load with 3DGS (-s DIR, or DIR/frame_NNNN when the scene moves; it reads sparse/0) or nerfstudio \
+             (ns-train … colmap --data DIR; it reads colmap/sparse/0, the same model)."
+        }
+        Writer::Dynerf => {
+            "Load DIR with K-Planes (DyNeRF config), 4DGaussians (dynerf) or Deformable-3DGS (plenoptic)."
+        }
         Writer::PlySequence => "One PLY per frame: Open3D, plyfile, trimesh and the codecs' tools read them.",
     }
 }

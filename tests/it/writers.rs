@@ -361,9 +361,16 @@ fn instant_ngp_reads_focal_and_its_box_holds_the_content() {
 #[test]
 fn colmap_text_model_per_frame_reprojects() {
     let root = built_opaque().out.join("man_colmap");
-    // nerfstudio looks in colmap/sparse/0 unless told: the preview page says how to point it here.
+    // 3DGS reads sparse/0 and nerfstudio's colmap parser colmap/sparse/0 by default: the same model is in both.
+    for frame in 0..FRAMES {
+        let model = root.join(format!("frame_{frame:04}"));
+        for f in ["cameras.txt", "images.txt", "points3D.txt"] {
+            let (a, b) = (model.join("sparse/0").join(f), model.join("colmap/sparse/0").join(f));
+            assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap(), "{f}");
+        }
+    }
     let page = std::fs::read_to_string(root.join("preview/index.html")).unwrap();
-    assert!(page.contains("--colmap-path sparse/0"), "the page says nerfstudio's flag");
+    assert!(page.contains("colmap/sparse/0, the same model"), "the page says how nerfstudio loads it");
     for frame in 0..FRAMES {
         let model = root.join(format!("frame_{frame:04}"));
         let cams = std::fs::read_to_string(model.join("sparse/0/cameras.txt")).unwrap();
