@@ -57,8 +57,18 @@ use record::{LastBuild, OutputRecord};
 /// let report = vvgen::build::Build::from_manifest_str(manifest, dir.path())?
 ///     .cache(dir.path().join("cache"))
 ///     .run(&vvgen::build::Silent)?;
-/// assert_eq!(report.ran(vvgen::plan::actions::Kind::RenderPass), 4);
-/// assert_eq!(report.ran(vvgen::plan::actions::Kind::PointFrame), 1);
+/// assert_eq!(report.ran(vvgen::Kind::RenderPass), 4);
+/// assert_eq!(report.ran(vvgen::Kind::PointFrame), 1);
+///
+/// // Asked again, the cache holds everything.
+/// let again = vvgen::build::Build::from_manifest_str(manifest, dir.path())?.cache(dir.path().join("cache"));
+/// assert!(again.status(false)?.up_to_date());
+///
+/// // A mistake is refused with its place and fix, before anything runs.
+/// match vvgen::build::Build::from_manifest_str("[dataset]\nnaem = \"x\"\n", dir.path()) {
+///     Err(vvgen::build::Error::Manifest(report)) => assert!(report.render(false).contains("did you mean `name`")),
+///     other => panic!("{other:?}"),
+/// }
 /// # Ok::<(), vvgen::build::Error>(())
 /// ```
 #[derive(Debug)]
@@ -537,7 +547,7 @@ pub fn reachable(m: &Manifest, cache: &Path, keep: &mut HashSet<Digest>) -> Resu
 }
 
 /// Collects the cache at `cache`: drops what none of `keep` reaches (when any is given), then the oldest
-/// beyond `max_bytes` (when given); nothing younger than `min_age` ([`gc::GRACE`] keeps a running build's
+/// beyond `max_bytes` (when given); nothing younger than `min_age` (`gc::GRACE` keeps a running build's
 /// unrecorded blobs).
 pub fn collect_garbage(
     keep: &[Manifest],
