@@ -13,7 +13,7 @@ use std::time::Instant;
 
 pub use crate::execute::{Counts, Shard};
 pub use error::Error;
-pub use status::{status, status_with, ActionStatus, KindStatus, State, Status};
+pub use status::{status, status_noting, status_with, ActionStatus, KindStatus, State, Status};
 
 use crate::cache::{gc, Digest, StatCache, Store};
 use crate::execute::{self, Inputs};

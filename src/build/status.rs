@@ -89,7 +89,19 @@ pub fn status(m: &Manifest, cache: &Path, explain: bool) -> Result<Status, Error
 
 /// [`status`]; with `verify`, every cached file is hashed again instead of trusted by its metadata.
 pub fn status_with(m: &Manifest, cache: &Path, explain: bool, verify: bool) -> Result<Status, Error> {
-    let p = prepare(m, cache, verify, None)?;
+    status_noting(m, cache, explain, verify, None)
+}
+
+/// [`status_with`], saying through `note` what it must do first that takes time: a `.blend` source's import by
+/// Blender, when the cache does not hold it yet (its frames are what the plan counts).
+pub fn status_noting(
+    m: &Manifest,
+    cache: &Path,
+    explain: bool,
+    verify: bool,
+    note: Option<&(dyn Fn(&str) + Sync)>,
+) -> Result<Status, Error> {
+    let p = prepare(m, cache, verify, note)?;
     let g = p.graph(m)?;
     let look = execute::lookup(&g, &p.store, &p.stat);
     let images_to_render = execute::images_to_render(&g, &execute::runs_here(&g, &look.state, None)).len();

@@ -9,7 +9,7 @@ use crate::build::{self, State};
 pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let t = std::time::Instant::now();
-    let st = build::status_with(&m, &cache_dir(&m), explain || json, verify)?;
+    let st = build::status_noting(&m, &cache_dir(&m), explain || json, verify, Some(&importing(ui)))?;
     if json {
         println!("{}", serde_json::to_string_pretty(&st)?);
         return Ok(ExitCode::SUCCESS);
@@ -50,7 +50,7 @@ pub fn run(manifest: &Path, explain: bool, json: bool, verify: bool, ui: Ui) -> 
 pub fn status(manifest: &Path, verify: bool, ui: Ui) -> anyhow::Result<ExitCode> {
     let Some(m) = load_manifest(manifest, ui) else { return Ok(ExitCode::from(EXIT_INVALID)) };
     let (cache, why) = cache_choice(&m);
-    let st = build::status_with(&m, &cache, false, verify)?;
+    let st = build::status_noting(&m, &cache, false, verify, Some(&importing(ui)))?;
     let total: usize = st.kinds.values().map(|k| k.planned).sum();
     let done: usize = st.kinds.values().map(|k| k.cached).sum();
     println!(
@@ -91,4 +91,13 @@ fn dir_size(p: &Path) -> (u64, u64) {
         }
     }
     (n, b)
+}
+
+/// What `plan` and `status` say while a `.blend` imports before they can count anything (`build` says it too).
+fn importing(ui: Ui) -> impl Fn(&str) + Sync {
+    move |what: &str| {
+        if !ui.quiet {
+            eprintln!("{what}");
+        }
+    }
 }
