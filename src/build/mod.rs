@@ -465,7 +465,7 @@ pub fn build(m: &Manifest, cache: &Path, opts: Options, progress: &dyn Progress)
 fn crop_warnings(m: &Manifest, p: &Prepared, to_render: &[usize]) -> Result<Vec<String>, Error> {
     use crate::plan::coverage;
     let images = p.scene.reads_frame_files().then_some(to_render);
-    let c = coverage::measure(&p.scene, &p.plan, images).map_err(|source| Error::Scene {
+    let c = coverage::measure(m, &p.scene, &p.plan, images).map_err(|source| Error::Scene {
         manifest: m.path.clone(),
         source: Box::new(source),
         hint: "",

@@ -27,7 +27,7 @@ pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<Exi
                         scene.check_frame_files()?;
                         let frames = scene.frames;
                         let plan = Plan::new(&m, frames)?;
-                        let crops = coverage::measure(&scene, &plan, None)?;
+                        let crops = coverage::measure(&m, &scene, &plan, None)?;
                         let mut warnings = scene.warnings.clone();
                         warnings.extend(plan.warnings.iter().cloned());
                         warnings.extend(coverage::warnings(&m, &plan, &crops));

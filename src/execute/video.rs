@@ -260,14 +260,15 @@ fn luma_for(rgb: [f32; 3], u: u8, v: u8) -> u8 {
     };
     let guess = 16.0 + (0..3).map(|k| rgb[k] - chroma[k]).sum::<f32>() / 3.0 / 1.164_383;
     let g = guess.round().clamp(0.0, 255.0);
-    let mut best = g;
+    let mut best = (err(g), g);
     for d in [-2.0, -1.0, 1.0, 2.0] {
         let y = (g + d).clamp(0.0, 255.0);
-        if err(y) < err(best) {
-            best = y;
+        let e = err(y);
+        if e < best.0 {
+            best = (e, y);
         }
     }
-    best as u8
+    best.1 as u8
 }
 
 #[cfg(test)]

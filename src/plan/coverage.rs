@@ -12,7 +12,7 @@
 
 use std::collections::BTreeMap;
 
-use glam::{DVec3, Vec3};
+use glam::{DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::Plan;
@@ -58,13 +58,14 @@ pub struct Coverage {
     pub measured: usize,
     /// How far from the origin the subject reaches over the measured frames, world units.
     pub reach: f64,
-    /// The images whose subject 4DGaussians and Deformable-3DGS would draw at least an eighth of a pixel off, in
-    /// image order.
+    /// The images of `dnerf` outputs whose subject 4DGaussians and Deformable-3DGS would draw at least an eighth
+    /// of a pixel off, in image order.
     pub misread: Vec<Misread>,
 }
 
-/// Measures `images` (all when `None`), posing each frame they show once, frames in parallel.
-pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<Coverage, scene::Error> {
+/// Measures `images` (all when `None`) of `m`'s plan, posing each frame they show once, frames in parallel; the
+/// misread poses only of the images a `dnerf` output writes (the readers that misread them read only those).
+pub fn measure(m: &Manifest, scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<Coverage, scene::Error> {
     let all: Vec<usize>;
     let images = match images {
         Some(i) => i,
@@ -78,6 +79,13 @@ pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<C
         by_frame.entry(plan.images[i].frame).or_default().push(i);
     }
     let subject: Vec<usize> = (0..scene.sources.len()).filter(|&i| scene.sources[i].ground.is_none()).collect();
+    let mut dnerf = vec![false; plan.images.len()];
+    // A split the plan lacks was reported when the plan was made.
+    for out in m.outputs.values().filter(|o| o.writer() == Writer::Dnerf) {
+        for i in plan.images_of(out).unwrap_or_default() {
+            dnerf[i] = true;
+        }
+    }
     type Found = (Vec<Crop>, Vec<Misread>, f64);
     let per_frame: Vec<Result<Found, scene::Error>> = by_frame
         .into_par_iter()
@@ -90,8 +98,13 @@ pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<C
             }
             let reach = points.iter().map(|p| p.as_dvec3().length_squared()).fold(0.0, f64::max).sqrt();
             let bounds = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
-            let misread = list.iter().filter_map(|&i| misread(plan, i, &points)).collect();
-            Ok((list.into_iter().filter_map(|i| crop(plan, i, &points, bounds)).collect(), misread, reach))
+            let (mut crops, mut misreads) = (Vec::new(), Vec::new());
+            for i in list {
+                let w2c = plan.images[i].camera.w2c();
+                crops.extend(crop(plan, i, &w2c, &points, bounds));
+                misreads.extend(dnerf[i].then(|| misread(plan, i, &w2c, &points)).flatten());
+            }
+            Ok((crops, misreads, reach))
         })
         .collect();
     let mut out = Coverage { measured: images.len(), ..Coverage::default() };
@@ -107,9 +120,8 @@ pub fn measure(scene: &Scene, plan: &Plan, images: Option<&[usize]>) -> Result<C
 }
 
 /// [`Misread`] of image `i` showing `points`, when at least [`MISREAD_PX`].
-fn misread(plan: &Plan, i: usize, points: &[Vec3]) -> Option<Misread> {
+fn misread(plan: &Plan, i: usize, w2c: &DMat4, points: &[Vec3]) -> Option<Misread> {
     let cam = &plan.images[i].camera;
-    let w2c = cam.w2c();
     let per_depth = 2.0 * cam.fx * w2c.w_axis.x.abs();
     // Under this, no vertex beyond the near plane can shift by MISREAD_PX: skip the vertices (aimed rigs land
     // here, t_x being rounding noise).
@@ -129,13 +141,13 @@ fn misread(plan: &Plan, i: usize, points: &[Vec3]) -> Option<Misread> {
     (n > 0 && max >= MISREAD_PX).then(|| Misread { image: i, mean_px: sum / n as f64, max_px: max })
 }
 
-/// Whether image `i` crops `points` (whose bounds are `(lo, hi)`, found once per frame), and by how much.
-fn crop(plan: &Plan, i: usize, points: &[Vec3], (lo, hi): (Vec3, Vec3)) -> Option<Crop> {
+/// Whether image `i` (whose world-to-camera is `w2c`) crops `points` (whose bounds are `(lo, hi)`, found once per
+/// frame), and by how much.
+fn crop(plan: &Plan, i: usize, w2c: &DMat4, points: &[Vec3], (lo, hi): (Vec3, Vec3)) -> Option<Crop> {
     if points.is_empty() {
         return None;
     }
     let cam = &plan.images[i].camera;
-    let w2c = cam.w2c();
     let corners = (0..8).map(|k| {
         DVec3::new(
             if k & 1 == 0 { lo.x } else { hi.x } as f64,
@@ -143,10 +155,10 @@ fn crop(plan: &Plan, i: usize, points: &[Vec3], (lo, hi): (Vec3, Vec3)) -> Optio
             if k & 4 == 0 { lo.z } else { hi.z } as f64,
         )
     });
-    if corners.into_iter().all(|c| cam.shows(&w2c, c)) {
+    if corners.into_iter().all(|c| cam.shows(w2c, c)) {
         return None;
     }
-    let outside = points.iter().filter(|p| !cam.shows(&w2c, p.as_dvec3())).count();
+    let outside = points.iter().filter(|p| !cam.shows(w2c, p.as_dvec3())).count();
     (outside > 0).then(|| Crop { image: i, outside: outside as f64 / points.len() as f64 })
 }
 

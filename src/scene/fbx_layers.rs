@@ -16,8 +16,8 @@
 /// nodes ufbx poses differently from Maya.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Layered {
-    /// The node's element id.
-    element: u32,
+    /// The node (index into the scene's nodes).
+    node: usize,
     /// The take (animation stack).
     take: usize,
 }
@@ -26,7 +26,7 @@ pub(super) struct Layered {
 pub(super) fn find(scene: &ufbx::Scene) -> Vec<Layered> {
     let mut found = Vec::new();
     for (take, stack) in scene.anim_stacks.iter().enumerate() {
-        for node in scene.nodes.iter() {
+        for (index, node) in scene.nodes.iter().enumerate() {
             if node.rotation_order == ufbx::RotationOrder::Xyz {
                 continue;
             }
@@ -36,7 +36,7 @@ pub(super) fn find(scene: &ufbx::Scene) -> Vec<Layered> {
                 l.compose_rotation && l.blended && ufbx::find_anim_prop(l, &node.element, "Lcl Rotation").is_some()
             });
             if by_layer {
-                found.push(Layered { element: node.element.element_id, take });
+                found.push(Layered { node: index, take });
             }
         }
     }
@@ -50,13 +50,13 @@ pub(super) fn overrides(scene: &ufbx::Scene, layered: &[Layered], take: usize, t
     layered
         .iter()
         .filter(|l| l.take == take)
-        .filter_map(|l| {
-            let node = scene.nodes.iter().find(|n| n.element.element_id == l.element)?;
+        .map(|l| {
+            let node = &scene.nodes[l.node];
             let rest = ufbx::find_prop(&node.element.props, "Lcl Rotation").map_or(
                 ufbx::Vec3 { x: 0.0, y: 0.0, z: 0.0 },
                 |p| ufbx::Vec3 { x: p.value_vec4.x, y: p.value_vec4.y, z: p.value_vec4.z },
             );
-            Some((l.element, blend(stack, &node.element, rest, time)))
+            (node.element.element_id, blend(stack, &node.element, rest, time))
         })
         .collect()
 }

@@ -8,29 +8,16 @@ use std::path::Path;
 fn imports() -> BTreeMap<String, BTreeSet<String>> {
     let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut stack = vec![src.clone()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-                continue;
-            }
-            if path.extension().is_none_or(|e| e != "rs") {
-                continue;
-            }
-            let rel = path.strip_prefix(&src).unwrap();
-            let top = rel.iter().next().unwrap().to_string_lossy().trim_end_matches(".rs").to_string();
-            let text = std::fs::read_to_string(&path).unwrap();
-            // Unit tests may reach anywhere: only the code above them counts.
-            let code = text.split("#[cfg(test)]").next().unwrap();
-            for line in code.lines().map(str::trim).filter(|l| !l.starts_with("//")) {
-                for (at, _) in line.match_indices("crate::") {
-                    let name: String =
-                        line[at + 7..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').collect();
-                    if !name.is_empty() && name != top {
-                        edges.entry(top.clone()).or_default().insert(name);
-                    }
+    for (rel, bytes) in crate::common::tree(&src).into_iter().filter(|(rel, _)| rel.ends_with(".rs")) {
+        let top = rel.split('/').next().unwrap().trim_end_matches(".rs").to_string();
+        let text = String::from_utf8(bytes).unwrap();
+        // Unit tests may reach anywhere: only the code above them counts.
+        let code = text.split("#[cfg(test)]").next().unwrap();
+        for line in code.lines().map(str::trim).filter(|l| !l.starts_with("//")) {
+            for (at, _) in line.match_indices("crate::") {
+                let name: String = line[at + 7..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').collect();
+                if !name.is_empty() && name != top {
+                    edges.entry(top.clone()).or_default().insert(name);
                 }
             }
         }
