@@ -177,7 +177,7 @@ fn main() {
     );
     std::fs::write(dir.join("b.toml"), text).unwrap();
     let (m, _) = vvgen::manifest::load(&dir.join("b.toml")).unwrap_or_else(|r| panic!("{r:?}"));
-    let scene = vvgen::scene::Scene::open(&m).unwrap();
+    let scene = vvgen::settings::scene::open(&m, None).unwrap();
     let man = scene.pose(0, &mut Default::default()).unwrap().clone();
     let cams = cameras(Vec3::ZERO);
     if run("cesium") {

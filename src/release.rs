@@ -95,7 +95,7 @@ fn input_files(m: &Manifest, stat: &crate::cache::StatCache) -> Result<Vec<PathB
                 let frames = s.frames().cloned().unwrap_or_default();
                 let seq = sequence::resolve(&m.dir, spec, &frames).map_err(|source| Error::Scene {
                     manifest: m.path.clone(),
-                    source: Box::new(crate::scene::Error::Sequence { name: name.clone(), source }),
+                    source: Box::new(crate::scene::Error::Sequence { name: name.clone(), message: source.to_string() }),
                     hint: "",
                 })?;
                 for f in seq {

@@ -276,7 +276,7 @@ pub(crate) fn prepare(
     let early_stat = early.as_ref().map(|s| s.stat_cache(&m.out_dir(), verify));
     let importer =
         early.as_ref().zip(early_stat.as_ref()).map(|(s, st)| crate::scene::blend::Importer::new(s, st, note));
-    let scene = Scene::open_importing(m, importer.as_ref()).map_err(|source| Error::Scene {
+    let scene = crate::settings::scene::open(m, importer.as_ref()).map_err(|source| Error::Scene {
         manifest: m.path.clone(),
         source: Box::new(source),
         hint: if m.after.is_empty() {

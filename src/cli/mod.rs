@@ -291,15 +291,15 @@ pub(crate) fn cache_choice(m: &crate::manifest::Manifest) -> (PathBuf, &'static 
 /// Opens `m`'s scene as `build` will, importing `.blend` sources through the cache `build` uses (so a later
 /// build finds the import done), and saying so when Blender starts.
 pub(crate) fn open_scene(m: &crate::manifest::Manifest, ui: Ui) -> anyhow::Result<crate::scene::Scene> {
-    use crate::scene::{blend, Scene};
+    use crate::scene::blend;
     if !m.sources.values().any(|s| s.blend().is_some()) {
-        return Ok(Scene::open(m)?);
+        return Ok(crate::settings::scene::open(m, None)?);
     }
     let store = crate::cache::Store::open(&cache_choice(m).0)?;
     let stat = store.stat_cache(&m.out_dir(), false);
     let say = |what: &str| eprintln!("{what}");
     let importer = blend::Importer::new(&store, &stat, (!ui.quiet).then_some(&say as &(dyn Fn(&str) + Sync)));
-    let scene = Scene::open_importing(m, Some(&importer))?;
+    let scene = crate::settings::scene::open(m, Some(&importer))?;
     // Blender's version, remembered per executable, and the digests hashed: the next command need not redo them.
     let _ = stat.save();
     Ok(scene)

@@ -133,7 +133,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             let say = |what: &str| eprintln!("{what}");
             let note = (!ui.quiet).then_some(&say as &(dyn Fn(&str) + Sync));
             let importer = scene::blend::Importer::new(&store, &stat, note);
-            let got = importer.import(asset, &crate::manifest::Source::default())?;
+            let got = importer.import(asset, &Default::default(), &Default::default())?;
             let _ = stat.save();
             let first = scene::source::mesh_frame(&got.dir.join("frame_00000.gltf"))?;
             drawable(&first, asset)?;

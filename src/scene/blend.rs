@@ -26,9 +26,9 @@ use std::sync::Mutex;
 
 use serde::Deserialize;
 
+use super::input::{BlendSelect, FrameRange};
 use super::Error;
 use crate::cache::{self, Digest, StatCache, Store};
-use crate::manifest::Source;
 
 /// The script Blender runs; its bytes are part of every import key.
 const SCRIPT: &str = include_str!("blend_export.py");
@@ -100,23 +100,18 @@ impl<'a> Importer<'a> {
         self.used.lock().expect("BUG: poisoned only by a panic elsewhere").clone()
     }
 
-    /// Imports `blend` as source `s` selects, from the cache when both keys hold, else by running Blender.
-    pub fn import(&self, blend: &Path, s: &Source) -> Result<Imported, Error> {
+    /// Imports what `select` selects of `blend` over `frames`, from the cache when both keys hold, else by
+    /// running Blender.
+    pub fn import(&self, blend: &Path, select: &BlendSelect, frames: &FrameRange) -> Result<Imported, Error> {
         let io = |path: &Path, e: std::io::Error| Error::Io { path: path.to_path_buf(), source: e };
         let content = self.stat.digest(blend).map_err(|e| io(blend, e))?;
         let exe = blender_exe().map_err(|message| Error::Blend { path: blend.to_path_buf(), message })?;
         let version = self.version(&exe).map_err(|message| Error::Blend { path: blend.to_path_buf(), message })?;
-        let f = s.frames();
-        let spec = FrameSpec {
-            start: f.and_then(|f| f.start),
-            end: f.and_then(|f| f.end),
-            count: f.and_then(|f| f.count),
-            step: f.and_then(|f| f.step),
-        };
+        let spec = FrameSpec { start: frames.start, end: frames.end, count: frames.count, step: frames.step };
         let selection = Selection {
-            scene: s.scene_name().map(str::to_string),
-            object: s.object.clone(),
-            collection: s.collection.clone(),
+            scene: select.scene.clone(),
+            object: select.object.clone(),
+            collection: select.collection.clone(),
         };
         let selection_json = serde_json::to_string(&selection).expect("strings serialize");
         let listing_fields = [
@@ -295,7 +290,7 @@ impl<'a> Importer<'a> {
     }
 }
 
-/// The selection the manifest makes, as the export script reads it.
+/// The selection, as the export script reads it.
 #[derive(serde::Serialize)]
 struct Selection {
     scene: Option<String>,
@@ -303,7 +298,7 @@ struct Selection {
     collection: Option<String>,
 }
 
-/// The manifest's `frames`, in Blender's frame numbers; the rest comes from the file's range.
+/// The source's `frames`, in Blender's frame numbers; the rest comes from the file's range.
 #[derive(serde::Serialize)]
 struct FrameSpec {
     start: Option<i64>,

@@ -17,6 +17,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
+use super::input::{Clip, Clips};
 use super::material::{AlphaMode, Material};
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
 use super::texture::{Texture, TextureRef};
@@ -239,7 +240,7 @@ type Shading = (Arc<Vec<Material>>, Arc<Vec<Texture>>);
 /// properties some exporters add (Stingray, 3ds Max physical) are ignored, as Blender ignores them. A default
 /// material is last.
 fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
-    let dir = crate::manifest::folder_of(path);
+    let dir = super::input::folder_of(path);
     let mut textures: Vec<Texture> = Vec::new();
     let mut cache: std::collections::HashMap<u32, (u32, bool)> = Default::default();
     let mut mats = Vec::new();
@@ -495,32 +496,27 @@ fn posed_vertices(
     }
 }
 
-/// Which take plays for source `name`: the manifest's `animation` as an index or a name; the first take by
-/// default (none when the file has no take).
-pub(crate) fn select_take(
-    asset: &FbxAsset,
-    name: &str,
-    sel: Option<&crate::manifest::source::AnimationSel>,
-) -> Result<Option<usize>, Error> {
-    use crate::manifest::source::AnimationSel;
+/// Which take plays for source `name`: one take, by index or by name; the first by default (none when the
+/// file has no take).
+pub(crate) fn select_take(asset: &FbxAsset, name: &str, sel: &Clips) -> Result<Option<usize>, Error> {
     let n = asset.takes.len();
     let names = || asset.takes.iter().map(|t| format!("`{}`", t.name)).collect::<Vec<_>>().join(", ");
     let refuse = |message: String| Error::Clip { name: name.to_string(), message };
     let file = asset.path.display();
     match sel {
-        None => Ok((n > 0).then_some(0)),
-        Some(AnimationSel::Index(i)) if (*i as usize) < n => Ok(Some(*i as usize)),
-        Some(AnimationSel::Index(i)) => {
-            Err(refuse(format!("{file}: there is no take {i} (the file has {n}: {})", names())))
-        }
-        Some(AnimationSel::Name(s)) => asset
-            .takes
-            .iter()
-            .position(|t| t.name == *s)
-            .map(Some)
-            .ok_or_else(|| refuse(format!("{file}: no take named `{s}` (takes: {})", names()))),
-        Some(AnimationSel::Many(_)) => {
-            Err(refuse(format!("{file}: an FBX source plays one take: name one (takes: {})", names())))
-        }
+        Clips::First => Ok((n > 0).then_some(0)),
+        Clips::These(one) => match one.as_slice() {
+            [Clip::Index(i)] if *i < n => Ok(Some(*i)),
+            [Clip::Index(i)] => Err(refuse(format!("{file}: there is no take {i} (the file has {n}: {})", names()))),
+            [Clip::Name(s)] => asset
+                .takes
+                .iter()
+                .position(|t| t.name == *s)
+                .map(Some)
+                .ok_or_else(|| refuse(format!("{file}: no take named `{s}` (takes: {})", names()))),
+            _ => Err(refuse(format!("{file}: an FBX source plays one take: name one (takes: {})", names()))),
+        },
+        // `"all"` names no take of the file, as a name it would.
+        Clips::All => Err(refuse(format!("{file}: no take named `all` (takes: {})", names()))),
     }
 }

@@ -1,11 +1,12 @@
-//! Scene sources: glTF and PLY files → [`PosedScene`] at any frame, in world space after the manifest's
-//! transforms. The transforms are resolved once per sequence when the scene opens ([`Scene::open`]), never per
+//! Scene sources: glTF, FBX, `.blend`, OBJ and PLY files → [`PosedScene`] at any frame, in world space after
+//! their placements. What to load comes as a [`Request`] ([`input`]), in the scene's own terms. The transforms are resolved once per sequence when the scene opens ([`Scene::open`]), never per
 //! frame, so the subject does not jump or breathe between frames.
 
 pub mod blend;
 pub mod fbx;
 mod fbx_layers;
 pub mod gltf;
+pub mod input;
 pub mod light;
 pub mod material;
 pub mod obj;
@@ -23,9 +24,9 @@ use glam::Mat4;
 pub use posed::{PosedPrimitive, PosedScene, PrimKind};
 pub use source::{LoadedSource, SourceData};
 
-use crate::manifest::transform::{Over, UpAxis};
-use crate::manifest::Manifest;
 use gltf::PoseScratch;
+pub use input::Request;
+use input::{Over, Placement, SourceRequest, UpAxis};
 use transform::Stats;
 
 /// What can go wrong opening or posing a scene. Every variant is a problem with the input (exit 2 at the CLI).
@@ -108,18 +109,17 @@ pub enum Error {
         #[source]
         source: transform::Error,
     },
-    /// A PLY sequence's frames cannot be listed.
-    #[error("source `{name}`")]
+    /// A sequence's frames cannot be listed.
+    #[error("source `{name}`: {message}")]
     Sequence {
         /// The source.
         name: String,
-        /// What is wrong.
-        #[source]
-        source: crate::manifest::sequence::Error,
+        /// What is wrong (a malformed pattern, a missing frame file).
+        message: String,
     },
 }
 
-/// Every source of a manifest, loaded, with its resolved transform.
+/// Every source of a [`Request`], loaded, with its resolved placement.
 #[derive(Debug)]
 pub struct Scene {
     /// Sources, sorted by name.
@@ -147,59 +147,56 @@ pub struct Poser {
 }
 
 impl Scene {
-    /// Loads every source and resolves the transforms (reading every frame once when a transform needs the
+    /// Loads every source and resolves the placements (reading every frame once when a placement needs the
     /// bounds of all frames). A `.blend` source needs [`Scene::open_importing`].
-    pub fn open(m: &Manifest) -> Result<Scene, Error> {
-        Scene::open_importing(m, None)
+    pub fn open(req: &Request) -> Result<Scene, Error> {
+        Scene::open_importing(req, None)
     }
 
     /// [`Scene::open`], importing `.blend` sources through `importer` (a cache).
-    pub fn open_importing(m: &Manifest, importer: Option<&blend::Importer>) -> Result<Scene, Error> {
+    pub fn open_importing(req: &Request, importer: Option<&blend::Importer>) -> Result<Scene, Error> {
         let mut sources = Vec::new();
-        for (name, s) in &m.sources {
-            sources.push(LoadedSource::load(name, s, &m.dir, importer)?);
+        for s in &req.sources {
+            sources.push(LoadedSource::load(s, importer)?);
         }
         let mut warnings: Vec<String> = sources.iter().flat_map(|s| s.warnings.iter().cloned()).collect();
-        for (s, (_, cfg)) in sources.iter().zip(&m.sources) {
+        for (s, r) in sources.iter().zip(&req.sources) {
             if let SourceData::Gltf { asset, clips, times } = &s.data {
                 warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", asset.path.display())));
-                warnings.extend(held_frames(&s.name, asset, clips, times, cfg.frames()));
+                warnings.extend(held_frames(&s.name, asset, clips, times, &r.frames));
             }
         }
         let mut scratch = PoseScratch::default();
         let mut posed = PosedScene::default();
         let mut locals = Vec::new();
-        // What a frame fit sizes the subject to: the splits' cameras, read off the manifest.
-        let reach = crate::manifest::framing::reach(m);
-        for (src, (_, cfg)) in sources.iter().zip(&m.sources) {
+        let reach = req.reach.as_ref();
+        for (src, SourceRequest { placement: t, .. }) in sources.iter().zip(&req.sources) {
             if src.ground.is_some() {
                 // Placed in world units: no transform, and no part in fitting the others.
                 locals.push(Mat4::IDENTITY);
                 continue;
             }
-            let t = cfg.transform.clone().unwrap_or_default();
-            let up = t.up.or(m.transform.up).unwrap_or(src.default_up);
-            let over = t.over.or(m.transform.over).unwrap_or_default();
-            let pre = transform::pre(&t, up).as_mat4();
+            let up = t.up.unwrap_or(src.default_up);
+            let over = t.over;
+            let pre = transform::pre(t, up).as_mat4();
             let mut stats = Stats::default();
-            if transform::needs_stats(&t) {
+            if transform::needs_stats(t) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.add(p))?;
             }
-            if let Some(c) = transform::frame_centre(&t, &stats) {
+            if let Some(c) = transform::frame_centre(t, &stats) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.far = stats.far.max(farthest(p, c)))?;
             }
             let table = || format!("source `{}`", src.name);
             locals.push(
-                transform::resolve(&t, up, &stats, reach.as_ref())
+                transform::resolve(t, up, &stats, reach)
                     .map_err(|source| Error::Transform { table: table(), source })?,
             );
         }
-        // The global table's `up` is only the sources' default: the rotation was applied per source.
-        let mut g = m.transform.clone();
-        g.up = None;
+        // The global placement's `up` is only the sources' default: the rotation was applied per source.
+        let g = Placement { up: None, ..req.global.clone() };
         let g_pre = transform::pre(&g, UpAxis::Z).as_mat4();
         let mut stats = Stats::default();
-        let over = g.over.unwrap_or_default();
+        let over = g.over;
         let fitted = || sources.iter().zip(&locals).filter(|(s, _)| s.ground.is_none());
         if transform::needs_stats(&g) {
             for (src, local) in fitted() {
@@ -212,10 +209,10 @@ impl Scene {
                 gather(src, g_pre * *local, over, &mut scratch, &mut posed, &mut |p| *far = far.max(farthest(p, c)))?;
             }
         }
-        let global = transform::resolve(&g, UpAxis::Z, &stats, reach.as_ref())
+        let global = transform::resolve(&g, UpAxis::Z, &stats, reach)
             .map_err(|source| Error::Transform { table: "[transform]".into(), source })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
-        let file_lights = m.render.gltf_lights && m.lit();
+        let file_lights = req.file_lights;
         let mut scene = Scene { sources, locals, global, frames, warnings, file_lights };
         scene.place_ground(&mut scratch, &mut posed)?;
         Ok(scene)
@@ -342,14 +339,13 @@ fn held_frames(
     asset: &gltf::GltfAsset,
     clips: &[usize],
     times: &[f32],
-    frames: Option<&crate::manifest::frames::Frames>,
+    f: &input::FrameRange,
 ) -> Option<String> {
     let longest = clips
         .iter()
         .copied()
         .max_by(|a, b| asset.animations[*a].duration().total_cmp(&asset.animations[*b].duration()))?;
     let duration = asset.animations[longest].duration();
-    let f = frames.cloned().unwrap_or_default();
     let (fps, start, step) = (f.fps(), f.start.unwrap_or(0), f.step() as i64);
     // A frame a little past the end (the clip's length is rarely a whole number of frames) is not held.
     let held = times.iter().filter(|&&t| t as f64 > duration as f64 + 1.0 / fps + 1e-6).count();

@@ -99,7 +99,7 @@ fn libraries(path: &Path, text: &[u8]) -> Result<Vec<(usize, String)>, Error> {
 
 /// The MTL files `libs` (named at their OBJ lines), each checked to exist, each followed by its textures.
 fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error> {
-    let dir = crate::manifest::folder_of(path);
+    let dir = crate::scene::input::folder_of(path);
     let mut deps = Vec::new();
     for (line_no, name) in libs {
         let mtl = dir.join(name);
@@ -118,7 +118,7 @@ fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error>
 fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
     let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let text = String::from_utf8_lossy(&text);
-    let dir = crate::manifest::folder_of(path);
+    let dir = crate::scene::input::folder_of(path);
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
@@ -159,7 +159,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
     let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
     let (models, materials) = tobj::load_obj(path, &options).map_err(|e| fail(e.to_string()))?;
     let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
-    let dir = crate::manifest::folder_of(path);
+    let dir = crate::scene::input::folder_of(path);
     let mut textures: Vec<Texture> = Vec::new();
     let mut mats: Vec<Material> = Vec::new();
     for m in &materials {

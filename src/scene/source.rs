@@ -1,4 +1,4 @@
-//! One manifest source, loaded: its geometry and its frame list, posable in source space.
+//! One source, loaded: its geometry and its frame list, posable in source space.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -9,10 +9,7 @@ use super::gltf::{GltfAsset, PoseScratch};
 use super::material::{srgb_to_linear, Material};
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
 use super::{ply, Error};
-use crate::manifest::sequence::{self, SequenceFrame};
-use crate::manifest::source::{AnimationSel, ClipRef};
-use crate::manifest::transform::UpAxis;
-use crate::manifest::{Source, SourceKind};
+use super::input::{folder_of, Clip, Clips, FrameFile, FrameRange, Ground, SourceFile, SourceRequest, UpAxis};
 
 /// A loaded source.
 #[derive(Debug)]
@@ -39,10 +36,10 @@ pub enum SourceData {
     /// A static mesh, posed once in source space.
     Static(PosedScene),
     /// A PLY sequence, read frame by frame.
-    Sequence(Vec<SequenceFrame>),
+    Sequence(Vec<FrameFile>),
     /// A mesh sequence (OBJ + MTL, textured PLY, or glTF per frame), read frame by frame; the topology may change
     /// every frame.
-    MeshSequence(Vec<SequenceFrame>),
+    MeshSequence(Vec<FrameFile>),
 }
 
 /// A source with its name.
@@ -55,80 +52,61 @@ pub struct LoadedSource {
     /// The up axis its transform assumes by default.
     pub default_up: UpAxis,
     /// A built-in ground plane, placed in world units ([`super::Scene::open`] makes its geometry).
-    pub ground: Option<crate::manifest::source::Plane>,
+    pub ground: Option<Ground>,
     /// What the user should know about how it loaded (a `.blend`'s import notes).
     pub warnings: Vec<String>,
 }
 
 impl LoadedSource {
-    /// Loads a manifest source; `dir` is the manifest's folder; `importer` imports a `.blend`.
-    pub fn load(
-        name: &str,
-        s: &Source,
-        dir: &std::path::Path,
-        importer: Option<&super::blend::Importer>,
-    ) -> Result<LoadedSource, Error> {
-        let invalid = |message: String| Error::Source { name: name.to_string(), message };
-        if let Some(p) = s.plane() {
-            let data = SourceData::Static(PosedScene::default());
-            let ground = Some(*p);
-            return Ok(LoadedSource { name: name.to_string(), data, default_up: UpAxis::Z, ground, warnings: vec![] });
-        }
-        let (kind, path) = s.kind().ok_or_else(|| invalid("names no file".into()))?;
-        let full: PathBuf = dir.join(path);
-        let is_ply = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-        let mut warnings = Vec::new();
-        let data = match kind {
-            SourceKind::Gltf => {
-                let asset = super::gltf::load(&full, s.scene_index())?;
-                let clips = select_clips(&asset, s.animation())
-                    .map_err(|message| Error::Clip { name: name.to_string(), message })?;
+    /// Loads a source; `importer` imports a `.blend`.
+    pub fn load(req: &SourceRequest, importer: Option<&super::blend::Importer>) -> Result<LoadedSource, Error> {
+        let name = req.name.clone();
+        let (mut warnings, mut ground) = (Vec::new(), None);
+        let data = match &req.file {
+            SourceFile::Ground(g) => {
+                ground = Some(*g);
+                SourceData::Static(PosedScene::default())
+            }
+            SourceFile::Gltf { path, scene } => {
+                let asset = super::gltf::load(path, *scene)?;
+                let clips = select_clips(&asset, &req.clips).map_err(|message| Error::Clip { name: name.clone(), message })?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
-                let times = frame_times(s.frames(), duration as f64);
+                let times = frame_times(&req.frames, duration as f64);
                 SourceData::Gltf { asset: Box::new(asset), clips, times }
             }
-            SourceKind::Fbx => {
-                let asset = super::fbx::load(&full)?;
-                let take = super::fbx::select_take(&asset, name, s.animation())?;
+            SourceFile::Fbx(path) => {
+                let asset = super::fbx::load(path)?;
+                let take = super::fbx::select_take(&asset, &name, &req.clips)?;
                 let duration = take.map_or(0.0, |t| asset.takes[t].duration());
-                let times = frame_times(s.frames(), duration);
+                let times = frame_times(&req.frames, duration);
                 SourceData::Fbx { asset: Box::new(asset), take, times }
             }
-            SourceKind::Blend => {
+            SourceFile::Blend { path, select } => {
                 let importer = importer.ok_or_else(|| Error::Blend {
-                    path: full.clone(),
+                    path: path.clone(),
                     message: "a .blend is imported through a cache: open the scene with an importer".into(),
                 })?;
-                let got = importer.import(&full, s)?;
-                warnings.extend(got.info.warnings.iter().map(|w| format!("{}: {w}", full.display())));
+                let got = importer.import(path, select, &req.frames)?;
+                warnings.extend(got.info.warnings.iter().map(|w| format!("{}: {w}", path.display())));
                 let frames = got.info.frames.iter().enumerate();
                 SourceData::MeshSequence(
-                    frames
-                        .map(|(i, &number)| SequenceFrame { number, path: got.dir.join(format!("frame_{i:05}.gltf")) })
-                        .collect(),
+                    frames.map(|(i, &number)| FrameFile { number, path: got.dir.join(format!("frame_{i:05}.gltf")) }).collect(),
                 )
             }
-            SourceKind::Mesh if is_ply => SourceData::Static(ply_scene(&full)?),
-            SourceKind::Mesh => SourceData::Static(gltf_at_rest(&full, s.scene_index())?),
-            SourceKind::PlySequence | SourceKind::MeshSequence => {
-                let frames = s.frames().cloned().unwrap_or_default();
-                let sequence = sequence::resolve(dir, path, &frames)
-                    .map_err(|source| Error::Sequence { name: name.to_string(), source })?;
-                if kind == SourceKind::PlySequence {
-                    SourceData::Sequence(sequence)
-                } else {
-                    SourceData::MeshSequence(sequence)
-                }
-            }
+            SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene(path)?),
+            SourceFile::Mesh { path, scene } => SourceData::Static(gltf_at_rest(path, *scene)?),
+            SourceFile::PlySequence(frames) => SourceData::Sequence(frames.clone()),
+            SourceFile::MeshSequence(frames) => SourceData::MeshSequence(frames.clone()),
         };
         // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
-        // .blend in Blender's (exported +Z up).
-        let default_up = if is_ply || matches!(kind, SourceKind::PlySequence | SourceKind::Fbx | SourceKind::Blend) {
-            UpAxis::Z
-        } else {
-            UpAxis::Y
+        // .blend in Blender's (exported +Z up). A ground plane is placed in world units.
+        let default_up = match &req.file {
+            SourceFile::Mesh { path, .. } if is_ply(path) => UpAxis::Z,
+            SourceFile::MeshSequence(frames) if frames.first().is_some_and(|f| is_ply(&f.path)) => UpAxis::Z,
+            SourceFile::Gltf { .. } | SourceFile::Mesh { .. } | SourceFile::MeshSequence(_) => UpAxis::Y,
+            _ => UpAxis::Z,
         };
-        Ok(LoadedSource { name: name.to_string(), data, default_up, ground: None, warnings })
+        Ok(LoadedSource { name, data, default_up, ground, warnings })
     }
 
     /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
@@ -183,13 +161,13 @@ impl LoadedSource {
     }
 }
 
-fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usize>, String> {
+fn select_clips(asset: &GltfAsset, sel: &Clips) -> Result<Vec<usize>, String> {
     let n = asset.animations.len();
-    let find = |r: &ClipRef| -> Result<usize, String> {
+    let find = |r: &Clip| -> Result<usize, String> {
         match r {
-            ClipRef::Index(i) if (*i as usize) < n => Ok(*i as usize),
-            ClipRef::Index(i) => Err(format!("{}: there is no animation {i} (the file has {n})", asset.path.display())),
-            ClipRef::Name(name) => {
+            Clip::Index(i) if *i < n => Ok(*i),
+            Clip::Index(i) => Err(format!("{}: there is no animation {i} (the file has {n})", asset.path.display())),
+            Clip::Name(name) => {
                 asset.animations.iter().position(|a| a.name.as_deref() == Some(name)).ok_or_else(|| {
                     let names: Vec<String> = asset
                         .animations
@@ -203,18 +181,19 @@ fn select_clips(asset: &GltfAsset, sel: Option<&AnimationSel>) -> Result<Vec<usi
         }
     };
     match sel {
-        None => Ok(if n > 0 { vec![0] } else { vec![] }),
-        Some(AnimationSel::Name(s)) if s == "all" => Ok((0..n).collect()),
-        Some(AnimationSel::Name(s)) => Ok(vec![find(&ClipRef::Name(s.clone()))?]),
-        Some(AnimationSel::Index(i)) => Ok(vec![find(&ClipRef::Index(*i))?]),
-        Some(AnimationSel::Many(v)) => v.iter().map(find).collect(),
+        Clips::First => Ok(if n > 0 { vec![0] } else { vec![] }),
+        Clips::All => Ok((0..n).collect()),
+        Clips::These(v) => v.iter().map(find).collect(),
     }
+}
+
+fn is_ply(path: &std::path::Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
 }
 
 /// The times (seconds from the clip's start) of an animated source's frames: `frames`, else the clip's whole
 /// `duration` at its rate.
-fn frame_times(frames: Option<&crate::manifest::frames::Frames>, duration: f64) -> Vec<f32> {
-    let f = frames.cloned().unwrap_or_default();
+fn frame_times(f: &FrameRange, duration: f64) -> Vec<f32> {
     let fps = f.fps();
     let start = f.start.unwrap_or(0);
     let step = f.step() as i64;
@@ -267,7 +246,7 @@ fn gltf_side_files(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
 
 /// `rel` (a glTF's side files) placed in the glTF's folder.
 fn beside(path: &std::path::Path, rel: Vec<PathBuf>) -> Vec<PathBuf> {
-    let dir = crate::manifest::folder_of(path);
+    let dir = folder_of(path);
     rel.into_iter().map(|r| dir.join(r)).collect()
 }
 
@@ -309,7 +288,7 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
     let Some(name) = comments.iter().find_map(|c| c.trim().strip_prefix("TextureFile").map(str::trim)) else {
         return Ok(None);
     };
-    let tex = crate::manifest::folder_of(path).join(name);
+    let tex = folder_of(path).join(name);
     if !tex.is_file() {
         return Err(Error::Mesh {
             path: path.to_path_buf(),
@@ -466,7 +445,7 @@ impl VertexTransform {
 /// The ground plane's geometry at height `z`, in world space: a double-sided diffuse rectangle facing +Z (two
 /// triangles) that receives shadows and casts none. Lit shading reads the environment's visibility over it from
 /// a grid (`render::light`), not from its vertices.
-pub fn ground(p: &crate::manifest::source::Plane, z: f32) -> PosedScene {
+pub fn ground(p: &Ground, z: f32) -> PosedScene {
     let [w, d] = p.size.map(|v| v as f32 * 0.5);
     let positions = vec![Vec3::new(-w, -d, z), Vec3::new(w, -d, z), Vec3::new(w, d, z), Vec3::new(-w, d, z)];
     let indices = vec![0, 1, 2, 0, 2, 3];

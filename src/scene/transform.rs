@@ -1,12 +1,11 @@
-//! Resolving a manifest `[transform]` to one 4×4 matrix from the bounds of the frames it covers.
+//! Resolving a [`Placement`] to one 4×4 matrix from the bounds of the frames it covers.
 //!
 //! `world = translate · rotate · scale · fit · center · up · matrix`. The caller gathers [`Stats`] of the
 //! geometry after `up · matrix` ([`pre`]) over the frames `over` selects, once per sequence.
 
 use glam::{DMat4, DVec3, Mat4, Vec3};
 
-use crate::manifest::framing::Reach;
-use crate::manifest::transform::{Center, Scale, Transform, UpAxis};
+use super::input::{Center, Fit, Placement, Reach, UpAxis};
 
 /// Bounds and centroid accumulator.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,8 +54,8 @@ impl Stats {
 }
 
 /// `up · matrix`: the part of the transform that does not depend on bounds.
-pub fn pre(t: &Transform, up: UpAxis) -> DMat4 {
-    let m = t.matrix().map_or(DMat4::IDENTITY, |m| DMat4::from_cols_array_2d(&m).transpose());
+pub fn pre(t: &Placement, up: UpAxis) -> DMat4 {
+    let m = t.matrix.map_or(DMat4::IDENTITY, |m| DMat4::from_cols_array_2d(&m).transpose());
     let up_m = match up {
         // +Y up → +Z up: +90° about X maps (x, y, z) to (x, -z, y).
         UpAxis::Y => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
@@ -95,18 +94,18 @@ pub enum Error {
 }
 
 /// Whether the transform needs bounds at all.
-pub fn needs_stats(t: &Transform) -> bool {
-    t.fit().is_some() || matches!(t.center, Some(Center::Bbox | Center::Centroid))
+pub fn needs_stats(t: &Placement) -> bool {
+    t.fit.is_some() || matches!(t.center, Some(Center::Bbox | Center::Centroid))
 }
 
 /// The centring rule: `center`, else the bounding box's centre for a frame fit (the cameras aim at the
 /// origin), else none.
-fn center_rule(t: &Transform) -> Center {
-    t.center.unwrap_or(if t.fit().is_some_and(|f| f.frame) { Center::Bbox } else { Center::None })
+fn center_rule(t: &Placement) -> Center {
+    t.center.unwrap_or(if matches!(t.fit, Some(Fit::Frame { .. })) { Center::Bbox } else { Center::None })
 }
 
 /// The point the transform moves to the origin, in the space after [`pre`].
-fn centre_of(t: &Transform, stats: &Stats) -> DVec3 {
+fn centre_of(t: &Placement, stats: &Stats) -> DVec3 {
     match center_rule(t) {
         Center::None => DVec3::ZERO,
         Center::Bbox => (stats.lo + stats.hi) * 0.5,
@@ -116,61 +115,57 @@ fn centre_of(t: &Transform, stats: &Stats) -> DVec3 {
 
 /// For a frame fit: the centre whose farthest point [`Stats::far`] must be gathered before [`resolve`] (a second
 /// pass over the frames: the centre is known only once the first has seen them all).
-pub fn frame_centre(t: &Transform, stats: &Stats) -> Option<DVec3> {
-    t.fit().is_some_and(|f| f.frame).then(|| centre_of(t, stats))
+pub fn frame_centre(t: &Placement, stats: &Stats) -> Option<DVec3> {
+    matches!(t.fit, Some(Fit::Frame { .. })).then(|| centre_of(t, stats))
 }
 
 /// The full matrix, given stats gathered after [`pre`] and, for a frame fit, the reach of the cameras
-/// ([`crate::manifest::framing::reach`]). Errors when a fit is asked of empty or flat geometry, or a frame fit
+/// ([`Reach`]). Errors when a fit is asked of empty or flat geometry, or a frame fit
 /// of cameras with no room.
-pub fn resolve(t: &Transform, up: UpAxis, stats: &Stats, reach: Option<&Reach>) -> Result<Mat4, Error> {
+pub fn resolve(t: &Placement, up: UpAxis, stats: &Stats, reach: Option<&Reach>) -> Result<Mat4, Error> {
     let pre = pre(t, up);
     let center = centre_of(t, stats);
     if needs_stats(t) && stats.is_empty() {
         return Err(Error::NoGeometry);
     }
     let mut s = 1.0;
-    if let Some(f) = t.fit() {
+    if let Some(f) = t.fit {
         let size = stats.hi - stats.lo;
-        let (measure, target, what) = if let Some(margin) = f.frame_margin() {
-            let reach = reach.ok_or(Error::NoFraming)?;
-            if reach.radius <= 0.0 {
-                return Err(Error::NoRoom { rig: reach.rig.clone() });
+        let (measure, target, what) = match f {
+            Fit::Frame { margin } => {
+                let reach = reach.ok_or(Error::NoFraming)?;
+                if reach.radius <= 0.0 {
+                    return Err(Error::NoRoom { rig: reach.rig.clone() });
+                }
+                (stats.far, reach.radius * (1.0 - margin), "size")
             }
-            (stats.far, reach.radius * (1.0 - margin), "size")
-        } else if let Some(h) = f.height {
-            (size.z, h, "height")
-        } else if let Some(r) = f.radius {
-            let far = (0..8)
-                .map(|i| {
-                    DVec3::new(
-                        pick(i & 1, stats.lo.x, stats.hi.x),
-                        pick(i & 2, stats.lo.y, stats.hi.y),
-                        pick(i & 4, stats.lo.z, stats.hi.z),
-                    )
-                    .distance(center)
-                })
-                .fold(0.0, f64::max);
-            (far, r, "radius")
-        } else {
-            (size.max_element(), f.extent.unwrap_or(1.0), "extent")
+            Fit::Height(h) => (size.z, h, "height"),
+            Fit::Radius(r) => {
+                let far = (0..8)
+                    .map(|i| {
+                        DVec3::new(
+                            pick(i & 1, stats.lo.x, stats.hi.x),
+                            pick(i & 2, stats.lo.y, stats.hi.y),
+                            pick(i & 4, stats.lo.z, stats.hi.z),
+                        )
+                        .distance(center)
+                    })
+                    .fold(0.0, f64::max);
+                (far, r, "radius")
+            }
+            Fit::Extent(e) => (size.max_element(), e, "extent"),
         };
         if measure.is_nan() || measure <= 1e-12 {
             return Err(Error::ZeroExtent { what });
         }
         s = target / measure;
     }
-    let extra = match t.scale {
-        Some(Scale::Uniform(k)) => DVec3::splat(k),
-        Some(Scale::Axes(a)) => DVec3::from(a),
-        None => DVec3::ONE,
-    };
-    let r = t.rotate_deg.map_or(DMat4::IDENTITY, |[x, y, z]| {
-        DMat4::from_rotation_z(z.to_radians())
-            * DMat4::from_rotation_y(y.to_radians())
-            * DMat4::from_rotation_x(x.to_radians())
-    });
-    let tr = DMat4::from_translation(t.translate.map_or(DVec3::ZERO, DVec3::from));
+    let extra = DVec3::from(t.scale);
+    let [x, y, z] = t.rotate_deg;
+    let r = DMat4::from_rotation_z(z.to_radians())
+        * DMat4::from_rotation_y(y.to_radians())
+        * DMat4::from_rotation_x(x.to_radians());
+    let tr = DMat4::from_translation(DVec3::from(t.translate));
     let m =
         tr * r * DMat4::from_scale(extra) * DMat4::from_scale(DVec3::splat(s)) * DMat4::from_translation(-center) * pre;
     Ok(m.as_mat4())
@@ -190,8 +185,7 @@ mod tests {
 
     #[test]
     fn y_up_becomes_z_up_and_fits() {
-        // As the manifest reads it (its spans stay inside `manifest`).
-        let t: Transform = toml::from_str("fit = { height = 2.0 }\ncenter = \"bbox\"").unwrap();
+        let t = Placement { fit: Some(Fit::Height(2.0)), center: Some(Center::Bbox), ..Placement::default() };
         let mut st = Stats::default();
         // A column 4 tall along source Y, from y=1 to y=5: after up it spans z=1..5.
         let p = pre(&t, UpAxis::Y).as_mat4();

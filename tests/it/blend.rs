@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use vvgen::cache::{StatCache, Store};
-use vvgen::scene::{blend::Importer, Poser, Scene};
+use vvgen::scene::{blend::Importer, Poser};
 
 fn vvgen(dir: &Path, args: &[&str], blender: &Path) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_vvgen"))
@@ -83,7 +83,7 @@ fn blend_poses_as_blender_evaluates_it_and_imports_once() {
     let store = Store::open(&d.join("library-cache")).unwrap();
     let stat = StatCache::load(&d.join("stat"));
     let importer = Importer::new(&store, &stat, None);
-    let scene = Scene::open_importing(&m, Some(&importer)).unwrap();
+    let scene = vvgen::settings::scene::open(&m, Some(&importer)).unwrap();
     // The file's frame range, 1–24: scene frame i is Blender's frame 1 + i.
     assert_eq!(scene.frames, 24);
     let mut poser = Poser::default();

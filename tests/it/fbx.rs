@@ -5,7 +5,7 @@ use std::path::Path;
 use std::process::Command;
 
 use crate::common::data;
-use vvgen::scene::{Poser, Scene};
+use vvgen::scene::Poser;
 
 fn vvgen(dir: &Path, args: &[&str]) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(dir).args(args).output().unwrap();
@@ -25,7 +25,7 @@ fn manifest(dir: &Path, source: &str) -> vvgen::manifest::Manifest {
 
 /// Every frame's bounds and the triangle count of frame 0.
 fn bounds(m: &vvgen::manifest::Manifest) -> (Vec<(glam::Vec3, glam::Vec3)>, usize) {
-    let scene = Scene::open(m).unwrap();
+    let scene = vvgen::settings::scene::open(m, None).unwrap();
     let mut poser = Poser::default();
     let b = (0..scene.frames).map(|f| scene.pose(f, &mut poser).unwrap().bounds().unwrap()).collect();
     (b, scene.pose(0, &mut poser).unwrap().triangle_count())

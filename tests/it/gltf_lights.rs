@@ -141,7 +141,7 @@ fn a_malformed_file_light_is_an_error_naming_the_file_and_the_light() {
         std::fs::write(d.join("floor.gltf"), &gltf).unwrap();
         std::fs::write(d.join("m.toml"), manifest("")).unwrap();
         let m = load(&d.join("m.toml"));
-        let err = vvgen::scene::Scene::open(&m).expect_err(want).to_string();
+        let err = vvgen::settings::scene::open(&m, None).expect_err(want).to_string();
         assert!(err.contains("floor.gltf") && err.contains(want), "{err}\n(wanted {want})");
     }
 }

@@ -95,7 +95,7 @@ fn a_white_lambertian_sphere_in_a_white_furnace_renders_white() {
 
 /// The ground and a box hovering over its centre.
 fn ground_and_caster() -> PosedScene {
-    let plane = vvgen::manifest::source::Plane { size: [4.0, 4.0], color: [0.8; 3], z: None };
+    let plane = vvgen::scene::input::Ground { size: [4.0, 4.0], color: [0.8; 3], z: None };
     let ground = vvgen::scene::source::ground(&plane, 0.0);
     merged(&[ground, sphere(0.4, Vec3::new(0.0, 0.0, 1.0), lambert(0.5))])
 }
@@ -445,7 +445,7 @@ fn a_ground_plane_lights_what_stands_on_it_from_below() {
     let (w, h) = (64u32, 32u32);
     let texels = (0..h).flat_map(|y| (0..w).map(move |_| Vec3::splat(if y < h / 2 { 1.0 } else { 0.0 }))).collect();
     let sky = EnvMap { width: w, height: h, texels };
-    let plane = vvgen::manifest::source::Plane { size: [6.0, 6.0], color: [0.8; 3], z: None };
+    let plane = vvgen::scene::input::Ground { size: [6.0, 6.0], color: [0.8; 3], z: None };
     let ball = sphere(0.4, Vec3::new(0.0, 0.0, 1.0), lambert(1.0));
     let scene = merged(&[vvgen::scene::source::ground(&plane, 0.0), ball.clone()]);
     // From low beside the ball, looking up at its underside: the point whose normal leans 15° off straight down.

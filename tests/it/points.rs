@@ -74,7 +74,7 @@ fn samples_lie_on_the_posed_surface_of_their_frame() {
     let m = cesium_manifest(dir.path(), "[output.p]\nwriter = \"ply-sequence\"\npoints = 600\n");
     build(&m, 2);
     let (manifest, _) = vvgen::manifest::load(&m).unwrap();
-    let scene = vvgen::scene::Scene::open(&manifest).unwrap();
+    let scene = vvgen::settings::scene::open(&manifest, None).unwrap();
     let mut poser = Default::default();
     for f in [0usize, 2] {
         let posed = scene.pose(f, &mut poser).unwrap();

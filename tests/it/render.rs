@@ -615,7 +615,7 @@ fn vox10_cubes_leave_no_holes_with_the_default_footprint() {
     let path = tmp.path().join("m.toml");
     std::fs::write(&path, text).unwrap();
     let m = crate::common::load(&path);
-    let scene = vvgen::scene::Scene::open(&m).unwrap();
+    let scene = vvgen::settings::scene::open(&m, None).unwrap();
     let mut poser = vvgen::scene::Poser::default();
     let posed = scene.pose(0, &mut poser).unwrap().clone();
     let pts: Vec<Vec3> = posed.primitives.iter().flat_map(|p| p.positions.iter().copied()).collect();

@@ -13,7 +13,7 @@ fn data(rel: &str) -> String {
 fn scene(text: &str) -> Scene {
     let (m, _) =
         manifest::parse(text, Path::new("/nonexistent/m.toml")).unwrap_or_else(|r| panic!("{}", r.render(false)));
-    Scene::open(&m).unwrap()
+    vvgen::settings::scene::open(&m, None).unwrap()
 }
 
 fn union_bounds(s: &Scene) -> (Vec3, Vec3) {

@@ -144,7 +144,7 @@ fn build(opaque: bool) -> Built {
         let (m, _) = vvgen::manifest::load(&path).unwrap_or_else(|r| panic!("{}", r.render(false)));
         let cache = vvgen::build::default_cache_dir(&m);
         vvgen::build::build(&m, &cache, Default::default(), &vvgen::build::Silent).unwrap();
-        let scene = Scene::open(&m).unwrap();
+        let scene = vvgen::settings::scene::open(&m, None).unwrap();
         Built { _tmp: tmp, out, scene }
     }
 }

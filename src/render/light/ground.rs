@@ -380,7 +380,7 @@ mod tests {
     /// A 4 m ground plane of colour (0.7, 0.6, 0.5) at z = 0 under a 0.6 m square caster at z = 1, lit by
     /// `lights` and the studio map.
     fn square_over_ground(lights: &[Light]) -> (PosedScene, FrameLight) {
-        let plane = crate::manifest::source::Plane { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
+        let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
         let h = 0.3;
         let caster = PosedScene::single(
             PrimKind::Triangles,

@@ -148,7 +148,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
             return Err(err(path, format!("requires extension `{ext}`, which vvgen does not support")));
         }
     }
-    let dir = crate::manifest::folder_of(path);
+    let dir = crate::scene::input::folder_of(path);
     let mut buffers = Vec::new();
     for b in doc.buffers() {
         let data = match b.source() {

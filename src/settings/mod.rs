@@ -1,9 +1,12 @@
-//! From the manifest's declarations to what the renderer takes: its settings, its encoding, its lights and
-//! environment, and the checks of the inputs only the renderer's readers can make (an environment map's header).
+//! From the manifest's declarations to what the stages take: the renderer's settings, its encoding, its lights
+//! and environment, the checks of the inputs only the renderer's readers can make (an environment map's header),
+//! and the scene's request ([`scene`]).
 //!
-//! This is the step between `manifest` (TOML → checked declarations, depending on nothing above it) and `render`
-//! (which knows nothing of manifests): the planner and the benches call it, `check` and `build` raise what
-//! [`diagnose`] finds.
+//! This is the step between `manifest` (TOML → checked declarations, depending on nothing above it) and the
+//! stages that know nothing of manifests (`scene`, `render`): the planner, the CLI and the benches call it,
+//! `check` and `build` raise what [`diagnose`] finds.
+
+pub mod scene;
 
 use crate::manifest::light::{Light, LightKind, SUN_ANGLE};
 use crate::manifest::render::{
