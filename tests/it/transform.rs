@@ -111,3 +111,25 @@ fn several_sources_merge_with_their_own_transforms() {
     assert_eq!(m.base_color_texture.unwrap().texture, 1, "the box's texture index is shifted past the man's");
     assert!(boxes[0].object > 0);
 }
+
+#[test]
+fn a_scene_opens_from_its_own_request_as_from_the_manifest_that_says_the_same() {
+    use vvgen::scene::input::{Center, Fit, FrameRange, Placement, Request, SourceFile, SourceRequest};
+    // The scene's own input, with no manifest: what a bench or a test of posing writes.
+    let req = Request {
+        sources: vec![SourceRequest {
+            name: "man".into(),
+            file: SourceFile::Gltf { path: data("gltf/CesiumMan/CesiumMan.glb").into(), scene: None },
+            clips: Default::default(),
+            frames: FrameRange { count: Some(20), fps: Some(10.0), ..Default::default() },
+            placement: Placement::default(),
+        }],
+        global: Placement { fit: Some(Fit::Height(2.4)), center: Some(Center::Bbox), ..Placement::default() },
+        ..Request::default()
+    };
+    let own = Scene::open(&req).unwrap();
+    let from_manifest = scene(&man("fit = { height = 2.4 }\ncenter = \"bbox\""));
+    assert_eq!((own.frames, own.global), (from_manifest.frames, from_manifest.global));
+    let (lo, hi) = union_bounds(&own);
+    assert!(((hi.z - lo.z) - 2.4).abs() < 1e-5, "{lo} {hi}");
+}
