@@ -71,7 +71,7 @@ struct Aim {
 
 fn aim(rig: &Rig) -> Option<Aim> {
     match rig.kind() {
-        RigKind::Explicit | RigKind::FromFile => None,
+        RigKind::Explicit | RigKind::FromFile | RigKind::Path => None,
         // Forward-facing cameras sit on a plane at `radius` in front of the target: none is nearer than that.
         _ => {
             let j = rig.jitter.unwrap_or_default();

@@ -86,6 +86,12 @@ pub struct Manifest {
 }
 
 impl Manifest {
+    /// Seconds between consecutive frames of the dataset: `step / fps` of the first source (by name) that gives
+    /// `frames`, else 1/30 s. What a `path` rig's keyframe times are measured in (frame `f` at `f × period`).
+    pub fn frame_period(&self) -> f64 {
+        self.sources.values().find_map(|s| s.frames().map(|f| f.step() as f64 / f.fps())).unwrap_or(1.0 / 30.0)
+    }
+
     /// Whether anything is lit: `pbr` renders, or a `ply-sequence` with `color = "lit"`.
     pub fn lit(&self) -> bool {
         self.render.shading == render::Shading::Pbr
@@ -241,7 +247,7 @@ fn parse_inner(text: &str, path: &Path, stack: &mut Vec<PathBuf>, diags: &mut Ve
         for (name, (r, _, keys)) in rigs {
             let keys: Vec<(&str, Range<usize>)> = keys.iter().map(|(k, s)| (k.as_str(), s.clone())).collect();
             r.validate(name, &keys, diags);
-            if let Some(f) = &r.file {
+            for f in r.file.iter().chain(&r.trace).chain(&r.dataparser_transforms) {
                 if !dir.join(f.get_ref()).is_file() {
                     diags.push(
                         Diagnostic::error(
@@ -504,6 +510,15 @@ fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
                     diags.push(
                         Diagnostic::error(format!("split `{name}` needs `views`"), Some(split.rig.span()))
                             .with_help("e.g. views = 100"),
+                    );
+                }
+                if kind == RigKind::Path && split.time == TimeMode::Random {
+                    diags.push(
+                        Diagnostic::error(
+                            format!("split `{name}`: rig `{rig_name}` is a path, one camera per frame at that frame's pose"),
+                            Some(split.rig.span()),
+                        )
+                        .with_help("remove time = \"random\" (a path split renders every selected frame once)"),
                     );
                 }
                 if let (RigKind::Dome, Some(r), Some(v)) = (kind, &rig.rings, &split.views) {

@@ -47,9 +47,28 @@ pub struct Rig {
     /// `explicit`: the poses.
     #[schemars(with = "Option<Vec<Pose>>")]
     pub(super) poses: Option<Spanned<Vec<Pose>>>,
-    /// `from-file`: a transforms.json (NeRF, D-NeRF, nerfstudio) whose cameras to reuse.
+    /// `from-file`: a transforms.json (NeRF, D-NeRF, nerfstudio) whose cameras to reuse; `path`: a nerfstudio
+    /// viewer `camera_path.json` whose cameras to follow.
     #[schemars(with = "Option<String>")]
     pub(super) file: Option<Spanned<String>>,
+    /// `path`: the keyframes the camera passes through, in time order.
+    #[schemars(with = "Option<Vec<Keyframe>>")]
+    pub(super) keyframes: Option<Spanned<Vec<Keyframe>>>,
+    /// `path`: a 6-DoF viewer trace, a CSV whose header names `time` (seconds), `x`, `y`, `z` and `qx`, `qy`, `qz`,
+    /// `qw` (the camera-to-trace rotation) in any order.
+    #[schemars(with = "Option<String>")]
+    pub(super) trace: Option<Spanned<String>>,
+    /// `path` with `trace`: the trace's frame → world, a 4×4 matrix (rows), e.g. Y-up → Z-up.
+    #[schemars(with = "Option<[[f64; 4]; 4]>")]
+    pub(super) trace_to_world: Option<Spanned<[[f64; 4]; 4]>>,
+    /// `path` with `trace`: the trace's handedness (default `"right"`).
+    pub trace_handedness: Option<Handedness>,
+    /// `path` with `file`: the `dataparser_transforms.json` nerfstudio saved beside the model the path was drawn
+    /// in; the path is in that model's coordinates, which this maps back to the world's. Without it the path
+    /// is taken as in world coordinates (a model trained with `--orientation-method none --center-method none
+    /// --auto-scale-poses False`).
+    #[schemars(with = "Option<String>")]
+    pub(super) dataparser_transforms: Option<Spanned<String>>,
     /// Random perturbation of each pose.
     pub jitter: Option<Jitter>,
 }
@@ -74,6 +93,8 @@ pub enum RigKind {
     Explicit,
     /// Poses read from an existing transforms.json.
     FromFile,
+    /// A camera moving over time: one pose per frame, from keyframes, a nerfstudio camera path or a viewer trace.
+    Path,
 }
 
 impl RigKind {
@@ -89,12 +110,15 @@ impl RigKind {
             RigKind::ForwardFacing => &["radius", "target", "layout", "extent", "jitter"],
             RigKind::Explicit => &["poses", "jitter"],
             RigKind::FromFile => &["file", "jitter"],
+            RigKind::Path => {
+                &["keyframes", "file", "dataparser_transforms", "trace", "trace_to_world", "trace_handedness"]
+            }
         }
     }
 
     /// Whether the rig itself fixes the number of views.
     pub fn counts_itself(self) -> bool {
-        matches!(self, RigKind::Explicit | RigKind::FromFile)
+        matches!(self, RigKind::Explicit | RigKind::FromFile | RigKind::Path)
     }
 
     /// Manifest spelling.
@@ -108,6 +132,7 @@ impl RigKind {
             RigKind::ForwardFacing => "forward-facing",
             RigKind::Explicit => "explicit",
             RigKind::FromFile => "from-file",
+            RigKind::Path => "path",
         }
     }
 }
@@ -153,6 +178,35 @@ pub struct Pose {
     /// Point to look at (default the origin).
     pub target: Option<[f64; 3]>,
 }
+
+/// One keyframe of a `path` rig: where the camera is at `time`.
+#[derive(Debug, Clone, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Keyframe {
+    /// Seconds from the dataset's first frame (frame `f` is at `f × step / fps`).
+    pub time: f64,
+    /// 4×4 camera-to-world, rows, OpenGL/Blender camera axes.
+    pub c2w: Option<[[f64; 4]; 4]>,
+    /// Camera position.
+    pub position: Option<[f64; 3]>,
+    /// Point to look at (default the origin).
+    pub target: Option<[f64; 3]>,
+    /// Vertical field of view in degrees; it must be `[render]`'s (the writers record one camera model).
+    pub fov_deg: Option<f64>,
+}
+
+/// A trace's handedness.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Handedness {
+    /// Right-handed, the camera looking along its −Z with +Y up (OpenGL, WebXR, glTF).
+    Right,
+    /// Left-handed, the camera looking along its +Z with +Y up (Unity).
+    Left,
+}
+
+/// Most keyframes one path may list.
+pub const MAX_KEYFRAMES: usize = 100_000;
 
 /// Random pose perturbation.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default, schemars::JsonSchema)]
@@ -208,6 +262,7 @@ impl Rig {
                     }
                 }
             },
+            RigKind::Path => self.validate_path(name, diags),
             RigKind::FromFile if self.file.is_none() => diags.push(
                 Diagnostic::error(format!("rig `{name}` (from-file) names no `file`"), Some(self.kind.span()))
                     .with_help("e.g. file = \"transforms_test.json\""),
@@ -215,6 +270,98 @@ impl Rig {
             _ => {}
         }
     }
+}
+
+impl Rig {
+    fn validate_path(&self, name: &str, diags: &mut Vec<Diagnostic>) {
+        let given = [self.keyframes.is_some(), self.file.is_some(), self.trace.is_some()];
+        if given.iter().filter(|g| **g).count() != 1 {
+            diags.push(
+                Diagnostic::error(
+                    format!("rig `{name}` (path) takes exactly one of `keyframes`, `file`, `trace`"),
+                    Some(self.kind.span()),
+                )
+                .with_help(
+                    r#"keyframes = [{ time = 0, position = [0, -4, 1] }, { time = 2, position = [4, 0, 1] }], or file = "camera_path.json" (nerfstudio's viewer), or trace = "viewer.csv""#,
+                ),
+            );
+        }
+        if let Some(k) = &self.keyframes {
+            let list = k.get_ref();
+            let span = Some(k.span());
+            if list.is_empty() || list.len() > MAX_KEYFRAMES {
+                diags.push(Diagnostic::error(
+                    format!("{} keyframes: a path needs 1 to {MAX_KEYFRAMES}", list.len()),
+                    span.clone(),
+                ));
+            }
+            for (i, f) in list.iter().enumerate() {
+                let mut bad = |msg: String, help: &str| {
+                    diags.push(Diagnostic::error(format!("keyframe {i}: {msg}"), span.clone()).with_help(help))
+                };
+                if !f.time.is_finite() {
+                    bad(format!("time = {} is not a number of seconds", f.time), "e.g. time = 1.5");
+                } else if i > 0 && f.time <= list[i - 1].time {
+                    bad(
+                        format!("time = {} does not come after keyframe {}'s {}", f.time, i - 1, list[i - 1].time),
+                        "list keyframes in increasing time",
+                    );
+                }
+                if f.c2w.is_some() == f.position.is_some() {
+                    bad("needs either `c2w` or `position`".into(), "e.g. position = [0, -4, 1], target = [0, 0, 0]");
+                } else if f.c2w.is_some() && f.target.is_some() {
+                    bad("`target` goes with `position`, not `c2w`".into(), "drop `target`, or give `position`");
+                }
+                let finite = f.c2w.iter().flatten().flatten().chain(f.position.iter().flatten()).all(|v| v.is_finite())
+                    && f.target.iter().flatten().all(|v| v.is_finite());
+                if !finite || f.c2w.is_some_and(|m| m[3] != [0.0, 0.0, 0.0, 1.0]) {
+                    bad("a pose must be finite, a `c2w` with a last row of [0, 0, 0, 1]".into(), "rows, top to bottom");
+                }
+                if let Some(fov) = f.fov_deg.filter(|v| !(*v > 0.0 && *v < 180.0)) {
+                    bad(format!("fov_deg = {fov} is not a field of view"), "degrees between 0 and 180, e.g. 40");
+                }
+            }
+        }
+        match (&self.trace, &self.trace_to_world) {
+            (Some(t), None) => diags.push(
+                Diagnostic::error("a trace needs `trace_to_world`: the map from its frame to the world", Some(t.span()))
+                    .with_help(
+                        r#"the world is +Z up; for a +Y-up trace (WebXR, Unity with trace_handedness = "left"): trace_to_world = [[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]]"#,
+                    ),
+            ),
+            (Some(_), Some(m)) => {
+                let v = m.get_ref();
+                if !v.iter().flatten().all(|x| x.is_finite()) || v[3] != [0.0, 0.0, 0.0, 1.0] {
+                    diags.push(
+                        Diagnostic::error("`trace_to_world` must be finite with a last row of [0, 0, 0, 1]", Some(m.span()))
+                            .with_help("rows are listed top to bottom; the translation is the last column"),
+                    );
+                }
+            }
+            (None, Some(m)) => diags.push(
+                Diagnostic::error("`trace_to_world` goes with `trace` only", Some(m.span())).with_help("remove it"),
+            ),
+            (None, None) => {}
+        }
+        if let Some(m) = self.trace_to_world.as_ref().filter(|m| det3(m.get_ref()) <= 0.0) {
+            diags.push(
+                Diagnostic::error("`trace_to_world` mirrors or flattens the trace", Some(m.span()))
+                    .with_help("give a rotation (and scale) with a positive determinant; a left-handed trace says trace_handedness = \"left\""),
+            );
+        }
+        if let (Some(d), None) = (&self.dataparser_transforms, &self.file) {
+            diags.push(
+                Diagnostic::error("`dataparser_transforms` goes with `file` (a camera_path.json)", Some(d.span()))
+                    .with_help("remove it"),
+            );
+        }
+    }
+}
+
+/// The determinant of a 4×4's upper 3×3.
+fn det3(m: &[[f64; 4]; 4]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
 /// Plain values of the fields whose spans stay inside `manifest` (for diagnostics).
@@ -244,8 +391,28 @@ impl Rig {
         self.poses.as_ref().map_or(&[], |p| p.get_ref().as_slice())
     }
 
-    /// The camera file of a from-file rig, when given.
+    /// The camera file of a from-file or path rig, when given.
     pub fn file(&self) -> Option<&str> {
         self.file.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// A path's keyframes (empty when none).
+    pub fn keyframes(&self) -> &[Keyframe] {
+        self.keyframes.as_ref().map_or(&[], |k| k.get_ref().as_slice())
+    }
+
+    /// A path's trace file, when given.
+    pub fn trace(&self) -> Option<&str> {
+        self.trace.as_ref().map(|t| t.get_ref().as_str())
+    }
+
+    /// A camera path's `dataparser_transforms.json`, when given.
+    pub fn dataparser_transforms(&self) -> Option<&str> {
+        self.dataparser_transforms.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// A trace's frame → world (rows), when given.
+    pub fn trace_to_world(&self) -> Option<[[f64; 4]; 4]> {
+        self.trace_to_world.as_ref().map(|m| *m.get_ref())
     }
 }

@@ -17,6 +17,7 @@ use std::path::PathBuf;
 use glam::DMat4;
 
 use crate::camera::Camera;
+use crate::manifest::rig::RigKind;
 use crate::manifest::split::TimeMode;
 use crate::manifest::Manifest;
 use crate::rig::{self, random::Keyed, Identity};
@@ -221,8 +222,23 @@ impl Plan {
                 (None, _) => 0,
             };
             let seed = split_seed(m, name);
-            let poses = rig::poses(rig, Identity { rig: rig_name, seed }, views, &m.dir)
-                .map_err(|source| Error::Rig { split: name.clone(), rig: rig_name.to_string(), source })?;
+            let rig_err = |source| Error::Rig { split: name.clone(), rig: rig_name.to_string(), source };
+            let path = rig.kind() == RigKind::Path;
+            let poses = if path {
+                // One camera per selected frame, at that frame's time.
+                let times: Vec<f64> = selected.iter().map(|&f| f as f64 * m.frame_period()).collect();
+                let lens = rig::path::Lens {
+                    fov_deg: 2.0 * (h as f64 / 2.0 / fy).atan().to_degrees(),
+                    aspect: w as f64 / h as f64,
+                };
+                let (poses, note) = rig::path::poses(rig, &times, &m.dir, lens).map_err(rig_err)?;
+                plan.warnings.extend(note.map(|n| format!("split `{name}` (rig `{rig_name}`): {n}")));
+                poses
+            } else {
+                rig::poses(rig, Identity { rig: rig_name, seed }, views, &m.dir).map_err(rig_err)?
+            };
+            // A path pairs its i-th camera with the i-th selected frame.
+            let time = if path { TimeMode::Monocular } else { split.time };
             if poses.is_empty() {
                 return Err(Error::NoCameras { split: name.clone() });
             }
@@ -233,7 +249,7 @@ impl Plan {
             if ![fx, fy, cx, cy, near, far].iter().all(|v| v.is_finite()) {
                 return Err(Error::NonFinite { split: name.clone(), view: 0 });
             }
-            let pairs: Vec<(usize, u32)> = match split.time {
+            let pairs: Vec<(usize, u32)> = match time {
                 TimeMode::All => selected.iter().flat_map(|&f| (0..poses.len() as u32).map(move |v| (f, v))).collect(),
                 TimeMode::Monocular => {
                     selected.iter().enumerate().map(|(i, &f)| (f, (i % poses.len()) as u32)).collect()
@@ -252,7 +268,7 @@ impl Plan {
                 name: name.clone(),
                 poses,
                 frames: selected,
-                time: split.time,
+                time,
                 images: (base..plan.images.len()).collect(),
             });
         }

@@ -3,6 +3,8 @@
 //! adding views to a split appends poses and leaves the earlier ones bit-identical.
 
 mod from_file;
+pub mod path;
+mod path_files;
 pub mod random;
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -69,6 +71,32 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// A path file (camera path, trace, dataparser transforms) is malformed.
+    #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    PathFile {
+        /// The file.
+        path: PathBuf,
+        /// The 1-based line, when the problem has one.
+        line: Option<usize>,
+        /// What is wrong, and the fix.
+        message: String,
+    },
+    /// A path's field of view is not `[render]`'s.
+    #[error(
+        "the path's vertical field of view is {path:.3}° and [render]'s is {render:.3}°: every writer records one \
+         camera model, so set [render] camera_angle_x = {angle_x:.6} (the path's, at the render's aspect)"
+    )]
+    PathFov {
+        /// The path's, degrees.
+        path: f64,
+        /// The render's, degrees.
+        render: f64,
+        /// The `camera_angle_x` (radians) that gives the path's.
+        angle_x: f64,
+    },
+    /// A path rig lists no keyframe.
+    #[error("a path needs `keyframes`, `file` or `trace`")]
+    PathEmpty,
     /// A frame's matrix is malformed.
     #[error("{}: frame {frame}: transform_matrix is not a finite 3×4 or 4×4 matrix", path.display())]
     BadMatrix {
@@ -228,6 +256,8 @@ pub fn poses(rig: &Rig, id: Identity, views: u32, dir: &Path) -> Result<Vec<DMat
             let file = rig.file().ok_or(Error::NoFile)?;
             from_file::read(&dir.join(file))?
         }
+        // A path's poses depend on its frames' times: the planner places them with `path::poses`.
+        RigKind::Path => Vec::new(),
     };
     if let Some(j) = rig.jitter {
         for (i, m) in out.iter_mut().enumerate() {

@@ -21,6 +21,7 @@ mod manifest;
 mod meshseq;
 mod new;
 mod normal_maps;
+mod path;
 mod ply;
 mod points;
 mod preview;
