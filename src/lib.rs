@@ -46,6 +46,7 @@ stages! {
     atomic;
     cache;
     camera;
+    compare;
     execute;
     export;
     manifest;

@@ -3,6 +3,7 @@
 
 mod build;
 mod check;
+mod compare;
 mod gc;
 mod inspect;
 mod new;
@@ -174,6 +175,33 @@ pub enum Command {
         after_help = "Example:\n  vvgen schema > vvgen.schema.json   # then `#:schema ./vvgen.schema.json` atop a manifest"
     )]
     Schema,
+    /// Score renders or decoded point clouds against the ground truth: images by PSNR and SSIM (whole and inside
+    /// the ground truth's alpha), point clouds by MPEG pc_error's D1, D2 and colour PSNR. Exit 2 on input that
+    /// does not pair up.
+    #[command(after_help = "Examples:
+  vvgen compare out/lego_dnerf/test renders/test
+  vvgen compare out/lego_dnerf/test renders/ --frames out/lego_dnerf/transforms_test.json --json
+  vvgen compare out/man_points decoded/ --peak 1023")]
+    Compare {
+        /// The ground truth: a folder of images (one split's), a PLY file, or a folder of PLY frames.
+        reference: PathBuf,
+        /// What to score: renders, or decoded point clouds (the same kind as the ground truth).
+        test: PathBuf,
+        /// Pair images by this transforms.json's frames, in order, against the test folder's images in name
+        /// order (as trainers number their renders).
+        #[arg(long)]
+        frames: Option<PathBuf>,
+        /// What transparent pixels are composited over: white, black, or R,G,B in 0 … 1.
+        #[arg(long, default_value = "white")]
+        background: String,
+        /// The geometry PSNR's peak (1023 for vox10); default: the reference's largest nearest-neighbour
+        /// distance, as pc_error.
+        #[arg(long)]
+        peak: Option<f64>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Show a manifest's scene: sources, clips, frames, bounds, resolved transforms, posed-geometry hashes.
     #[command(
         after_help = "Examples:\n  vvgen inspect manifests/cesium-man.toml\n  vvgen inspect manifests/cesium-man.toml --frame 12 --ply posed.ply"
@@ -232,6 +260,9 @@ pub fn run() -> ExitCode {
         Command::Release { manifest } => release::release(&manifest, ui),
         Command::Verify { dir } => release::verify(&dir, ui),
         Command::Gc { keep, max_size, min_age, cache } => gc::run(&keep, max_size, min_age, cache, ui),
+        Command::Compare { reference, test, frames, background, peak, json } => {
+            compare::run(&reference, &test, frames.as_deref(), &background, peak, json)
+        }
         Command::Schema => serde_json::to_string_pretty(&crate::manifest::schema::json_schema())
             .map(|text| {
                 println!("{text}");
@@ -251,6 +282,7 @@ pub fn run() -> ExitCode {
             match e.downcast_ref::<crate::build::Error>() {
                 Some(b) => ExitCode::from(b.exit_code()),
                 None if e.downcast_ref::<crate::scene::Error>().is_some() => ExitCode::from(EXIT_INVALID),
+                None if e.downcast_ref::<crate::compare::Error>().is_some() => ExitCode::from(EXIT_INVALID),
                 None => ExitCode::FAILURE,
             }
         }

@@ -5,6 +5,7 @@
 mod blend;
 mod build;
 mod common;
+mod compare;
 mod consumers;
 mod corpus;
 mod engine;
