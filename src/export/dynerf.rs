@@ -3,6 +3,12 @@
 //! `camNN.mp4` (H.264, [`crate::execute::video`]), the same frames as PNG in `frames/camNN/NNNN.png` and
 //! `camNN/images/NNNN.png` (RGB, background baked in), and the init cloud as `points3D_downsample2.ply` and
 //! `points3D.ply`. Camera 00 is the one the loaders hold out for testing: a split named `test` goes first.
+//!
+//! A path split (a moving camera) has no place in `poses_bounds.npy`, which holds one fixed pose per video: it is
+//! written beside the cameras, where no loader looks, as `path_SPLIT.mp4`, its frames `path_SPLIT/NNNN.png`, and
+//! its cameras `path_SPLIT.json` in nerfstudio's camera-path format (row-major OpenGL `camera_to_world` per
+//! frame, vertical `fov` in degrees, `fps`, `seconds`, and `render_time`, the frame's time 0 … 1), the ground
+//! truth a trained model's render along that path is scored against.
 
 use glam::{DMat4, DVec3, Vec3};
 
@@ -11,7 +17,6 @@ use crate::manifest::output::Output;
 use crate::plan::actions::Action;
 
 pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> Result<(), Error> {
-    let frames = x.plan.frames_of(images);
     // Cameras: split by split, `test` first; the plan checked each split sees every frame (synchronized video).
     let mut splits: Vec<usize> = Vec::new();
     for &i in images {
@@ -20,6 +25,12 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
             splits.push(s);
         }
     }
+    let (paths, mut splits): (Vec<usize>, Vec<usize>) = splits.into_iter().partition(|&s| x.plan.splits[s].moving);
+    for &s in &paths {
+        write_path(x, s, files)?;
+    }
+    let fixed: Vec<usize> = images.iter().copied().filter(|&i| !x.plan.splits[x.plan.images[i].split].moving).collect();
+    let (images, frames) = (fixed.as_slice(), x.plan.frames_of(&fixed));
     splits.sort_by_key(|&s| x.plan.splits[s].name != "test");
     let mut cams: Vec<(usize, u32)> = Vec::new();
     for &s in &splits {
@@ -60,6 +71,37 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
         files.blob("points3D.ply", cloud)?;
     }
     Ok(())
+}
+
+/// A path split as one video, its frames, and its cameras in nerfstudio's camera-path format.
+fn write_path(x: &Export, s: usize, files: &mut Files) -> Result<(), Error> {
+    let sp = &x.plan.splits[s];
+    let mut list = sp.images.clone();
+    list.sort_by_key(|&i| x.plan.images[i].frame);
+    let fps = x.graph.keying.video_fps_milli as f64 / 1000.0;
+    let mut cams = Vec::with_capacity(list.len());
+    for (fi, &i) in list.iter().enumerate() {
+        let img = &x.plan.images[i];
+        files.image_blob(i, "rgb", &format!("path_{}/{fi:04}.png", sp.name), x.opaque_rgb(i)?)?;
+        let c = &img.camera;
+        cams.push(serde_json::json!({
+            "camera_to_world": c.c2w.transpose().to_cols_array().to_vec(),
+            "fov": (2.0 * (c.height as f64 / 2.0 / c.fy).atan()).to_degrees(),
+            "aspect": c.width as f64 / c.height as f64,
+            "render_time": img.time,
+        }));
+    }
+    let c = &x.plan.images[list[0]].camera;
+    let doc = serde_json::json!({
+        "camera_type": "perspective",
+        "render_height": c.height,
+        "render_width": c.width,
+        "fps": fps,
+        "seconds": list.len() as f64 / fps,
+        "camera_path": cams,
+    });
+    files.json(&format!("path_{}.json", sp.name), &doc)?;
+    files.blob(&format!("path_{}.mp4", sp.name), x.blob(&Action::Video { split: s, view: 0 })?)
 }
 
 /// The 15 numbers of an LLFF pose from an OpenGL camera-to-world (columns right, up, back, centre): the 3×5

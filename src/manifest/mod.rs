@@ -401,8 +401,16 @@ fn check_source_files(dir: &Path, s: &Source, produced: &[PathBuf], diags: &mut 
 fn dynerf_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<Diagnostic>) {
     let selected = consumers::selected_splits(m, out);
     let mut frames: Option<(&str, Option<&frames::FrameSubset>)> = None;
+    let moving = |s: &Split| m.rigs.get(s.rig()).is_some_and(|r| r.kind() == RigKind::Path);
+    let (mut fixed, mut paths) = (0, Vec::new());
     for split_name in selected {
         let Some(split) = m.splits.get(split_name) else { continue };
+        if moving(split) {
+            // A path is written beside the synchronized cameras, as one video.
+            paths.push(split_name);
+            continue;
+        }
+        fixed += 1;
         let help = "the dynerf layout is synchronized video: every camera at every frame";
         if split.time != TimeMode::All {
             diags.push(
@@ -425,6 +433,15 @@ fn dynerf_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<Diagnos
             Some(_) => {}
             None => frames = Some((split_name, these)),
         }
+    }
+    if let (0, Some(first)) = (fixed, paths.first()) {
+        diags.push(
+            Diagnostic::error(
+                format!("output `{name}` (dynerf) writes only path split `{first}`: the loaders' cameras are fixed"),
+                Some(out.writer.span()),
+            )
+            .with_help("add a split of fixed cameras (e.g. a forward-facing rig, time = \"all\"); a path split is written beside them as one video"),
+        );
     }
 }
 

@@ -221,7 +221,7 @@ impl<'a> Graph<'a> {
                     return Err(Error::NeedsPass { output: name.to_string(), pass: "rgba" });
                 }
                 if writer == Writer::Dynerf {
-                    check_dynerf(plan, &images, &frames)?;
+                    check_dynerf(plan, &images)?;
                 }
                 let background = opaque_background(m);
                 let mut composites = std::collections::BTreeMap::new();
@@ -233,10 +233,13 @@ impl<'a> Graph<'a> {
                     deps.push(id);
                 }
                 if writer == Writer::Dynerf {
-                    // One video per camera (split, view), its frames in order.
+                    // One video per camera (split, view), its frames in order; a moving camera's (a path split)
+                    // is one video of all its images.
                     let mut cameras: std::collections::BTreeMap<(usize, u32), Vec<usize>> = Default::default();
                     for &i in &images {
-                        cameras.entry((plan.images[i].split, plan.images[i].view)).or_default().push(i);
+                        let img = &plan.images[i];
+                        let view = if plan.splits[img.split].moving { 0 } else { img.view };
+                        cameras.entry((img.split, view)).or_default().push(i);
                     }
                     for ((split, view), mut list) in cameras {
                         list.sort_by_key(|&i| plan.images[i].frame);
@@ -318,17 +321,25 @@ pub fn image_label(plan: &Plan, i: usize) -> String {
     format!("{}/{}/{}", plan.splits[img.split].name, img.view, img.frame)
 }
 
-/// The DyNeRF layout is synchronized video: every camera of every split at every frame.
-fn check_dynerf(plan: &Plan, images: &[usize], frames: &[usize]) -> Result<(), Error> {
+/// The DyNeRF layout is synchronized video: every camera of every split at every frame, but for path splits,
+/// which are written beside them as one video each. At least one split must be synchronized.
+fn check_dynerf(plan: &Plan, images: &[usize]) -> Result<(), Error> {
     let mut seen = Vec::new();
     for &i in images {
         let s = plan.images[i].split;
-        if seen.contains(&s) {
-            continue;
+        if !seen.contains(&s) {
+            seen.push(s);
         }
-        seen.push(s);
+    }
+    let fixed: Vec<usize> = seen.iter().copied().filter(|&s| !plan.splits[s].moving).collect();
+    let Some(&first) = fixed.first().or(seen.first()) else { return Ok(()) };
+    if fixed.is_empty() {
+        return Err(Error::NotSynchronized { split: plan.splits[first].name.clone() });
+    }
+    let frames = &plan.splits[first].frames;
+    for s in fixed {
         let sp = &plan.splits[s];
-        if sp.time != crate::manifest::split::TimeMode::All || sp.frames != frames {
+        if sp.time != crate::manifest::split::TimeMode::All || &sp.frames != frames {
             return Err(Error::NotSynchronized { split: sp.name.clone() });
         }
     }

@@ -89,7 +89,8 @@ pub enum Error {
     },
     /// The DyNeRF layout needs synchronized video.
     #[error(
-        "split `{split}`: the dynerf layout needs every camera at every frame (time = \"all\" over the same frames)"
+        "split `{split}`: the dynerf layout needs every camera at every frame (time = \"all\" over the same frames; \
+         a path split is written beside them as one video)"
     )]
     NotSynchronized {
         /// The split.
@@ -162,6 +163,8 @@ pub struct SplitPlan {
     pub frames: Vec<usize>,
     /// How views meet time.
     pub time: TimeMode,
+    /// Whether the split's camera moves (a `path` rig): view `i` is the pose at its `i`-th frame.
+    pub moving: bool,
     /// Indices into [`Plan::images`], time-major: by frame, then view.
     pub images: Vec<usize>,
 }
@@ -269,6 +272,7 @@ impl Plan {
                 poses,
                 frames: selected,
                 time,
+                moving: path,
                 images: (base..plan.images.len()).collect(),
             });
         }

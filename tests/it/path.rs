@@ -225,3 +225,43 @@ fn a_left_handed_trace_maps_onto_the_world_by_its_transform() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("a trace needs `trace_to_world`") && err.contains("m.toml:"), "{err}");
 }
+
+#[test]
+fn a_dynerf_output_writes_a_path_beside_its_cameras_as_one_video() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rig = "keyframes = [{ time = 0, position = [0, -4, 1] }, { time = 1, position = [4, 0, 1] }]";
+    let text = manifest(5, rig).replace("writer = \"nerfstudio\"", "writer = \"dynerf\"")
+        + "\n[rig.fixed]\nkind = \"orbit\"\n\n[split.cams]\nrig = \"fixed\"\nviews = 2\n";
+    assert_eq!(build_in(d, &text).renders, 5 + 2 * 5);
+    let out = d.join("out/m_dynerf");
+    // The loaders' cameras are the fixed ones only: two rows of 17.
+    let npy = std::fs::read(out.join("poses_bounds.npy")).unwrap();
+    assert!(
+        String::from_utf8_lossy(&npy[..128]).contains("'shape': (2, 17)"),
+        "{}",
+        String::from_utf8_lossy(&npy[..128])
+    );
+    assert!(out.join("cam01.mp4").is_file() && !out.join("cam02.mp4").exists());
+    // The path: one video, its frames, and its cameras as nerfstudio's camera path, frame by frame.
+    let mp4 = std::fs::read(out.join("path_walk.mp4")).unwrap();
+    assert_eq!(&mp4[4..8], b"ftyp");
+    assert!((0..5).all(|f| out.join(format!("path_walk/{f:04}.png")).is_file()));
+    let doc: Value = serde_json::from_slice(&std::fs::read(out.join("path_walk.json")).unwrap()).unwrap();
+    let cams = doc["camera_path"].as_array().unwrap();
+    assert_eq!((cams.len(), doc["fps"].as_f64(), doc["render_width"].as_u64()), (5, Some(4.0), Some(48)));
+    for (f, eye) in [(0usize, DVec3::new(0.0, -4.0, 1.0)), (4, DVec3::new(4.0, 0.0, 1.0))] {
+        let m: Vec<f64> = serde_json::from_value(cams[f]["camera_to_world"].clone()).unwrap();
+        let c2w = DMat4::from_cols_array(&m.try_into().unwrap()).transpose();
+        assert!(c2w.w_axis.truncate().distance(eye) < 1e-9, "frame {f}: {c2w}");
+        let (u, v) = project(&c2w, DVec3::ZERO);
+        assert!((u - 24.0).abs() < 1e-6 && (v - 24.0).abs() < 1e-6);
+        assert!((cams[f]["fov"].as_f64().unwrap() - 90.0).abs() < 1e-9);
+    }
+    // A dynerf output of paths alone has no camera for the loaders: refused, naming the split.
+    std::fs::write(d.join("m.toml"), manifest(5, rig).replace("writer = \"nerfstudio\"", "writer = \"dynerf\""))
+        .unwrap();
+    let (code, err) = vvgen(d, &["check", "m.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("only path split `walk`") && err.contains("written beside them"), "{err}");
+}
