@@ -24,10 +24,24 @@ def read_ply(path):
     data = Path(path).read_bytes()
     end = data.index(b"end_header\n") + len(b"end_header\n")
     header = data[:end].decode().splitlines()
-    assert "format binary_little_endian 1.0" in header, "binary little-endian only"
     n = int(next(l.split()[2] for l in header if l.startswith("element vertex")))
-    props = [(l.split()[2], TYPES[l.split()[1]]) for l in header if l.startswith("property")]
-    return np.frombuffer(data[end:], dtype=np.dtype(props), count=n), [l for l in header if l.startswith("comment")]
+    # The vertex element's scalar properties (a face list after them is left alone).
+    start = next(i for i, l in enumerate(header) if l.startswith("element vertex"))
+    props = []
+    for l in header[start + 1:]:
+        if not l.startswith("property") or l.split()[1] == "list":
+            break
+        props.append((l.split()[2], TYPES[l.split()[1]]))
+    comments = [l for l in header if l.startswith("comment")]
+    if "format ascii 1.0" in header:
+        rows = data[end:].decode().splitlines()[:n]
+        table = np.array([r.split()[: len(props)] for r in rows], dtype=np.float64)
+        out = np.zeros(n, dtype=np.dtype(props))
+        for k, (name, _) in enumerate(props):
+            out[name] = table[:, k]
+        return out, comments
+    assert "format binary_little_endian 1.0" in header, "ascii or binary little-endian"
+    return np.frombuffer(data[end:], dtype=np.dtype(props), count=n), comments
 
 
 def write_ply(path, rows):

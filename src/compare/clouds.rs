@@ -18,6 +18,10 @@
 //!   resolution"); colour `10 log10(1 / mse)`.
 //!
 //! Every sum is taken in point order, so the scores do not depend on the thread count.
+//!
+//! One difference in what is read: pc_error takes colours only from `uchar red, green, blue`; vvgen's PLY reader
+//! also takes `diffuse_red …` and float colours, so a file with those gets colour PSNRs here and none from
+//! pc_error (checked on `shared/assets` pond, a binary scan with `diffuse_*` colours: D1 and D2 agree).
 
 use std::path::Path;
 

@@ -144,6 +144,17 @@ fn what_does_not_pair_up_is_refused_with_the_reason() {
     assert!(err.contains("holds 2 PLY files") && err.contains("holds 1"), "{err}");
     let (code, _, err) = vvgen(d, &["compare", "a", "b", "--peak", "-3"]);
     assert_eq!(code, 2, "{err}");
+    // As many: frame by frame, in name order, and the mean over them.
+    std::fs::copy(data("compare/clouds/vox/noise.ply"), d.join("b/f1.ply")).unwrap();
+    let (code, out, err) = vvgen(d, &["compare", "a", "b", "--peak", "255", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let doc: Value = serde_json::from_str(&out).unwrap();
+    let want = json(&data("compare/clouds/pc_error.json"));
+    let got: Vec<f64> = doc["frames"].as_array().unwrap().iter().map(|f| f["d1_psnr"].as_f64().unwrap()).collect();
+    let theirs =
+        [&want["vox/sub peak 255"]["d1_psnr"], &want["vox/noise peak 255"]["d1_psnr"]].map(|v| v.as_f64().unwrap());
+    assert!(got.iter().zip(theirs).all(|(a, b)| (a - b).abs() < 0.01), "{got:?} against {theirs:?}");
+    assert!((doc["mean"]["d1_psnr"].as_f64().unwrap() - (theirs[0] + theirs[1]) / 2.0).abs() < 0.01);
 }
 
 #[test]
