@@ -40,6 +40,7 @@ pub fn run(
     frames: Option<&Path>,
     bg: &str,
     peak: Option<f64>,
+    normals: Option<&Path>,
     json: bool,
 ) -> anyhow::Result<ExitCode> {
     if let Some(p) = peak.filter(|p| !(p.is_finite() && *p > 0.0)) {
@@ -56,10 +57,19 @@ pub fn run(
     }
     if compare::is_clouds(reference) {
         let pairs = compare::cloud_pairs(reference, test)?;
+        // The reference's normals from beside it: a file, or a folder of one per frame, in the same order.
+        let normal_files = match normals {
+            Some(n) => compare::cloud_pairs(reference, n)?.into_iter().map(|(_, _, f)| Some(f)).collect(),
+            None => vec![None; pairs.len()],
+        };
         let mut scores = Vec::with_capacity(pairs.len());
-        for (name, a, b) in &pairs {
+        for ((name, a, b), n) in pairs.iter().zip(normal_files) {
             let (ra, rb) = rayon::join(|| clouds::Cloud::read(a), || clouds::Cloud::read(b));
-            scores.push(clouds::score(name, &ra?, &rb?, peak));
+            let ra = match n {
+                Some(f) => ra?.with_normals_of(clouds::Cloud::read(&f)?, &f)?,
+                None => ra?,
+            };
+            scores.push(clouds::score(name, &ra, &rb?, peak));
         }
         if json {
             let mean = |f: &dyn Fn(&clouds::Score) -> Option<f64>| summary(scores.iter().filter_map(f)).map(|s| s.0);

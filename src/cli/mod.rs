@@ -198,6 +198,10 @@ pub enum Command {
         /// distance, as pc_error.
         #[arg(long)]
         peak: Option<f64>,
+        /// The reference's normals, for D2, when its files carry none (pc_error's `-n`): the same points with
+        /// normals, a file or a folder of one per frame.
+        #[arg(long)]
+        normals: Option<PathBuf>,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -260,8 +264,8 @@ pub fn run() -> ExitCode {
         Command::Release { manifest } => release::release(&manifest, ui),
         Command::Verify { dir } => release::verify(&dir, ui),
         Command::Gc { keep, max_size, min_age, cache } => gc::run(&keep, max_size, min_age, cache, ui),
-        Command::Compare { reference, test, frames, background, peak, json } => {
-            compare::run(&reference, &test, frames.as_deref(), &background, peak, json)
+        Command::Compare { reference, test, frames, background, peak, normals, json } => {
+            compare::run(&reference, &test, frames.as_deref(), &background, peak, normals.as_deref(), json)
         }
         Command::Schema => serde_json::to_string_pretty(&crate::manifest::schema::json_schema())
             .map(|text| {

@@ -53,6 +53,26 @@ impl Cloud {
         Ok(Cloud { positions: ply.positions, normals: ply.normals, colors }.merged())
     }
 
+    /// This cloud with the normals of `other`, the same points with normals (pc_error's `-n`: vox10 frames
+    /// carry none, and MPEG distributes them beside); `path` names `other` in the error.
+    pub fn with_normals_of(mut self, other: Cloud, path: &Path) -> Result<Cloud, Error> {
+        match other.normals {
+            Some(n) if other.positions == self.positions => {
+                self.normals = Some(n);
+                Ok(self)
+            }
+            Some(_) => Err(Error::Cloud {
+                path: path.to_path_buf(),
+                message: format!(
+                    "its {} points are not the reference's {}: give the reference's own points with normals",
+                    other.positions.len(),
+                    self.positions.len()
+                ),
+            }),
+            None => Err(Error::Cloud { path: path.to_path_buf(), message: "has no normals (nx, ny, nz)".into() }),
+        }
+    }
+
     /// Sorted by position (ties in file order), identical positions merged: colours averaged and truncated,
     /// the first normal kept.
     pub fn merged(self) -> Cloud {

@@ -169,3 +169,41 @@ fn identical_clouds_and_images_score_perfectly() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("inf") && out.contains("3 image(s) identical"), "{out}");
 }
+
+#[test]
+fn normals_from_beside_the_reference_give_its_d2() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let src = data("compare/clouds");
+    // The reference without its normals (as vox10 frames come), in ascii: every f32 round-trips.
+    let c = Cloud::read(&src.join("float.ply")).unwrap();
+    let colors = c.colors.as_ref().unwrap();
+    let mut text = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
+        c.positions.len()
+    );
+    for (p, k) in c.positions.iter().zip(colors) {
+        text += &format!("{} {} {} {} {} {}\n", p[0], p[1], p[2], k[0], k[1], k[2]);
+    }
+    std::fs::write(d.join("bare.ply"), text).unwrap();
+    let noise = src.join("float/noise.ply");
+    let (code, out, err) = vvgen(d, &["compare", "bare.ply", noise.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let without: Value = serde_json::from_str(&out).unwrap();
+    assert!(without["frames"][0]["d2_psnr"].is_null(), "no normals, no D2 (as pc_error)");
+    let normals = src.join("float.ply");
+    let args = ["compare", "bare.ply", noise.to_str().unwrap(), "--normals", normals.to_str().unwrap(), "--json"];
+    let (code, out, err) = vvgen(d, &args);
+    assert_eq!(code, 0, "{err}");
+    let with: Value = serde_json::from_str(&out).unwrap();
+    let want = json(&src.join("pc_error.json"))["float/noise"]["d2_psnr"].as_f64().unwrap();
+    let got = with["frames"][0]["d2_psnr"].as_f64().unwrap();
+    assert!((got - want).abs() < 0.01, "D2 {got} against pc_error's {want}");
+    // Normals of other points are refused.
+    let other = src.join("float/sub.ply");
+    let (code, _, err) =
+        vvgen(d, &["compare", "bare.ply", noise.to_str().unwrap(), "--normals", other.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("sub.ply") && err.contains("are not the reference's"), "{err}");
+}
