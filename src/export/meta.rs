@@ -40,10 +40,11 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
         .collect();
     // Image entries: every file of each image, keyed by pass, as placed by the writer.
     let mut entries = Vec::new();
+    let cam = images.first().map(|&i| x.plan.images[i].camera);
     for &i in images {
         let img = &x.plan.images[i];
         let c = &img.camera;
-        entries.push(json!({
+        let mut e = json!({
             "split": x.plan.splits[img.split].name,
             "view": img.view,
             "frame": img.frame,
@@ -51,9 +52,14 @@ pub fn write(x: &Export, name: &str, out: &Output, images: &[usize], files: &mut
             "index": img.index,
             "files": files.placed.get(&i),
             "c2w": super::rows(&c.c2w),
-        }));
+        });
+        // A path that zooms: this image's focal lengths, where they are not the camera model's.
+        if cam.is_some_and(|m| (m.fx, m.fy) != (c.fx, c.fy)) {
+            e["fl_x"] = json!(c.fx);
+            e["fl_y"] = json!(c.fy);
+        }
+        entries.push(e);
     }
-    let cam = images.first().map(|&i| x.plan.images[i].camera);
     let mut doc = json!({
         "tool": "vvgen",
         "version": env!("CARGO_PKG_VERSION"),

@@ -149,6 +149,12 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
     let (depth, mask) = (r.has_pass(Pass::Depth), r.has_pass(Pass::Mask));
     let mut frames = Vec::new();
     let mut lists: Vec<(String, Vec<String>)> = Vec::new();
+    // A path that zooms: nerfstudio reads per-frame focal lengths only when the file gives none for all.
+    let c0 = &x.plan.images[images[0]].camera;
+    let zooms = images.iter().any(|&i| {
+        let c = &x.plan.images[i].camera;
+        (c.fx, c.fy) != (c0.fx, c0.fy)
+    });
     for (split, list) in by_split(x, images) {
         let mut names_of_split = Vec::new();
         for &i in &list {
@@ -163,6 +169,10 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
             }
             f.insert("view".into(), json!(img.view));
             f.insert("frame".into(), json!(img.frame));
+            if zooms {
+                f.insert("fl_x".into(), json!(img.camera.fx));
+                f.insert("fl_y".into(), json!(img.camera.fy));
+            }
             frames.push(Value::Object(f));
             names_of_split.push(format!("{}.png", n.rgba));
         }
@@ -172,7 +182,9 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
     let mut doc = Map::new();
     doc.insert("camera_model".into(), json!("OPENCV"));
     for (k, v) in [("fl_x", c.fx), ("fl_y", c.fy), ("cx", c.cx), ("cy", c.cy)] {
-        doc.insert(k.into(), json!(v));
+        if !(zooms && k.starts_with("fl_")) {
+            doc.insert(k.into(), json!(v));
+        }
     }
     doc.insert("w".into(), json!(c.width));
     doc.insert("h".into(), json!(c.height));

@@ -191,7 +191,8 @@ pub struct Keyframe {
     pub position: Option<[f64; 3]>,
     /// Point to look at (default the origin).
     pub target: Option<[f64; 3]>,
-    /// Vertical field of view in degrees; it must be `[render]`'s (the writers record one camera model).
+    /// Vertical field of view in degrees (default `[render]`'s); it changes linearly between keyframes, and
+    /// only writers that record focal lengths per image (nerfstudio) take a path that zooms.
     pub fov_deg: Option<f64>,
 }
 

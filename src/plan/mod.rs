@@ -96,6 +96,20 @@ pub enum Error {
         /// The split.
         split: String,
     },
+    /// A zooming path split in an output whose format holds one focal length.
+    #[error(
+        "output `{output}` ({writer}) writes split `{split}`, whose path's field of view is not [render]'s, and \
+         {writer} records one focal length, [render]'s: write that split with a nerfstudio output (per-frame \
+         fl_x, fl_y), or give the path [render]'s field of view"
+    )]
+    Zoom {
+        /// The output.
+        output: String,
+        /// Its writer.
+        writer: &'static str,
+        /// The split.
+        split: String,
+    },
     /// A D-NeRF split name K-Planes would misread.
     #[error("split `{split}`: K-Planes misreads D-NeRF file paths containing `_r`; rename the split")]
     SplitName {
@@ -227,19 +241,35 @@ impl Plan {
             let seed = split_seed(m, name);
             let rig_err = |source| Error::Rig { split: name.clone(), rig: rig_name.to_string(), source };
             let path = rig.kind() == RigKind::Path;
+            // Per view, its focal lengths: `[render]`'s, but for a path that zooms.
+            let mut focal: Option<Vec<(f64, f64)>> = None;
             let poses = if path {
                 // One camera per selected frame, at that frame's time.
                 let times: Vec<f64> = selected.iter().map(|&f| f as f64 * m.frame_period()).collect();
-                let lens = rig::path::Lens {
-                    fov_deg: 2.0 * (h as f64 / 2.0 / fy).atan().to_degrees(),
-                    aspect: w as f64 / h as f64,
-                };
-                let (poses, note) = rig::path::poses(rig, &times, &m.dir, lens).map_err(rig_err)?;
-                plan.warnings.extend(note.map(|n| format!("split `{name}` (rig `{rig_name}`): {n}")));
-                poses
+                let render_fov = 2.0 * (h as f64 / 2.0 / fy).atan().to_degrees();
+                let placed = rig::path::poses(rig, &times, &m.dir, render_fov).map_err(rig_err)?;
+                plan.warnings.extend(placed.note.map(|n| format!("split `{name}` (rig `{rig_name}`): {n}")));
+                // The vertical field of view scales `[render]`'s focal lengths (their pixel aspect kept); at
+                // `[render]`'s own field of view they are its, to the bit.
+                focal = placed.fov_deg.map(|fovs| {
+                    fovs.iter()
+                        .map(|&fov| {
+                            let k = if fov == render_fov {
+                                1.0
+                            } else {
+                                (render_fov.to_radians() / 2.0).tan() / (fov.to_radians() / 2.0).tan()
+                            };
+                            (fx * k, fy * k)
+                        })
+                        .collect()
+                });
+                placed.poses
             } else {
                 rig::poses(rig, Identity { rig: rig_name, seed }, views, &m.dir).map_err(rig_err)?
             };
+            if let Some(view) = focal.iter().flatten().position(|(a, b)| !(a.is_finite() && b.is_finite() && *a > 0.0)) {
+                return Err(Error::NonFinite { split: name.clone(), view });
+            }
             // A path pairs its i-th camera with the i-th selected frame.
             let time = if path { TimeMode::Monocular } else { split.time };
             if poses.is_empty() {
@@ -264,6 +294,7 @@ impl Plan {
             };
             let base = plan.images.len();
             for (index, &(frame, view)) in pairs.iter().enumerate() {
+                let (fx, fy) = focal.as_ref().map_or((fx, fy), |f| f[view as usize]);
                 let camera = Camera { width: w, height: h, fx, fy, cx, cy, near, far, c2w: poses[view as usize] };
                 plan.images.push(Image { split: si, view, frame, time: time_of(frame, frames), index, camera });
             }
@@ -277,7 +308,33 @@ impl Plan {
             });
         }
         plan.check_shared_poses(m);
+        plan.check_zooms(m)?;
         Ok(plan)
+    }
+
+    /// A path whose field of view is not `[render]`'s (a zoom, or another lens) goes only to writers that record
+    /// intrinsics per image: nerfstudio (per-frame `fl_x`, `fl_y`) and, beside its cameras, dynerf (the path's
+    /// camera file). The others have one camera model per file or per split, `[render]`'s.
+    fn check_zooms(&self, m: &Manifest) -> Result<(), Error> {
+        use crate::manifest::output::Writer;
+        let (fx, fy, _, _) = m.render.intrinsics();
+        for (name, out) in &m.outputs {
+            let writer = out.writer();
+            if !writer.renders_images() || matches!(writer, Writer::Nerfstudio | Writer::Dynerf) {
+                continue;
+            }
+            for &i in &self.images_of(out)? {
+                let img = &self.images[i];
+                if (img.camera.fx, img.camera.fy) != (fx, fy) {
+                    return Err(Error::Zoom {
+                        output: name.clone(),
+                        writer: writer.name(),
+                        split: self.splits[img.split].name.clone(),
+                    });
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Warns when two splits share a camera pose, unless either allows it.

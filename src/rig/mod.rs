@@ -81,19 +81,6 @@ pub enum Error {
         /// What is wrong, and the fix.
         message: String,
     },
-    /// A path's field of view is not `[render]`'s.
-    #[error(
-        "the path's vertical field of view is {path:.3}° and [render]'s is {render:.3}°: every writer records one \
-         camera model, so set [render] camera_angle_x = {angle_x:.6} (the path's, at the render's aspect)"
-    )]
-    PathFov {
-        /// The path's, degrees.
-        path: f64,
-        /// The render's, degrees.
-        render: f64,
-        /// The `camera_angle_x` (radians) that gives the path's.
-        angle_x: f64,
-    },
     /// A path rig lists no keyframe.
     #[error("a path needs `keyframes`, `file` or `trace`")]
     PathEmpty,

@@ -8,6 +8,10 @@
 //!
 //! A frame's pose depends only on the keyframes about its own time (the two it lies between and their
 //! neighbours), so editing one keyframe moves only the frames near it, and only their images render again.
+//!
+//! A path may zoom: keyframes' `fov_deg` (or a camera path's `fov`) change the vertical field of view linearly
+//! between them; the planner turns it into each image's focal length, and only writers that record intrinsics
+//! per image take such a split.
 
 use std::path::Path;
 
@@ -17,18 +21,20 @@ use super::path_files::{self, Sample};
 use super::{look_at, Error};
 use crate::manifest::rig::{Keyframe, Rig};
 
-/// `[render]`'s lens as a path's field of view is checked against it.
-#[derive(Debug, Clone, Copy)]
-pub struct Lens {
-    /// The vertical field of view, degrees.
-    pub fov_deg: f64,
-    /// Width over height.
-    pub aspect: f64,
+/// A path at the split's frames.
+#[derive(Debug, Clone)]
+pub struct Placed {
+    /// Camera-to-world per frame.
+    pub poses: Vec<DMat4>,
+    /// The vertical field of view per frame, degrees, when the path gives one (a zoom); `None`: `[render]`'s.
+    pub fov_deg: Option<Vec<f64>>,
+    /// A note when the path ends before the last frame.
+    pub note: Option<String>,
 }
 
-/// The poses of a path rig at `times` (seconds from the dataset's first frame), and a note when the path ends
-/// before the last of them. The path's field of view, where it gives one, must be `lens`'s.
-pub fn poses(rig: &Rig, times: &[f64], dir: &Path, lens: Lens) -> Result<(Vec<DMat4>, Option<String>), Error> {
+/// The poses of a path rig at `times` (seconds from the dataset's first frame). `render_fov_deg` is
+/// `[render]`'s vertical field of view, what keyframes without `fov_deg` keep.
+pub fn poses(rig: &Rig, times: &[f64], dir: &Path, render_fov_deg: f64) -> Result<Placed, Error> {
     let samples = if let Some(file) = rig.file() {
         let transforms = rig.dataparser_transforms().map(|d| dir.join(d));
         path_files::camera_path(&dir.join(file), transforms.as_deref())?
@@ -37,11 +43,14 @@ pub fn poses(rig: &Rig, times: &[f64], dir: &Path, lens: Lens) -> Result<(Vec<DM
         let left = rig.trace_handedness == Some(crate::manifest::rig::Handedness::Left);
         path_files::trace(&dir.join(trace), to_world, left)?
     } else {
-        return keyframed(rig.keyframes(), times, lens);
+        return keyframed(rig.keyframes(), times, render_fov_deg);
     };
-    check_fov(samples.iter().filter_map(|s| s.fov_deg), lens)?;
     let end = samples.last().map_or(0.0, |s| s.time);
-    Ok((times.iter().map(|&t| sampled(&samples, t)).collect(), held(times, end)))
+    let zooms = samples.iter().any(|s| s.fov_deg.is_some_and(|f| (f - render_fov_deg).abs() > 1e-6));
+    let fov_deg = zooms.then(|| {
+        times.iter().map(|&t| sampled_fov(&samples, t).unwrap_or(render_fov_deg)).collect()
+    });
+    Ok(Placed { poses: times.iter().map(|&t| sampled(&samples, t)).collect(), fov_deg, note: held(times, end) })
 }
 
 const IDENTITY: [[f64; 4]; 4] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
@@ -58,26 +67,30 @@ fn held(times: &[f64], end: f64) -> Option<String> {
     })
 }
 
-/// A field of view other than `[render]`'s is refused: every writer records one camera model per file.
-fn check_fov(fovs: impl Iterator<Item = f64>, lens: Lens) -> Result<(), Error> {
-    for fov in fovs {
-        if (fov - lens.fov_deg).abs() > 1e-3 {
-            let angle_x = 2.0 * (lens.aspect * (fov.to_radians() / 2.0).tan()).atan();
-            return Err(Error::PathFov { path: fov, render: lens.fov_deg, angle_x });
-        }
-    }
-    Ok(())
-}
-
 /// Keyframes at `times`.
-fn keyframed(keys: &[Keyframe], times: &[f64], lens: Lens) -> Result<(Vec<DMat4>, Option<String>), Error> {
-    check_fov(keys.iter().filter_map(|k| k.fov_deg), lens)?;
+fn keyframed(keys: &[Keyframe], times: &[f64], render_fov_deg: f64) -> Result<Placed, Error> {
     let Some(last) = keys.last() else { return Err(Error::PathEmpty) };
+    // A zoom: keyframes without `fov_deg` keep `[render]`'s; between keyframes it changes linearly.
+    let fovs: Vec<f64> = keys.iter().map(|k| k.fov_deg.unwrap_or(render_fov_deg)).collect();
+    let zooms = fovs.iter().any(|f| (f - render_fov_deg).abs() > 1e-6);
     let eyes: Vec<DVec3> = keys.iter().map(eye).collect();
     let aimed = keys.iter().all(|k| k.position.is_some());
     let aims: Vec<DVec3> = keys.iter().map(|k| DVec3::from(k.target.unwrap_or([0.0; 3]))).collect();
     let turns: Vec<DQuat> = keys.iter().map(orientation).collect();
     let key_times: Vec<f64> = keys.iter().map(|k| k.time).collect();
+    let fov_deg = zooms.then(|| {
+        times
+            .iter()
+            .map(|&t| {
+                let (i, u) = segment(&key_times, t);
+                if i + 1 < fovs.len() {
+                    fovs[i] + (fovs[i + 1] - fovs[i]) * u
+                } else {
+                    fovs[i]
+                }
+            })
+            .collect()
+    });
     let poses = times
         .iter()
         .map(|&t| {
@@ -91,7 +104,7 @@ fn keyframed(keys: &[Keyframe], times: &[f64], lens: Lens) -> Result<(Vec<DMat4>
             }
         })
         .collect();
-    Ok((poses, held(times, last.time)))
+    Ok(Placed { poses, fov_deg, note: held(times, last.time) })
 }
 
 fn eye(k: &Keyframe) -> DVec3 {
@@ -168,6 +181,17 @@ fn catmull_rom(p: &[DVec3], i: usize, u: f64) -> DVec3 {
     let b1 = mix(a1, a2, t0, t2);
     let b2 = mix(a2, a3, t1, t3);
     mix(b1, b2, t1, t2)
+}
+
+/// A dense path's field of view at `t`, as [`sampled`] places the camera.
+fn sampled_fov(s: &[Sample], t: f64) -> Option<f64> {
+    let i = s.partition_point(|x| x.time <= t);
+    if i == 0 || i >= s.len() {
+        return s[i.min(s.len() - 1)].fov_deg;
+    }
+    let (a, b) = (&s[i - 1], &s[i]);
+    let u = ((t - a.time) / (b.time - a.time)).clamp(0.0, 1.0);
+    Some(a.fov_deg? + (b.fov_deg? - a.fov_deg?) * u)
 }
 
 /// A dense path at `t`: linear between the two samples about it, orientation by slerp; held at the ends.

@@ -110,8 +110,11 @@ pub fn camera_path(path: &Path, transforms: Option<&Path>) -> Result<Vec<Sample>
         .enumerate()
         .map(|(i, c)| {
             let m = &c.camera_to_world;
-            if m.len() != 16 || m.iter().any(|v| !v.is_finite()) || !c.fov.is_finite() {
+            if m.len() != 16 || m.iter().any(|v| !v.is_finite()) {
                 return Err(bad(path, None, format!("camera {i}: `camera_to_world` is not 16 finite numbers")));
+            }
+            if !(c.fov > 0.0 && c.fov < 180.0) {
+                return Err(bad(path, None, format!("camera {i}: fov = {} is not a field of view in degrees", c.fov)));
             }
             let rot = DMat3::from_cols_array_2d(&[[m[0], m[4], m[8]], [m[1], m[5], m[9]], [m[2], m[6], m[10]]]);
             let model = DVec3::new(m[3], m[7], m[11]);

@@ -170,13 +170,48 @@ fn a_nerfstudio_camera_path_renders_its_cameras_back_in_the_world() {
             assert!((a.0 - b.0).abs() < 1e-6 && (a.1 - b.1).abs() < 1e-6, "camera {i}: {a:?} against {b:?}");
         }
     }
-    // A path drawn at another field of view is refused, with the camera_angle_x that matches it.
+    // A path drawn at another field of view renders at its own: nerfstudio records its focal length.
     let narrow = doc.to_string().replace("\"fov\":90.0", "\"fov\":60.0");
     std::fs::write(d.join("camera_path.json"), narrow).unwrap();
-    std::fs::write(d.join("m.toml"), manifest(5, rig)).unwrap();
+    build_in(d, &manifest(5, rig));
+    let meta: Value =
+        serde_json::from_slice(&std::fs::read(d.join("out/m_nerfstudio/transforms.json")).unwrap()).unwrap();
+    let f = 24.0 / (30f64).to_radians().tan();
+    assert!((meta["fl_x"].as_f64().unwrap() - f).abs() < 1e-9 && (meta["fl_y"].as_f64().unwrap() - f).abs() < 1e-9);
+    // A format with [render]'s one focal length refuses it, naming the way out.
+    std::fs::write(d.join("m.toml"), manifest(5, rig).replace("\"nerfstudio\"", "\"dnerf\"")).unwrap();
     let (code, err) = vvgen(d, &["check", "m.toml"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("60.000°") && err.contains("camera_angle_x = 1.047198"), "{err}");
+    assert!(err.contains("split `walk`, whose path's field of view is not [render]'s"), "{err}");
+    assert!(err.contains("write that split with a nerfstudio output"), "{err}");
+}
+
+#[test]
+fn a_zooming_path_writes_each_frames_focal_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // From [render]'s 90° at t = 0 to 45° at t = 1 s, linearly; the camera stays put, aimed at the origin.
+    let rig = "keyframes = [{ time = 0, position = [0, -4, 1] }, { time = 1, position = [0, -4, 1], fov_deg = 45 }]";
+    assert_eq!(build_in(d, &manifest(5, rig)).renders, 5);
+    let meta: Value =
+        serde_json::from_slice(&std::fs::read(d.join("out/m_nerfstudio/transforms.json")).unwrap()).unwrap();
+    // nerfstudio reads per-frame focal lengths only when the file gives none for all.
+    assert!(meta.get("fl_x").is_none() && meta.get("fl_y").is_none() && meta["cx"] == 24.0, "{meta}");
+    let mut frames: Vec<&Value> = meta["frames"].as_array().unwrap().iter().collect();
+    frames.sort_by_key(|f| f["frame"].as_u64().unwrap());
+    for (i, f) in frames.iter().enumerate() {
+        let fov = 90.0 - 45.0 * i as f64 / 4.0;
+        let want = 24.0 / (fov / 2.0f64).to_radians().tan();
+        assert!((f["fl_x"].as_f64().unwrap() - want).abs() < 1e-9, "frame {i}: {f}");
+        assert_eq!(f["fl_x"], f["fl_y"]);
+    }
+    // And the images zoom: the subject grows, frame by frame.
+    let covered = |i: usize| {
+        let p = d.join(format!("out/m_nerfstudio/walk/r_{i:04}.png"));
+        image::open(p).unwrap().to_rgba8().pixels().filter(|p| p[3] > 0).count()
+    };
+    let sizes: Vec<usize> = (0..5).map(covered).collect();
+    assert!(sizes.windows(2).all(|w| w[1] > w[0]), "{sizes:?}");
 }
 
 #[test]
