@@ -1,8 +1,12 @@
 # Renders a lit vvgen D-NeRF dataset's cameras again in Blender Cycles, as the reference for lit rendering
 # (benches/lit_fidelity.sh runs it; benches/lit_metrics.py compares). Blender is a peer, never a test dependency.
 #
-#   blender -b -P benches/blender_lit.py -- --model MODEL.gl(b|tf) --dataset OUT/…_dnerf --out DIR \
-#       --sun DX,DY,DZ,STRENGTH,ANGLE_DEG --env MAP.exr,STRENGTH [--plane W,D,Z,GREY] [--no-sun] [--samples 256]
+#   BPY benches/blender_lit.py -- --model MODEL.gl(b|tf) --dataset OUT/…_dnerf --out DIR \
+#       --sun DX,DY,DZ,STRENGTH,ANGLE_DEG --env MAP.exr,STRENGTH [--plane W,D,Z,GREY] [--no-sun] [--samples 512]
+#
+# BPY: a Python with Blender 4.5 LTS's `bpy` module (`pip install "bpy==4.5.*"` in a venv outside the repo), the
+# reference: its Principled BSDF's diffuse is Lambert's (3.4's added a roughness-driven retro-reflection, 6–16 %
+# brighter at grazing views). `blender -b -P benches/blender_lit.py -- …` still runs it in Blender 3.4.
 #
 # The scene is the manifest's, built the way Blender users build it: the model through Blender's glTF importer,
 # placed by the dataset's `world_from_source`; a Sun lamp (Strength, Angle) whose −Z travels along DIR; the map
@@ -92,12 +96,15 @@ def main():
     wn.links.new(tex.outputs["Color"], bg.inputs["Color"])
 
     blender_dataset.film(scene, meta["camera"])
-    scene.render.engine = "CYCLES" if a.engine == "cycles" else "BLENDER_EEVEE"
+    # Blender 4.2 renamed Eevee and dropped its soft-shadow and AO switches (always on).
+    eevee = "BLENDER_EEVEE_NEXT" if bpy.app.version >= (4, 2, 0) else "BLENDER_EEVEE"
+    scene.render.engine = "CYCLES" if a.engine == "cycles" else eevee
     scene.cycles.samples = a.samples
     scene.cycles.seed = a.seed
     scene.eevee.taa_render_samples = a.samples
-    scene.eevee.use_soft_shadows = True
-    scene.eevee.use_gtao = True
+    for flag in ("use_soft_shadows", "use_gtao"):
+        if hasattr(scene.eevee, flag):
+            setattr(scene.eevee, flag, True)
     scene.cycles.use_denoising = False
     scene.cycles.device = "CPU"
     if a.direct:

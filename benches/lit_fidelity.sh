@@ -1,27 +1,33 @@
 #!/usr/bin/env bash
-# Lit rendering against Blender 3.4 Cycles (issue 16's fidelity bar): CesiumMan and FlightHelmet on a ground
-# plane under a sun and Blender's "sunset" map, the same cameras in both, Standard view transform, Cycles at
-# 256 samples without denoising as the reference (its pixel filter Blender's default, Blackman-Harris 1.5 px), and
-# vvgen with the same filter (FILTER=box compares vvgen's default instead). Prints silhouette IoU, PSNR, SSIM and
-# shadow IoU per image (benches/lit_metrics.py). Blender is a peer, never a test dependency.
+# Lit rendering against Blender 4.5 LTS Cycles (issue 48's bar): CesiumMan and FlightHelmet on a 6 × 6 ground of
+# albedo 0.8 under a sun along (−1, 1, −2) of 1 W/m² and 0.5° and Blender's "sunset" map at 0.4, three cameras at
+# 400², the same in both; Standard view transform, Cycles at 512 samples without denoising, two seeds averaged in
+# linear light (one seed's noise alone costs SSIM 0.05), its pixel filter Blender's default (Blackman-Harris
+# 1.5 px), and vvgen with the same filter (FILTER=box compares vvgen's default instead). Prints silhouette IoU,
+# PSNR, SSIM and shadow IoU per image, their mean and worst (benches/lit_metrics.py). Blender is a peer, never a
+# test dependency.
 #
 #   benches/lit_fidelity.sh [WORK_DIR]      (default /tmp/vvgen-lit-fidelity)
 #
-# Needs: blender (apt, 3.4), a python with numpy and Pillow as $PYTHON (default python3), FlightHelmet from
-# ../shared/assets (or $FLIGHT_HELMET). Takes about 10 minutes on 2 cores, most of it Cycles.
+# Needs: $BPY, a Python with `bpy==4.5.*` (default /tmp/bpy45/bin/python; BPY=blender runs Debian's Blender 3.4
+# instead), a python with numpy and Pillow as $PYTHON (default python3), FlightHelmet from ../shared/assets (or
+# $FLIGHT_HELMET). SEEDS (default "0 1"), CYCLES_SAMPLES (512), the scene's settings below. About 40 minutes on 2
+# cores, nearly all of it Cycles.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=${1:-/tmp/vvgen-lit-fidelity}
 py=${PYTHON:-python3}
 helmet=${FLIGHT_HELMET:-$repo/../shared/assets/gltf/FlightHelmet/FlightHelmet.gltf}
-samples=${CYCLES_SAMPLES:-256}
+samples=${CYCLES_SAMPLES:-512}
+seeds=${SEEDS:-0 1}
+bpy=${BPY:-/tmp/bpy45/bin/python}
 filter=${FILTER:-blackman-harris}
 mkdir -p "$work"
 (cd "$repo" && cargo build --release --quiet)
 vvgen=$repo/target/release/vvgen
 map=$repo/tests/data/hdri/sunset.exr
-sun_dir="0.45,0.35,-0.82"; sun_strength=2.5; sun_angle=3; env_strength=0.6
-plane_z=-1.0; grey=0.5
+sun_dir=${SUN_DIR:--1,1,-2}; sun_strength=${SUN_STRENGTH:-1}; sun_angle=${SUN_ANGLE:-0.5}
+env_strength=${ENV_STRENGTH:-0.4}; plane_z=-1.0; grey=${GREY:-0.8}; plane_size=${PLANE_SIZE:-6.0}
 
 manifest() { # name model with_sun
     local sun=""
@@ -42,7 +48,7 @@ preview = false
 gltf = "$2"
 frames = { count = 1, fps = 24 }
 [source.ground]
-plane = { size = [3.0, 3.0], color = [$grey, $grey, $grey], z = $plane_z }
+plane = { size = [$plane_size, $plane_size], color = [$grey, $grey, $grey], z = $plane_z }
 [transform]
 up = "y"
 fit = { height = 2.0 }
@@ -80,12 +86,18 @@ for model in cesium helmet; do
         (cd "$dir" && "$vvgen" build m.toml > /dev/null)
         flags=()
         [ $light = env ] && flags+=(--no-sun)
-        blender -b -P "$repo/benches/blender_lit.py" -- --model "$file" --dataset "$dir/out/$model-${light}_dnerf" \
-            --out "$dir/cycles" --sun "$sun_dir,$sun_strength,$sun_angle" --env "$map,$env_strength" \
-            --plane "3,3,$plane_z,$grey" --samples "$samples" "${flags[@]}" 2>&1 | grep -E "^rendered|Error" || true
+        for seed in $seeds; do
+            run=("$bpy" "$repo/benches/blender_lit.py")
+            [ "$bpy" = blender ] && run=(blender -b -P "$repo/benches/blender_lit.py")
+            "${run[@]}" -- --model "$file" --dataset "$dir/out/$model-${light}_dnerf" \
+                --out "$dir/cycles-$seed" --sun="$sun_dir,$sun_strength,$sun_angle" --env "$map,$env_strength" \
+                --plane "$plane_size,$plane_size,$plane_z,$grey" --samples "$samples" --seed "$seed" "${flags[@]}" \
+                2>&1 | grep -E "^rendered|Error" || true
+        done
     done
-    echo "$model (vvgen 4 samples, $filter filter, vs Cycles $samples samples)"
+    refs() { local out=""; for seed in $seeds; do out="$out${out:+,}$work/$model-$1/cycles-$seed"; done; echo "$out"; }
+    version=$("$bpy" -c "import bpy; print(bpy.app.version_string)" 2>/dev/null | tail -1 || blender --version | head -1)
+    echo "$model (vvgen 4 samples, $filter filter, vs Cycles $version, $samples samples, seeds $seeds averaged)"
     "$py" "$repo/benches/lit_metrics.py" "$work/$model-sun/out/$model-sun_dnerf" "$work/$model-env/out/$model-env_dnerf" \
-        "$work/$model-sun/cycles" "$work/$model-env/cycles" --plane-z "$plane_z" \
-        --sun "$sun_dir,$sun_strength" --grey "$grey"
+        "$(refs sun)" "$(refs env)" --plane-z="$plane_z" --sun="$sun_dir,$sun_strength" --grey "$grey"
 done
