@@ -94,7 +94,10 @@ pub(super) fn passes(
         // Shadow maps and the environment's visibility, once for every view of the frame that renders lit.
         let lit = images.iter().any(|(_, todo)| needs_main(todo));
         let light = match (&env, lit) {
-            (Some(env), true) => Some(FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone())),
+            (Some(env), true) => Some(
+                FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone())
+                    .with_exposure(g.keying.render.lighting.exposure),
+            ),
             _ => None,
         };
         let made: Vec<Result<Made, Error>> = images

@@ -83,6 +83,10 @@ pub struct Render {
     /// (default true).
     #[serde(default = "yes")]
     pub gltf_lights: bool,
+    /// `pbr`: exposure in stops, Blender's Color Management ▸ Exposure: the lit image's linear light times
+    /// 2^exposure before it is encoded (default 0). What a bright sun's washed-out ground is brought back with.
+    #[schemars(with = "Option<f64>")]
+    pub(crate) exposure: Option<Spanned<f64>>,
 }
 
 fn default_resolution() -> Spanned<[u32; 2]> {
@@ -124,6 +128,7 @@ impl Default for Render {
             ambient: None,
             png_compression: PngCompression::default(),
             gltf_lights: true,
+            exposure: None,
         }
     }
 }
@@ -291,6 +296,11 @@ pub enum PngCompression {
 }
 
 impl Render {
+    /// `pbr`: the exposure in stops (0 unless given).
+    pub fn exposure(&self) -> f64 {
+        self.exposure.as_ref().map_or(0.0, |e| *e.get_ref())
+    }
+
     /// `(width, height)`.
     pub fn size(&self) -> (u32, u32) {
         let [w, h] = *self.resolution.get_ref();
@@ -318,6 +328,20 @@ impl Render {
     }
 
     pub(crate) fn validate(&self, diags: &mut Vec<Diagnostic>) {
+        if let Some(e) = &self.exposure {
+            let v = *e.get_ref();
+            if !(v.is_finite() && v.abs() <= 20.0) {
+                diags.push(
+                    Diagnostic::error(format!("exposure = {v} stops is outside -20 … 20"), Some(e.span()))
+                        .with_help("stops, as Blender's exposure: -1 halves the light, 1 doubles it"),
+                );
+            } else if self.shading != Shading::Pbr {
+                diags.push(
+                    Diagnostic::warning("`exposure` applies to lit renders only: it is ignored here", Some(e.span()))
+                        .with_help("set shading = \"pbr\", or remove it"),
+                );
+            }
+        }
         let [w, h] = *self.resolution.get_ref();
         let rs = Some(self.resolution.span());
         if w == 0 || h == 0 || w > MAX_RESOLUTION || h > MAX_RESOLUTION {

@@ -43,6 +43,8 @@ pub struct Lighting {
     pub lights: Vec<light::Light>,
     /// The environment.
     pub environment: Environment,
+    /// Exposure in stops: lit radiance (and the visible environment) times 2^exposure before encoding.
+    pub exposure: f32,
 }
 
 /// The environment a `pbr` render is lit by.
@@ -195,7 +197,8 @@ pub struct Frame {
 /// `s.lighting`'s lights; a build prepares each frame's lighting once and calls [`render_lit`].
 pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     if s.shading == Shading::Pbr {
-        let light = light::FrameLight::prepare(scene, &s.lighting.lights, s.lighting.environment.studio());
+        let light = light::FrameLight::prepare(scene, &s.lighting.lights, s.lighting.environment.studio())
+            .with_exposure(s.lighting.exposure);
         return render_lit(scene, cam, s, Some(&light));
     }
     render_lit(scene, cam, s, None)

@@ -134,6 +134,7 @@ pub fn lighting(m: &Manifest, environment: Option<crate::cache::Digest>) -> rend
             rotation_deg: e.map_or(0.0, |e| e.rotation_deg) as f32,
             visible: e.is_some_and(|e| e.visible),
         },
+        exposure: m.render.exposure() as f32,
     }
 }
 

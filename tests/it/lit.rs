@@ -484,3 +484,45 @@ fn the_ground_darkens_under_a_caster_in_the_environments_light_alone() {
     let row: Vec<u8> = (nx..nx + 12).map(|x| rgb(&f, x, ny)[0]).collect();
     assert!(row.windows(2).all(|w| w[0].abs_diff(w[1]) <= 3), "{row:?}");
 }
+
+/// Exposure is Blender's: the lit image's linear light times 2^stops. It keys the lit pass alone.
+#[test]
+fn exposure_scales_the_lit_light_and_re_renders_the_lit_pass_only() {
+    use vvgen::plan::actions::Kind;
+    let dir = lit_project();
+    let d = dir.path();
+    // Dim enough that one stop up saturates nothing.
+    let dim = lit_manifest("")
+        .replace("intensity = 2.0", "intensity = 0.3")
+        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nstrength = 0.15\n");
+    build_in(d, &dim);
+    let read = |f: &str| image::open(d.join("out/m_dnerf").join(f)).unwrap().into_rgba8();
+    let (base, albedo) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
+    let brighter = dim.replace("shading = \"pbr\"\n", "shading = \"pbr\"\nexposure = 1\n");
+    let r = build_in(d, &brighter);
+    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (4, 0), "the lit passes alone");
+    let (up, albedo_after) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
+    assert_eq!(albedo.as_raw(), albedo_after.as_raw());
+    let lin = |v: u8| {
+        let c = v as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let (mut n, mut worst) = (0, 0.0f64);
+    for (a, b) in base.pixels().zip(up.pixels()) {
+        for c in 0..3 {
+            // Opaque, unsaturated, and bright enough that 8-bit steps are small.
+            if a[3] == 255 && a[c] > 40 && b[c] < 250 {
+                worst = worst.max((lin(b[c]) / lin(a[c]) - 2.0).abs());
+                n += 1;
+            }
+        }
+    }
+    assert!(n > 500 && worst < 0.06, "{n} channels, worst ratio off 2 by {worst}");
+    // Back to none: the first build's images, from the cache.
+    assert_eq!(build_in(d, &dim).ran(Kind::RenderPass), 0);
+    assert_eq!(read("train/r_0000.png").as_raw(), base.as_raw());
+}

@@ -93,6 +93,8 @@ pub struct FrameLight {
     env: EnvLight,
     /// The ground plane, when the scene has one: its height and the radiance it reflects (see [`Ground`]).
     ground: Option<Ground>,
+    /// What lit radiance is multiplied by before it is encoded: 2^exposure.
+    exposure: f32,
     /// The environment's occlusion: directions over the sphere, each with its weight (the map's brightness there)
     /// and a parallel shadow map from it. Empty when nothing casts shadows.
     occlusion: Vec<(Vec3, f32, ShadowMap)>,
@@ -210,7 +212,7 @@ impl FrameLight {
         let (lights, occlusion) = rayon::join(light_maps, env_maps);
         let ground = Ground::find(scene, &all, &env);
         let mut light =
-            FrameLight { lights, env, ground, occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
+            FrameLight { lights, env, ground, exposure: 1.0, occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
         // The planes first: a vertex's bounce reads them.
         light.planes =
             ground_planes(scene).map(|prim| light.plane_visibility(prim.material, &prim.positions)).collect();
@@ -343,7 +345,20 @@ impl FrameLight {
     #[inline]
     pub fn background(&self, d: Vec3) -> Option<Vec3> {
         let map = self.env.background.as_ref()?;
-        Some(map.radiance(self.env.rotation * d) * self.env.strength)
+        Some(map.radiance(self.env.rotation * d) * (self.env.strength * self.exposure))
+    }
+
+    /// This lighting seen with an exposure of `stops` (Blender's Color Management ▸ Exposure): what
+    /// [`FrameLight::exposed`] and [`FrameLight::background`] multiply by. The prepared maps do not change.
+    pub fn with_exposure(mut self, stops: f32) -> FrameLight {
+        self.exposure = stops.exp2();
+        self
+    }
+
+    /// Lit radiance `c` as the image records it: times the exposure.
+    #[inline]
+    pub fn exposed(&self, c: Vec3) -> Vec3 {
+        c * self.exposure
     }
 
     /// Whether the environment shows as the background.

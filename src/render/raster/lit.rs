@@ -54,7 +54,7 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
     if !tri.back && plain(mat) {
         if let Some(c) = l.light.shade_ground(tri.material, p, albedo) {
-            return c + mat.emissive;
+            return l.light.exposed(c + mat.emissive);
         }
     }
     let nrm = tri.normal_at(k);
@@ -93,7 +93,7 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
         None => nrm,
     };
     let emission = mat.emissive * sample(m.emissive).unwrap_or(Vec3::ONE);
-    l.light.shade(p, n, v, &surface, ao, vis, interreflects) + emission
+    l.light.exposed(l.light.shade(p, n, v, &surface, ao, vis, interreflects) + emission)
 }
 
 /// Whether a material is Lambertian and untextured, as a `plane` source's is: the top face of a ground plane of
