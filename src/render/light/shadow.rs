@@ -3,6 +3,13 @@
 //! slope-free constant bias measured in texels (no acne on lit faces, no gap where an object meets the
 //! ground). Soft shadows filter over the penumbra a light of the given size casts (percentage-closer soft
 //! shadows: a blocker search, then a filter whose width grows with the receiver's distance from the blocker).
+//!
+//! Transparent (`BLEND`) casters do not enter the depth map: they go to a second layer, the nearest such caster's
+//! depth and the light the layers pass, `Π (1 − α)` over them (α per triangle: its material's alpha factor, times
+//! the mean of its vertex colours' and base-colour texture's alpha at its corners), as Cycles' transparent
+//! shadows pass `1 − α` through a glTF `BLEND` material imported by Blender. A receiver behind that caster gets
+//! its visibility times the layer's transmittance (read at its texel, unfiltered). One layer per texel: a
+//! receiver between two panes is dimmed by both (a closed glass object's back face by its front and itself).
 
 use glam::{Mat4, Vec2, Vec3};
 
@@ -32,6 +39,19 @@ pub struct ShadowMap {
     /// The max pyramid beside it: a soft lookup inside a shadow tells in four reads that everything it would
     /// filter is nearer than its receiver.
     maxs: Vec<Vec<f32>>,
+    /// Transparent casters, when there are any.
+    glass: Option<Glass>,
+}
+
+/// The transparent casters' layer of a map (see the module's header).
+#[derive(Debug, Clone)]
+struct Glass {
+    /// Nearest transparent caster's depth per texel, +∞ where there is none.
+    depth: Vec<f32>,
+    /// The light its layers pass, per texel (1 where there is none).
+    pass: Vec<f32>,
+    /// The min pyramid of `depth`, so that an open region stays a few reads.
+    mins: Vec<Vec<f32>>,
 }
 
 /// Bias, in texels of world size at the receiver, along the surface normal and along the light's axis.
@@ -73,6 +93,7 @@ impl ShadowMap {
             depth: vec![f32::INFINITY; (size * size) as usize],
             mins: Vec::new(),
             maxs: Vec::new(),
+            glass: None,
         };
         m.rasterize(scene);
         m.build_pyramids();
@@ -89,6 +110,7 @@ impl ShadowMap {
             depth: vec![f32::INFINITY; (size * size) as usize],
             mins: Vec::new(),
             maxs: Vec::new(),
+            glass: None,
         };
         m.rasterize(scene);
         m.build_pyramids();
@@ -98,6 +120,25 @@ impl ShadowMap {
     /// Builds [`ShadowMap::mins`] and [`ShadowMap::maxs`] (sides halving, rounded up, down to one texel).
     fn build_pyramids(&mut self) {
         (self.mins, self.maxs) = pyramids(&self.depth, self.size as usize);
+        if let Some(g) = self.glass.as_mut() {
+            g.mins = pyramids(&g.depth, self.size as usize).0;
+        }
+    }
+
+    /// The light the transparent layer passes to a receiver at texel `q` (light space) and depth `recv`: its
+    /// transmittance where a transparent caster lies in front of the receiver, else 1.
+    fn glass_pass(&self, q: Vec3, recv: f32) -> f32 {
+        let Some(g) = &self.glass else { return 1.0 };
+        let (x, y) = (floor(q.x), floor(q.y));
+        if x < 0 || y < 0 || x >= self.size as i64 || y >= self.size as i64 {
+            return 1.0;
+        }
+        let i = (y as u32 * self.size + x as u32) as usize;
+        if g.depth[i] < recv {
+            g.pass[i]
+        } else {
+            1.0
+        }
     }
 
     /// The nearest depth over texels `x0..=x1` × `y0..=y1` (clamped to the map; +∞ outside it), in at most four
@@ -170,12 +211,21 @@ impl ShadowMap {
         let n = self.size as f32;
         let persp = matches!(self.projection, Projection::Persp { .. });
         for prim in &scene.primitives {
-            let casts = scene.materials.get(prim.material as usize).is_none_or(|m| m.casts_shadows);
+            let material = scene.materials.get(prim.material as usize);
+            let casts = material.is_none_or(|m| m.casts_shadows);
             if prim.kind != PrimKind::Triangles || !casts {
                 continue;
             }
+            let blend = material.filter(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend);
             let light: Vec<Vec3> = prim.positions.iter().map(|&p| self.project(p)).collect();
             for t in prim.indices.chunks_exact(3) {
+                // A transparent triangle passes 1 − α of the light: into the glass layer, not the depth map.
+                let alpha = blend.map(|m| triangle_alpha(scene, prim, m, t));
+                if alpha.is_some_and(|a| a < 1.0) {
+                    let a = alpha.unwrap_or(1.0);
+                    self.rasterize_glass([light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]], a);
+                    continue;
+                }
                 let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
                 if persp && v.iter().any(|p| p.z < NEAR) {
                     continue;
@@ -218,6 +268,52 @@ impl ShadowMap {
         }
     }
 
+    /// Rasterizes one transparent triangle (light-space corners `v`) of alpha `alpha` into the glass layer.
+    fn rasterize_glass(&mut self, v: [Vec3; 3], alpha: f32) {
+        let n = self.size as f32;
+        let persp = matches!(self.projection, Projection::Persp { .. });
+        if persp && v.iter().any(|p| p.z < NEAR) {
+            return;
+        }
+        let area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
+        if area.abs() < 1e-12 {
+            return;
+        }
+        let size = (self.size * self.size) as usize;
+        let g = self.glass.get_or_insert_with(|| Glass {
+            depth: vec![f32::INFINITY; size],
+            pass: vec![1.0; size],
+            mins: Vec::new(),
+        });
+        let x0 = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
+        let x1 = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
+        let y0 = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
+        let y1 = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
+        if x0 > x1 || y0 > y1 {
+            return;
+        }
+        let z = v.map(|p| if persp { 1.0 / p.z } else { p.z });
+        let inv_area = 1.0 / area;
+        for y in y0 as u32..=y1 as u32 {
+            let py = y as f32 + 0.5;
+            for x in x0 as u32..=x1 as u32 {
+                let px = x as f32 + 0.5;
+                let w0 = ((v[1].x - px) * (v[2].y - py) - (v[1].y - py) * (v[2].x - px)) * inv_area;
+                let w1 = ((v[2].x - px) * (v[0].y - py) - (v[2].y - py) * (v[0].x - px)) * inv_area;
+                let w2 = 1.0 - w0 - w1;
+                // Strictly inside (half-open edges would count a texel on a shared edge twice, squaring 1 − α).
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let zi = w0 * z[0] + w1 * z[1] + w2 * z[2];
+                let d = if persp { 1.0 / zi } else { zi };
+                let i = (y * self.size + x) as usize;
+                g.depth[i] = g.depth[i].min(d);
+                g.pass[i] *= 1.0 - alpha;
+            }
+        }
+    }
+
     /// Nearest caster depth at texel (x, y); outside the map, nothing.
     #[inline]
     fn at(&self, x: i64, y: i64) -> f32 {
@@ -236,6 +332,15 @@ impl ShadowMap {
         let q = self.project(p + n * (NORMAL_BIAS * texel));
         let bias = DEPTH_BIAS * self.texel_world(q.z);
         let recv = q.z - bias;
+        let opaque = self.opaque_visibility(q, recv, n, size);
+        if opaque == 0.0 {
+            return 0.0;
+        }
+        opaque * self.glass_pass(q, recv)
+    }
+
+    /// [`ShadowMap::visibility`] from the opaque casters alone, at light-space `q` and receiver depth `recv`.
+    fn opaque_visibility(&self, q: Vec3, recv: f32, n: Vec3, size: f32) -> f32 {
         let slope = self.receiver_slope(n);
         if size <= 0.0 {
             return self.pcf(q, recv, slope);
@@ -324,7 +429,38 @@ impl ShadowMap {
         let reach = (slope.x.abs() + slope.y.abs()) * search;
         let (x0, y0) = (floor(lo.x - search) - 1, floor(lo.y - search) - 1);
         let (x1, y1) = (floor(hi.x + search) + 1, floor(hi.y + search) + 1);
-        self.region_min(x0, y0, x1, y1) >= recv + reach + 1e-4 * (1.0 + recv.abs())
+        let open = |m: &ShadowMap, levels: Option<&[Vec<f32>]>| {
+            let bound = recv + reach + 1e-4 * (1.0 + recv.abs());
+            match levels {
+                None => m.region_min(x0, y0, x1, y1) >= bound,
+                Some(l) => m.region_in(l, [x0, y0, x1, y1]) >= bound,
+            }
+        };
+        // No transparent caster in front either: its light would be dimmed.
+        open(self, None) && self.glass.as_ref().is_none_or(|g| open(self, Some(&g.mins)))
+    }
+
+    /// The nearest depth of pyramid `levels` over the region (clamped to the map), as [`ShadowMap::region_min`].
+    fn region_in(&self, levels: &[Vec<f32>], r: [i64; 4]) -> f32 {
+        let n = self.size as i64;
+        let [x0, y0, x1, y1] = r;
+        let (x0, y0, x1, y1) = (x0.max(0), y0.max(0), x1.min(n - 1), y1.min(n - 1));
+        if x0 > x1 || y0 > y1 {
+            return f32::INFINITY;
+        }
+        // Level 0 of a glass pyramid is its depth, which `region` reads through `at` (the opaque map): start at
+        // level 1 at least.
+        let span = ((x1 - x0).max(y1 - y0) + 1).max(2);
+        let level = (64 - (span as u64 - 1).leading_zeros()) as usize;
+        let Some(m) = levels.get(level - 1) else { return levels.last().map_or(f32::INFINITY, |m| m[0]) };
+        let side = (self.size as usize).div_ceil(1 << level) as i64;
+        let mut v = f32::INFINITY;
+        for by in (y0 >> level)..=(y1 >> level).min(side - 1) {
+            for bx in (x0 >> level)..=(x1 >> level).min(side - 1) {
+                v = v.min(m[(by * side + bx) as usize]);
+            }
+        }
+        v
     }
 
     /// Whether texels `x0..=x1` × `y0..=y1` all lie in the map.
@@ -470,6 +606,20 @@ pub fn cube_face(d: Vec3) -> usize {
     }
 }
 
+/// A transparent triangle's alpha: its material's factor times the mean alpha of its corners' vertex colours
+/// and base-colour texture (read at the corners' uvs).
+fn triangle_alpha(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, m: &crate::scene::material::Material, t: &[u32]) -> f32 {
+    let mut a = m.base_color.w;
+    if prim.colors.len() == prim.positions.len() {
+        a *= t.iter().map(|&i| prim.colors[i as usize].w).sum::<f32>() / 3.0;
+    }
+    let texture = m.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|tex| (r, tex)));
+    if let (Some((r, tex)), true) = (texture, prim.uvs.len() == prim.positions.len()) {
+        a *= t.iter().map(|&i| tex.sample(&r, prim.uvs[i as usize]).w).sum::<f32>() / 3.0;
+    }
+    a.clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -490,6 +640,38 @@ mod tests {
             vec![0, 1, 2, 0, 2, 3],
             Material::default(),
         )
+    }
+
+    #[test]
+    fn glass_passes_one_minus_its_alpha_and_layers_multiply() {
+        // Two panes of alpha 0.25 and 0.5 above each other, over part of the ground; an opaque block beside.
+        let glass = |z: f32, alpha: f32| {
+            let mut q = quad(z, 0.5);
+            let mut m = Material::default();
+            m.alpha_mode = crate::scene::material::AlphaMode::Blend;
+            m.base_color.w = alpha;
+            q.materials = std::sync::Arc::new(vec![m]);
+            q
+        };
+        let mut scene = PosedScene::default();
+        let mut block = quad(1.0, 0.2);
+        for p in &mut block.primitives[0].positions {
+            p.x += 1.5;
+        }
+        crate::scene::merge(&[glass(1.0, 0.25), glass(2.0, 0.5), block], &mut scene);
+        let bounds = scene.bounds().unwrap();
+        let m = ShadowMap::sun(&scene, -Vec3::Z, bounds, 512);
+        let under = m.visibility(Vec3::new(0.1, -0.2, 0.0), Vec3::Z, 0.0);
+        assert!((under - 0.75 * 0.5).abs() < 1e-6, "{under}");
+        // On top of the upper pane nothing is in front. (Between the panes the layer counts both: one layer per
+        // texel, the nearest depth and every pane's share.)
+        assert_eq!(m.visibility(Vec3::new(0.1, -0.2, 2.0), Vec3::Z, 0.0), 1.0);
+        // The opaque block still blocks; open ground is open, and a ground grid is not told it is open under glass.
+        assert_eq!(m.visibility(Vec3::new(1.5, 0.0, 0.0), Vec3::Z, 0.0), 0.0);
+        assert_eq!(m.visibility(Vec3::new(-0.9, 0.9, 0.0), Vec3::Z, 0.01), 1.0);
+        let cell = |x: f32, y: f32| [Vec3::new(x, y, 0.0), Vec3::new(x + 0.05, y + 0.05, 0.0)];
+        assert!(!m.open_over(&cell(0.0, 0.0), Vec3::Z, 0.01));
+        assert!(m.open_over(&cell(-0.9, 0.9), Vec3::Z, 0.01));
     }
 
     #[test]
