@@ -647,9 +647,11 @@ mod tests {
         // Two panes of alpha 0.25 and 0.5 above each other, over part of the ground; an opaque block beside.
         let glass = |z: f32, alpha: f32| {
             let mut q = quad(z, 0.5);
-            let mut m = Material::default();
-            m.alpha_mode = crate::scene::material::AlphaMode::Blend;
-            m.base_color.w = alpha;
+            let m = Material {
+                alpha_mode: crate::scene::material::AlphaMode::Blend,
+                base_color: glam::Vec4::new(1.0, 1.0, 1.0, alpha),
+                ..Material::default()
+            };
             q.materials = std::sync::Arc::new(vec![m]);
             q
         };
