@@ -11,8 +11,8 @@
 #
 # Needs: $BPY, a Python with `bpy==4.5.*` (default /tmp/bpy45/bin/python; BPY=blender runs Debian's Blender 3.4
 # instead), a python with numpy and Pillow as $PYTHON (default python3), FlightHelmet from ../shared/assets (or
-# $FLIGHT_HELMET). SEEDS (default "0 1"), CYCLES_SAMPLES (512), the scene's settings below. About 40 minutes on 2
-# cores, nearly all of it Cycles.
+# $FLIGHT_HELMET). SEEDS (default "0 1"), CYCLES_SAMPLES (512), the scene's settings below. About 20 minutes on 2
+# cores, nearly all of it Cycles; REUSE_CYCLES=1 measures a new vvgen against an earlier run's renders.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=${1:-/tmp/vvgen-lit-fidelity}
@@ -87,6 +87,8 @@ for model in cesium helmet; do
         flags=()
         [ $light = env ] && flags+=(--no-sun)
         for seed in $seeds; do
+            # REUSE_CYCLES=1 keeps renders of an earlier run (the reference does not change with vvgen).
+            if [ "${REUSE_CYCLES:-0}" = 1 ] && [ -d "$dir/cycles-$seed" ]; then continue; fi
             run=("$bpy" "$repo/benches/blender_lit.py")
             [ "$bpy" = blender ] && run=(blender -b -P "$repo/benches/blender_lit.py")
             "${run[@]}" -- --model "$file" --dataset "$dir/out/$model-${light}_dnerf" \
