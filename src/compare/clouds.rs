@@ -120,6 +120,9 @@ struct Index {
     tree: KdTree,
 }
 
+/// Points per parallel task: fixed, so sums are taken in the same order whatever the thread count.
+const CHUNK: usize = 1 << 14;
+
 /// Squared distances closer than this to the previous neighbour's count as the same distance.
 const SAME: f64 = 1e-8;
 
@@ -167,22 +170,27 @@ fn f64s(p: &[f32; 3]) -> [f64; 3] {
 
 /// Normals for `b`'s points from the reference `a`'s (pc_error's `scaleNormals` with averaging).
 fn derived_normals(a: &[[f32; 3]], a_normals: &[[f32; 3]], a_index: &Index, b: &[[f32; 3]], b_index: &Index) -> Vec<[f64; 3]> {
-    let given: Vec<Vec<u32>> = a
-        .par_iter()
-        .map_init(Vec::new, |buf, p| {
-            b_index.nearest_set(f64s(p), 5, false, buf);
-            buf.iter().map(|e| e.1).collect()
+    // (reference point, test point) pairs, chunk by chunk in point order: eight bytes a pair, where a list per
+    // point would cost an allocation each.
+    let given: Vec<Vec<(u32, u32)>> = a
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(ci, chunk)| {
+            let (mut out, mut buf) = (Vec::with_capacity(chunk.len()), Vec::new());
+            for (k, p) in chunk.iter().enumerate() {
+                b_index.nearest_set(f64s(p), 5, false, &mut buf);
+                out.extend(buf.iter().map(|e| ((ci * CHUNK + k) as u32, e.1)));
+            }
+            out
         })
         .collect();
     let mut sum = vec![[0.0f64; 3]; b.len()];
     let mut count = vec![0u32; b.len()];
-    for (i, to) in given.iter().enumerate() {
-        for &j in to {
-            for c in 0..3 {
-                sum[j as usize][c] += f64::from(a_normals[i][c]);
-            }
-            count[j as usize] += 1;
+    for &(i, j) in given.iter().flatten() {
+        for c in 0..3 {
+            sum[j as usize][c] += f64::from(a_normals[i as usize][c]);
         }
+        count[j as usize] += 1;
     }
     sum.into_par_iter()
         .zip(count)
@@ -224,52 +232,56 @@ struct Errors {
 /// One direction: every point of `a` against `b` (with `b`'s normals, when there are any).
 fn one_way(a: &Cloud, b: &Cloud, b_index: &Index, b_normals: Option<&[[f64; 3]]>) -> Errors {
     let colors = a.colors.as_deref().zip(b.colors.as_deref());
-    let terms: Vec<(f64, f64, [f64; 3])> = a
+    // Sums per chunk of points in order, then over the chunks in order: the same figures at any thread count.
+    let parts: Vec<[f64; 5]> = a
         .positions
-        .par_iter()
+        .par_chunks(CHUNK)
         .enumerate()
-        .map_init(Vec::new, |buf, (i, p)| {
-            let q = f64s(p);
-            b_index.nearest_set(q, 10, true, buf);
-            let j = buf[0].1 as usize;
-            let e = [p[0] - b.positions[j][0], p[1] - b.positions[j][1], p[2] - b.positions[j][2]].map(f64::from);
-            let d1 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-            let d2 = b_normals.map_or(0.0, |n| {
-                let s: f64 = buf
-                    .iter()
-                    .map(|&(_, k)| {
-                        let (bp, bn) = (b.positions[k as usize], n[k as usize]);
-                        let dot: f64 = (0..3).map(|c| f64::from(p[c] - bp[c]) * bn[c]).sum();
-                        dot * dot
-                    })
-                    .sum();
-                s / buf.len() as f64
-            });
-            let col = colors.map_or([0.0; 3], |(ca, cb)| {
-                let mut sum = [0u32; 3];
-                for &(_, k) in buf.iter() {
+        .map(|(ci, chunk)| {
+            let (mut acc, mut buf) = ([0.0f64; 5], Vec::new());
+            for (k, p) in chunk.iter().enumerate() {
+                let i = ci * CHUNK + k;
+                b_index.nearest_set(f64s(p), 10, true, &mut buf);
+                let j = buf[0].1 as usize;
+                let e = [p[0] - b.positions[j][0], p[1] - b.positions[j][1], p[2] - b.positions[j][2]].map(f64::from);
+                acc[0] += e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                if let Some(n) = b_normals {
+                    let s: f64 = buf
+                        .iter()
+                        .map(|&(_, k)| {
+                            let (bp, bn) = (b.positions[k as usize], n[k as usize]);
+                            let dot: f64 = (0..3).map(|c| f64::from(p[c] - bp[c]) * bn[c]).sum();
+                            dot * dot
+                        })
+                        .sum();
+                    acc[1] += s / buf.len() as f64;
+                }
+                if let Some((ca, cb)) = colors {
+                    let mut sum = [0u32; 3];
+                    for &(_, k) in buf.iter() {
+                        for c in 0..3 {
+                            sum[c] += u32::from(cb[k as usize][c]);
+                        }
+                    }
+                    let n = buf.len() as f64;
+                    let avg = sum.map(|s| (f64::from(s) / n).round() as u8);
+                    let (x, y) = (ycbcr(ca[i]), ycbcr(avg));
                     for c in 0..3 {
-                        sum[c] += u32::from(cb[k as usize][c]);
+                        let d = x[c] - y[c];
+                        acc[2 + c] += f64::from(d * d);
                     }
                 }
-                let n = buf.len() as f64;
-                let avg = sum.map(|s| (f64::from(s) / n).round() as u8);
-                let (x, y) = (ycbcr(ca[i]), ycbcr(avg));
-                std::array::from_fn(|c| {
-                    let d = x[c] - y[c];
-                    f64::from(d * d)
-                })
-            });
-            (d1, d2, col)
+            }
+            acc
         })
         .collect();
-    let n = terms.len() as f64;
+    let n = a.positions.len() as f64;
     let (mut d1, mut d2, mut col) = (0.0, 0.0, [0.0; 3]);
-    for (a1, a2, c) in &terms {
-        d1 += a1;
-        d2 += a2;
+    for part in &parts {
+        d1 += part[0];
+        d2 += part[1];
         for k in 0..3 {
-            col[k] += c[k];
+            col[k] += part[2 + k];
         }
     }
     Errors { d1: d1 / n, d2: b_normals.map(|_| d2 / n), color: colors.map(|_| col.map(|v| v / n)) }
