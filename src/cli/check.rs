@@ -27,6 +27,8 @@ pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<Exi
                         scene.check_frame_files()?;
                         let frames = scene.frames;
                         let plan = Plan::new(&m, frames)?;
+                        // What the build would refuse before planning an action.
+                        crate::plan::graph::refusals(&m, &scene, &plan)?;
                         let crops = coverage::measure(&m, &scene, &plan, None)?;
                         let mut warnings = scene.warnings.clone();
                         warnings.extend(plan.warnings.iter().cloned());

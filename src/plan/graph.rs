@@ -83,6 +83,7 @@ impl<'a> Graph<'a> {
                 .round() as u64,
             points: BTreeMap::new(),
         };
+        refusals(m, scene, plan)?;
         let mut g = Graph { nodes: Vec::new(), keying, index: HashMap::new(), by_key: HashMap::new() };
         for (name, out) in &m.outputs {
             if out.writer() == Writer::PlySequence {
@@ -183,19 +184,8 @@ impl<'a> Graph<'a> {
             }
             return Ok(deps);
         }
+        // What cannot work was refused before any action was planned (`refusals`).
         let images = plan.images_of(out)?;
-        if images.is_empty() {
-            return Err(Error::NoImages { output: name.to_string() });
-        }
-        if writer == Writer::Dnerf {
-            if let Some(s) = plan
-                .splits
-                .iter()
-                .find(|s| s.name.contains("_r") && s.images.first().is_some_and(|i| images.contains(i)))
-            {
-                return Err(Error::SplitName { split: s.name.clone() });
-            }
-        }
         let passes = m.render.passes().to_vec();
         for &i in &images {
             for &pass in &passes {
@@ -217,12 +207,6 @@ impl<'a> Graph<'a> {
                 }
             }
             Writer::Colmap | Writer::Dynerf => {
-                if !passes.contains(&Pass::Rgba) {
-                    return Err(Error::NeedsPass { output: name.to_string(), pass: "rgba" });
-                }
-                if writer == Writer::Dynerf {
-                    check_dynerf(plan, &images)?;
-                }
                 let background = opaque_background(m);
                 let mut composites = std::collections::BTreeMap::new();
                 for &i in &images {
@@ -319,6 +303,40 @@ impl<'a> Graph<'a> {
 pub fn image_label(plan: &Plan, i: usize) -> String {
     let img = &plan.images[i];
     format!("{}/{}/{}", plan.splits[img.split].name, img.view, img.frame)
+}
+
+/// What the outputs ask that cannot work, found from the manifest, the scene and the plan alone: an output with
+/// no image, a split name K-Planes misreads, a writer without the `rgba` pass it needs, DyNeRF without
+/// synchronized cameras, point settings that contradict the sources. [`Graph::new`] refuses them before it plans
+/// an action, and `check` calls it too, so it knows what the build would refuse.
+pub fn refusals(m: &Manifest, scene: &Scene, plan: &Plan) -> Result<(), Error> {
+    for (name, out) in &m.outputs {
+        let writer = out.writer();
+        if writer == Writer::PlySequence {
+            point_settings(m, scene, plan, name, out)?;
+            continue;
+        }
+        let images = plan.images_of(out)?;
+        if images.is_empty() {
+            return Err(Error::NoImages { output: name.to_string() });
+        }
+        if writer == Writer::Dnerf {
+            if let Some(s) = plan
+                .splits
+                .iter()
+                .find(|s| s.name.contains("_r") && s.images.first().is_some_and(|i| images.contains(i)))
+            {
+                return Err(Error::SplitName { split: s.name.clone() });
+            }
+        }
+        if matches!(writer, Writer::Colmap | Writer::Dynerf) && !m.render.passes().contains(&Pass::Rgba) {
+            return Err(Error::NeedsPass { output: name.to_string(), pass: "rgba" });
+        }
+        if writer == Writer::Dynerf {
+            check_dynerf(plan, &images)?;
+        }
+    }
+    Ok(())
 }
 
 /// The DyNeRF layout is synchronized video: every camera of every split at every frame, but for path splits,

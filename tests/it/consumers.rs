@@ -168,6 +168,10 @@ fn check_plans_and_opens_the_inputs() {
         .unwrap();
     let out = vvgen(dir.path(), &["check", "m.toml"]);
     assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    // What only the build's planning of outputs refused before: a writer without the pass it needs.
+    let (code, err, _dir) = check(&manifest("passes = [\"depth\"]", SPLITS, "writer = \"colmap\""));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("output `o`: the `rgba` pass is needed for this writer"), "{err}");
 }
 
 /// 4DGaussians' and Deformable-3DGS' Blender readers negate the camera's x translation: `check` says by how many
