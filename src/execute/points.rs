@@ -190,7 +190,10 @@ fn samples(
                 Some(_) => x.scene.pose(f, &mut poser).map_err(scene_err)?,
                 None => &posed,
             };
-            Some(FrameLight::prepare(whole, &g.keying.render.lighting.lights, env))
+            Some(
+                FrameLight::prepare(whole, &g.keying.render.lighting.lights, env)
+                    .with_exposure(g.keying.render.lighting.exposure),
+            )
         }
         PointColor::Albedo => None,
     };

@@ -83,8 +83,9 @@ pub struct Render {
     /// (default true).
     #[serde(default = "yes")]
     pub gltf_lights: bool,
-    /// `pbr`: exposure in stops, Blender's Color Management ▸ Exposure: the lit image's linear light times
-    /// 2^exposure before it is encoded (default 0). What a bright sun's washed-out ground is brought back with.
+    /// `pbr`: exposure in stops, Blender's Color Management ▸ Exposure: the lit image's linear light (and lit
+    /// point colours) times 2^exposure before it is encoded (default 0). What a bright sun's washed-out ground is
+    /// brought back with.
     #[schemars(with = "Option<f64>")]
     pub(crate) exposure: Option<Spanned<f64>>,
 }

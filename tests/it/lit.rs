@@ -494,13 +494,26 @@ fn exposure_scales_the_lit_light_and_re_renders_the_lit_pass_only() {
     // Dim enough that one stop up saturates nothing.
     let dim = lit_manifest("")
         .replace("intensity = 2.0", "intensity = 0.3")
-        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nstrength = 0.15\n");
+        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nstrength = 0.15\n")
+        + "[output.pts]\nwriter = \"ply-sequence\"\npoints = 3000\ncolor = \"lit\"\n";
     build_in(d, &dim);
     let read = |f: &str| image::open(d.join("out/m_dnerf").join(f)).unwrap().into_rgba8();
     let (base, albedo) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
     let brighter = dim.replace("shading = \"pbr\"\n", "shading = \"pbr\"\nexposure = 1\n");
+    let points = |d: &Path| vvgen::scene::ply::read_file(&d.join("out/m_points/m_0000.ply")).unwrap().colors.unwrap();
+    let base_points = points(d);
     let r = build_in(d, &brighter);
     assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (4, 0), "the lit passes alone");
+    // Lit point colours are exposed too: where neither is clipped, one stop doubles their linear light.
+    let lin8 = |v: u8| ((v as f64 / 255.0 + 0.055) / 1.055).powf(2.4);
+    let after = points(d);
+    let ratios: Vec<f64> = base_points
+        .iter()
+        .zip(&after)
+        .filter(|(a, b)| a[0] > 60 && b[0] < 250)
+        .map(|(a, b)| lin8(b[0]) / lin8(a[0]))
+        .collect();
+    assert!(ratios.len() > 100 && ratios.iter().all(|r| (r - 2.0).abs() < 0.1), "{} {:?}", ratios.len(), ratios);
     let (up, albedo_after) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
     assert_eq!(albedo.as_raw(), albedo_after.as_raw());
     let lin = |v: u8| {

@@ -266,7 +266,7 @@ impl FrameLight {
             return albedo + emission;
         }
         let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
-        self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission
+        self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission)
     }
 
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
