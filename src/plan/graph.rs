@@ -83,14 +83,8 @@ impl<'a> Graph<'a> {
                 .round() as u64,
             points: BTreeMap::new(),
         };
-        refusals(m, scene, plan)?;
         let mut g = Graph { nodes: Vec::new(), keying, index: HashMap::new(), by_key: HashMap::new() };
-        for (name, out) in &m.outputs {
-            if out.writer() == Writer::PlySequence {
-                let s = point_settings(m, scene, plan, name, out)?;
-                g.keying.points.insert(name.clone(), s);
-            }
-        }
+        g.keying.points = refusals(m, scene, plan)?;
         for (name, out) in &m.outputs {
             let deps = g.plan_output(m, name, out)?;
             g.add(Action::WriteOutput { output: name.clone() }, format!("write {name}"), deps);
@@ -308,12 +302,14 @@ pub fn image_label(plan: &Plan, i: usize) -> String {
 /// What the outputs ask that cannot work, found from the manifest, the scene and the plan alone: an output with
 /// no image, a split name K-Planes misreads, a writer without the `rgba` pass it needs, DyNeRF without
 /// synchronized cameras, point settings that contradict the sources. [`Graph::new`] refuses them before it plans
-/// an action, and `check` calls it too, so it knows what the build would refuse.
-pub fn refusals(m: &Manifest, scene: &Scene, plan: &Plan) -> Result<(), Error> {
+/// an action, and `check` calls it too, so it knows what the build would refuse. Gives the point outputs'
+/// resolved settings, by output.
+pub fn refusals(m: &Manifest, scene: &Scene, plan: &Plan) -> Result<BTreeMap<String, PointSettings>, Error> {
+    let mut points = BTreeMap::new();
     for (name, out) in &m.outputs {
         let writer = out.writer();
         if writer == Writer::PlySequence {
-            point_settings(m, scene, plan, name, out)?;
+            points.insert(name.clone(), point_settings(m, scene, plan, name, out)?);
             continue;
         }
         let images = plan.images_of(out)?;
@@ -336,7 +332,7 @@ pub fn refusals(m: &Manifest, scene: &Scene, plan: &Plan) -> Result<(), Error> {
             check_dynerf(plan, &images)?;
         }
     }
-    Ok(())
+    Ok(points)
 }
 
 /// The DyNeRF layout is synchronized video: every camera of every split at every frame, but for path splits,

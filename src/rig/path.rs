@@ -183,31 +183,34 @@ fn catmull_rom(p: &[DVec3], i: usize, u: f64) -> DVec3 {
     mix(b1, b2, t1, t2)
 }
 
-/// A dense path's field of view at `t`, as [`sampled`] places the camera.
-fn sampled_fov(s: &[Sample], t: f64) -> Option<f64> {
+/// The two samples of a dense path about `t` and how far between them, 0 … 1; at or past either end, that end
+/// twice (the camera holds still).
+fn bracket(s: &[Sample], t: f64) -> (&Sample, &Sample, f64) {
+    let first = &s[0];
+    if t <= first.time || s.len() == 1 {
+        return (first, first, 0.0);
+    }
     let i = s.partition_point(|x| x.time <= t);
-    if i == 0 || i >= s.len() {
-        return s[i.min(s.len() - 1)].fov_deg;
+    if i >= s.len() {
+        let last = &s[s.len() - 1];
+        return (last, last, 0.0);
     }
     let (a, b) = (&s[i - 1], &s[i]);
-    let u = ((t - a.time) / (b.time - a.time)).clamp(0.0, 1.0);
-    Some(a.fov_deg? + (b.fov_deg? - a.fov_deg?) * u)
+    (a, b, ((t - a.time) / (b.time - a.time)).clamp(0.0, 1.0))
 }
 
 /// A dense path at `t`: linear between the two samples about it, orientation by slerp; held at the ends.
 fn sampled(s: &[Sample], t: f64) -> DMat4 {
-    let first = &s[0];
-    if t <= first.time || s.len() == 1 {
-        return DMat4::from_rotation_translation(first.rotation, first.position);
+    match bracket(s, t) {
+        (a, b, _) if std::ptr::eq(a, b) => DMat4::from_rotation_translation(a.rotation, a.position),
+        (a, b, u) => DMat4::from_rotation_translation(a.rotation.slerp(b.rotation, u), a.position.lerp(b.position, u)),
     }
-    let i = s.partition_point(|x| x.time <= t);
-    if i >= s.len() {
-        let l = &s[s.len() - 1];
-        return DMat4::from_rotation_translation(l.rotation, l.position);
-    }
-    let (a, b) = (&s[i - 1], &s[i]);
-    let u = ((t - a.time) / (b.time - a.time)).clamp(0.0, 1.0);
-    DMat4::from_rotation_translation(a.rotation.slerp(b.rotation, u), a.position.lerp(b.position, u))
+}
+
+/// A dense path's field of view at `t`, as [`sampled`] places the camera.
+fn sampled_fov(s: &[Sample], t: f64) -> Option<f64> {
+    let (a, b, u) = bracket(s, t);
+    Some(a.fov_deg? + (b.fov_deg? - a.fov_deg?) * u)
 }
 
 #[cfg(test)]

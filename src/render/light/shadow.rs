@@ -144,12 +144,19 @@ impl ShadowMap {
     /// The nearest depth over texels `x0..=x1` × `y0..=y1` (clamped to the map; +∞ outside it), in at most four
     /// reads of [`ShadowMap::mins`].
     fn region_min(&self, x0: i64, y0: i64, x1: i64, y1: i64) -> f32 {
+        self.region_min_of(&self.depth, &self.mins, [x0, y0, x1, y1])
+    }
+
+    /// [`ShadowMap::region_min`] of a depth layer `base` and its min pyramid `mins` (the opaque map's, or the
+    /// glass layer's).
+    fn region_min_of(&self, base: &[f32], mins: &[Vec<f32>], r: [i64; 4]) -> f32 {
         let n = self.size as i64;
+        let [x0, y0, x1, y1] = r;
         let (x0, y0, x1, y1) = (x0.max(0), y0.max(0), x1.min(n - 1), y1.min(n - 1));
         if x0 > x1 || y0 > y1 {
             return f32::INFINITY;
         }
-        self.region(&self.mins, [x0, y0, x1, y1], f32::INFINITY, f32::min)
+        self.region(base, mins, [x0, y0, x1, y1], f32::INFINITY, f32::min)
     }
 
     /// The farthest depth over texels `x0..=x1` × `y0..=y1`, or +∞ when the region leaves the map (where lookups
@@ -159,17 +166,18 @@ impl ShadowMap {
         if x0 < 0 || y0 < 0 || x1 >= n || y1 >= n || x0 > x1 || y0 > y1 {
             return f32::INFINITY;
         }
-        self.region(&self.maxs, [x0, y0, x1, y1], f32::NEG_INFINITY, f32::max)
+        self.region(&self.depth, &self.maxs, [x0, y0, x1, y1], f32::NEG_INFINITY, f32::max)
     }
 
     /// `fold` of a pyramid's blocks covering the region `[x0, y0, x1, y1]` (inside the map): those of the level
-    /// whose blocks are at least as wide as the region, so at most 2 × 2 of them.
-    fn region(&self, levels: &[Vec<f32>], r: [i64; 4], init: f32, fold: fn(f32, f32) -> f32) -> f32 {
+    /// whose blocks are at least as wide as the region, so at most 2 × 2 of them; a single texel is read from the
+    /// layer `base` the pyramid was built from.
+    fn region(&self, base: &[f32], levels: &[Vec<f32>], r: [i64; 4], init: f32, fold: fn(f32, f32) -> f32) -> f32 {
         let [x0, y0, x1, y1] = r;
         let span = (x1 - x0).max(y1 - y0) + 1;
         let level = (64 - (span as u64 - 1).leading_zeros()) as usize;
         if level == 0 {
-            return self.at(x0, y0);
+            return base[(y0 * self.size as i64 + x0) as usize];
         }
         let Some(m) = levels.get(level - 1) else { return levels.last().map_or(init, |m| m[0]) };
         let side = (self.size as usize).div_ceil(1 << level) as i64;
@@ -208,8 +216,7 @@ impl ShadowMap {
     }
 
     fn rasterize(&mut self, scene: &PosedScene) {
-        let n = self.size as f32;
-        let persp = matches!(self.projection, Projection::Persp { .. });
+        let (size, persp) = (self.size, matches!(self.projection, Projection::Persp { .. }));
         for prim in &scene.primitives {
             let material = scene.materials.get(prim.material as usize);
             let casts = material.is_none_or(|m| m.casts_shadows);
@@ -219,97 +226,30 @@ impl ShadowMap {
             let blend = material.filter(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend);
             let light: Vec<Vec3> = prim.positions.iter().map(|&p| self.project(p)).collect();
             for t in prim.indices.chunks_exact(3) {
-                // A transparent triangle passes 1 − α of the light: into the glass layer, not the depth map.
-                let alpha = blend.map(|m| triangle_alpha(scene, prim, m, t));
-                if alpha.is_some_and(|a| a < 1.0) {
-                    let a = alpha.unwrap_or(1.0);
-                    self.rasterize_glass([light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]], a);
-                    continue;
-                }
                 let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
-                if persp && v.iter().any(|p| p.z < NEAR) {
+                // A transparent triangle passes 1 − α of the light: into the glass layer, not the depth map.
+                if let Some(alpha) = blend.map(|m| triangle_alpha(scene, prim, m, t)).filter(|a| *a < 1.0) {
+                    let n = (size * size) as usize;
+                    let g = self.glass.get_or_insert_with(|| Glass {
+                        depth: vec![f32::INFINITY; n],
+                        pass: vec![1.0; n],
+                        mins: Vec::new(),
+                    });
+                    // Strictly inside (half-open edges would count a texel on a shared edge twice, squaring 1 − α).
+                    scan(v, size, persp, 0.0, |i, d| {
+                        g.depth[i] = g.depth[i].min(d);
+                        g.pass[i] *= 1.0 - alpha;
+                    });
                     continue;
                 }
-                let area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
-                if area.abs() < 1e-12 {
-                    continue;
-                }
-                let x0 = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
-                let x1 = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
-                let y0 = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
-                let y1 = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
-                if x0 > x1 || y0 > y1 {
-                    continue;
-                }
-                // Perspective maps interpolate 1/depth (linear in screen space), parallel ones depth.
-                let z = v.map(|p| if persp { 1.0 / p.z } else { p.z });
-                let inv_area = 1.0 / area;
-                for y in y0 as u32..=y1 as u32 {
-                    let py = y as f32 + 0.5;
-                    for x in x0 as u32..=x1 as u32 {
-                        let px = x as f32 + 0.5;
-                        let w0 = ((v[1].x - px) * (v[2].y - py) - (v[1].y - py) * (v[2].x - px)) * inv_area;
-                        let w1 = ((v[2].x - px) * (v[0].y - py) - (v[2].y - py) * (v[0].x - px)) * inv_area;
-                        let w2 = 1.0 - w0 - w1;
-                        // A texel whose centre any triangle touches counts (conservative by a hair: casters
-                        // thinner than a texel still cast).
-                        if w0 < -1e-4 || w1 < -1e-4 || w2 < -1e-4 {
-                            continue;
-                        }
-                        let zi = w0 * z[0] + w1 * z[1] + w2 * z[2];
-                        let d = if persp { 1.0 / zi } else { zi };
-                        let cell = &mut self.depth[(y * self.size + x) as usize];
-                        if d < *cell {
-                            *cell = d;
-                        }
+                // A texel whose centre any triangle touches counts (conservative by a hair: casters thinner than a
+                // texel still cast).
+                let depth = &mut self.depth;
+                scan(v, size, persp, -1e-4, |i, d| {
+                    if d < depth[i] {
+                        depth[i] = d;
                     }
-                }
-            }
-        }
-    }
-
-    /// Rasterizes one transparent triangle (light-space corners `v`) of alpha `alpha` into the glass layer.
-    fn rasterize_glass(&mut self, v: [Vec3; 3], alpha: f32) {
-        let n = self.size as f32;
-        let persp = matches!(self.projection, Projection::Persp { .. });
-        if persp && v.iter().any(|p| p.z < NEAR) {
-            return;
-        }
-        let area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
-        if area.abs() < 1e-12 {
-            return;
-        }
-        let size = (self.size * self.size) as usize;
-        let g = self.glass.get_or_insert_with(|| Glass {
-            depth: vec![f32::INFINITY; size],
-            pass: vec![1.0; size],
-            mins: Vec::new(),
-        });
-        let x0 = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
-        let x1 = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
-        let y0 = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
-        let y1 = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
-        if x0 > x1 || y0 > y1 {
-            return;
-        }
-        let z = v.map(|p| if persp { 1.0 / p.z } else { p.z });
-        let inv_area = 1.0 / area;
-        for y in y0 as u32..=y1 as u32 {
-            let py = y as f32 + 0.5;
-            for x in x0 as u32..=x1 as u32 {
-                let px = x as f32 + 0.5;
-                let w0 = ((v[1].x - px) * (v[2].y - py) - (v[1].y - py) * (v[2].x - px)) * inv_area;
-                let w1 = ((v[2].x - px) * (v[0].y - py) - (v[2].y - py) * (v[0].x - px)) * inv_area;
-                let w2 = 1.0 - w0 - w1;
-                // Strictly inside (half-open edges would count a texel on a shared edge twice, squaring 1 − α).
-                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                    continue;
-                }
-                let zi = w0 * z[0] + w1 * z[1] + w2 * z[2];
-                let d = if persp { 1.0 / zi } else { zi };
-                let i = (y * self.size + x) as usize;
-                g.depth[i] = g.depth[i].min(d);
-                g.pass[i] *= 1.0 - alpha;
+                });
             }
         }
     }
@@ -429,38 +369,10 @@ impl ShadowMap {
         let reach = (slope.x.abs() + slope.y.abs()) * search;
         let (x0, y0) = (floor(lo.x - search) - 1, floor(lo.y - search) - 1);
         let (x1, y1) = (floor(hi.x + search) + 1, floor(hi.y + search) + 1);
-        let open = |m: &ShadowMap, levels: Option<&[Vec<f32>]>| {
-            let bound = recv + reach + 1e-4 * (1.0 + recv.abs());
-            match levels {
-                None => m.region_min(x0, y0, x1, y1) >= bound,
-                Some(l) => m.region_in(l, [x0, y0, x1, y1]) >= bound,
-            }
-        };
+        let bound = recv + reach + 1e-4 * (1.0 + recv.abs());
         // No transparent caster in front either: its light would be dimmed.
-        open(self, None) && self.glass.as_ref().is_none_or(|g| open(self, Some(&g.mins)))
-    }
-
-    /// The nearest depth of pyramid `levels` over the region (clamped to the map), as [`ShadowMap::region_min`].
-    fn region_in(&self, levels: &[Vec<f32>], r: [i64; 4]) -> f32 {
-        let n = self.size as i64;
-        let [x0, y0, x1, y1] = r;
-        let (x0, y0, x1, y1) = (x0.max(0), y0.max(0), x1.min(n - 1), y1.min(n - 1));
-        if x0 > x1 || y0 > y1 {
-            return f32::INFINITY;
-        }
-        // Level 0 of a glass pyramid is its depth, which `region` reads through `at` (the opaque map): start at
-        // level 1 at least.
-        let span = ((x1 - x0).max(y1 - y0) + 1).max(2);
-        let level = (64 - (span as u64 - 1).leading_zeros()) as usize;
-        let Some(m) = levels.get(level - 1) else { return levels.last().map_or(f32::INFINITY, |m| m[0]) };
-        let side = (self.size as usize).div_ceil(1 << level) as i64;
-        let mut v = f32::INFINITY;
-        for by in (y0 >> level)..=(y1 >> level).min(side - 1) {
-            for bx in (x0 >> level)..=(x1 >> level).min(side - 1) {
-                v = v.min(m[(by * side + bx) as usize]);
-            }
-        }
-        v
+        self.region_min(x0, y0, x1, y1) >= bound
+            && self.glass.as_ref().is_none_or(|g| self.region_min_of(&g.depth, &g.mins, [x0, y0, x1, y1]) >= bound)
     }
 
     /// Whether texels `x0..=x1` × `y0..=y1` all lie in the map.
@@ -603,6 +515,43 @@ pub fn cube_face(d: Vec3) -> usize {
         4
     } else {
         5
+    }
+}
+
+/// Visits each texel of a `size`² map whose centre light-space triangle `v` covers (barycentrics all at least
+/// `min_w`) with its index and the triangle's depth there; perspective maps interpolate 1/depth (linear in
+/// screen space), parallel ones depth. Triangles crossing the near plane or of no area visit nothing.
+fn scan(v: [Vec3; 3], size: u32, persp: bool, min_w: f32, mut visit: impl FnMut(usize, f32)) {
+    let n = size as f32;
+    if persp && v.iter().any(|p| p.z < NEAR) {
+        return;
+    }
+    let area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
+    if area.abs() < 1e-12 {
+        return;
+    }
+    let x0 = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
+    let x1 = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
+    let y0 = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
+    let y1 = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
+    if x0 > x1 || y0 > y1 {
+        return;
+    }
+    let z = v.map(|p| if persp { 1.0 / p.z } else { p.z });
+    let inv_area = 1.0 / area;
+    for y in y0 as u32..=y1 as u32 {
+        let py = y as f32 + 0.5;
+        for x in x0 as u32..=x1 as u32 {
+            let px = x as f32 + 0.5;
+            let w0 = ((v[1].x - px) * (v[2].y - py) - (v[1].y - py) * (v[2].x - px)) * inv_area;
+            let w1 = ((v[2].x - px) * (v[0].y - py) - (v[2].y - py) * (v[0].x - px)) * inv_area;
+            let w2 = 1.0 - w0 - w1;
+            if w0 < min_w || w1 < min_w || w2 < min_w {
+                continue;
+            }
+            let zi = w0 * z[0] + w1 * z[1] + w2 * z[2];
+            visit((y * size + x) as usize, if persp { 1.0 / zi } else { zi });
+        }
     }
 }
 
