@@ -12,7 +12,8 @@
 # Needs: $BPY, a Python with `bpy==4.5.*` (default /tmp/bpy45/bin/python; BPY=blender runs Debian's Blender 3.4
 # instead), a python with numpy and Pillow as $PYTHON (default python3), FlightHelmet from ../shared/assets (or
 # $FLIGHT_HELMET). SEEDS (default "0 1"), CYCLES_SAMPLES (512), the scene's settings below. About 20 minutes on 2
-# cores, nearly all of it Cycles; REUSE_CYCLES=1 measures a new vvgen against an earlier run's renders.
+# cores, nearly all of it Cycles; REUSE_CYCLES=1 measures a new vvgen against an earlier run's renders; UNDER=1
+# views the subjects from below instead (use another WORK_DIR).
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=${1:-/tmp/vvgen-lit-fidelity}
@@ -28,6 +29,25 @@ vvgen=$repo/target/release/vvgen
 map=$repo/tests/data/hdri/sunset.exr
 sun_dir=${SUN_DIR:--1,1,-2}; sun_strength=${SUN_STRENGTH:-1}; sun_angle=${SUN_ANGLE:-0.5}
 env_strength=${ENV_STRENGTH:-0.4}; plane_z=-1.0; grey=${GREY:-0.8}; plane_size=${PLANE_SIZE:-6.0}
+
+# The cameras: the hemisphere views of `numpy_seed = 0`, or with UNDER=1 two views from 10° below the subject's
+# middle, one on its shadowed side (azimuth 45°, facing the sun's shadow) and one opposite.
+if [ "${UNDER:-0}" = 1 ]; then
+    rig='[rig.low]
+kind = "orbit"
+elevation_deg = -10
+start_azimuth_deg = 45
+[split.train]
+rig = "low"
+views = 2'
+else
+    rig='[rig.hemi]
+kind = "hemisphere"
+numpy_seed = 0
+[split.train]
+rig = "hemi"
+views = 3'
+fi
 
 manifest() { # name model with_sun
     local sun=""
@@ -63,12 +83,7 @@ passes = ["rgba", "depth"]
 map = "$map"
 strength = $env_strength
 $sun
-[rig.hemi]
-kind = "hemisphere"
-numpy_seed = 0
-[split.train]
-rig = "hemi"
-views = 3
+$rig
 [output.d]
 writer = "dnerf"
 TOML

@@ -10,7 +10,9 @@ also writes `depth`); REF_SUN / REF_ENV: Cycles' renders of their cameras, or se
   RGBA with the sun;
 - shadow-region IoU on the ground: ground pixels come from vvgen's depth (world z within 1 cm of the plane);
   a pixel is in shadow where the sun adds less than half of what it adds to open ground (grey · E · cos / π),
-  the sun's share being the with-sun image minus the environment-only one, in linear light.
+  the sun's share being the with-sun image minus the environment-only one, in linear light;
+- the subject's brightness as a ratio to Cycles' (linear luminance over the pixels above the ground), with the
+  sun and under the environment alone.
 Needs numpy and Pillow (a venv outside the repo).
 """
 import argparse
@@ -99,9 +101,15 @@ def main():
         sun_r = (linear(rs[..., :3]) - linear(re[..., :3])).mean(-1)
         sh_v, sh_r = ground & (sun_v < 0.5 * open_sun), ground & (sun_r < 0.5 * open_sun)
         shadow_iou = (sh_v & sh_r).sum() / max(1, (sh_v | sh_r).sum())
+        # The subject's brightness against Cycles' (linear luminance summed over its fully covered pixels), with
+        # the sun and under the environment alone: where a missing bounce or a wrong light shows first.
+        subject = (depth > 0) & (world_z > a.plane_z + 0.01) & full & (ve[..., 3] >= 254) & (re[..., 3] >= 254)
+        lum = np.array([0.2126, 0.7152, 0.0722])
+        ratio = lambda x, y: (linear(x[..., :3])[subject] @ lum).sum() / max(1e-9, (linear(y[..., :3])[subject] @ lum).sum())
         rows.append((rel, iou, psnr, ssim, shadow_iou, int(sh_r.sum())))
         print(f"  {rel:20} silhouette IoU {iou:.4f}  PSNR {psnr:5.2f} dB  SSIM {ssim:.4f}  "
-              f"shadow IoU {shadow_iou:.4f} ({sh_r.sum()} px in Cycles' shadow)", flush=True)
+              f"shadow IoU {shadow_iou:.4f} ({sh_r.sum()} px in Cycles' shadow)  "
+              f"subject ×{ratio(vs, rs):.3f} (environment alone ×{ratio(ve, re):.3f})", flush=True)
     m = np.array([r[1:5] for r in rows])
     print(f"  mean: silhouette IoU {m[:, 0].mean():.4f}  PSNR {m[:, 1].mean():.2f} dB  SSIM {m[:, 2].mean():.4f}  "
           f"shadow IoU {m[:, 3].mean():.4f}")

@@ -192,7 +192,8 @@ fn samples(
             };
             Some(
                 FrameLight::prepare(whole, &g.keying.render.lighting.lights, env)
-                    .with_exposure(g.keying.render.lighting.exposure),
+                    .with_exposure(g.keying.render.lighting.exposure)
+                    .with_view(g.keying.render.lighting.view),
             )
         }
         PointColor::Albedo => None,

@@ -96,6 +96,7 @@ pub(super) fn passes(
         let light = match (&env, lit) {
             (Some(env), true) => Some(
                 FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone())
+                    .with_bounce(posed)
                     .with_exposure(g.keying.render.lighting.exposure),
             ),
             _ => None,

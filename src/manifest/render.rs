@@ -88,6 +88,10 @@ pub struct Render {
     /// brought back with.
     #[schemars(with = "Option<f64>")]
     pub(crate) exposure: Option<Spanned<f64>>,
+    /// `pbr`: Blender's Color Management ▸ View Transform for an sRGB display: `"standard"` (default), or
+    /// `"agx"`, Blender 4.x's default, whose curve rolls highlights off instead of clipping them.
+    #[schemars(with = "Option<ViewTransform>")]
+    pub(crate) view_transform: Option<Spanned<ViewTransform>>,
 }
 
 fn default_resolution() -> Spanned<[u32; 2]> {
@@ -130,6 +134,7 @@ impl Default for Render {
             png_compression: PngCompression::default(),
             gltf_lights: true,
             exposure: None,
+            view_transform: None,
         }
     }
 }
@@ -283,6 +288,17 @@ fn unit() -> f64 {
     1.0
 }
 
+/// How a lit render's light becomes display values (Blender's view transforms).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum ViewTransform {
+    /// The sRGB encoding alone: light above 1 clips.
+    #[default]
+    Standard,
+    /// AgX, as Blender 4.5 displays it on sRGB.
+    Agx,
+}
+
 /// PNG compression level.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default, Hash, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
@@ -300,6 +316,11 @@ impl Render {
     /// `pbr`: the exposure in stops (0 unless given).
     pub fn exposure(&self) -> f64 {
         self.exposure.as_ref().map_or(0.0, |e| *e.get_ref())
+    }
+
+    /// `pbr`: the view transform (standard unless given).
+    pub fn view_transform(&self) -> ViewTransform {
+        self.view_transform.as_ref().map_or(ViewTransform::Standard, |v| *v.get_ref())
     }
 
     /// `(width, height)`.
@@ -339,6 +360,14 @@ impl Render {
             } else if self.shading != Shading::Pbr {
                 diags.push(
                     Diagnostic::warning("`exposure` applies to lit renders only: it is ignored here", Some(e.span()))
+                        .with_help("set shading = \"pbr\", or remove it"),
+                );
+            }
+        }
+        if let Some(v) = &self.view_transform {
+            if self.shading != Shading::Pbr && *v.get_ref() != ViewTransform::Standard {
+                diags.push(
+                    Diagnostic::warning("`view_transform` applies to lit renders only: it is ignored here", Some(v.span()))
                         .with_help("set shading = \"pbr\", or remove it"),
                 );
             }

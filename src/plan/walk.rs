@@ -278,7 +278,7 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
 /// prefiltered environment's key, a dep).
 fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     use crate::render::light::{Light, LightKind};
-    let crate::render::Lighting { lights, environment, exposure } = l;
+    let crate::render::Lighting { lights, environment, exposure, view } = l;
     w.str("lit shading", LIT_SALT);
     for Light { kind, color, intensity, shadows } in lights {
         let v = |a: glam::Vec3| [a.x as f64, a.y as f64, a.z as f64];
@@ -315,6 +315,10 @@ fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     // Keyed only when set: an exposure of 0 changes no byte, and lit datasets made before it keep their keys.
     if *exposure != 0.0 {
         w.f64("exposure (stops)", *exposure as f64);
+    }
+    // The same for the view transform: the standard one is the encoding lit datasets always had.
+    if *view == crate::render::ViewTransform::Agx {
+        w.str("view transform", "agx (Blender 4.5's AgX Base sRGB)");
     }
 }
 

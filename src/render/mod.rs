@@ -3,6 +3,7 @@
 //! colour (alpha = coverage), depth and normal. Tiles run in parallel with rayon and never share
 //! accumulators, so the bytes do not depend on the thread count.
 
+pub mod agx;
 pub mod bin;
 pub mod encode;
 pub mod filter;
@@ -45,6 +46,40 @@ pub struct Lighting {
     pub environment: Environment,
     /// Exposure in stops: lit radiance (and the visible environment) times 2^exposure before encoding.
     pub exposure: f32,
+    /// How lit light becomes display values.
+    pub view: ViewTransform,
+}
+
+/// How a lit render's linear light becomes display light before the sRGB encoding (Blender's view transforms).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ViewTransform {
+    /// None: light above 1 clips.
+    #[default]
+    Standard,
+    /// Blender 4.x's AgX ([`agx`]).
+    Agx,
+}
+
+/// A render's view transform as its pixels read it: scene light → the display light the sRGB encoding takes.
+#[derive(Clone, Copy)]
+pub(crate) struct Display {
+    agx: Option<&'static agx::Agx>,
+}
+
+impl Display {
+    /// The display of a render with settings `s`: AgX's only for a lit render that asks for it.
+    pub(crate) fn of(s: &RenderSettings) -> Display {
+        Display { agx: (s.shading == Shading::Pbr && s.lighting.view == ViewTransform::Agx).then(agx::Agx::get) }
+    }
+
+    /// The display light of scene light `c` (itself under the standard view).
+    #[inline]
+    pub(crate) fn light(&self, c: Vec3) -> Vec3 {
+        match self.agx {
+            Some(a) => a.display(c),
+            None => c,
+        }
+    }
 }
 
 /// The environment a `pbr` render is lit by.
@@ -198,6 +233,7 @@ pub struct Frame {
 pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     if s.shading == Shading::Pbr {
         let light = light::FrameLight::prepare(scene, &s.lighting.lights, s.lighting.environment.studio())
+            .with_bounce(scene)
             .with_exposure(s.lighting.exposure);
         return render_lit(scene, cam, s, Some(&light));
     }
@@ -275,7 +311,7 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
             width: w,
         })
         .collect();
-    let env_bg = light.filter(|l| l.has_background()).map(|light| EnvBackground { light, cam });
+    let env_bg = light.filter(|l| l.has_background()).map(|light| EnvBackground { light, cam, display: Display::of(s) });
     // Sample buffers are reused by the bands a worker takes.
     let scratch = || (None::<raster::SampleTile>, splat::Layer::default());
     bands.into_par_iter().enumerate().for_each_init(scratch, |(st, layer), (band, mut out)| {
@@ -342,15 +378,16 @@ struct Pixels<'a> {
 struct EnvBackground<'a> {
     light: &'a light::FrameLight,
     cam: &'a Camera,
+    display: Display,
 }
 
 impl EnvBackground<'_> {
-    /// The environment's radiance along the ray through pixel (x, y)'s centre.
+    /// The environment's display light along the ray through pixel (x, y)'s centre.
     fn at(&self, x: i64, y: i64) -> Vec3 {
         let c = self.cam;
         let d = glam::DVec3::new((x as f64 + 0.5 - c.cx) / c.fx, -((y as f64 + 0.5 - c.cy) / c.fy), -1.0);
         let world = glam::DMat3::from_mat4(c.c2w) * d;
-        self.light.background(world.as_vec3().normalize()).unwrap_or(Vec3::ZERO)
+        self.display.light(self.light.background(world.as_vec3().normalize()).unwrap_or(Vec3::ZERO))
     }
 
     /// The opaque sRGB pixel (x, y) where nothing covers it.
@@ -401,6 +438,7 @@ fn resolve_grid<const K: usize, const N: usize>(
     let mut ids = [0u32; N];
     let w = st.w as usize;
     let srgb = Srgb8::tables();
+    let display = Display::of(s);
     for py in 0..ph {
         for px in 0..pw {
             let i = (py * out.width + x0 + px) as usize;
@@ -446,6 +484,9 @@ fn resolve_grid<const K: usize, const N: usize>(
                 // Nothing shows: a fully transparent surface over the background.
                 (alpha, rgb, coverage) = (0.0, Vec3::ZERO, 0);
             }
+            // Display light from here on: a background composites over what the view shows of the surface
+            // (under AgX, a white background stays white).
+            rgb = display.light(rgb);
             let mut a8 = coverage;
             if let Some(env) = env {
                 // The environment shows where the surface does not cover the pixel.

@@ -135,6 +135,10 @@ pub fn lighting(m: &Manifest, environment: Option<crate::cache::Digest>) -> rend
             visible: e.is_some_and(|e| e.visible),
         },
         exposure: m.render.exposure() as f32,
+        view: match m.render.view_transform() {
+            crate::manifest::render::ViewTransform::Standard => render::ViewTransform::Standard,
+            crate::manifest::render::ViewTransform::Agx => render::ViewTransform::Agx,
+        },
     }
 }
 

@@ -66,7 +66,8 @@ fn lit(
     lights: &[Light],
 ) -> vvgen::render::Frame {
     let env = Environment { map: None, strength: 1.0, rotation_deg, visible };
-    let light = FrameLight::prepare(scene, lights, env.with(Arc::new(prefilter(&map)), Some(Arc::new(map))));
+    let light =
+        FrameLight::prepare(scene, lights, env.with(Arc::new(prefilter(&map)), Some(Arc::new(map)))).with_bounce(scene);
     let s = RenderSettings { samples: 4, shading: Shading::Pbr, ..Default::default() };
     render_lit(scene, c, &s, Some(&light))
 }
@@ -359,6 +360,7 @@ fn lighting_mistakes_are_named_with_their_place_and_fix() {
         ("[environment]\nmap = \"not-a-map.png\"\n", "is not an environment map vvgen reads"),
         ("[environment]\nmap = \"broken.hdr\"\n", "not a readable Radiance HDR file"),
         ("[source.floor]\nplane = { size = [0, 4] }\n", "a plane's `size` must be two positive extents"),
+        ("view_transform = \"filmic\"\n", "expected `standard` or `agx`"),
     ];
     std::fs::write(d.join("broken.hdr"), b"#?RADIANCE\nnonsense").unwrap();
     for (extra, want) in cases {
@@ -538,4 +540,73 @@ fn exposure_scales_the_lit_light_and_re_renders_the_lit_pass_only() {
     // Back to none: the first build's images, from the cache.
     assert_eq!(build_in(d, &dim).ran(Kind::RenderPass), 0);
     assert_eq!(read("train/r_0000.png").as_raw(), base.as_raw());
+}
+
+#[test]
+fn agx_view_shows_the_lit_light_through_blenders_curve_and_re_renders_the_lit_pass_only() {
+    use vvgen::plan::actions::Kind;
+    use vvgen::render::agx::Agx;
+    let dir = lit_project();
+    let d = dir.path();
+    // Dim enough that the standard image clips little (its light is recovered from it below).
+    let m = lit_manifest("")
+        .replace("intensity = 2.0", "intensity = 0.3")
+        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nstrength = 0.15\n")
+        + "[output.pts]\nwriter = \"ply-sequence\"\npoints = 3000\ncolor = \"lit\"\n";
+    build_in(d, &m);
+    let read = |f: &str| image::open(d.join("out/m_dnerf").join(f)).unwrap().into_rgba8();
+    let points = |d: &Path| vvgen::scene::ply::read_file(&d.join("out/m_points/m_0000.ply")).unwrap().colors.unwrap();
+    let (standard, albedo, standard_points) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"), points(d));
+    let agx = m.replace("shading = \"pbr\"\n", "shading = \"pbr\"\nview_transform = \"agx\"\n");
+    let r = build_in(d, &agx);
+    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (4, 0), "the lit passes alone");
+    let (shown, albedo_after) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
+    assert_eq!(albedo.as_raw(), albedo_after.as_raw());
+    // Each opaque pixel is the standard one's light through AgX, give or take the 8-bit steps of the standard
+    // image it is recovered from (a code where the curve is steep; more where light was clipped at 1).
+    let lin = |v: u8| {
+        let c = v as f32 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let code = |v: f32| {
+        let v = v.clamp(0.0, 1.0);
+        255.0 * if v <= 0.0031308 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+    };
+    let (mut n, mut worst, mut moved) = (0, 0f32, 0);
+    for (a, b) in standard.pixels().zip(shown.pixels()) {
+        if a[3] != 255 || a.0[..3].iter().any(|c| !(30..=250).contains(c)) {
+            continue;
+        }
+        let want = Agx::get().display(glam::Vec3::new(lin(a[0]), lin(a[1]), lin(a[2])));
+        for c in 0..3 {
+            worst = worst.max((code(want.to_array()[c]) - b[c] as f32).abs());
+        }
+        moved += (a.0[..3] != b.0[..3]) as u32;
+        n += 1;
+    }
+    assert!(n > 500 && worst <= 2.5, "{n} pixels, worst {worst} codes");
+    assert!(moved * 2 > n, "AgX changed only {moved} of {n} pixels");
+    // Lit point colours go through the same view.
+    let agx_points = points(d);
+    let (mut m, mut off) = (0, 0f32);
+    for (a, b) in standard_points.iter().zip(&agx_points) {
+        if a[..3].iter().all(|&c| c > 30 && c < 250) {
+            let want = Agx::get().display(glam::Vec3::new(lin(a[0]), lin(a[1]), lin(a[2])));
+            off = off.max((0..3).map(|c| (code(want.to_array()[c]) - b[c] as f32).abs()).fold(0.0, f32::max));
+            m += 1;
+        }
+    }
+    assert!(m > 100 && off <= 2.5, "{m} points, worst {off} codes");
+    // Back to the standard view: the first build's bytes, from the cache.
+    assert_eq!(build_in(d, &m_standard(&agx)).ran(Kind::RenderPass), 0);
+    assert_eq!(read("train/r_0000.png").as_raw(), standard.as_raw());
+}
+
+/// `m` with its view transform removed.
+fn m_standard(m: &str) -> String {
+    m.replace("view_transform = \"agx\"\n", "")
 }

@@ -47,6 +47,12 @@ pub(super) struct PlaneVisibility {
     /// The suns' visibility at the same points, each sun weighted by the irradiance it brings the plane (what
     /// its bounce carries of their shadows). Empty when no sun lights the plane.
     sun: Vec<f32>,
+    /// The irradiance point and spot lights bring the same points, with their shadows (suns are in `sun`):
+    /// what their bounce off the ground carries. Empty without such lights.
+    lamps: Vec<Vec3>,
+    /// The irradiance the subject reflects onto the same points ([`super::bounce::Subject::onto`]). Empty until
+    /// the subject's own bounce is known, and without a subject.
+    pub(super) bounce: Vec<Vec3>,
     /// Summed-area tables of `vis` and `sun` ((PLANE_CELLS + 2)² entries, rows along +y; entry (i, j) sums the
     /// grid points below and left of it), for averages over a footprint.
     sums: Vec<[f64; 2]>,
@@ -80,17 +86,35 @@ impl PlaneVisibility {
         (g.j * PLANE_CELLS + g.i, read(&self.vis, g))
     }
 
-    /// The plane's light at world (x, y) as fractions of the open plane's (environment, suns), or `None` past
-    /// its edges.
+    /// The plane's light at world (x, y) as fractions of the open plane's (environment, suns) and the
+    /// irradiance of its point and spot lights, or `None` past its edges.
     #[inline]
-    fn light_at(&self, x: f32, y: f32) -> Option<Vec2> {
+    fn light_at(&self, x: f32, y: f32) -> Option<(Vec2, Vec3)> {
         let uv = self.grid_uv(x, y);
         let n = PLANE_CELLS as f32;
         if !(0.0..=n).contains(&uv.x) || !(0.0..=n).contains(&uv.y) {
             return None;
         }
         let g = locate(uv);
-        Some(Vec2::new(read(&self.vis, g), if self.sun.is_empty() { 1.0 } else { read(&self.sun, g) }))
+        let fractions = Vec2::new(read(&self.vis, g), if self.sun.is_empty() { 1.0 } else { read(&self.sun, g) });
+        Some((fractions, read3(&self.lamps, g)))
+    }
+
+    /// The irradiance the subject reflects onto world (x, y), bilinear between grid points, held at the edges.
+    #[inline]
+    pub(super) fn bounce_at(&self, x: f32, y: f32) -> Vec3 {
+        read3(&self.bounce, locate(self.grid_uv(x, y)))
+    }
+
+    /// Every `stride`-th of the grid's points along each axis, in row order (rows along +y), on the plane.
+    pub(super) fn points(&self, z: f32, stride: usize) -> Vec<Vec3> {
+        let n = PLANE_CELLS / stride + 1;
+        (0..n * n)
+            .map(|k| {
+                let (i, j) = ((k % n) * stride, (k / n) * stride);
+                Vec3::new(self.lo.x + self.cell.x * i as f32, self.lo.y + self.cell.y * j as f32, z)
+            })
+            .collect()
     }
 
     /// The plane's light averaged over the square of half-side `w` (world units, at least half a cell) about
@@ -145,6 +169,62 @@ fn locate(uv: Vec2) -> GridPoint {
     GridPoint { i, j, t: Vec2::new(u - i as f32, v - j as f32) }
 }
 
+/// Grid `g` of colours ((PLANE_CELLS + 1)² points) read bilinearly at `at`; zero when it is empty.
+#[inline]
+fn read3(g: &[Vec3], at: GridPoint) -> Vec3 {
+    let n = PLANE_CELLS + 1;
+    if g.len() < n * n {
+        return Vec3::ZERO;
+    }
+    let row = |j: usize| g[j * n + at.i].lerp(g[j * n + at.i + 1], at.t.x);
+    row(at.j).lerp(row(at.j + 1), at.t.y)
+}
+
+/// The stride at which the subject's bounce onto a ground is gathered ([`spread`]).
+pub(super) const BOUNCE_STRIDE: usize = 4;
+
+/// A coarse grid `c` of every `stride`-th grid point (as [`PlaneVisibility::points`] lists them) spread to the
+/// whole grid, bilinearly.
+pub(super) fn spread(c: &[Vec3], stride: usize) -> Vec<Vec3> {
+    let (n, m) = (PLANE_CELLS + 1, PLANE_CELLS / stride + 1);
+    (0..n * n)
+        .map(|k| {
+            let (u, v) = ((k % n) as f32 / stride as f32, (k / n) as f32 / stride as f32);
+            let (i, j) = ((u as usize).min(m - 2), (v as usize).min(m - 2));
+            let (tu, tv) = (u - i as f32, v - j as f32);
+            let row = |j: usize| c[j * m + i].lerp(c[j * m + i + 1], tu);
+            row(j).lerp(row(j + 1), tv)
+        })
+        .collect()
+}
+
+/// Grid `g` of colours ((PLANE_CELLS + 1)² points) blurred by a box of 2·`r` + 1 points along each axis, twice
+/// (a tent about `r` points wide), held at the edges.
+pub(super) fn blur(g: &[Vec3], r: usize) -> Vec<Vec3> {
+    let n = PLANE_CELLS + 1;
+    let pass = |g: &[Vec3], step: usize| -> Vec<Vec3> {
+        (0..n * n)
+            .map(|k| {
+                let (i, j) = (k % n, k / n);
+                let along = if step == 1 { i } else { j };
+                let sum: Vec3 = (0..=2 * r)
+                    .map(|o| {
+                        let at = (along + o).saturating_sub(r).min(n - 1);
+                        let (ii, jj) = if step == 1 { (at, j) } else { (i, at) };
+                        g[jj * n + ii]
+                    })
+                    .sum();
+                sum / (2 * r + 1) as f32
+            })
+            .collect()
+    };
+    let mut g = g.to_vec();
+    for _ in 0..2 {
+        g = pass(&pass(&g, 1), n);
+    }
+    g
+}
+
 /// The summed-area tables of grids `vis` and `sun` ((PLANE_CELLS + 1)² points each; `sun` may be empty).
 fn summed_areas(vis: &[f32], sun: &[f32]) -> Vec<[f64; 2]> {
     let (n, m) = (PLANE_CELLS + 1, PLANE_CELLS + 2);
@@ -181,6 +261,8 @@ fn read(g: &[f32], at: GridPoint) -> f32 {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Ground {
     pub(super) z: f32,
+    /// The plane's colour.
+    albedo: Vec3,
     /// The open plane's outgoing radiance under the environment's sky, and under the suns.
     sky: Vec3,
     sun: Vec3,
@@ -193,7 +275,7 @@ impl Ground {
         let albedo = scene.material(prim.material).base_color.truncate();
         let sky = env.prefiltered.sky_irradiance(Vec3::Z) * env.strength;
         let sun = lights.iter().map(|l| sun_irradiance(l)).sum::<Vec3>();
-        Some(Ground { z: prim.positions[0].z, sky: albedo * sky / PI, sun: albedo * sun / PI })
+        Some(Ground { z: prim.positions[0].z, albedo, sky: albedo * sky / PI, sun: albedo * sun / PI })
     }
 
     /// Where the ray from `p` (on or above the ground) along `d` (pointing down) meets the ground's plane, and
@@ -278,9 +360,30 @@ impl FrameLight {
                 _ => Vec::new(),
             })
             .collect();
+        // Point and spot lights vary over the plane by distance and angle: their irradiance itself, per point.
+        let lamps: Vec<&super::Lamp> =
+            self.lights.iter().filter(|l| !matches!(l.light.kind, LightKind::Sun { .. })).collect();
+        let lamps: Vec<Vec3> = if lamps.is_empty() {
+            Vec::new()
+        } else {
+            (0..(n + 1) * (n + 1))
+                .into_par_iter()
+                .map(|k| {
+                    let p = point(k);
+                    lamps
+                        .iter()
+                        .map(|lamp| {
+                            let (l, radiance) = lamp.incidence(p);
+                            let light = &lamp.light;
+                            light.color * (radiance * light.intensity * l.z.max(0.0) * lamp.visibility(p, Vec3::Z))
+                        })
+                        .sum()
+                })
+                .collect()
+        };
         let sky = self.irradiance(lo, Vec3::Z, Vec3::ZERO);
         let sums = summed_areas(&vis, &sun);
-        PlaneVisibility { material, lo: lo.truncate(), cell, vis, sun, sums, sky, open }
+        PlaneVisibility { material, lo: lo.truncate(), cell, vis, sun, lamps, bounce: Vec::new(), sums, sky, open }
     }
 
     /// What reaches world point `p` of a surface of material `material` of the environment's light, when that
@@ -289,7 +392,7 @@ impl FrameLight {
     pub fn plane_visibility_at(&self, material: u32, p: Vec3) -> Option<Visibility> {
         let g = self.planes.iter().find(|g| g.material == material)?;
         let below = self.ground.map_or(Vec3::ZERO, |g| g.radiance(Vec2::ONE));
-        Some(Visibility { env: g.at(p.x, p.y), below })
+        Some(Visibility { env: g.at(p.x, p.y), below, bounce: g.bounce_at(p.x, p.y) })
     }
 
     /// The radiance a point `p` with unit normal `n` receives from below the horizon, averaged over the cosine
@@ -305,7 +408,6 @@ impl FrameLight {
         if p.z < g.z - 1e-3 {
             return Vec3::ZERO;
         }
-        let plane = self.planes.first();
         let (t, b) = basis(n);
         let (mut sum, mut count) = (Vec3::ZERO, 0u32);
         for h in BOUNCE.iter() {
@@ -313,11 +415,7 @@ impl FrameLight {
             if d.z >= -1e-4 {
                 continue;
             }
-            let (q, _) = g.hit(p, d);
-            sum += match plane.and_then(|plane| plane.light_at(q.x, q.y)) {
-                Some(light) => g.radiance(light),
-                None => self.map_below(d),
-            };
+            sum += self.below_along(p, d);
             count += 1;
         }
         if count == 0 {
@@ -326,6 +424,19 @@ impl FrameLight {
             g.radiance(Vec2::ONE)
         } else {
             sum / count as f32
+        }
+    }
+
+    /// The radiance [`FrameLight::below`] counts along unit direction `d` (pointing down) from `p` (on or above
+    /// the ground): the ground's where `d` meets it, else the map's.
+    pub(super) fn below_along(&self, p: Vec3, d: Vec3) -> Vec3 {
+        let Some(g) = self.ground else {
+            return Vec3::ZERO;
+        };
+        let (q, _) = g.hit(p, d);
+        match self.planes.first().and_then(|plane| plane.light_at(q.x, q.y)) {
+            Some((light, lamps)) => g.radiance(light) + g.albedo * lamps * (1.0 / PI),
+            None => self.map_below(d),
         }
     }
 
@@ -358,7 +469,7 @@ impl FrameLight {
     pub fn shade_ground(&self, material: u32, p: Vec3, albedo: Vec3) -> Option<Vec3> {
         let g = self.planes.iter().find(|g| g.material == material)?;
         let (cell, vis) = g.cell_at(p.x, p.y);
-        let mut e = g.sky * vis;
+        let mut e = g.sky * vis + g.bounce_at(p.x, p.y);
         for (lamp, open) in self.lights.iter().zip(&g.open) {
             let (l, radiance) = lamp.incidence(p);
             if l.z <= 0.0 || radiance == 0.0 {

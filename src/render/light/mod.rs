@@ -7,6 +7,7 @@
 //! the cosine of the angle off its axis, faded over `blend` (Blender 3.x's spot falloff); an environment of
 //! radiance L lights a white Lambertian surface to L.
 
+mod bounce;
 pub mod brdf;
 pub mod environment;
 mod ground;
@@ -36,16 +37,23 @@ pub struct Visibility {
     /// ground's, its shadows in it, and past its edges the map's (see `FrameLight::below`). Unread without a
     /// ground.
     pub below: Vec3,
+    /// The irradiance the subject's own parts reflect onto the point, all [`bounce::BOUNCES`] bounces of it
+    /// (see [`bounce`]); zero on a ground plane and on points.
+    pub bounce: Vec3,
 }
 
 impl Visibility {
     /// In the open, without a ground.
-    pub const OPEN: Visibility = Visibility { env: 1.0, below: Vec3::ZERO };
+    pub const OPEN: Visibility = Visibility { env: 1.0, below: Vec3::ZERO, bounce: Vec3::ZERO };
 
     /// The linear blend `self` → `o` at `t`.
     #[inline]
     pub fn lerp(self, o: Visibility, t: f32) -> Visibility {
-        Visibility { env: self.env + (o.env - self.env) * t, below: self.below.lerp(o.below, t) }
+        Visibility {
+            env: self.env + (o.env - self.env) * t,
+            below: self.below.lerp(o.below, t),
+            bounce: self.bounce.lerp(o.bounce, t),
+        }
     }
 
     /// The blend of three vertices' by barycentric weights `k`.
@@ -54,6 +62,7 @@ impl Visibility {
         Visibility {
             env: v[0].env * k[0] + v[1].env * k[1] + v[2].env * k[2],
             below: v[0].below * k[0] + v[1].below * k[1] + v[2].below * k[2],
+            bounce: v[0].bounce * k[0] + v[1].bounce * k[1] + v[2].bounce * k[2],
         }
     }
 }
@@ -95,6 +104,8 @@ pub struct FrameLight {
     ground: Option<Ground>,
     /// What lit radiance is multiplied by before it is encoded: 2^exposure.
     exposure: f32,
+    /// The view transform baked colours are displayed through (images apply theirs when they are resolved).
+    view: Option<&'static super::agx::Agx>,
     /// The environment's occlusion: directions over the sphere, each with its weight (the map's brightness there)
     /// and a parallel shadow map from it. Empty when nothing casts shadows.
     occlusion: Vec<(Vec3, f32, ShadowMap)>,
@@ -212,7 +223,7 @@ impl FrameLight {
         let (lights, occlusion) = rayon::join(light_maps, env_maps);
         let ground = Ground::find(scene, &all, &env);
         let mut light =
-            FrameLight { lights, env, ground, exposure: 1.0, occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
+            FrameLight { lights, env, ground, exposure: 1.0, view: None, occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
         // The planes first: a vertex's bounce reads them.
         light.planes =
             ground_planes(scene).map(|prim| light.plane_visibility(prim.material, &prim.positions)).collect();
@@ -232,9 +243,50 @@ impl FrameLight {
         light
     }
 
+    /// This lighting with what the subject reflects onto itself and onto the ground gathered ([`bounce`]): what
+    /// rendered meshes read (a baked point has no vertices to gather at, and estimates it instead).
+    pub fn with_bounce(mut self, scene: &PosedScene) -> FrameLight {
+        let Some(subject) = bounce::Subject::of(scene) else {
+            return self;
+        };
+        let gathered = subject.gather(scene, &self, &self.vertex_visibility);
+        for (i, vis) in self.vertex_visibility.iter_mut().enumerate() {
+            if vis.is_empty() {
+                continue;
+            }
+            for (v, b) in vis.iter_mut().zip(&gathered.bounce[subject.serials(scene, i)]) {
+                v.bounce = *b;
+            }
+        }
+        let z = self.ground.map_or(0.0, |g| g.z);
+        for plane in &mut self.planes {
+            // The bounce varies over the subject's size, not a cell's: gathered on every fourth grid point,
+            // spread between them, then blurred over about five, where far from the subject a point's rays meet
+            // it by chance or not (that noise falls under 1/255).
+            let coarse = subject.onto(scene, &gathered, &plane.points(z, ground::BOUNCE_STRIDE), Vec3::Z);
+            plane.bounce = ground::blur(&ground::spread(&coarse, ground::BOUNCE_STRIDE), 2);
+        }
+        self
+    }
+
     /// What reaches `p` (unit normal `n`) of the environment's light: see [`Visibility`].
     pub fn visibility(&self, p: Vec3, n: Vec3) -> Visibility {
-        Visibility { env: self.environment_visibility(p, n), below: self.below(p, n) }
+        Visibility { env: self.environment_visibility(p, n), below: self.below(p, n), bounce: Vec3::ZERO }
+    }
+
+    /// The irradiance reaching `p` (unit normal `n`) straight from the lights, with their shadows, and from the
+    /// environment past its occlusion `vis` (and the ground's bounce): all but what the subject reflects.
+    pub(super) fn direct_irradiance(&self, p: Vec3, n: Vec3, vis: &Visibility) -> Vec3 {
+        let mut e = self.irradiance(p, n, vis.below) * vis.env;
+        for lamp in &self.lights {
+            let (l, radiance) = lamp.incidence(p);
+            let c = n.dot(l);
+            if c <= 0.0 || radiance == 0.0 {
+                continue;
+            }
+            e += lamp.light.color * (radiance * lamp.light.intensity * c * lamp.visibility(p, n));
+        }
+        e
     }
 
     /// The fraction of the environment's light (weighted by where it comes from and by the cosine to `n`) that
@@ -266,17 +318,18 @@ impl FrameLight {
             return albedo + emission;
         }
         let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
-        self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission)
+        let c = self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission);
+        self.view.map_or(c, |agx| agx.display(c))
     }
 
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
     /// `v` (toward the eye), for surface `s`, with ambient occlusion `ao` (the material's) and what reaches it
-    /// of the environment's light, `vis` (interpolated from the vertices). `interreflects`: whether what the
-    /// casters block comes partly back to the diffuse layer (`multi_bounce`): yes on a subject, whose casters
-    /// are mostly its own parts, of colours like its own; no on a ground plane, whose caster is the subject, of a
-    /// colour the plane's says nothing of.
+    /// of the environment's light, `vis` (interpolated from the vertices, with what the subject reflects onto
+    /// it). `estimate_bounce`: where no gathered bounce is known (a baked point), whether what the casters block
+    /// comes partly back to the diffuse layer by an estimate (`multi_bounce`) instead: yes on a subject, whose
+    /// casters are mostly its own parts, of colours like its own.
     #[allow(clippy::too_many_arguments)]
-    pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, vis: Visibility, interreflects: bool) -> Vec3 {
+    pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, vis: Visibility, estimate_bounce: bool) -> Vec3 {
         let mut out = Vec3::ZERO;
         for lamp in &self.lights {
             let (l, radiance) = lamp.incidence(p);
@@ -298,7 +351,7 @@ impl FrameLight {
             Vec3::ZERO
         };
         let irradiance = self.irradiance(p, n, vis.below);
-        let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (irradiance / PI);
+        let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (1.0 / PI);
         let specular = if w > 0.0 {
             let r = 2.0 * n.dot(v) * n - v;
             let mut l = e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength;
@@ -317,13 +370,16 @@ impl FrameLight {
             Vec3::ZERO
         };
         // What the occluders block is not all lost: they reflect some of it back (interreflection, which a path
-        // tracer follows). The diffuse layer gets it back by Jimenez et al.'s multi-bounce fit ("Practical
-        // real-time strategies for accurate indirect occlusion", 2016), with the surface's own colour standing
-        // in for its surroundings' (on subjects only, see `interreflects`); against Cycles it lifts CesiumMan's
-        // crevices by 1.9 dB.
+        // tracer follows). A mesh's vertices gathered it ([`bounce`]); a baked point estimates it by Jimenez et
+        // al.'s multi-bounce fit ("Practical real-time strategies for accurate indirect occlusion", 2016), with
+        // the surface's own colour standing in for its surroundings' (see `estimate_bounce`).
         let occlusion = ao * vis.env;
-        let returned = if interreflects { multi_bounce(occlusion, s.diffuse()) } else { Vec3::splat(occlusion) };
-        out + diffuse * returned + specular * occlusion
+        let returned =
+            if estimate_bounce { multi_bounce(occlusion, s.diffuse()) } else { Vec3::splat(occlusion) };
+        // The specular layer sees the same occluders where its lobe is blocked: their mean radiance, which the
+        // gathered irradiance over π is (for a rough lobe; a sharp one would see one of them).
+        let bounce = vis.bounce.max(Vec3::ZERO) * ao;
+        out + diffuse * (irradiance * returned + bounce) + specular * occlusion + spec_f * bounce * (1.0 / PI)
     }
 
     /// The environment's irradiance at world point `p` on a surface of unit normal `n`, before occlusion, with
@@ -352,6 +408,12 @@ impl FrameLight {
     /// [`FrameLight::exposed`] and [`FrameLight::background`] multiply by. The prepared maps do not change.
     pub fn with_exposure(mut self, stops: f32) -> FrameLight {
         self.exposure = stops.exp2();
+        self
+    }
+
+    /// This lighting's baked colours ([`FrameLight::bake`]) displayed through `view`, as the images' are.
+    pub fn with_view(mut self, view: super::ViewTransform) -> FrameLight {
+        self.view = (view == super::ViewTransform::Agx).then(super::agx::Agx::get);
         self
     }
 

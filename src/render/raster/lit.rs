@@ -79,11 +79,10 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
     }
     let ao =
         m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint_rgb(&r, uv, dx, dy).x - 1.0));
-    // A ground plane's visibility is a grid; a subject's comes from its vertices, and only a subject
-    // interreflects (see `FrameLight::shade`).
-    let (vis, interreflects) = match l.light.plane_visibility_at(tri.material, p) {
-        Some(v) => (v, false),
-        None => (Visibility::blend(&tri.vis, k), true),
+    // A ground plane's visibility is a grid; a subject's comes from its vertices, with the bounce they gathered.
+    let vis = match l.light.plane_visibility_at(tri.material, p) {
+        Some(v) => v,
+        None => Visibility::blend(&tri.vis, k),
     };
     let n = match m.normal {
         Some((r, tex, scale)) => {
@@ -93,7 +92,7 @@ pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projec
         None => nrm,
     };
     let emission = mat.emissive * sample(m.emissive).unwrap_or(Vec3::ONE);
-    l.light.exposed(l.light.shade(p, n, v, &surface, ao, vis, interreflects) + emission)
+    l.light.exposed(l.light.shade(p, n, v, &surface, ao, vis, false) + emission)
 }
 
 /// Whether a material is Lambertian and untextured, as a `plane` source's is: the top face of a ground plane of

@@ -1,0 +1,451 @@
+//! Diffuse interreflection off the subject: the light its parts reflect onto each other, gathered once per posed
+//! frame at every vertex and shared by every view of the frame (see [`gather`]).
+//!
+//! Cycles follows every bounce; the direct light, the environment's occlusion and the ground's first bounce leave
+//! out what the subject reflects onto itself, which made it 4–14 % dark where it sees little sky and sun. Each
+//! vertex casts a fixed set of cosine-weighted rays against the posed frame's casters; a ray that meets one
+//! carries the radiance of the diffuse surface there, interpolated from the vertices' irradiance, and the gather
+//! repeats over the same hits so that light bounces [`BOUNCES`] times. Rays that meet nothing add nothing: the
+//! environment's share of them is already in the occlusion.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3, Vec3A};
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+use rayon::prelude::*;
+
+use super::brdf::{basis, hammersley};
+use super::{FrameLight, Visibility};
+use crate::scene::{PosedScene, PrimKind};
+
+/// Diffuse bounces the gather follows: Cycles' bounces past the third add under 0.5 % on the subject.
+pub(super) const BOUNCES: usize = 3;
+
+/// Rays a frame's gather may cast in all: a vertex casts `RAY_BUDGET / vertices` rays, a power of two between
+/// [`MIN_RAYS`] and [`MAX_RAYS`] (CesiumMan's 3 273 vertices cast 32 each, FlightHelmet's 55 392 cast 16): the
+/// cost of a frame stays about that of a million rays up to a mesh of 256 000 vertices, and past that grows
+/// by 4 rays a vertex (a 5-million-vertex scan: 20 million rays, seconds a frame). Smoothing over each vertex's
+/// neighbours ([`Neighbours::smooth`]) makes up for the few rays of a dense mesh.
+const RAY_BUDGET: usize = 1 << 20;
+const MIN_RAYS: usize = 4;
+const MAX_RAYS: usize = 32;
+/// Rays each point a ground gathers at casts toward the subject (see `FrameLight::with_bounce`: every fourth grid
+/// point, 1 089 in all).
+const GROUND_RAYS: u32 = 256;
+
+/// Where one gathering ray met a caster: the triangle, the barycentric weights of its second and third corners
+/// there, and the diffuse reflectance of the surface there.
+#[derive(Clone, Copy)]
+struct Hit {
+    tri: u32,
+    k: [f32; 2],
+    albedo: [u8; 3],
+}
+
+/// The casters of one posed frame: their triangles as the ray tracer reads them and, per triangle, its
+/// primitive and its corners' vertex indices.
+struct Casters {
+    tris: Vec<Triangle>,
+    corners: Vec<(u32, [u32; 3])>,
+}
+
+impl Casters {
+    fn of(scene: &PosedScene) -> Casters {
+        let (mut tris, mut corners) = (Vec::new(), Vec::new());
+        for (pi, prim) in scene.primitives.iter().enumerate() {
+            if prim.kind != PrimKind::Triangles || !scene.material(prim.material).casts_shadows {
+                continue;
+            }
+            for t in prim.indices.chunks_exact(3) {
+                let c = [t[0], t[1], t[2]];
+                let [a, b, d] = c.map(|i| prim.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+                tris.push(Triangle { v0: a.into(), v1: b.into(), v2: d.into() });
+                corners.push((pi as u32, c));
+            }
+        }
+        Casters { tris, corners }
+    }
+}
+
+/// The frame's subject as the gather reads it: its casters, in a ray-tracing tree, and its vertices.
+pub(super) struct Subject {
+    casters: Casters,
+    bvh: CwBvh,
+    /// How far off a surface its rays start: a hair, scaled to the subject.
+    eps: f32,
+    /// The gathering vertices (every caster's), as (primitive, vertex), numbered in primitive order (a vertex's
+    /// serial number); `first[p]` is primitive p's first.
+    vertices: Vec<(u32, u32)>,
+    first: Vec<usize>,
+}
+
+/// What the gather found: per serial number, the irradiance the subject reflects onto the vertex, and all it
+/// receives (that and its direct light).
+pub(super) struct Gathered {
+    pub(super) bounce: Vec<Vec3>,
+    total: Vec<Vec3>,
+}
+
+impl Subject {
+    /// The casters of `scene`, `None` when nothing casts shadows.
+    pub(super) fn of(scene: &PosedScene) -> Option<Subject> {
+        let casters = Casters::of(scene);
+        let mut first = vec![0usize; scene.primitives.len()];
+        let mut vertices: Vec<(u32, u32)> = Vec::new();
+        for (i, prim) in scene.primitives.iter().enumerate() {
+            if prim.kind == PrimKind::Triangles && scene.material(prim.material).casts_shadows {
+                first[i] = vertices.len();
+                vertices.extend((0..prim.positions.len() as u32).map(|v| (i as u32, v)));
+            }
+        }
+        if casters.tris.is_empty() || vertices.is_empty() {
+            return None;
+        }
+        let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::fast_build(), &mut Default::default());
+        let (lo, hi) = casters.tris.iter().fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), t| {
+            (lo.min(t.v0).min(t.v1).min(t.v2), hi.max(t.v0).max(t.v1).max(t.v2))
+        });
+        let eps = 1e-4 * (hi - lo).length().max(1e-6);
+        Some(Subject { casters, bvh, eps, vertices, first })
+    }
+
+    /// The light the subject reflects onto each of its vertices, by serial number, in a frame whose direct
+    /// light and environment `light` describes and whose vertices see the environment as `vis` says.
+    pub(super) fn gather(&self, scene: &PosedScene, light: &FrameLight, vis: &[Vec<Visibility>]) -> Gathered {
+        let n = self.vertices.len();
+        let rays = 1usize << (RAY_BUDGET / n).clamp(MIN_RAYS, MAX_RAYS).ilog2();
+        let hits = self.trace_all(scene, rays);
+        let neighbours = Neighbours::of(scene, &self.first, &self.vertices);
+        // The direct light each vertex receives (irradiance, by its normal).
+        let direct: Vec<Vec3> = self
+            .vertices
+            .par_iter()
+            .map(|&(pi, v)| {
+                let (prim, v) = (&scene.primitives[pi as usize], v as usize);
+                let vis = vis[pi as usize].get(v).copied().unwrap_or(Visibility::OPEN);
+                light.direct_irradiance(prim.positions[v], prim.normals[v], &vis)
+            })
+            .collect();
+        // The bounces: each gather reads the irradiance the last one left at the vertices.
+        let mut g = Gathered { bounce: vec![Vec3::ZERO; n], total: direct.clone() };
+        for _ in 0..BOUNCES {
+            let raw: Vec<Vec3> = (0..n)
+                .into_par_iter()
+                .map(|k| hits.of(k).iter().map(|h| self.reflected(&g, h)).sum::<Vec3>() * (PI / rays as f32))
+                .collect();
+            g.bounce = neighbours.smooth(&raw);
+            g.total = direct.iter().zip(&g.bounce).map(|(d, b)| *d + *b).collect();
+        }
+        g
+    }
+
+    /// The radiance coming back along a ray that met the subject at `h`: the diffuse surface there under all it
+    /// receives (`g`'s totals, interpolated across the triangle).
+    #[inline]
+    fn reflected(&self, g: &Gathered, h: &Hit) -> Vec3 {
+        let (pi, [a, b, c]) = self.casters.corners[h.tri as usize];
+        let at = |v: u32| g.total[self.first[pi as usize] + v as usize].max(Vec3::ZERO);
+        let e = at(a) * (1.0 - h.k[0] - h.k[1]) + at(b) * h.k[0] + at(c) * h.k[1];
+        Vec3::new(h.albedo[0] as f32, h.albedo[1] as f32, h.albedo[2] as f32) * (1.0 / 255.0) * e * (1.0 / PI)
+    }
+
+    /// The serial numbers of primitive `prim`'s vertices.
+    pub(super) fn serials(&self, scene: &PosedScene, prim: usize) -> std::ops::Range<usize> {
+        let k = self.first[prim];
+        k..k + scene.primitives[prim].positions.len()
+    }
+
+    /// The irradiance the subject (lit as `g` found) reflects onto each of `points`, surfaces facing `normal`
+    /// that are not its own (a ground plane's grid): [`GROUND_RAYS`] rays each, rotated per point.
+    pub(super) fn onto(&self, scene: &PosedScene, g: &Gathered, points: &[Vec3], normal: Vec3) -> Vec<Vec3> {
+        let (t, b) = basis(normal);
+        points
+            .par_iter()
+            .enumerate()
+            .map(|(serial, &p)| {
+                let shift = hammersley(serial as u32 % 4093, 4093);
+                let mut sum = Vec3::ZERO;
+                for i in 0..GROUND_RAYS {
+                    let d = cosine_direction(i, GROUND_RAYS, shift, t, b, normal);
+                    if let Some(h) = self.trace(scene, p + normal * self.eps, d) {
+                        sum += self.reflected(g, &h);
+                    }
+                }
+                sum * (PI / GROUND_RAYS as f32)
+            })
+            .collect()
+    }
+
+    /// Casts `rays` cosine-weighted rays from each vertex against the casters.
+    fn trace_all(&self, scene: &PosedScene, rays: usize) -> Hits {
+        let per_vertex: Vec<Vec<Hit>> = self
+            .vertices
+            .par_iter()
+            .enumerate()
+            .map(|(serial, &(pi, v))| {
+                let prim = &scene.primitives[pi as usize];
+                let (p, n) = (prim.positions[v as usize], prim.normals[v as usize]);
+                let (t, b) = basis(n);
+                // The same set rotated per vertex (Cranley–Patterson, by its serial number in the frame):
+                // neighbours sample different directions, so their errors average out where they are smoothed.
+                let shift = hammersley(serial as u32 % 4093, 4093);
+                (0..rays as u32)
+                    .filter_map(|i| self.trace(scene, p + n * self.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
+                    .collect()
+            })
+            .collect();
+        let mut start = Vec::with_capacity(per_vertex.len() + 1);
+        start.push(0);
+        for h in &per_vertex {
+            start.push(start.last().copied().unwrap_or(0) + h.len());
+        }
+        Hits { start, hits: per_vertex.concat() }
+    }
+
+    /// The nearest caster along the ray from `o` along unit `d`, with the diffuse reflectance there.
+    fn trace(&self, scene: &PosedScene, o: Vec3, d: Vec3) -> Option<Hit> {
+        let (casters, bvh) = (&self.casters, &self.bvh);
+        let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
+        let mut hit = RayHit::none();
+        // The tree numbers its leaves' triangles in its own order: `primitive_indices` maps them back to ours.
+        let ours = |id: usize| bvh.primitive_indices[id] as usize;
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| casters.tris[ours(id)].intersect(r)) {
+            return None;
+        }
+        let tri = ours(hit.primitive_id as usize);
+        let (pi, c) = casters.corners[tri];
+        let t = &casters.tris[tri];
+        let k = barycentric(o + d * hit.t, t.v0.into(), t.v1.into(), t.v2.into());
+        let albedo = diffuse_albedo(scene, &scene.primitives[pi as usize], c, k);
+        let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+        Some(Hit { tri: tri as u32, k, albedo: [q(albedo.x), q(albedo.y), q(albedo.z)] })
+    }
+}
+
+/// The hits of every vertex's rays, the misses left out: vertex k's are `hits[start[k]..start[k + 1]]`.
+struct Hits {
+    start: Vec<usize>,
+    hits: Vec<Hit>,
+}
+
+impl Hits {
+    fn of(&self, k: usize) -> &[Hit] {
+        &self.hits[self.start[k]..self.start[k + 1]]
+    }
+}
+
+/// Direction `i` of `n` cosine-weighted about unit `normal` (tangents `t`, `b`), its set rotated by `shift`.
+#[inline]
+fn cosine_direction(i: u32, n: u32, shift: Vec2, t: Vec3, b: Vec3, normal: Vec3) -> Vec3 {
+    let xi = (hammersley(i, n) + shift).fract();
+    let (r, phi) = (xi.x.sqrt(), 2.0 * PI * xi.y);
+    t * (r * phi.cos()) + b * (r * phi.sin()) + normal * (1.0 - xi.x).max(0.0).sqrt()
+}
+
+/// Each gathering vertex's neighbours across its primitive's triangles, with the weight its normal gives them.
+struct Neighbours {
+    start: Vec<usize>,
+    list: Vec<(u32, f32)>,
+}
+
+impl Neighbours {
+    fn of(scene: &PosedScene, first: &[usize], vertices: &[(u32, u32)]) -> Neighbours {
+        let count = vertices.len();
+        let mut sets: Vec<Vec<u32>> = vec![Vec::new(); count];
+        for (i, prim) in scene.primitives.iter().enumerate() {
+            if prim.kind != PrimKind::Triangles || !scene.material(prim.material).casts_shadows {
+                continue;
+            }
+            for t in prim.indices.chunks_exact(3) {
+                for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                    let (ka, kb) = (first[i] + a as usize, first[i] + b as usize);
+                    if ka < count && kb < count && ka != kb {
+                        sets[ka].push(kb as u32);
+                        sets[kb].push(ka as u32);
+                    }
+                }
+            }
+        }
+        let normals: Vec<Vec3> =
+            vertices.iter().map(|&(pi, v)| scene.primitives[pi as usize].normals[v as usize]).collect();
+        let (mut start, mut list) = (vec![0], Vec::new());
+        for (k, set) in sets.iter_mut().enumerate() {
+            set.sort_unstable();
+            set.dedup();
+            // Neighbours facing another way see other things: they count by how alike the normals are.
+            list.extend(set.iter().map(|&j| (j, normals[k].dot(normals[j as usize]).max(0.0).powi(2))));
+            start.push(list.len());
+        }
+        Neighbours { start, list }
+    }
+
+    /// `raw` averaged over each vertex and its neighbours: the gather's noise, which would mottle the surface,
+    /// shrinks by about the square root of their number.
+    fn smooth(&self, raw: &[Vec3]) -> Vec<Vec3> {
+        (0..raw.len())
+            .into_par_iter()
+            .map(|k| {
+                let (mut sum, mut w) = (raw[k], 1.0);
+                for &(j, wj) in &self.list[self.start[k]..self.start[k + 1]] {
+                    sum += raw[j as usize] * wj;
+                    w += wj;
+                }
+                sum / w
+            })
+            .collect()
+    }
+}
+
+/// The diffuse layer's colour at barycentric weights `k` (of corners two and three) in triangle `c` of `prim`:
+/// base colour × (1 − metallic), textures and vertex colours included.
+fn diffuse_albedo(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, c: [u32; 3], k: [f32; 2]) -> Vec3 {
+    let mat = scene.material(prim.material);
+    let w = [1.0 - k[0] - k[1], k[0], k[1]];
+    let uv = (!prim.uvs.is_empty()).then(|| {
+        (0..3).map(|j| prim.uvs.get(c[j] as usize).copied().unwrap_or(Vec2::ZERO) * w[j]).sum::<Vec2>()
+    });
+    let color = (!prim.colors.is_empty()).then(|| {
+        (0..3).map(|j| prim.colors.get(c[j] as usize).copied().unwrap_or(glam::Vec4::ONE) * w[j]).sum::<glam::Vec4>()
+    });
+    let texture = |r: Option<crate::scene::texture::TextureRef>| {
+        r.and_then(|r| Some((r, scene.textures.get(r.texture as usize)?)))
+    };
+    let metallic = match (texture(mat.metallic_roughness_texture), uv) {
+        (Some((r, t)), Some(uv)) => mat.metallic * t.sample(&r, uv).z,
+        _ => mat.metallic,
+    };
+    mat.albedo(&scene.textures, uv, color).truncate() * (1.0 - metallic)
+}
+
+/// The barycentric weights of `b` and `c` for point `p` in triangle (a, b, c) (the projection onto its plane).
+fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 2] {
+    let (e1, e2, w) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det.abs() < 1e-20 {
+        return [0.0, 0.0];
+    }
+    let (w1, w2) = (w.dot(e1), w.dot(e2));
+    let u = ((d22 * w1 - d12 * w2) / det).clamp(0.0, 1.0);
+    let v = ((d11 * w2 - d12 * w1) / det).clamp(0.0, 1.0 - u);
+    [u, v]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::material::Material;
+    use crate::scene::light::{Light, LightKind};
+    use glam::Vec4;
+
+    #[test]
+    fn barycentric_weights_rebuild_the_point() {
+        let (a, b, c) = (Vec3::new(0.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 1.0), Vec3::new(0.0, 3.0, 1.0));
+        let p = a * 0.2 + b * 0.5 + c * 0.3;
+        let k = barycentric(p, a, b, c);
+        assert!((k[0] - 0.5).abs() < 1e-6 && (k[1] - 0.3).abs() < 1e-6, "{k:?}");
+    }
+
+    /// A square of half-side `h` at height `z`, facing `normal` (±Z), as a grid of `n` × `n` cells, of colour
+    /// `grey`.
+    fn square(h: f32, z: f32, normal: Vec3, n: u32, grey: f32) -> PosedScene {
+        let at = |i: u32, j: u32| Vec3::new(-h + 2.0 * h * i as f32 / n as f32, -h + 2.0 * h * j as f32 / n as f32, z);
+        let positions: Vec<Vec3> = (0..=n).flat_map(|j| (0..=n).map(move |i| at(i, j))).collect();
+        let mut indices = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let k = j * (n + 1) + i;
+                let quad = [k, k + 1, k + n + 2, k, k + n + 2, k + n + 1];
+                indices.extend(if normal.z > 0.0 { quad } else { [quad[0], quad[2], quad[1], quad[3], quad[5], quad[4]] });
+            }
+        }
+        let material = Material { base_color: Vec4::new(grey, grey, grey, 1.0), ..Material::default() };
+        PosedScene::single(PrimKind::Triangles, positions, vec![normal; ((n + 1) * (n + 1)) as usize], Vec::new(), indices, material)
+    }
+
+    /// A sun shining straight up, casting no shadows, and a dark environment: only faces looking down are lit,
+    /// all alike, by `e` W/m².
+    fn lit_from_below(scene: &PosedScene, e: f32) -> FrameLight {
+        let sun = Light {
+            kind: LightKind::Sun { direction: Vec3::Z, angle: 0.01 },
+            color: Vec3::ONE,
+            intensity: e,
+            shadows: false,
+        };
+        let mut env = crate::render::Environment::default().studio();
+        env.strength = 0.0;
+        FrameLight::prepare(scene, &[sun], env).with_bounce(scene)
+    }
+
+    /// Half the view factor from a point to the rectangle a × b whose corner lies `c` straight above it, in a
+    /// parallel plane, over π (the standard closed form, for one quadrant).
+    fn quadrant(a: f32, b: f32, c: f32) -> f32 {
+        let (x, y) = (a / c, b / c);
+        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
+    }
+
+    #[test]
+    fn a_lit_ceiling_lights_the_floor_below_by_its_view_factor() {
+        // A black floor facing up and, 0.5 m above, a ceiling of 0.8 facing down, both 4 m wide, lit from below
+        // by 2 W/m²: the floor's middle receives 0.8 · 2 · F, F the ceiling's view factor (0.952).
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[square(2.0, 0.0, Vec3::Z, 20, 0.0), square(2.0, 0.5, -Vec3::Z, 20, 0.8)], &mut scene);
+        let light = lit_from_below(&scene, 2.0);
+        let f = 4.0 * quadrant(2.0, 2.0, 0.5);
+        let expected = 0.8 * 2.0 * f;
+        let middle = 10 * 21 + 10;
+        let got = light.vertex_visibility[0][middle].bounce;
+        assert!((got.x / expected - 1.0).abs() < 0.03 && got.x == got.y && got.y == got.z, "{got} vs {expected}");
+        // The ceiling, over a black floor, gets nothing back; off the floor's middle, toward its edge, less.
+        assert!(light.vertex_visibility[1][middle].bounce.max_element() < 1e-6);
+        let edge = 10 * 21 + 1;
+        assert!(light.vertex_visibility[0][edge].bounce.x < 0.8 * got.x);
+        // The same frame prepared again gives the same bits.
+        let again = lit_from_below(&scene, 2.0);
+        assert_eq!(format!("{:?}", again.vertex_visibility), format!("{:?}", light.vertex_visibility));
+    }
+
+    #[test]
+    fn light_bounces_back_and_forth_between_facing_surfaces() {
+        // Both 0.8: the floor's bounce lights the ceiling, which sends part of it back (a second bounce and a
+        // third): the floor gets 0.8 · 2 · F · (1 + (0.8 F)² + …) over the first bounce's 0.8 · 2 · F.
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[square(2.0, 0.0, Vec3::Z, 20, 0.8), square(2.0, 0.5, -Vec3::Z, 20, 0.8)], &mut scene);
+        let light = lit_from_below(&scene, 2.0);
+        let f = 4.0 * quadrant(2.0, 2.0, 0.5);
+        let middle = 10 * 21 + 10;
+        let floor = light.vertex_visibility[0][middle].bounce.x;
+        let ceiling = light.vertex_visibility[1][middle].bounce.x;
+        // The ceiling receives the floor's first bounce back: about 0.8 · F times it (its view factor is F too,
+        // but the floor is dimmer toward its edges: a little less).
+        let first = 0.8 * 2.0 * f;
+        assert!(ceiling > 0.8 * f * first * 0.9 && ceiling < 0.8 * f * first * 1.03, "{ceiling}");
+        // Three bounces: the floor's third is what the ceiling's second sends it.
+        let third = first * (0.8 * f) * (0.8 * f);
+        assert!(floor > first + 0.85 * third && floor < (first + third) * 1.03, "{floor} vs {first} + {third}");
+    }
+
+    #[test]
+    fn a_lit_square_lights_the_ground_below_by_its_view_factor() {
+        // A 0.6 m square of 0.5 facing down 1 m over a 4 m ground, lit from below by 3 W/m²: the ground under
+        // its middle receives 0.5 · 3 · F (F = 0.102); 1.5 m aside, far less.
+        let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
+        let mut scene = PosedScene::default();
+        let ground = crate::scene::source::ground(&plane, 0.0);
+        crate::scene::merge(&[ground, square(0.3, 1.0, -Vec3::Z, 6, 0.5)], &mut scene);
+        let light = lit_from_below(&scene, 3.0);
+        let expected = 0.5 * 3.0 * 4.0 * quadrant(0.3, 0.3, 1.0);
+        let got = light.planes[0].bounce_at(0.0, 0.0);
+        assert!((got.x / expected - 1.0).abs() < 0.05, "{got} vs {expected}");
+        assert!(light.planes[0].bounce_at(1.5, 0.0).x < 0.3 * got.x);
+        // Shaded, the ground adds it: its colour × the bounce / π over what the dark sky and the sun give.
+        let ground = scene.primitives[0].material;
+        let shaded = light.shade_ground(ground, Vec3::ZERO, Vec3::new(0.7, 0.6, 0.5)).expect("a ground");
+        assert!((shaded - Vec3::new(0.7, 0.6, 0.5) * got / PI).abs().max_element() < 1e-6, "{shaded}");
+    }
+}
