@@ -1,5 +1,5 @@
 //! Diffuse interreflection off the subject: the light its parts reflect onto each other, gathered once per posed
-//! frame at every vertex and shared by every view of the frame (see [`gather`]).
+//! frame at every vertex and shared by every view of the frame (see [`Subject::gather`]).
 //!
 //! Cycles follows every bounce; the direct light, the environment's occlusion and the ground's first bounce leave
 //! out what the subject reflects onto itself, which made it 4–14 % dark where it sees little sky and sun. Each
