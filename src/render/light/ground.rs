@@ -631,4 +631,33 @@ mod tests {
         // Only a ground plane's material takes the shortcut.
         assert!(frame.shade_ground(scene.primitives[1].material, Vec3::ZERO, albedo).is_none());
     }
+
+    #[test]
+    fn point_and_spot_lights_bounce_off_the_ground() {
+        // A 200 W point light 1 m over the middle of a ground of 0.5 under a black sky: a face a centimetre over
+        // the ground, looking down, sees the ground's reflection of it, 0.5 · E / π with E = P · cos / (4π d²)
+        // (Blender's units: a white surface shows P / (4π² d²)): straight below, d = 1; 1.5 m aside, d² = 3.25
+        // and cos = 1/√3.25. A spot there aiming down, its cone wide, is that point light times the cosine off
+        // its axis (1 straight below, 1/√3.25 aside).
+        let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.5, 0.5, 0.5], z: None };
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0)], &mut scene);
+        let position = Vec3::new(0.0, 0.0, 1.0);
+        let radiance = |d2: f32, cos: f32| 0.5 * 200.0 * cos / (4.0 * PI * d2) / PI;
+        let (point, spot) = (
+            LightKind::Point { position, radius: 0.05 },
+            LightKind::Spot { position, direction: -Vec3::Z, cone: 170f32.to_radians(), blend: 0.0, radius: 0.05 },
+        );
+        for (kind, off_axis) in [(point, 1.0), (spot, 1.0 / 3.25f32.sqrt())] {
+            let lamp = Light { kind, color: Vec3::ONE, intensity: 200.0, shadows: true };
+            let mut env = crate::render::Environment::default().studio();
+            env.strength = 0.0;
+            let frame = FrameLight::prepare(&scene, &[lamp], env);
+            let below = frame.below(Vec3::new(0.0, 0.0, 0.01), -Vec3::Z);
+            assert!((below.x / radiance(1.0, 1.0) - 1.0).abs() < 0.01, "{kind:?}: {below}");
+            let aside = frame.below(Vec3::new(1.5, 0.0, 0.01), -Vec3::Z);
+            let want = radiance(3.25, 1.0 / 3.25f32.sqrt()) * off_axis;
+            assert!((aside.x / want - 1.0).abs() < 0.02, "{kind:?}: {aside} vs {want}");
+        }
+    }
 }
