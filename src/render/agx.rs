@@ -176,9 +176,13 @@ fn lift_negatives(rgb: DVec3, y: impl Fn(DVec3) -> f64, soften: bool) -> DVec3 {
     let shifted = rgb + DVec3::splat(offset);
     let mut after = y(shifted);
     if soften {
-        // The sRGB rail lets the opponent's term count only for small luminances (Y^0.08 of the way back).
+        // The sRGB rail lets the opponent's term count only for small luminances (Y^0.08 of the way back); a
+        // negative luminance has no such power, and the generator leaves that colour unscaled.
+        if before < 0.0 {
+            return shifted;
+        }
         let lerp = |t: f64, a: f64, b: f64| a + t * (b - a);
-        before = lerp(before.max(0.0).powf(0.08).clamp(0.0, 1.0), opponent(rgb), before);
+        before = lerp(before.powf(0.08).clamp(0.0, 1.0), opponent(rgb), before);
         after = lerp(after.max(0.0).powf(0.08).clamp(0.0, 1.0), opponent(shifted), after);
         let ratio = if after > before { before / after.max(1e-100) } else { 1.0 };
         return shifted * ratio;
