@@ -20,11 +20,9 @@ fn main() {
     }
 }
 
-/// The sRGB code of display-linear `v`.
+/// The sRGB code of display-linear `v`, unrounded.
 fn code(v: f32) -> f32 {
-    let v = v.clamp(0.0, 1.0);
-    let s = if v <= 0.0031308 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-    s * 255.0
+    vvgen::scene::material::linear_to_srgb(v) * 255.0
 }
 
 fn table_vs(cube: &str) {

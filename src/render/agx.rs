@@ -192,29 +192,50 @@ fn lift_negatives(rgb: DVec3, y: impl Fn(DVec3) -> f64, soften: bool) -> DVec3 {
     shifted * ratio
 }
 
-/// The table's value at normalized log input `u` (E-Gamut, per channel): display light under a 1/2.4 power,
-/// 0 … 1.
-fn formed(u: DVec3) -> DVec3 {
-    let e_gamut = u.map(|u| MIDDLE_GREY * (u * 25.0 - 10.0).exp2());
-    let to_2020 = rec2020_to_xyz().inverse() * e_gamut_to_xyz();
-    let mut c = to_2020 * e_gamut;
-    c = lift_negatives(c, |c| c.dot(LUMINANCE_2020), false);
-    c = inset() * c;
-    let hue_before = to_hsv(c).x;
-    let log = c.map(|v| ((v / MIDDLE_GREY).log2() - FORMATION.0) / (FORMATION.1 - FORMATION.0));
-    c = log.map(sigmoid).map(|v| v.max(0.0).powf(2.4));
-    let mut hsv = to_hsv(c);
-    hsv.x = hue_before + HUE_MIX * (hsv.x - hue_before);
-    c = outset() * from_hsv(hsv);
-    // Rec.2020 → Rec.709 (through XYZ, the generator's matrices), then the sRGB medium's rail.
-    let to_709 = rec709_from_xyz_generator() * rec2020_to_xyz();
-    let from_709 = to_709.inverse();
-    c = lift_negatives(to_709 * c, |c| (from_709 * c).dot(LUMINANCE_2020), true);
-    let out = c.map(|v| v.max(0.0).powf(1.0 / 2.4).clamp(0.0, 1.0));
-    if out.is_finite() {
-        out
-    } else {
-        DVec3::ZERO
+/// The generator's matrices, made once for all the table's nodes.
+struct Formation {
+    /// E-Gamut → Rec.2020.
+    to_2020: DMat3,
+    inset: DMat3,
+    outset: DMat3,
+    /// Rec.2020 → Rec.709 (through XYZ, the generator's matrices), and back.
+    to_709: DMat3,
+    from_709: DMat3,
+}
+
+impl Formation {
+    fn new() -> Formation {
+        let to_709 = rec709_from_xyz_generator() * rec2020_to_xyz();
+        Formation {
+            to_2020: rec2020_to_xyz().inverse() * e_gamut_to_xyz(),
+            inset: inset(),
+            outset: outset(),
+            to_709,
+            from_709: to_709.inverse(),
+        }
+    }
+
+    /// The table's value at normalized log input `u` (E-Gamut, per channel): display light under a 1/2.4
+    /// power, 0 … 1.
+    fn formed(&self, u: DVec3) -> DVec3 {
+        let e_gamut = u.map(|u| MIDDLE_GREY * (u * 25.0 - 10.0).exp2());
+        let mut c = self.to_2020 * e_gamut;
+        c = lift_negatives(c, |c| c.dot(LUMINANCE_2020), false);
+        c = self.inset * c;
+        let hue_before = to_hsv(c).x;
+        let log = c.map(|v| ((v / MIDDLE_GREY).log2() - FORMATION.0) / (FORMATION.1 - FORMATION.0));
+        c = log.map(sigmoid).map(|v| v.max(0.0).powf(2.4));
+        let mut hsv = to_hsv(c);
+        hsv.x = hue_before + HUE_MIX * (hsv.x - hue_before);
+        c = self.outset * from_hsv(hsv);
+        // To Rec.709, then the sRGB medium's rail.
+        c = lift_negatives(self.to_709 * c, |c| (self.from_709 * c).dot(LUMINANCE_2020), true);
+        let out = c.map(|v| v.max(0.0).powf(1.0 / 2.4).clamp(0.0, 1.0));
+        if out.is_finite() {
+            out
+        } else {
+            DVec3::ZERO
+        }
     }
 }
 
@@ -252,11 +273,12 @@ impl Agx {
     fn new() -> Agx {
         use rayon::prelude::*;
         let n = SIDE - 1;
+        let formation = Formation::new();
         let table = (0..SIDE * SIDE * SIDE)
             .into_par_iter()
             .map(|k| {
                 let (r, g, b) = (k % SIDE, (k / SIDE) % SIDE, k / (SIDE * SIDE));
-                formed(DVec3::new(r as f64, g as f64, b as f64) / n as f64).as_vec3()
+                formation.formed(DVec3::new(r as f64, g as f64, b as f64) / n as f64).as_vec3()
             })
             .collect();
         // Blender: Rec.709 → XYZ (D65, its own matrix) → E-Gamut; the E white point's adaptation there and back

@@ -60,16 +60,21 @@ pub enum ViewTransform {
     Agx,
 }
 
-/// A render's view transform as its pixels read it: scene light → the display light the sRGB encoding takes.
-#[derive(Clone, Copy)]
+/// A view transform as pixels and baked colours read it: scene light → the display light the sRGB encoding takes.
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Display {
     agx: Option<&'static agx::Agx>,
 }
 
 impl Display {
-    /// The display of a render with settings `s`: AgX's only for a lit render that asks for it.
+    /// The display of view transform `view`.
+    pub(crate) fn new(view: ViewTransform) -> Display {
+        Display { agx: (view == ViewTransform::Agx).then(agx::Agx::get) }
+    }
+
+    /// The display of a render with settings `s`: its view transform's when it is lit, else the standard one.
     pub(crate) fn of(s: &RenderSettings) -> Display {
-        Display { agx: (s.shading == Shading::Pbr && s.lighting.view == ViewTransform::Agx).then(agx::Agx::get) }
+        Display::new(if s.shading == Shading::Pbr { s.lighting.view } else { ViewTransform::Standard })
     }
 
     /// The display light of scene light `c` (itself under the standard view).

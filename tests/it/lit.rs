@@ -10,7 +10,7 @@ use glam::{DMat4, Vec3, Vec4};
 use vvgen::render::light::environment::{prefilter, EnvMap};
 use vvgen::render::light::{FrameLight, Light, LightKind};
 use vvgen::render::{render_lit, Camera, Environment, RenderSettings, Shading};
-use vvgen::scene::material::Material;
+use vvgen::scene::material::{linear_to_srgb, srgb8_to_linear, Material};
 use vvgen::scene::{PosedScene, PrimKind};
 
 use crate::common::{cesium_head, load};
@@ -494,20 +494,17 @@ fn exposure_scales_the_lit_light_and_re_renders_the_lit_pass_only() {
     let dir = lit_project();
     let d = dir.path();
     // Dim enough that one stop up saturates nothing.
-    let dim = lit_manifest("")
-        .replace("intensity = 2.0", "intensity = 0.3")
-        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nstrength = 0.15\n")
-        + "[output.pts]\nwriter = \"ply-sequence\"\npoints = 3000\ncolor = \"lit\"\n";
+    let dim = dim_lit_manifest();
     build_in(d, &dim);
-    let read = |f: &str| image::open(d.join("out/m_dnerf").join(f)).unwrap().into_rgba8();
+    let read = |f: &str| dataset_image(d, f);
     let (base, albedo) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
     let brighter = dim.replace("shading = \"pbr\"\n", "shading = \"pbr\"\nexposure = 1\n");
-    let points = |d: &Path| vvgen::scene::ply::read_file(&d.join("out/m_points/m_0000.ply")).unwrap().colors.unwrap();
+    let points = point_colours;
     let base_points = points(d);
     let r = build_in(d, &brighter);
     assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (4, 0), "the lit passes alone");
     // Lit point colours are exposed too: where neither is clipped, one stop doubles their linear light.
-    let lin8 = |v: u8| ((v as f64 / 255.0 + 0.055) / 1.055).powf(2.4);
+    let lin8 = |v: u8| srgb8_to_linear(v) as f64;
     let after = points(d);
     let ratios: Vec<f64> = base_points
         .iter()
@@ -518,14 +515,7 @@ fn exposure_scales_the_lit_light_and_re_renders_the_lit_pass_only() {
     assert!(ratios.len() > 100 && ratios.iter().all(|r| (r - 2.0).abs() < 0.1), "{} {:?}", ratios.len(), ratios);
     let (up, albedo_after) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
     assert_eq!(albedo.as_raw(), albedo_after.as_raw());
-    let lin = |v: u8| {
-        let c = v as f64 / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
+    let lin = |v: u8| srgb8_to_linear(v) as f64;
     let (mut n, mut worst) = (0, 0.0f64);
     for (a, b) in base.pixels().zip(up.pixels()) {
         for c in 0..3 {
@@ -549,13 +539,10 @@ fn agx_view_shows_the_lit_light_through_blenders_curve_and_re_renders_the_lit_pa
     let dir = lit_project();
     let d = dir.path();
     // Dim enough that the standard image clips little (its light is recovered from it below).
-    let m = lit_manifest("")
-        .replace("intensity = 2.0", "intensity = 0.3")
-        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nstrength = 0.15\n")
-        + "[output.pts]\nwriter = \"ply-sequence\"\npoints = 3000\ncolor = \"lit\"\n";
+    let m = dim_lit_manifest();
     build_in(d, &m);
-    let read = |f: &str| image::open(d.join("out/m_dnerf").join(f)).unwrap().into_rgba8();
-    let points = |d: &Path| vvgen::scene::ply::read_file(&d.join("out/m_points/m_0000.ply")).unwrap().colors.unwrap();
+    let read = |f: &str| dataset_image(d, f);
+    let points = point_colours;
     let (standard, albedo, standard_points) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"), points(d));
     let agx = m.replace("shading = \"pbr\"\n", "shading = \"pbr\"\nview_transform = \"agx\"\n");
     let r = build_in(d, &agx);
@@ -564,18 +551,8 @@ fn agx_view_shows_the_lit_light_through_blenders_curve_and_re_renders_the_lit_pa
     assert_eq!(albedo.as_raw(), albedo_after.as_raw());
     // Each opaque pixel is the standard one's light through AgX, give or take the 8-bit steps of the standard
     // image it is recovered from (a code where the curve is steep; more where light was clipped at 1).
-    let lin = |v: u8| {
-        let c = v as f32 / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
-    let code = |v: f32| {
-        let v = v.clamp(0.0, 1.0);
-        255.0 * if v <= 0.0031308 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
-    };
+    let lin = srgb8_to_linear;
+    let code = |v: f32| 255.0 * linear_to_srgb(v);
     let (mut n, mut worst, mut moved) = (0, 0f32, 0);
     for (a, b) in standard.pixels().zip(shown.pixels()) {
         if a[3] != 255 || a.0[..3].iter().any(|c| !(30..=250).contains(c)) {
@@ -609,4 +586,23 @@ fn agx_view_shows_the_lit_light_through_blenders_curve_and_re_renders_the_lit_pa
 /// `m` with its view transform removed.
 fn m_standard(m: &str) -> String {
     m.replace("view_transform = \"agx\"\n", "")
+}
+
+/// [`lit_manifest`] dimmed (a sun of 0.3, the map at 0.15) so that its images clip little, with lit point
+/// colours beside them.
+fn dim_lit_manifest() -> String {
+    lit_manifest("")
+        .replace("intensity = 2.0", "intensity = 0.3")
+        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nstrength = 0.15\n")
+        + "[output.pts]\nwriter = \"ply-sequence\"\npoints = 3000\ncolor = \"lit\"\n"
+}
+
+/// Image `f` of the D-NeRF dataset built in `d`.
+fn dataset_image(d: &Path, f: &str) -> image::RgbaImage {
+    image::open(d.join("out/m_dnerf").join(f)).unwrap().into_rgba8()
+}
+
+/// The lit point colours of frame 0 built in `d`.
+fn point_colours(d: &Path) -> Vec<[u8; 4]> {
+    vvgen::scene::ply::read_file(&d.join("out/m_points/m_0000.ply")).unwrap().colors.unwrap()
 }

@@ -10,7 +10,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec2, Vec3};
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
@@ -19,8 +19,8 @@ use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
 use super::brdf::{basis, hammersley};
-use super::{FrameLight, Visibility};
-use crate::scene::{PosedScene, PrimKind};
+use super::{caster_bounds, is_caster, FrameLight, Visibility};
+use crate::scene::PosedScene;
 
 /// Diffuse bounces the gather follows. Each adds about ρF of the one before (ρ the albedo, F the share of a
 /// vertex's hemisphere the subject fills: 7 % of CesiumMan's rays meet it), so what the fourth and later would
@@ -61,7 +61,7 @@ impl Casters {
     fn of(scene: &PosedScene) -> Casters {
         let (mut tris, mut corners) = (Vec::new(), Vec::new());
         for (pi, prim) in scene.primitives.iter().enumerate() {
-            if prim.kind != PrimKind::Triangles || !scene.material(prim.material).casts_shadows {
+            if !is_caster(scene, prim) {
                 continue;
             }
             for t in prim.indices.chunks_exact(3) {
@@ -103,26 +103,24 @@ impl Subject {
         let mut first = vec![0usize; scene.primitives.len()];
         let mut vertices: Vec<(u32, u32)> = Vec::new();
         for (i, prim) in scene.primitives.iter().enumerate() {
-            if prim.kind == PrimKind::Triangles && scene.material(prim.material).casts_shadows {
+            if is_caster(scene, prim) {
                 first[i] = vertices.len();
                 vertices.extend((0..prim.positions.len() as u32).map(|v| (i as u32, v)));
             }
         }
+        let (lo, hi) = caster_bounds(scene)?;
         if casters.tris.is_empty() || vertices.is_empty() {
             return None;
         }
         let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::fast_build(), &mut Default::default());
-        let (lo, hi) = casters.tris.iter().fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), t| {
-            (lo.min(t.v0).min(t.v1).min(t.v2), hi.max(t.v0).max(t.v1).max(t.v2))
-        });
         let eps = 1e-4 * (hi - lo).length().max(1e-6);
-        let sphere = (Vec3::from((lo + hi) * 0.5), 0.5 * (hi - lo).length());
+        let sphere = ((lo + hi) * 0.5, 0.5 * (hi - lo).length());
         Some(Subject { casters, bvh, eps, sphere, vertices, first })
     }
 
     /// The light the subject reflects onto each of its vertices, by serial number, in a frame whose direct
-    /// light and environment `light` describes and whose vertices see the environment as `vis` says.
-    pub(super) fn gather(&self, scene: &PosedScene, light: &FrameLight, vis: &[Vec<Visibility>]) -> Gathered {
+    /// light, environment and vertices' view of it `light` holds.
+    pub(super) fn gather(&self, scene: &PosedScene, light: &FrameLight) -> Gathered {
         let n = self.vertices.len();
         let rays = 1usize << (RAY_BUDGET / n).clamp(MIN_RAYS, MAX_RAYS).ilog2();
         let hits = self.trace_all(scene, rays);
@@ -133,7 +131,7 @@ impl Subject {
             .par_iter()
             .map(|&(pi, v)| {
                 let (prim, v) = (&scene.primitives[pi as usize], v as usize);
-                let vis = vis[pi as usize].get(v).copied().unwrap_or(Visibility::OPEN);
+                let vis = light.vertex_visibility[pi as usize].get(v).copied().unwrap_or(Visibility::OPEN);
                 light.direct_irradiance(prim.positions[v], prim.normals[v], &vis)
             })
             .collect();
@@ -293,7 +291,7 @@ impl Neighbours {
         let count = vertices.len();
         let mut sets: Vec<Vec<u32>> = vec![Vec::new(); count];
         for (i, prim) in scene.primitives.iter().enumerate() {
-            if prim.kind != PrimKind::Triangles || !scene.material(prim.material).casts_shadows {
+            if !is_caster(scene, prim) {
                 continue;
             }
             for t in prim.indices.chunks_exact(3) {
@@ -376,6 +374,7 @@ mod tests {
     use super::*;
     use crate::scene::material::Material;
     use crate::scene::light::{Light, LightKind};
+    use crate::scene::PrimKind;
     use glam::Vec4;
 
     #[test]
@@ -425,14 +424,21 @@ mod tests {
         (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
     }
 
+    /// A floor of grey `floor` facing up and, 0.5 m above, a ceiling of 0.8 facing down, both 4 m wide (20 × 20
+    /// cells, the middle vertex 10 · 21 + 10), lit from below by 2 W/m²; and the ceiling's view factor from the
+    /// floor's middle, F.
+    fn floor_under_ceiling(floor: f32) -> (PosedScene, FrameLight, f32) {
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[square(2.0, 0.0, Vec3::Z, 20, floor), square(2.0, 0.5, -Vec3::Z, 20, 0.8)], &mut scene);
+        let light = lit_from_below(&scene, 2.0);
+        (scene, light, 4.0 * quadrant(2.0, 2.0, 0.5))
+    }
+
     #[test]
     fn a_lit_ceiling_lights_the_floor_below_by_its_view_factor() {
         // A black floor facing up and, 0.5 m above, a ceiling of 0.8 facing down, both 4 m wide, lit from below
         // by 2 W/m²: the floor's middle receives 0.8 · 2 · F, F the ceiling's view factor (0.952).
-        let mut scene = PosedScene::default();
-        crate::scene::merge(&[square(2.0, 0.0, Vec3::Z, 20, 0.0), square(2.0, 0.5, -Vec3::Z, 20, 0.8)], &mut scene);
-        let light = lit_from_below(&scene, 2.0);
-        let f = 4.0 * quadrant(2.0, 2.0, 0.5);
+        let (scene, light, f) = floor_under_ceiling(0.0);
         let expected = 0.8 * 2.0 * f;
         let middle = 10 * 21 + 10;
         let got = light.vertex_visibility[0][middle].bounce;
@@ -450,10 +456,7 @@ mod tests {
     fn light_bounces_back_and_forth_between_facing_surfaces() {
         // Both 0.8: the floor's bounce lights the ceiling, which sends part of it back (a second bounce and a
         // third): the floor gets 0.8 · 2 · F · (1 + (0.8 F)² + …) over the first bounce's 0.8 · 2 · F.
-        let mut scene = PosedScene::default();
-        crate::scene::merge(&[square(2.0, 0.0, Vec3::Z, 20, 0.8), square(2.0, 0.5, -Vec3::Z, 20, 0.8)], &mut scene);
-        let light = lit_from_below(&scene, 2.0);
-        let f = 4.0 * quadrant(2.0, 2.0, 0.5);
+        let (_, light, f) = floor_under_ceiling(0.8);
         let middle = 10 * 21 + 10;
         let floor = light.vertex_visibility[0][middle].bounce.x;
         let ceiling = light.vertex_visibility[1][middle].bounce.x;

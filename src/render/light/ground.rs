@@ -202,18 +202,13 @@ pub(super) fn spread(c: &[Vec3], stride: usize) -> Vec<Vec3> {
 /// (a tent about `r` points wide), held at the edges.
 pub(super) fn blur(g: &[Vec3], r: usize) -> Vec<Vec3> {
     let n = PLANE_CELLS + 1;
-    let pass = |g: &[Vec3], step: usize| -> Vec<Vec3> {
+    // One box pass along the axis whose neighbouring points lie `stride` apart in the grid (1: x, n: y).
+    let pass = |g: &[Vec3], stride: usize| -> Vec<Vec3> {
         (0..n * n)
             .map(|k| {
-                let (i, j) = (k % n, k / n);
-                let along = if step == 1 { i } else { j };
-                let sum: Vec3 = (0..=2 * r)
-                    .map(|o| {
-                        let at = (along + o).saturating_sub(r).min(n - 1);
-                        let (ii, jj) = if step == 1 { (at, j) } else { (i, at) };
-                        g[jj * n + ii]
-                    })
-                    .sum();
+                let along = (k / stride) % n;
+                let first = k - along * stride;
+                let sum: Vec3 = (0..=2 * r).map(|o| g[first + (along + o).saturating_sub(r).min(n - 1) * stride]).sum();
                 sum / (2 * r + 1) as f32
             })
             .collect()
@@ -370,14 +365,7 @@ impl FrameLight {
                 .into_par_iter()
                 .map(|k| {
                     let p = point(k);
-                    lamps
-                        .iter()
-                        .map(|lamp| {
-                            let (l, radiance) = lamp.incidence(p);
-                            let light = &lamp.light;
-                            light.color * (radiance * light.intensity * l.z.max(0.0) * lamp.visibility(p, Vec3::Z))
-                        })
-                        .sum()
+                    lamps.iter().map(|lamp| lamp.irradiance(p, Vec3::Z)).sum()
                 })
                 .collect()
         };

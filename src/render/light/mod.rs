@@ -20,7 +20,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 pub use crate::scene::light::{Light, LightKind};
-use crate::scene::{PosedScene, PrimKind};
+use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
 use ground::{ground_planes, Ground, PlaneVisibility};
@@ -105,7 +105,7 @@ pub struct FrameLight {
     /// What lit radiance is multiplied by before it is encoded: 2^exposure.
     exposure: f32,
     /// The view transform baked colours are displayed through (images apply theirs when they are resolved).
-    view: Option<&'static super::agx::Agx>,
+    view: super::Display,
     /// The environment's occlusion: directions over the sphere, each with its weight (the map's brightness there)
     /// and a parallel shadow map from it. Empty when nothing casts shadows.
     occlusion: Vec<(Vec3, f32, ShadowMap)>,
@@ -147,6 +147,17 @@ impl Lamp {
         }
     }
 
+    /// The irradiance the light brings `p` on a surface of unit normal `n`, past its shadow casters.
+    #[inline]
+    fn irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
+        let (l, radiance) = self.incidence(p);
+        let c = n.dot(l);
+        if c <= 0.0 || radiance == 0.0 {
+            return Vec3::ZERO;
+        }
+        self.light.color * (radiance * self.light.intensity * c * self.visibility(p, n))
+    }
+
     /// The fraction of the light reaching `p` (unit normal `n`) past its shadow casters.
     #[inline]
     fn visibility(&self, p: Vec3, n: Vec3) -> f32 {
@@ -160,14 +171,15 @@ impl Lamp {
     }
 }
 
+/// Whether primitive `p` casts shadows, and so occludes and reflects light onto others: triangles whose material
+/// casts them (every material but a `plane` source's).
+fn is_caster(scene: &PosedScene, p: &PosedPrimitive) -> bool {
+    p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows)
+}
+
 /// Bounds of the geometry that casts shadows.
 fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
-    let mut it = scene
-        .primitives
-        .iter()
-        .filter(|p| p.kind == PrimKind::Triangles)
-        .filter(|p| scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows))
-        .flat_map(|p| p.positions.iter());
+    let mut it = scene.primitives.iter().filter(|p| is_caster(scene, p)).flat_map(|p| p.positions.iter());
     let first = *it.next()?;
     Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
 }
@@ -223,7 +235,7 @@ impl FrameLight {
         let (lights, occlusion) = rayon::join(light_maps, env_maps);
         let ground = Ground::find(scene, &all, &env);
         let mut light =
-            FrameLight { lights, env, ground, exposure: 1.0, view: None, occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
+            FrameLight { lights, env, ground, exposure: 1.0, view: super::Display::new(super::ViewTransform::Standard), occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
         // The planes first: a vertex's bounce reads them.
         light.planes =
             ground_planes(scene).map(|prim| light.plane_visibility(prim.material, &prim.positions)).collect();
@@ -249,7 +261,7 @@ impl FrameLight {
         let Some(subject) = bounce::Subject::of(scene) else {
             return self;
         };
-        let gathered = subject.gather(scene, &self, &self.vertex_visibility);
+        let gathered = subject.gather(scene, &self);
         for (i, vis) in self.vertex_visibility.iter_mut().enumerate() {
             if vis.is_empty() {
                 continue;
@@ -277,16 +289,7 @@ impl FrameLight {
     /// The irradiance reaching `p` (unit normal `n`) straight from the lights, with their shadows, and from the
     /// environment past its occlusion `vis` (and the ground's bounce): all but what the subject reflects.
     pub(super) fn direct_irradiance(&self, p: Vec3, n: Vec3, vis: &Visibility) -> Vec3 {
-        let mut e = self.irradiance(p, n, vis.below) * vis.env;
-        for lamp in &self.lights {
-            let (l, radiance) = lamp.incidence(p);
-            let c = n.dot(l);
-            if c <= 0.0 || radiance == 0.0 {
-                continue;
-            }
-            e += lamp.light.color * (radiance * lamp.light.intensity * c * lamp.visibility(p, n));
-        }
-        e
+        self.lights.iter().fold(self.irradiance(p, n, vis.below) * vis.env, |e, lamp| e + lamp.irradiance(p, n))
     }
 
     /// The fraction of the environment's light (weighted by where it comes from and by the cosine to `n`) that
@@ -319,7 +322,7 @@ impl FrameLight {
         }
         let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
         let c = self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission);
-        self.view.map_or(c, |agx| agx.display(c))
+        self.view.light(c)
     }
 
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
@@ -413,7 +416,7 @@ impl FrameLight {
 
     /// This lighting's baked colours ([`FrameLight::bake`]) displayed through `view`, as the images' are.
     pub fn with_view(mut self, view: super::ViewTransform) -> FrameLight {
-        self.view = (view == super::ViewTransform::Agx).then(super::agx::Agx::get);
+        self.view = super::Display::new(view);
         self
     }
 
