@@ -61,6 +61,14 @@ pub(super) struct PlaneVisibility {
     /// Per light, per cell (rows along +y): whether the light's shadow surely misses the whole cell
     /// ([`super::ShadowMap::open_over`]), so its pixels need no shadow lookup. Empty for a light that cannot tell.
     pub(super) open: Vec<Vec<bool>>,
+    /// The top face's irradiance from the environment, the subject's bounce and every sun unshadowed, at the
+    /// grid points: all a pixel in a cell where no sun's shadow reaches reads (see [`PlaneVisibility::combine`]).
+    lit: Vec<Vec3>,
+    /// The same without the suns: a pixel in a cell some sun's shadow may reach adds each sun's light past its
+    /// shadow to it.
+    unsunned: Vec<Vec3>,
+    /// Per cell: whether no sun's shadow reaches it (every sun is open there, or casts no shadow).
+    sunlit: Vec<bool>,
 }
 
 /// Where a point falls on a plane's grid: its cell (column, row) and the fractions across it.
@@ -75,15 +83,7 @@ impl PlaneVisibility {
     /// The environment's visibility at world (x, y), bilinear between grid points, held at the edges.
     #[inline]
     pub(super) fn at(&self, x: f32, y: f32) -> f32 {
-        self.cell_at(x, y).1
-    }
-
-    /// The cell holding world (x, y) (edge cells hold what lies past the edges; index rows along +y) and the
-    /// environment's visibility there.
-    #[inline]
-    pub(super) fn cell_at(&self, x: f32, y: f32) -> (usize, f32) {
-        let g = locate(self.grid_uv(x, y));
-        (g.j * PLANE_CELLS + g.i, read(&self.vis, g))
+        read(&self.vis, locate(self.grid_uv(x, y)))
     }
 
     /// The plane's light at world (x, y) as fractions of the open plane's (environment, suns) and the
@@ -157,6 +157,26 @@ impl PlaneVisibility {
     #[inline]
     fn grid_uv(&self, x: f32, y: f32) -> Vec2 {
         Vec2::new((x - self.lo.x) / self.cell.x, (y - self.lo.y) / self.cell.y)
+    }
+
+    /// Sums the top face's light, per grid point, into what its pixels read ([`PlaneVisibility::lit`],
+    /// [`PlaneVisibility::unsunned`], [`PlaneVisibility::sunlit`]), under `lights`: once the bounce is known.
+    /// A sum of grids read bilinearly is the bilinear read of their sum, so a pixel makes one read instead of
+    /// one per grid (the ground is most of an image's pixels, and its reads were a tenth of a lit render).
+    pub(super) fn combine(&mut self, lights: &[super::Lamp]) {
+        let n = (PLANE_CELLS + 1) * (PLANE_CELLS + 1);
+        let suns: Vec3 = lights.iter().map(|lamp| sun_irradiance(&lamp.light)).sum();
+        self.unsunned = (0..n).map(|k| self.sky * self.vis[k] + self.bounce.get(k).copied().unwrap_or(Vec3::ZERO)).collect();
+        self.lit = self.unsunned.iter().map(|&e| e + suns).collect();
+        let shadowing: Vec<&Vec<bool>> = lights
+            .iter()
+            .zip(&self.open)
+            .filter(|(lamp, _)| sun_irradiance(&lamp.light) != Vec3::ZERO && !lamp.maps.is_empty())
+            .map(|(_, open)| open)
+            .collect();
+        self.sunlit = (0..PLANE_CELLS * PLANE_CELLS)
+            .map(|c| shadowing.iter().all(|open| open.get(c) == Some(&true)))
+            .collect();
     }
 }
 
@@ -371,7 +391,23 @@ impl FrameLight {
         };
         let sky = self.irradiance(lo, Vec3::Z, Vec3::ZERO);
         let sums = summed_areas(&vis, &sun);
-        PlaneVisibility { material, lo: lo.truncate(), cell, vis, sun, lamps, bounce: Vec::new(), sums, sky, open }
+        let mut plane = PlaneVisibility {
+            material,
+            lo: lo.truncate(),
+            cell,
+            vis,
+            sun,
+            lamps,
+            bounce: Vec::new(),
+            sums,
+            sky,
+            open,
+            lit: Vec::new(),
+            unsunned: Vec::new(),
+            sunlit: Vec::new(),
+        };
+        plane.combine(&self.lights);
+        plane
     }
 
     /// What reaches world point `p` of a surface of material `material` of the environment's light, when that
@@ -456,9 +492,15 @@ impl FrameLight {
     #[inline]
     pub fn shade_ground(&self, material: u32, p: Vec3, albedo: Vec3) -> Option<Vec3> {
         let g = self.planes.iter().find(|g| g.material == material)?;
-        let (cell, vis) = g.cell_at(p.x, p.y);
-        let mut e = g.sky * vis + g.bounce_at(p.x, p.y);
+        let at = locate(g.grid_uv(p.x, p.y));
+        let cell = at.j * PLANE_CELLS + at.i;
+        let sunlit = g.sunlit.get(cell) == Some(&true);
+        let mut e = read3(if sunlit { &g.lit } else { &g.unsunned }, at);
         for (lamp, open) in self.lights.iter().zip(&g.open) {
+            let sun = matches!(lamp.light.kind, LightKind::Sun { .. });
+            if sun && sunlit {
+                continue;
+            }
             let (l, radiance) = lamp.incidence(p);
             if l.z <= 0.0 || radiance == 0.0 {
                 continue;

@@ -93,7 +93,7 @@ pub struct EnvLight {
 }
 
 /// Version of baked point colours ([`FrameLight::bake`]): part of their keys.
-pub const BAKE_SALT: &str = "bake 1";
+pub const BAKE_SALT: &str = "bake 2";
 
 /// Everything a frame's lit shading needs besides the camera.
 #[derive(Debug)]
@@ -277,6 +277,7 @@ impl FrameLight {
             // it by chance or not (that noise falls under 1/255).
             let coarse = subject.onto(scene, &gathered, &plane.points(z, ground::BOUNCE_STRIDE), Vec3::Z);
             plane.bounce = ground::blur(&ground::spread(&coarse, ground::BOUNCE_STRIDE), 2);
+            plane.combine(&self.lights);
         }
         self
     }

@@ -267,8 +267,11 @@ impl ShadowMap {
     /// caller weights by n·l). `size` is the light's angular radius as a tangent (sun) or its radius in world
     /// units (point, spot); 0 is a hard shadow.
     pub fn visibility(&self, p: Vec3, n: Vec3, size: f32) -> f32 {
-        let first = self.project(p);
-        let texel = self.texel_world(first.z);
+        // A parallel map's texels are one size at every depth: no need to project `p` to find it.
+        let texel = match self.projection {
+            Projection::Ortho { scale, .. } => 1.0 / scale,
+            Projection::Persp { .. } => self.texel_world(self.project(p).z),
+        };
         let q = self.project(p + n * (NORMAL_BIAS * texel));
         let bias = DEPTH_BIAS * self.texel_world(q.z);
         let recv = q.z - bias;
