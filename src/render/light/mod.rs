@@ -359,15 +359,25 @@ impl FrameLight {
         let specular = if w > 0.0 {
             let r = 2.0 * n.dot(v) * n - v;
             let mut l = e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength;
-            // Above a ground, reflections below the horizon that meet it see the ground, not the map's lower half:
-            // its light averaged over the lobe's footprint there (GGX's half vectors spread about α in tangent,
+            // Above a ground, the part of the lobe below the horizon sees the ground, not the map's lower half: its
+            // light averaged over the lobe's footprint there (GGX's half vectors spread about α in tangent,
             // reflected directions twice that), so that the ground's shadows show, blurred with roughness, as a
-            // path tracer's do (read at a point, they printed sharp patches on rough rubber). Blended in over a
-            // band that widens with roughness (the lobe straddles the horizon).
+            // path tracer's do (read at a point, they printed sharp patches on rough rubber). The lobe spans about
+            // w = sin(atan 2α) in height about `r`, so the share of it below the horizon runs from none at
+            // r.z = w to all at −w: that share of the map's radiance there is swapped for the ground's, both read
+            // along the lobe's lower part (`r` lowered to at most −w/2). A glossy face looking at the horizon
+            // reflects half ground: without it, FlightHelmet's stand seen from below was 30–40 % dark in green
+            // and blue against Cycles, the sunlit ground it mirrors missing.
             let a = s.roughness.max(brdf::MIN_ROUGHNESS).powi(2);
-            if let Some((g, on)) = self.ground_seen(p, r, 2.0 * a) {
-                let x = (-r.z / (0.05 + s.roughness)).min(1.0);
-                l = l.lerp(g, x * x * (3.0 - 2.0 * x) * on);
+            let w = (2.0 * a / (1.0 + 4.0 * a * a).sqrt()).max(1e-3);
+            let x = (0.5 - r.z / (2.0 * w)).clamp(0.0, 1.0);
+            let below = x * x * (3.0 - 2.0 * x);
+            if below > 0.0 {
+                let d = Vec3::new(r.x, r.y, r.z.min(-0.5 * w)).normalize();
+                if let Some((g, on)) = self.ground_seen(p, d, 2.0 * a) {
+                    let map = e.prefiltered.specular(e.rotation * d, s.roughness) * e.strength;
+                    l = (l + (g - map) * (below * on)).max(Vec3::ZERO);
+                }
             }
             spec_f * l
         } else {
@@ -506,6 +516,41 @@ mod tests {
         // Per channel.
         let c = multi_bounce(0.5, Vec3::new(0.9, 0.5, 0.1));
         assert!(c.x > c.y && c.y > c.z);
+    }
+
+    #[test]
+    fn a_glossy_face_mirrors_the_ground_in_the_share_of_its_lobe_below_the_horizon() {
+        // A white metal (its specular layer only) half a metre over a 20 m ground, under an overhead sun and the
+        // studio map: how much brighter it is over a ground of 0.8 than over a black one, per unit of the sunlit
+        // ground's radiance and of the specular layer's weight, is the share of its lobe that meets the ground.
+        let share = |z: f32| {
+            let shade = |grey: f64| {
+                let plane = crate::scene::input::Ground { size: [20.0, 20.0], color: [grey; 3], z: None };
+                let mut scene = PosedScene::default();
+                crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0)], &mut scene);
+                let sun = Light {
+                    kind: LightKind::Sun { direction: -Vec3::Z, angle: 0.01 },
+                    color: Vec3::ONE,
+                    intensity: 3.0,
+                    shadows: true,
+                };
+                let frame = FrameLight::prepare(&scene, &[sun], crate::render::Environment::default().studio());
+                let metal = Surface { base: Vec3::ONE, metallic: 1.0, roughness: 0.5, specular: 0.5 };
+                // Facing +X, seen from the direction whose mirror image is (x, 0, z): the lobe's centre.
+                let n = Vec3::X;
+                let r = Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
+                let v = 2.0 * n.dot(r) * n - r;
+                let out = frame.shade(Vec3::new(0.0, 0.0, 0.5), n, v, &metal, 1.0, Visibility::OPEN, false);
+                (out, frame.ground.map(|g| g.radiance(glam::Vec2::ONE)), brdf::dfg(n.dot(v), 0.5))
+            };
+            let ((lit, ground, ab), (black, _, _)) = (shade(0.8), shade(0.0));
+            ((lit - black).x / ground.expect("a ground").x) / (ab.x + ab.y)
+        };
+        // Looking level with the horizon: half of it. Well above: none; well below: all of it.
+        let level = share(0.0);
+        assert!((level - 0.5).abs() < 0.05, "{level}");
+        assert!(share(0.8).abs() < 0.01, "{}", share(0.8));
+        assert!((share(-0.8) - 1.0).abs() < 0.05, "{}", share(-0.8));
     }
 
     #[test]
