@@ -373,9 +373,11 @@ impl FrameLight {
             let x = (0.5 - r.z / (2.0 * w)).clamp(0.0, 1.0);
             let below = x * x * (3.0 - 2.0 * x);
             if below > 0.0 {
-                let d = Vec3::new(r.x, r.y, r.z.min(-0.5 * w)).normalize();
+                // (A lobe pointing well down reads the map where it already has: `l` itself.)
+                let lowered = r.z > -0.5 * w;
+                let d = if lowered { Vec3::new(r.x, r.y, -0.5 * w).normalize() } else { r };
                 if let Some((g, on)) = self.ground_seen(p, d, 2.0 * a) {
-                    let map = e.prefiltered.specular(e.rotation * d, s.roughness) * e.strength;
+                    let map = if lowered { e.prefiltered.specular(e.rotation * d, s.roughness) * e.strength } else { l };
                     l = (l + (g - map) * (below * on)).max(Vec3::ZERO);
                 }
             }
