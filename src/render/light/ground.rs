@@ -185,7 +185,8 @@ impl PlaneVisibility {
 fn locate(uv: Vec2) -> GridPoint {
     let n = PLANE_CELLS;
     let (u, v) = (uv.x.clamp(0.0, n as f32), uv.y.clamp(0.0, n as f32));
-    let (i, j) = ((u as usize).min(n - 1), (v as usize).min(n - 1));
+    // Through i32: both lie in 0..=n, and x86-64 converts to i32 in one instruction (to usize it cannot).
+    let (i, j) = ((u as i32 as usize).min(n - 1), (v as i32 as usize).min(n - 1));
     GridPoint { i, j, t: Vec2::new(u - i as f32, v - j as f32) }
 }
 
