@@ -2,10 +2,12 @@
 # Lit rendering speed (issue 16): CesiumMan at 800², 4 samples, a sun with 3° soft shadows and the sunset map;
 # 4 frames × 16 views, RGBA only, cold builds (fresh cache, environment prefiltering included). Three scenes,
 # alternating: lit on a ground plane (`pbr`, the lit example's scene), lit alone (`alone`: the issue's scene,
-# the man shadowing himself), unlit on the ground (`unlit`); then Blender 3.4 Eevee and Cycles (16 samples) on
+# the man shadowing himself), unlit on the ground (`unlit`); then Blender's Eevee and Cycles (16 samples) on
 # two of the same cameras with and without the ground, in the same run, per image.
 #
 #   benches/lit_speed.sh [WORK_DIR] [ROUNDS]
+#
+# Blender: $BPY, a Python with `bpy==4.5.*` (default /tmp/bpy45/bin/python), or BPY=blender for Debian's 3.4.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=${1:-/tmp/vvgen-lit-speed}
@@ -13,6 +15,9 @@ rounds=${2:-2}
 mkdir -p "$work"
 (cd "$repo" && cargo build --release --quiet)
 vvgen=$repo/target/release/vvgen
+bpy=${BPY:-/tmp/bpy45/bin/python}
+run=("$bpy" "$repo/benches/blender_lit.py")
+[ "$bpy" = blender ] && run=(blender -b -P "$repo/benches/blender_lit.py")
 map=$repo/tests/data/hdri/sunset.exr
 man=$repo/tests/data/gltf/CesiumMan/CesiumMan.glb
 manifest() { # name: pbr | alone | unlit
@@ -72,7 +77,7 @@ for engine in eevee cycles; do
     for scene in pbr alone; do
         ground=()
         [ $scene = pbr ] && ground=(--plane 3,3,-1.2,0.5)
-        blender -b -P "$repo/benches/blender_lit.py" -- --model "$man" --dataset "$work/out-$scene/speed_dnerf" \
+        "${run[@]}" -- --model "$man" --dataset "$work/out-$scene/speed_dnerf" \
             --out "$work/$engine-$scene" --sun 0.45,0.35,-0.82,2.5,3 --env "$map,0.6" "${ground[@]}" --samples 16 \
             --engine $engine --images train/0/0,train/1/0 2>&1 | grep -E "^rendered" | sed "s/^/$engine-16 $scene: /"
     done
