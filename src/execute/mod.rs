@@ -488,6 +488,7 @@ impl<'a> Running<'a> {
             let tick = self.tick;
             let made: Result<Made, Error> = match kind {
                 Kind::Environment => render::environment(g, x, &ids, tick),
+                Kind::Light => render::lights(g, x, &blobs, &ids, tick),
                 Kind::RenderPass => render::passes(g, x, &blobs, &ids, tick),
                 Kind::Composite => render::composites(g, x, &blobs, &ids, tick),
                 Kind::Video => video::videos(g, x, &blobs, &ids, tick),

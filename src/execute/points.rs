@@ -107,6 +107,7 @@ fn make(
             Ok(txt.into_bytes())
         }
         Action::Environment
+        | Action::Light { .. }
         | Action::RenderPass { .. }
         | Action::Composite { .. }
         | Action::Video { .. }

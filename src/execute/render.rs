@@ -14,7 +14,7 @@ use crate::plan::actions::Action;
 use crate::plan::graph::{ActionId, Graph};
 use crate::render::encode::{self, Encoding, NormalSpace};
 use crate::render::light::environment::{self, EnvMap, Prefiltered};
-use crate::render::light::{EnvLight, FrameLight};
+use crate::render::light::{EnvLight, FrameLight, Gathered};
 use crate::render::{self, Frame, RenderSettings, Shading};
 use crate::scene::Poser;
 use std::sync::Arc;
@@ -31,8 +31,9 @@ fn load_map(g: &Graph, x: &Inputs, id: ActionId) -> Result<EnvMap, Error> {
     environment::load(path).map_err(|source| Error::Environment { action: label(), source })
 }
 
-/// The environment lit renders read: the prefiltered map from the environment action (deps), with the map itself
-/// when it is the visible background; the built-in studio environment when no map is named.
+/// The environment lit renders read: the prefiltered map from the environment action (the deps of their frames'
+/// light actions), with the map itself when it is the visible background; the built-in studio environment when no
+/// map is named.
 fn env_light(
     g: &Graph,
     x: &Inputs,
@@ -42,9 +43,36 @@ fn env_light(
     if g.keying.render.shading != Shading::Pbr {
         return Ok(None);
     }
-    let env_id = ids.iter().find_map(|&id| g.node(id).deps.first().copied());
+    let light = ids.iter().find_map(|&id| g.node(id).deps.first().copied());
+    let env_id = light.and_then(|l| g.node(l).deps.first().copied());
     let visible = g.keying.render.lighting.environment.visible;
     environment_light(g, x, blobs, env_id, visible).map(Some)
+}
+
+/// Runs the light actions `ids`: per frame, the lights and environment prepared at the vertices and over the
+/// ground, and what the subject reflects gathered ([`FrameLight::gather`]), kept for every lit view of the frame.
+pub(super) fn lights(
+    g: &Graph,
+    x: &Inputs,
+    blobs: &[Option<Vec<Digest>>],
+    ids: &[ActionId],
+    done: &(dyn Fn() + Sync),
+) -> Result<Made, Error> {
+    let env_id = ids.iter().find_map(|&id| g.node(id).deps.first().copied());
+    let env = environment_light(g, x, blobs, env_id, false)?;
+    let mut poser = Poser::default();
+    let mut out = Vec::with_capacity(ids.len());
+    for &id in ids {
+        let node = g.node(id);
+        let Action::Light { frame } = node.action else { continue };
+        let posed =
+            x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: node.label.clone(), source })?;
+        super::check_posed(posed, &node.label)?;
+        let gathered = FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone()).gather(posed);
+        out.push((id, x.store(g, id, &[gathered.encode()])?));
+        done();
+    }
+    Ok(out)
 }
 
 /// The environment as the prefiltered map of action `env_id` (the built-in studio environment without one),
@@ -91,14 +119,18 @@ pub(super) fn passes(
         let posed = x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: label.clone(), source })?;
         super::check_posed(posed, &label)?;
         let images: Vec<(usize, Vec<(ActionId, Pass)>)> = images.into_iter().collect();
-        // Shadow maps and the environment's visibility, once for every view of the frame that renders lit.
-        let lit = images.iter().any(|(_, todo)| needs_main(todo));
-        let light = match (&env, lit) {
-            (Some(env), true) => Some(
-                FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone())
-                    .with_bounce(posed)
-                    .with_exposure(g.keying.render.lighting.exposure),
-            ),
+        // The lights' shadow maps, once for every view of the frame that renders lit, beside what its light action
+        // found (the vertices' and the ground's light, the bounce).
+        let gathered = images.iter().flat_map(|(_, todo)| todo).find_map(|(id, _)| g.node(*id).deps.first().copied());
+        let light = match (&env, gathered) {
+            (Some(env), Some(light_id)) => {
+                let content = |message: String| Error::Content { action: label.clone(), message };
+                let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
+                let light =
+                    FrameLight::from_gathered(posed, &g.keying.render.lighting.lights, env.clone(), &gathered)
+                        .map_err(content)?;
+                Some(light.with_exposure(g.keying.render.lighting.exposure))
+            }
             _ => None,
         };
         let made: Vec<Result<Made, Error>> = images

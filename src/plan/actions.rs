@@ -31,6 +31,9 @@ pub const VIDEO_SALT: &str =
 pub enum Kind {
     /// Prefilter the environment map (lit shading): irradiance and specular levels.
     Environment,
+    /// One frame's light that does not depend on the camera and is costly to find (lit shading): the environment's
+    /// visibility at the vertices and over the ground, and what the subject reflects onto itself and the ground.
+    Light,
     /// Render one pass of one image (PNG, plus EXR or instance ids where asked).
     RenderPass,
     /// Composite an RGBA image over an opaque background (COLMAP, DyNeRF).
@@ -60,8 +63,9 @@ pub enum Kind {
 impl Kind {
     /// Every kind, in an order that puts an action's inputs' kinds before its own (`execute` starts a kind
     /// once the kinds it reads have finished, so kinds that read nothing of each other run at once).
-    pub const ALL: [Kind; 13] = [
+    pub const ALL: [Kind; 14] = [
         Kind::Environment,
+        Kind::Light,
         Kind::RenderPass,
         Kind::Bounds,
         Kind::SampleFrame,
@@ -80,6 +84,7 @@ impl Kind {
     pub fn name(self) -> &'static str {
         match self {
             Kind::Environment => "environment",
+            Kind::Light => "light",
             Kind::RenderPass => "render-pass",
             Kind::Composite => "composite",
             Kind::Video => "video",
@@ -114,8 +119,15 @@ impl Kind {
 pub enum Action {
     /// The environment map, prefiltered. No deps (the map enters by its content key).
     Environment,
-    /// Pass `pass` of plan image `image`. Deps: for a lit (`pbr`) RGBA pass lit by a map, its
-    /// [`Action::Environment`].
+    /// Scene frame `frame`'s light at its vertices and over its ground, the bounce included
+    /// ([`crate::render::light::Gathered`]), shared by every lit view of it.
+    /// Deps: the [`Action::Environment`] when a map lights the scene.
+    Light {
+        /// Scene frame.
+        frame: usize,
+    },
+    /// Pass `pass` of plan image `image`. Deps: for a lit (`pbr`) RGBA pass, its frame's [`Action::Light`]
+    /// (which reads the environment).
     RenderPass {
         /// Index into [`Plan::images`].
         image: usize,
@@ -205,6 +217,7 @@ impl Action {
     pub fn kind(&self) -> Kind {
         match self {
             Action::Environment => Kind::Environment,
+            Action::Light { .. } => Kind::Light,
             Action::RenderPass { .. } => Kind::RenderPass,
             Action::Composite { .. } => Kind::Composite,
             Action::Video { .. } => Kind::Video,

@@ -282,10 +282,17 @@ impl<'a> Graph<'a> {
 
     fn render_pass(&mut self, image: usize, pass: Pass) -> ActionId {
         let label = format!("render {} {}", image_label(self.keying.plan, image), pass_name(pass));
-        // A lit RGBA pass reads the prefiltered environment map (the built-in studio map needs no action).
+        // A lit RGBA pass reads its frame's light, which reads the prefiltered environment map (the built-in
+        // studio map needs no action).
         let r = &self.keying.render;
-        let deps = if pass == Pass::Rgba && r.shading == Shading::Pbr && r.lighting.environment.map.is_some() {
-            vec![self.add(Action::Environment, "environment".into(), vec![])]
+        let deps = if pass == Pass::Rgba && r.shading == Shading::Pbr {
+            let env = if r.lighting.environment.map.is_some() {
+                vec![self.add(Action::Environment, "environment".into(), vec![])]
+            } else {
+                vec![]
+            };
+            let frame = self.keying.plan.images[image].frame;
+            vec![self.add(Action::Light { frame }, format!("light {frame}"), env)]
         } else {
             vec![]
         };

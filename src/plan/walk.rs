@@ -54,6 +54,23 @@ impl Action {
                 w.str("prefilter", crate::render::light::environment::SALT);
                 w.str("map content", cx.render.lighting.environment.map.as_deref().unwrap_or("studio"));
             }
+            Action::Light { frame } => {
+                // What the gather reads: the posed frame, its materials and lights, the manifest's lights and the
+                // environment. Not the cameras, the image settings, exposure or the view transform, which shape
+                // only the pixels.
+                w.str("lit shading", LIT_SALT);
+                w.digest("frame content", &cx.frame_keys[*frame]);
+                light_fields(w, &cx.render.lighting);
+                if let Some(lit) = &cx.frame_lit[*frame] {
+                    w.digest("lit materials", lit);
+                }
+                if let Some(lights) = &cx.frame_lights[*frame] {
+                    w.digest("file lights", lights);
+                }
+                if let Some(env) = deps.first() {
+                    w.digest("prefiltered environment", env);
+                }
+            }
             Action::RenderPass { image, pass } => {
                 let img = &cx.plan.images[*image];
                 w.str("renderer", RENDER_SALT);
@@ -69,8 +86,9 @@ impl Action {
                         w.digest("file lights", lights);
                     }
                 }
-                if let Some(env) = deps.first() {
-                    w.digest("prefiltered environment", env);
+                // The frame's light, and through it the prefiltered environment.
+                if let Some(light) = deps.first() {
+                    w.digest("frame light", light);
                 }
                 encoding(w, &cx.encoding, *pass);
             }
@@ -277,8 +295,22 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
 /// What lights a `pbr` render: every light, and the environment's settings (its map enters through the
 /// prefiltered environment's key, a dep).
 fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
+    light_fields(w, l);
+    let crate::render::Lighting { exposure, view, .. } = l;
+    // Keyed only when set: an exposure of 0 changes no byte, and lit datasets made before it keep their keys.
+    if *exposure != 0.0 {
+        w.f64("exposure (stops)", *exposure as f64);
+    }
+    // The same for the view transform: the standard one is the encoding lit datasets always had.
+    if *view == crate::render::ViewTransform::Agx {
+        w.str("view transform", "agx (Blender 4.5's AgX Base sRGB)");
+    }
+}
+
+/// The lights and the environment: what lights a scene before exposure and the view transform.
+fn light_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     use crate::render::light::{Light, LightKind};
-    let crate::render::Lighting { lights, environment, exposure, view } = l;
+    let crate::render::Lighting { lights, environment, .. } = l;
     w.str("lit shading", LIT_SALT);
     for Light { kind, color, intensity, shadows } in lights {
         let v = |a: glam::Vec3| [a.x as f64, a.y as f64, a.z as f64];
@@ -312,14 +344,6 @@ fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     w.f64("environment strength", *strength as f64);
     w.f64("environment rotation (deg)", *rotation_deg as f64);
     w.bool("environment visible", *visible);
-    // Keyed only when set: an exposure of 0 changes no byte, and lit datasets made before it keep their keys.
-    if *exposure != 0.0 {
-        w.f64("exposure (stops)", *exposure as f64);
-    }
-    // The same for the view transform: the standard one is the encoding lit datasets always had.
-    if *view == crate::render::ViewTransform::Agx {
-        w.str("view transform", "agx (Blender 4.5's AgX Base sRGB)");
-    }
 }
 
 fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {

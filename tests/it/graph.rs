@@ -227,12 +227,13 @@ fn each_setting_invalidates_exactly_the_actions_that_read_it() {
             vec![(RenderPass, 24), (Composite, 6), (PreviewSheet, 2)],
         ),
         ("voxel", base.replace("voxel = 0.05", "voxel = 0.08"), vec![(PointFrame, 2), (PreviewStrip, 1)]),
-        // Lit shading: the map is prefiltered and the RGBA passes re-render (composited by colmap, shown by the
-        // sheets); depth, normals, masks, bounds, samples and clouds do not depend on shading.
+        // Lit shading: the map is prefiltered, each of the two frames' light gathered, and the RGBA passes
+        // re-render (composited by colmap, shown by the sheets); depth, normals, masks, bounds, samples and clouds
+        // do not depend on shading.
         (
             "shading",
             manifest(&lit(), outputs),
-            vec![(Environment, 1), (RenderPass, 6), (Composite, 6), (PreviewSheet, 2)],
+            vec![(Environment, 1), (Light, 2), (RenderPass, 6), (Composite, 6), (PreviewSheet, 2)],
         ),
         ("init points", base.replace("init_points = 100", "init_points = 150"), vec![(InitCloud, 1)]),
     ];

@@ -293,6 +293,8 @@ fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
     let text = lit_manifest("");
     let first = build_in(d, &text);
     assert_eq!(first.ran(Kind::Environment), 1);
+    // One light action per frame (two frames), shared by the frame's two views.
+    assert_eq!(first.ran(Kind::Light), 2);
     assert_eq!(first.ran(Kind::RenderPass), 4 * 3);
     let root = d.join("out/m_dnerf");
     for f in ["train/r_0000.png", "albedo/train/r_0000.png", "depth/train/r_0000.png"] {
@@ -308,11 +310,11 @@ fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
     assert!(build_in(d, &text).nothing_to_do());
     // Moving the sun re-renders the lit pass only, not albedo or depth, and not the prefiltering.
     let moved = build_in(d, &lit_manifest("").replace("[0.3, 0.2, -1]", "[-0.3, 0.2, -1]"));
-    assert_eq!((moved.ran(Kind::RenderPass), moved.ran(Kind::Environment)), (4, 0));
+    assert_eq!((moved.ran(Kind::RenderPass), moved.ran(Kind::Environment), moved.ran(Kind::Light)), (4, 0, 2));
     // A new map (same name, other content) is prefiltered again and re-renders the lit pass only.
     write_hdr(&d.join("sky.hdr"), 32, 16);
     let remapped = build_in(d, &lit_manifest("").replace("[0.3, 0.2, -1]", "[-0.3, 0.2, -1]"));
-    assert_eq!((remapped.ran(Kind::RenderPass), remapped.ran(Kind::Environment)), (4, 1));
+    assert_eq!((remapped.ran(Kind::RenderPass), remapped.ran(Kind::Environment), remapped.ran(Kind::Light)), (4, 1, 2));
 }
 
 /// A pixel filter keys the colour passes alone: switching to Cycles' filter re-renders `rgba` and `albedo`,
@@ -328,8 +330,8 @@ fn a_pixel_filter_re_renders_the_colour_passes_only() {
     let (rgba, depth) = (read("train/r_0000.png"), read("depth/train/r_0000.png"));
     let soft = text.replace("samples = 4\n", "samples = 4\nfilter = \"blackman-harris\"\n");
     let r = build_in(d, &soft);
-    // Four images: their rgba and albedo.
-    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (8, 0));
+    // Four images: their rgba and albedo; the frames' gathered light is the same.
+    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment), r.ran(Kind::Light)), (8, 0, 0));
     assert_ne!(read("train/r_0000.png"), rgba);
     assert_eq!(read("depth/train/r_0000.png"), depth);
     // Its width is part of the key too; the box again is the first build's, still cached.
@@ -502,7 +504,11 @@ fn exposure_scales_the_lit_light_and_re_renders_the_lit_pass_only() {
     let points = point_colours;
     let base_points = points(d);
     let r = build_in(d, &brighter);
-    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (4, 0), "the lit passes alone");
+    assert_eq!(
+        (r.ran(Kind::RenderPass), r.ran(Kind::Environment), r.ran(Kind::Light)),
+        (4, 0, 0),
+        "the lit passes alone"
+    );
     // Lit point colours are exposed too: where neither is clipped, one stop doubles their linear light.
     let lin8 = |v: u8| srgb8_to_linear(v) as f64;
     let after = points(d);
@@ -546,7 +552,11 @@ fn agx_view_shows_the_lit_light_through_blenders_curve_and_re_renders_the_lit_pa
     let (standard, albedo, standard_points) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"), points(d));
     let agx = m.replace("shading = \"pbr\"\n", "shading = \"pbr\"\nview_transform = \"agx\"\n");
     let r = build_in(d, &agx);
-    assert_eq!((r.ran(Kind::RenderPass), r.ran(Kind::Environment)), (4, 0), "the lit passes alone");
+    assert_eq!(
+        (r.ran(Kind::RenderPass), r.ran(Kind::Environment), r.ran(Kind::Light)),
+        (4, 0, 0),
+        "the lit passes alone"
+    );
     let (shown, albedo_after) = (read("train/r_0000.png"), read("albedo/train/r_0000.png"));
     assert_eq!(albedo.as_raw(), albedo_after.as_raw());
     // Each opaque pixel is the standard one's light through AgX, give or take the 8-bit steps of the standard

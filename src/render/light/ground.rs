@@ -71,6 +71,24 @@ pub(super) struct PlaneVisibility {
     sunlit: Vec<bool>,
 }
 
+/// A ground plane's grids that cost rays and shadow lookups to find ((PLANE_CELLS + 1)² points each, rows along
+/// +y; `sun`, `lamps` and `bounce` may be empty): see [`PlaneVisibility`]'s fields of the same names. What a
+/// frame's light action keeps of a plane.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(super) struct PlaneGrids {
+    pub(super) vis: Vec<f32>,
+    pub(super) sun: Vec<f32>,
+    pub(super) lamps: Vec<Vec3>,
+    pub(super) bounce: Vec<Vec3>,
+}
+
+impl PlaneVisibility {
+    /// Its grids, as [`FrameLight::assemble`] takes them back.
+    pub(super) fn grids(&self) -> PlaneGrids {
+        PlaneGrids { vis: self.vis.clone(), sun: self.sun.clone(), lamps: self.lamps.clone(), bounce: self.bounce.clone() }
+    }
+}
+
 /// Where a point falls on a plane's grid: its cell (column, row) and the fractions across it.
 #[derive(Clone, Copy)]
 struct GridPoint {
@@ -200,6 +218,9 @@ fn read3(g: &[Vec3], at: GridPoint) -> Vec3 {
     let row = |j: usize| g[j * n + at.i].lerp(g[j * n + at.i + 1], at.t.x);
     row(at.j).lerp(row(at.j + 1), at.t.y)
 }
+
+/// Points in a plane's grids.
+pub(super) const GRID_POINTS: usize = (PLANE_CELLS + 1) * (PLANE_CELLS + 1);
 
 /// The stride at which the subject's bounce onto a ground is gathered ([`spread`]).
 pub(super) const BOUNCE_STRIDE: usize = 4;
@@ -355,6 +376,31 @@ impl FrameLight {
         } else {
             Vec::new()
         };
+        // Point and spot lights vary over the plane by distance and angle: their irradiance itself, per point.
+        let lamps: Vec<&super::Lamp> =
+            self.lights.iter().filter(|l| !matches!(l.light.kind, LightKind::Sun { .. })).collect();
+        let lamps: Vec<Vec3> = if lamps.is_empty() {
+            Vec::new()
+        } else {
+            (0..(n + 1) * (n + 1))
+                .into_par_iter()
+                .map(|k| {
+                    let p = point(k);
+                    lamps.iter().map(|lamp| lamp.irradiance(p, Vec3::Z)).sum()
+                })
+                .collect()
+        };
+        self.assemble(material, corners, PlaneGrids { vis, sun, lamps, bounce: Vec::new() })
+    }
+
+    /// The plane through `corners` with its grids `grids` (found by [`FrameLight::plane_visibility`], here or in
+    /// the frame's light action): what its shading reads besides them, found from this frame's lights.
+    pub(super) fn assemble(&self, material: u32, corners: &[Vec3], grids: PlaneGrids) -> PlaneVisibility {
+        let lo = corners.iter().fold(Vec3::INFINITY, |a, &p| a.min(p));
+        let hi = corners.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
+        let n = PLANE_CELLS;
+        let cell = (hi - lo).truncate().max(Vec2::splat(1e-6)) / n as f32;
+        let corner = |i: usize, j: usize| Vec3::new(lo.x + cell.x * i as f32, lo.y + cell.y * j as f32, lo.z);
         // A cell's box reaches a millimetre above and below the plane and a hair past its sides, so that every
         // point shaded in it (rounding included) lies inside.
         let margin = Vec3::new(1e-4 * cell.x.max(1e-3), 1e-4 * cell.y.max(1e-3), 1e-3);
@@ -376,21 +422,8 @@ impl FrameLight {
                 _ => Vec::new(),
             })
             .collect();
-        // Point and spot lights vary over the plane by distance and angle: their irradiance itself, per point.
-        let lamps: Vec<&super::Lamp> =
-            self.lights.iter().filter(|l| !matches!(l.light.kind, LightKind::Sun { .. })).collect();
-        let lamps: Vec<Vec3> = if lamps.is_empty() {
-            Vec::new()
-        } else {
-            (0..(n + 1) * (n + 1))
-                .into_par_iter()
-                .map(|k| {
-                    let p = point(k);
-                    lamps.iter().map(|lamp| lamp.irradiance(p, Vec3::Z)).sum()
-                })
-                .collect()
-        };
         let sky = self.irradiance(lo, Vec3::Z, Vec3::ZERO);
+        let PlaneGrids { vis, sun, lamps, bounce } = grids;
         let sums = summed_areas(&vis, &sun);
         let mut plane = PlaneVisibility {
             material,
@@ -399,7 +432,7 @@ impl FrameLight {
             vis,
             sun,
             lamps,
-            bounce: Vec::new(),
+            bounce,
             sums,
             sky,
             open,

@@ -92,6 +92,119 @@ pub struct EnvLight {
     pub background: Option<Arc<EnvMap>>,
 }
 
+/// What a frame's light action keeps ([`FrameLight::gather`]): per primitive, per vertex, its [`Visibility`] with
+/// the bounce gathered (none for points), and per ground plane its grids. Encoded for the cache by
+/// [`Gathered::encode`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Gathered {
+    vertices: Vec<Vec<Visibility>>,
+    planes: Vec<ground::PlaneGrids>,
+}
+
+impl Gathered {
+    /// The bytes of the cache's blob, little-endian u32 counts and f32 values: the number of primitives, then per
+    /// primitive its vertex count and each vertex's environment visibility, radiance from below and bounce;
+    /// then the number of planes and per plane its four grids, each as a count and values.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let u32s = |out: &mut Vec<u8>, n: usize| out.extend((n as u32).to_le_bytes());
+        let f32s = |out: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|f| out.extend(f.to_le_bytes()));
+        u32s(&mut out, self.vertices.len());
+        for prim in &self.vertices {
+            u32s(&mut out, prim.len());
+            for v in prim {
+                f32s(&mut out, &[v.env]);
+                f32s(&mut out, &v.below.to_array());
+                f32s(&mut out, &v.bounce.to_array());
+            }
+        }
+        u32s(&mut out, self.planes.len());
+        for g in &self.planes {
+            u32s(&mut out, g.vis.len());
+            f32s(&mut out, &g.vis);
+            u32s(&mut out, g.sun.len());
+            f32s(&mut out, &g.sun);
+            for grid in [&g.lamps, &g.bounce] {
+                u32s(&mut out, grid.len());
+                grid.iter().for_each(|c| f32s(&mut out, &c.to_array()));
+            }
+        }
+        out
+    }
+
+    /// Reads back what [`Gathered::encode`] wrote: an error for bytes it cannot have written (truncated,
+    /// trailing, a grid of another size, a value that is not finite), and never an allocation larger than the
+    /// bytes.
+    pub fn decode(bytes: &[u8]) -> Result<Gathered, String> {
+        let mut r = Reader { bytes, at: 0 };
+        let prims = r.count(4)?;
+        let mut vertices = Vec::with_capacity(prims);
+        for _ in 0..prims {
+            let n = r.count(28)?;
+            let f = r.f32s(n * 7)?;
+            let v3 = |c: &[f32]| Vec3::new(c[0], c[1], c[2]);
+            vertices.push(
+                f.chunks_exact(7).map(|c| Visibility { env: c[0], below: v3(&c[1..4]), bounce: v3(&c[4..7]) }).collect(),
+            );
+        }
+        let planes = r.count(16)?;
+        let mut grids = Vec::with_capacity(planes);
+        for _ in 0..planes {
+            let n = r.count(4)?;
+            let vis = r.f32s(n)?;
+            let n = r.count(4)?;
+            let sun = r.f32s(n)?;
+            let mut colours = [Vec::new(), Vec::new()];
+            for c in &mut colours {
+                let n = r.count(12)?;
+                *c = r.f32s(n * 3)?.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+            }
+            let [lamps, bounce] = colours;
+            let sized = |len: usize| len == 0 || len == ground::GRID_POINTS;
+            if vis.len() != ground::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len()) {
+                return Err("the frame's gathered light has a ground grid of another size".into());
+            }
+            grids.push(ground::PlaneGrids { vis, sun, lamps, bounce });
+        }
+        if r.at != bytes.len() {
+            return Err("the frame's gathered light has trailing bytes".into());
+        }
+        Ok(Gathered { vertices, planes: grids })
+    }
+}
+
+/// A cursor over a [`Gathered`] blob.
+struct Reader<'b> {
+    bytes: &'b [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    /// A count of items of at least `size` bytes each, refused when the bytes left cannot hold that many (so a
+    /// corrupt count never sizes an allocation).
+    fn count(&mut self, size: usize) -> Result<usize, String> {
+        let b = self.bytes.get(self.at..self.at + 4).ok_or("the frame's gathered light is truncated")?;
+        self.at += 4;
+        let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize;
+        if n > (self.bytes.len() - self.at) / size {
+            return Err("the frame's gathered light is truncated".into());
+        }
+        Ok(n)
+    }
+
+    /// `n` finite f32s.
+    fn f32s(&mut self, n: usize) -> Result<Vec<f32>, String> {
+        let b = self.bytes.get(self.at..self.at + 4 * n).ok_or("the frame's gathered light is truncated")?;
+        self.at += 4 * n;
+        let v: Vec<f32> = b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        if v.iter().all(|f| f.is_finite()) {
+            Ok(v)
+        } else {
+            Err("the frame's gathered light holds a value that is not finite".into())
+        }
+    }
+}
+
 /// Version of baked point colours ([`FrameLight::bake`]): part of their keys.
 pub const BAKE_SALT: &str = "bake 2";
 
@@ -184,6 +297,34 @@ fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
     Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
 }
 
+/// The lights (`lights`, the manifest's, then the scene's own) with their shadow maps over the casters within
+/// `bounds`, made side by side.
+fn lamps(scene: &PosedScene, lights: &[Light], bounds: Option<(Vec3, Vec3)>) -> Vec<Lamp> {
+    let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
+    all.par_iter()
+        .map(|l| {
+            let maps = match (l.shadows, bounds) {
+                (true, Some(b)) => match l.kind {
+                    LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP)],
+                    LightKind::Spot { position, direction, cone, .. } => {
+                        vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP)]
+                    }
+                    LightKind::Point { position, .. } => shadow::CUBE
+                        .iter()
+                        .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP))
+                        .collect(),
+                },
+                _ => Vec::new(),
+            };
+            let size = match l.kind {
+                LightKind::Sun { angle, .. } => (0.5 * angle).tan(),
+                LightKind::Point { radius, .. } | LightKind::Spot { radius, .. } => radius,
+            };
+            Lamp { light: (*l).clone(), maps, size }
+        })
+        .collect()
+}
+
 /// `n` directions spread evenly over the sphere (a Fibonacci lattice).
 fn sphere_directions(n: usize) -> Vec<Vec3> {
     (0..n)
@@ -201,41 +342,15 @@ impl FrameLight {
     /// the manifest's, then the scene's own), and the environment's visibility at every vertex.
     pub fn prepare(scene: &PosedScene, lights: &[Light], env: EnvLight) -> FrameLight {
         let bounds = caster_bounds(scene);
-        let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
         // The lights' maps and the environment's are made side by side (a single sun's 2048² map would otherwise
         // keep one core busy while the other waits).
-        let light_maps = || {
-            all.par_iter()
-                .map(|l| {
-                    let maps = match (l.shadows, bounds) {
-                        (true, Some(b)) => match l.kind {
-                            LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP)],
-                            LightKind::Spot { position, direction, cone, .. } => {
-                                vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP)]
-                            }
-                            LightKind::Point { position, .. } => shadow::CUBE
-                                .iter()
-                                .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP))
-                                .collect(),
-                        },
-                        _ => Vec::new(),
-                    };
-                    let size = match l.kind {
-                        LightKind::Sun { angle, .. } => (0.5 * angle).tan(),
-                        LightKind::Point { radius, .. } | LightKind::Spot { radius, .. } => radius,
-                    };
-                    Lamp { light: (*l).clone(), maps, size }
-                })
-                .collect()
-        };
         let env_maps = || match bounds {
             Some(b) => occlusion_maps(scene, &env, b),
             None => Vec::new(),
         };
-        let (lights, occlusion) = rayon::join(light_maps, env_maps);
-        let ground = Ground::find(scene, &all, &env);
-        let mut light =
-            FrameLight { lights, env, ground, exposure: 1.0, view: super::Display::new(super::ViewTransform::Standard), occlusion, vertex_visibility: Vec::new(), planes: Vec::new() };
+        let (lamps, occlusion) = rayon::join(|| lamps(scene, lights, bounds), env_maps);
+        let mut light = FrameLight::bare(scene, lights, lamps, env);
+        light.occlusion = occlusion;
         // The planes first: a vertex's bounce reads them.
         light.planes =
             ground_planes(scene).map(|prim| light.plane_visibility(prim.material, &prim.positions)).collect();
@@ -253,6 +368,45 @@ impl FrameLight {
             })
             .collect();
         light
+    }
+
+    /// The lighting of a frame with its lights' shadow maps `lamps` and nothing else prepared.
+    fn bare(scene: &PosedScene, lights: &[Light], lamps: Vec<Lamp>, env: EnvLight) -> FrameLight {
+        let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
+        let ground = Ground::find(scene, &all, &env);
+        FrameLight {
+            lights: lamps,
+            env,
+            ground,
+            exposure: 1.0,
+            view: super::Display::new(super::ViewTransform::Standard),
+            occlusion: Vec::new(),
+            vertex_visibility: Vec::new(),
+            planes: Vec::new(),
+        }
+    }
+
+    /// The lighting of a frame whose light action found `g` ([`FrameLight::gather`] of the same frame, lights
+    /// and environment): only the lights' shadow maps are made again, which pixels read; the environment's
+    /// occlusion, which only the vertices and the ground's grids read, is not. An error names what does not fit
+    /// the frame.
+    pub fn from_gathered(scene: &PosedScene, lights: &[Light], env: EnvLight, g: &Gathered) -> Result<FrameLight, String> {
+        let fits = scene.primitives.len() == g.vertices.len()
+            && scene.primitives.iter().zip(&g.vertices).all(|(prim, v)| match prim.kind {
+                PrimKind::Triangles => v.len() == prim.positions.len(),
+                PrimKind::Points => v.is_empty(),
+            })
+            && ground_planes(scene).count() == g.planes.len();
+        if !fits {
+            return Err("the frame's gathered light does not fit its scene (another frame's, or a stale cache)".into());
+        }
+        let mut light = FrameLight::bare(scene, lights, lamps(scene, lights, caster_bounds(scene)), env);
+        light.vertex_visibility = g.vertices.clone();
+        light.planes = ground_planes(scene)
+            .zip(&g.planes)
+            .map(|(prim, grids)| light.assemble(prim.material, &prim.positions, grids.clone()))
+            .collect();
+        Ok(light)
     }
 
     /// This lighting with what the subject reflects onto itself and onto the ground gathered ([`bounce`]): what
@@ -280,6 +434,14 @@ impl FrameLight {
             plane.combine(&self.lights);
         }
         self
+    }
+
+    /// What this frame's light holds that costs rays and shadow lookups and no camera changes: every vertex's
+    /// [`Visibility`] with the bounce gathered, and the ground's grids. A build keeps it as the frame's light
+    /// action and renders from it ([`FrameLight::from_gathered`]).
+    pub fn gather(self, scene: &PosedScene) -> Gathered {
+        let light = self.with_bounce(scene);
+        Gathered { vertices: light.vertex_visibility, planes: light.planes.iter().map(|p| p.grids()).collect() }
     }
 
     /// What reaches `p` (unit normal `n`) of the environment's light: see [`Visibility`].
@@ -579,6 +741,62 @@ mod tests {
         // then leans toward the horizon, where occluders are).
         let (straight, grazing) = (specular_occlusion(1.0, 0.5, 0.2), specular_occlusion(0.1, 0.5, 0.2));
         assert!(straight > 0.6 && grazing < 0.5, "{straight} {grazing}");
+    }
+
+    #[test]
+    fn a_frames_gathered_light_reads_back_as_it_was_and_refuses_other_bytes() {
+        // A grey square over a ground under an overhead sun: it reflects light onto the ground (onto itself it
+        // cannot: it is flat).
+        let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
+        let h = 0.3;
+        let caster = PosedScene::single(
+            PrimKind::Triangles,
+            vec![Vec3::new(-h, -h, 0.5), Vec3::new(h, -h, 0.5), Vec3::new(h, h, 0.5), Vec3::new(-h, h, 0.5)],
+            vec![-Vec3::Z; 4],
+            Vec::new(),
+            vec![0, 2, 1, 0, 3, 2],
+            crate::scene::material::Material::default(),
+        );
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0), caster], &mut scene);
+        let sun = Light {
+            kind: LightKind::Sun { direction: -Vec3::Z, angle: 0.01 },
+            color: Vec3::ONE,
+            intensity: 3.0,
+            shadows: true,
+        };
+        let lights = std::slice::from_ref(&sun);
+        let studio = || crate::render::Environment::default().studio();
+        let fresh = FrameLight::prepare(&scene, lights, studio()).with_bounce(&scene);
+        let g = FrameLight::prepare(&scene, lights, studio()).gather(&scene);
+        assert_eq!(g.vertices.iter().map(Vec::len).collect::<Vec<_>>(), [4, 4]);
+        assert!(g.planes[0].bounce.iter().any(|v| v.x > 1e-3));
+        let bytes = g.encode();
+        assert_eq!(Gathered::decode(&bytes).as_ref(), Ok(&g));
+        // Read back, it lights the frame exactly as preparing it in place does, without the environment's
+        // occlusion maps.
+        let cached = FrameLight::from_gathered(&scene, lights, studio(), &g).expect("the same frame");
+        assert!(cached.occlusion.is_empty() && !fresh.occlusion.is_empty());
+        assert_eq!(fresh.vertex_visibility, cached.vertex_visibility);
+        let ground = scene.primitives[0].material;
+        for i in 0..400 {
+            let p = Vec3::new(-1.9 + (i % 20) as f32 * 0.2, -1.9 + (i / 20) as f32 * 0.2, 0.0);
+            assert_eq!(fresh.shade_ground(ground, p, Vec3::ONE), cached.shade_ground(ground, p, Vec3::ONE), "{p}");
+            let q = p + Vec3::new(0.0, 0.0, 0.3);
+            assert_eq!(fresh.ground_seen(q, -Vec3::Z, 0.1), cached.ground_seen(q, -Vec3::Z, 0.1), "{q}");
+        }
+        // Bytes it cannot have written are refused, a huge count without allocating for it.
+        assert!(Gathered::decode(&bytes[..bytes.len() - 1]).is_err());
+        assert!(Gathered::decode(&[bytes.as_slice(), &[0]].concat()).is_err());
+        let mut huge = bytes.clone();
+        huge[4..8].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(Gathered::decode(&huge).is_err());
+        let mut nan = bytes.clone();
+        nan[8..12].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert!(Gathered::decode(&nan).unwrap_err().contains("finite"));
+        // Another frame's shape is refused.
+        let other = Gathered { vertices: vec![vec![Visibility::OPEN; 3]], planes: Vec::new() };
+        assert!(FrameLight::from_gathered(&scene, lights, studio(), &other).is_err());
     }
 
     #[test]
