@@ -60,19 +60,25 @@ pub(super) fn lights(
 ) -> Result<Made, Error> {
     let env_id = ids.iter().find_map(|&id| g.node(id).deps.first().copied());
     let env = environment_light(g, x, blobs, env_id, false)?;
-    let mut poser = Poser::default();
-    let mut out = Vec::with_capacity(ids.len());
-    for &id in ids {
-        let node = g.node(id);
-        let Action::Light { frame } = node.action else { continue };
-        let posed =
-            x.scene.pose(frame, &mut poser).map_err(|source| Error::Scene { action: node.label.clone(), source })?;
-        super::check_posed(posed, &node.label)?;
-        let gathered = FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone()).gather(posed);
-        out.push((id, x.store(g, id, &[gathered.encode()])?));
-        done();
-    }
-    Ok(out)
+    // Frames side by side: a frame's preparation has parts on one thread (a sun's map, the gather's tree), which
+    // another frame's fill. Each result depends on its frame alone.
+    let made: Vec<Result<(ActionId, Vec<Digest>), Error>> = ids
+        .par_iter()
+        .filter_map(|&id| match g.node(id).action {
+            Action::Light { frame } => Some((id, frame)),
+            _ => None,
+        })
+        .map_init(Poser::default, |poser, (id, frame)| {
+            let label = &g.node(id).label;
+            let posed = x.scene.pose(frame, poser).map_err(|source| Error::Scene { action: label.clone(), source })?;
+            super::check_posed(posed, label)?;
+            let gathered = FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone()).gather(posed);
+            let stored = x.store(g, id, &[gathered.encode()])?;
+            done();
+            Ok((id, stored))
+        })
+        .collect();
+    made.into_iter().collect()
 }
 
 /// The environment as the prefiltered map of action `env_id` (the built-in studio environment without one),
