@@ -12,6 +12,7 @@
 //! receiver between two panes is dimmed by both (a closed glass object's back face by its front and itself).
 
 use glam::{Mat4, Vec2, Vec3};
+use rayon::prelude::*;
 
 use crate::scene::texture::floor;
 use crate::scene::{PosedScene, PrimKind};
@@ -217,41 +218,68 @@ impl ShadowMap {
 
     fn rasterize(&mut self, scene: &PosedScene) {
         let (size, persp) = (self.size, matches!(self.projection, Projection::Persp { .. }));
-        for prim in &scene.primitives {
-            let material = scene.materials.get(prim.material as usize);
-            let casts = material.is_none_or(|m| m.casts_shadows);
-            if prim.kind != PrimKind::Triangles || !casts {
-                continue;
-            }
-            let blend = material.filter(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend);
-            let light: Vec<Vec3> = prim.positions.iter().map(|&p| self.project(p)).collect();
-            for t in prim.indices.chunks_exact(3) {
-                let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
-                // A transparent triangle passes 1 − α of the light: into the glass layer, not the depth map.
-                if let Some(alpha) = blend.map(|m| triangle_alpha(scene, prim, m, t)).filter(|a| *a < 1.0) {
-                    let n = (size * size) as usize;
-                    let g = self.glass.get_or_insert_with(|| Glass {
-                        depth: vec![f32::INFINITY; n],
-                        pass: vec![1.0; n],
-                        mins: Vec::new(),
-                    });
-                    // Strictly inside (half-open edges would count a texel on a shared edge twice, squaring 1 − α).
-                    scan(v, size, persp, 0.0, |i, d| {
-                        g.depth[i] = g.depth[i].min(d);
-                        g.pass[i] *= 1.0 - alpha;
-                    });
-                    continue;
+        // The casters projected once, and per triangle whether it is glass (a transparent triangle passes 1 − α of
+        // the light: into the glass layer, not the depth map).
+        let casters: Vec<(&crate::scene::PosedPrimitive, Vec<Vec3>, Vec<bool>)> = scene
+            .primitives
+            .iter()
+            .filter_map(|prim| {
+                let material = scene.materials.get(prim.material as usize);
+                if prim.kind != PrimKind::Triangles || !material.is_none_or(|m| m.casts_shadows) {
+                    return None;
                 }
-                // A texel whose centre any triangle touches counts (conservative by a hair: casters thinner than a
-                // texel still cast).
-                let depth = &mut self.depth;
-                scan(v, size, persp, -1e-4, |i, d| {
-                    if d < depth[i] {
-                        depth[i] = d;
+                let light: Vec<Vec3> = prim.positions.iter().map(|&p| self.project(p)).collect();
+                let blend = material.filter(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend);
+                let mut glass = Vec::new();
+                if let Some(m) = blend {
+                    for t in prim.indices.chunks_exact(3) {
+                        let alpha = triangle_alpha(scene, prim, m, t);
+                        glass.push(alpha < 1.0);
+                        if alpha >= 1.0 {
+                            continue;
+                        }
+                        let n = (size * size) as usize;
+                        let g = self.glass.get_or_insert_with(|| Glass {
+                            depth: vec![f32::INFINITY; n],
+                            pass: vec![1.0; n],
+                            mins: Vec::new(),
+                        });
+                        let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
+                        // Strictly inside (half-open edges would count a texel on a shared edge twice, squaring
+                        // 1 − α).
+                        scan(v, size, persp, 0.0, (0, size), |i, d| {
+                            g.depth[i] = g.depth[i].min(d);
+                            g.pass[i] *= 1.0 - alpha;
+                        });
                     }
-                });
+                }
+                Some((prim, light, glass))
+            })
+            .collect();
+        // The opaque casters in bands of rows side by side: a texel keeps the least depth over it, which no order
+        // changes, so the map is the same bits as one pass over it (a sun's 2048² map on one thread held up
+        // every view of its frame).
+        let band = size.div_ceil(8).max(1);
+        self.depth.par_chunks_mut((band * size) as usize).enumerate().for_each(|(b, depth)| {
+            let rows = (b as u32 * band, ((b as u32 + 1) * band).min(size));
+            let first = (rows.0 * size) as usize;
+            for (prim, light, glass) in &casters {
+                for (k, t) in prim.indices.chunks_exact(3).enumerate() {
+                    if glass.get(k) == Some(&true) {
+                        continue;
+                    }
+                    let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
+                    // A texel whose centre any triangle touches counts (conservative by a hair: casters thinner
+                    // than a texel still cast).
+                    scan(v, size, persp, -1e-4, rows, |i, d| {
+                        let i = i - first;
+                        if d < depth[i] {
+                            depth[i] = d;
+                        }
+                    });
+                }
             }
-        }
+        });
     }
 
     /// Nearest caster depth at texel (x, y); outside the map, nothing.
@@ -521,10 +549,10 @@ pub fn cube_face(d: Vec3) -> usize {
     }
 }
 
-/// Visits each texel of a `size`² map whose centre light-space triangle `v` covers (barycentrics all at least
-/// `min_w`) with its index and the triangle's depth there; perspective maps interpolate 1/depth (linear in
+/// Visits each texel of a `size`² map in rows `rows.0..rows.1` whose centre light-space triangle `v` covers
+/// (barycentrics all at least `min_w`) with its index and the triangle's depth there; perspective maps interpolate 1/depth (linear in
 /// screen space), parallel ones depth. Triangles crossing the near plane or of no area visit nothing.
-fn scan(v: [Vec3; 3], size: u32, persp: bool, min_w: f32, mut visit: impl FnMut(usize, f32)) {
+fn scan(v: [Vec3; 3], size: u32, persp: bool, min_w: f32, rows: (u32, u32), mut visit: impl FnMut(usize, f32)) {
     let n = size as f32;
     if persp && v.iter().any(|p| p.z < NEAR) {
         return;
@@ -535,8 +563,8 @@ fn scan(v: [Vec3; 3], size: u32, persp: bool, min_w: f32, mut visit: impl FnMut(
     }
     let x0 = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
     let x1 = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
-    let y0 = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
-    let y1 = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0);
+    let y0 = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(rows.0 as f32);
+    let y1 = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(n - 1.0).min(rows.1 as f32 - 1.0);
     if x0 > x1 || y0 > y1 {
         return;
     }
