@@ -296,7 +296,9 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
 /// prefiltered environment's key, a dep).
 fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     light_fields(w, l);
-    let crate::render::Lighting { exposure, view, .. } = l;
+    let crate::render::Lighting { exposure, view, environment, .. } = l;
+    // Whether the map shows behind the subject shapes pixels only.
+    w.bool("environment visible", environment.visible);
     // Keyed only when set: an exposure of 0 changes no byte, and lit datasets made before it keep their keys.
     if *exposure != 0.0 {
         w.f64("exposure (stops)", *exposure as f64);
@@ -307,7 +309,8 @@ fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     }
 }
 
-/// The lights and the environment: what lights a scene before exposure and the view transform.
+/// The lights and the environment: what lights a scene before exposure and the view transform (not whether the
+/// map shows as the background, which lights nothing: [`lighting_fields`] keys that).
 fn light_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     use crate::render::light::{Light, LightKind};
     let crate::render::Lighting { lights, environment, .. } = l;
@@ -338,12 +341,11 @@ fn light_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
         w.f64("intensity", *intensity as f64);
         w.bool("shadows", *shadows);
     }
-    let crate::render::Environment { map, strength, rotation_deg, visible } = environment;
+    let crate::render::Environment { map, strength, rotation_deg, visible: _ } = environment;
     // The built-in studio map has no prefiltering action: its version is the renderer's.
     w.str("environment", if map.is_some() { "map" } else { "studio" });
     w.f64("environment strength", *strength as f64);
     w.f64("environment rotation (deg)", *rotation_deg as f64);
-    w.bool("environment visible", *visible);
 }
 
 fn encoding(w: &mut dyn KeyWriter, e: &Encoding, pass: Pass) {

@@ -315,6 +315,12 @@ fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
     write_hdr(&d.join("sky.hdr"), 32, 16);
     let remapped = build_in(d, &lit_manifest("").replace("[0.3, 0.2, -1]", "[-0.3, 0.2, -1]"));
     assert_eq!((remapped.ran(Kind::RenderPass), remapped.ran(Kind::Environment), remapped.ran(Kind::Light)), (4, 1, 2));
+    // The map shown behind the subject changes pixels, not the light: nothing is gathered again.
+    let shown = lit_manifest("")
+        .replace("[0.3, 0.2, -1]", "[-0.3, 0.2, -1]")
+        .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nvisible = true\n");
+    let shown = build_in(d, &shown);
+    assert_eq!((shown.ran(Kind::RenderPass), shown.ran(Kind::Environment), shown.ran(Kind::Light)), (4, 0, 0));
 }
 
 /// A pixel filter keys the colour passes alone: switching to Cycles' filter re-renders `rgba` and `albedo`,
