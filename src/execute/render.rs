@@ -14,7 +14,7 @@ use crate::plan::actions::Action;
 use crate::plan::graph::{ActionId, Graph};
 use crate::render::encode::{self, Encoding, NormalSpace};
 use crate::render::light::environment::{self, EnvMap, Prefiltered};
-use crate::render::light::{EnvLight, FrameLight, Gathered};
+use crate::render::light::{EnvLight, FrameLight, Gathered, GatheredError};
 use crate::render::{self, Frame, RenderSettings, Shading};
 use crate::scene::Poser;
 use std::sync::Arc;
@@ -62,8 +62,7 @@ pub(super) fn lights(
     let env = environment_light(g, x, blobs, env_id, false)?;
     // Frames side by side: a frame's preparation has parts on one thread (a sun's map, the gather's tree), which
     // another frame's fill. Each result depends on its frame alone.
-    let made: Vec<Result<(ActionId, Vec<Digest>), Error>> = ids
-        .par_iter()
+    ids.par_iter()
         .filter_map(|&id| match g.node(id).action {
             Action::Light { frame } => Some((id, frame)),
             _ => None,
@@ -77,8 +76,7 @@ pub(super) fn lights(
             done();
             Ok((id, stored))
         })
-        .collect();
-    made.into_iter().collect()
+        .collect()
 }
 
 /// The environment as the prefiltered map of action `env_id` (the built-in studio environment without one),
@@ -130,11 +128,10 @@ pub(super) fn passes(
         let gathered = images.iter().flat_map(|(_, todo)| todo).find_map(|(id, _)| g.node(*id).deps.first().copied());
         let light = match (&env, gathered) {
             (Some(env), Some(light_id)) => {
-                let content = |message: String| Error::Content { action: label.clone(), message };
+                let content = |e: GatheredError| Error::Content { action: label.clone(), message: e.to_string() };
                 let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
-                let light =
-                    FrameLight::from_gathered(posed, &g.keying.render.lighting.lights, env.clone(), &gathered)
-                        .map_err(content)?;
+                let light = FrameLight::from_gathered(posed, &g.keying.render.lighting.lights, env.clone(), gathered)
+                    .map_err(content)?;
                 Some(light.with_exposure(g.keying.render.lighting.exposure))
             }
             _ => None,

@@ -296,7 +296,8 @@ fn render_settings(w: &mut dyn KeyWriter, s: &RenderSettings, pass: Pass) {
 /// prefiltered environment's key, a dep).
 fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     light_fields(w, l);
-    let crate::render::Lighting { exposure, view, environment, .. } = l;
+    // The lights and the rest of the environment are `light_fields`'.
+    let crate::render::Lighting { lights: _, environment, exposure, view } = l;
     // Whether the map shows behind the subject shapes pixels only.
     w.bool("environment visible", environment.visible);
     // Keyed only when set: an exposure of 0 changes no byte, and lit datasets made before it keep their keys.
@@ -313,7 +314,8 @@ fn lighting_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
 /// map shows as the background, which lights nothing: [`lighting_fields`] keys that).
 fn light_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
     use crate::render::light::{Light, LightKind};
-    let crate::render::Lighting { lights, environment, .. } = l;
+    // Exposure and the view transform shape pixels only: `lighting_fields` keys them.
+    let crate::render::Lighting { lights, environment, exposure: _, view: _ } = l;
     w.str("lit shading", LIT_SALT);
     for Light { kind, color, intensity, shadows } in lights {
         let v = |a: glam::Vec3| [a.x as f64, a.y as f64, a.z as f64];

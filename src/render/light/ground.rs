@@ -42,17 +42,8 @@ pub(super) struct PlaneVisibility {
     /// Corner of the grid (x, y) and the size of one cell.
     lo: Vec2,
     cell: Vec2,
-    /// The environment's visibility at (PLANE_CELLS + 1)² grid points, rows along +y.
-    vis: Vec<f32>,
-    /// The suns' visibility at the same points, each sun weighted by the irradiance it brings the plane (what
-    /// its bounce carries of their shadows). Empty when no sun lights the plane.
-    sun: Vec<f32>,
-    /// The irradiance point and spot lights bring the same points, with their shadows (suns are in `sun`):
-    /// what their bounce off the ground carries. Empty without such lights.
-    lamps: Vec<Vec3>,
-    /// The irradiance the subject reflects onto the same points ([`super::bounce::Subject::onto`]). Empty until
-    /// the subject's own bounce is known, and without a subject.
-    pub(super) bounce: Vec<Vec3>,
+    /// What costs rays and shadow lookups to find: the grids (see [`PlaneGrids`]).
+    pub(super) grids: PlaneGrids,
     /// Summed-area tables of `vis` and `sun` ((PLANE_CELLS + 2)² entries, rows along +y; entry (i, j) sums the
     /// grid points below and left of it), for averages over a footprint.
     sums: Vec<[f64; 2]>,
@@ -71,22 +62,20 @@ pub(super) struct PlaneVisibility {
     sunlit: Vec<bool>,
 }
 
-/// A ground plane's grids that cost rays and shadow lookups to find ((PLANE_CELLS + 1)² points each, rows along
-/// +y; `sun`, `lamps` and `bounce` may be empty): see [`PlaneVisibility`]'s fields of the same names. What a
-/// frame's light action keeps of a plane.
+/// A ground plane's grids that cost rays and shadow lookups to find: what a frame's light action keeps of a plane.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub(super) struct PlaneGrids {
+    /// The environment's visibility at (PLANE_CELLS + 1)² grid points, rows along +y.
     pub(super) vis: Vec<f32>,
+    /// The suns' visibility at the same points, each sun weighted by the irradiance it brings the plane (what
+    /// its bounce carries of their shadows). Empty when no sun lights the plane.
     pub(super) sun: Vec<f32>,
+    /// The irradiance point and spot lights bring the same points, with their shadows (suns are in `sun`):
+    /// what their bounce off the ground carries. Empty without such lights.
     pub(super) lamps: Vec<Vec3>,
+    /// The irradiance the subject reflects onto the same points ([`super::bounce::Subject::onto`]). Empty until
+    /// the subject's own bounce is known, and without a subject.
     pub(super) bounce: Vec<Vec3>,
-}
-
-impl PlaneVisibility {
-    /// Its grids, as [`FrameLight::assemble`] takes them back.
-    pub(super) fn grids(&self) -> PlaneGrids {
-        PlaneGrids { vis: self.vis.clone(), sun: self.sun.clone(), lamps: self.lamps.clone(), bounce: self.bounce.clone() }
-    }
 }
 
 /// Where a point falls on a plane's grid: its cell (column, row) and the fractions across it.
@@ -101,7 +90,7 @@ impl PlaneVisibility {
     /// The environment's visibility at world (x, y), bilinear between grid points, held at the edges.
     #[inline]
     pub(super) fn at(&self, x: f32, y: f32) -> f32 {
-        read(&self.vis, locate(self.grid_uv(x, y)))
+        read(&self.grids.vis, locate(self.grid_uv(x, y)))
     }
 
     /// The plane's light at world (x, y) as fractions of the open plane's (environment, suns) and the
@@ -114,14 +103,14 @@ impl PlaneVisibility {
             return None;
         }
         let g = locate(uv);
-        let fractions = Vec2::new(read(&self.vis, g), if self.sun.is_empty() { 1.0 } else { read(&self.sun, g) });
-        Some((fractions, read3(&self.lamps, g)))
+        let fractions = Vec2::new(read(&self.grids.vis, g), if self.grids.sun.is_empty() { 1.0 } else { read(&self.grids.sun, g) });
+        Some((fractions, read3(&self.grids.lamps, g)))
     }
 
     /// The irradiance the subject reflects onto world (x, y), bilinear between grid points, held at the edges.
     #[inline]
     pub(super) fn bounce_at(&self, x: f32, y: f32) -> Vec3 {
-        read3(&self.bounce, locate(self.grid_uv(x, y)))
+        read3(&self.grids.bounce, locate(self.grid_uv(x, y)))
     }
 
     /// Every `stride`-th of the grid's points along each axis, in row order (rows along +y), on the plane.
@@ -184,7 +173,7 @@ impl PlaneVisibility {
     pub(super) fn combine(&mut self, lights: &[super::Lamp]) {
         let n = (PLANE_CELLS + 1) * (PLANE_CELLS + 1);
         let suns: Vec3 = lights.iter().map(|lamp| sun_irradiance(&lamp.light)).sum();
-        self.unsunned = (0..n).map(|k| self.sky * self.vis[k] + self.bounce.get(k).copied().unwrap_or(Vec3::ZERO)).collect();
+        self.unsunned = (0..n).map(|k| self.sky * self.grids.vis[k] + self.grids.bounce.get(k).copied().unwrap_or(Vec3::ZERO)).collect();
         self.lit = self.unsunned.iter().map(|&e| e + suns).collect();
         let shadowing: Vec<&Vec<bool>> = lights
             .iter()
@@ -423,16 +412,12 @@ impl FrameLight {
             })
             .collect();
         let sky = self.irradiance(lo, Vec3::Z, Vec3::ZERO);
-        let PlaneGrids { vis, sun, lamps, bounce } = grids;
-        let sums = summed_areas(&vis, &sun);
+        let sums = summed_areas(&grids.vis, &grids.sun);
         let mut plane = PlaneVisibility {
             material,
             lo: lo.truncate(),
             cell,
-            vis,
-            sun,
-            lamps,
-            bounce,
+            grids,
             sums,
             sky,
             open,
@@ -656,7 +641,7 @@ mod tests {
         let (x, y) = (plane.lo.x + plane.cell.x * (i0 as f32 + 4.0), plane.lo.y + plane.cell.y * (j0 as f32 + 4.0));
         let (avg, on) = plane.light_over(x, y, plane.cell.x * 4.5).expect("on the plane");
         assert_eq!(on, 1.0);
-        assert!((avg.x - mean(&plane.vis)).abs() < 1e-4 && (avg.y - mean(&plane.sun)).abs() < 1e-4, "{avg}");
+        assert!((avg.x - mean(&plane.grids.vis)).abs() < 1e-4 && (avg.y - mean(&plane.grids.sun)).abs() < 1e-4, "{avg}");
     }
 
     #[test]

@@ -135,7 +135,7 @@ impl Gathered {
     /// Reads back what [`Gathered::encode`] wrote: an error for bytes it cannot have written (truncated,
     /// trailing, a grid of another size, a value that is not finite), and never an allocation larger than the
     /// bytes.
-    pub fn decode(bytes: &[u8]) -> Result<Gathered, String> {
+    pub fn decode(bytes: &[u8]) -> Result<Gathered, GatheredError> {
         let mut r = Reader { bytes, at: 0 };
         let prims = r.count(4)?;
         let mut vertices = Vec::with_capacity(prims);
@@ -162,15 +162,26 @@ impl Gathered {
             let [lamps, bounce] = colours;
             let sized = |len: usize| len == 0 || len == ground::GRID_POINTS;
             if vis.len() != ground::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len()) {
-                return Err("the frame's gathered light has a ground grid of another size".into());
+                return Err(GatheredError::Damaged("a ground grid of another size"));
             }
             grids.push(ground::PlaneGrids { vis, sun, lamps, bounce });
         }
         if r.at != bytes.len() {
-            return Err("the frame's gathered light has trailing bytes".into());
+            return Err(GatheredError::Damaged("trailing bytes"));
         }
         Ok(Gathered { vertices, planes: grids })
     }
+}
+
+/// Why a frame's gathered light read back from the cache cannot light it (a damaged or stale cache).
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum GatheredError {
+    /// The bytes are not what [`Gathered::encode`] writes.
+    #[error("damaged gathered light: {0}")]
+    Damaged(&'static str),
+    /// It was gathered for a scene of another shape.
+    #[error("the frame's gathered light does not fit its scene (another frame's, or a stale cache)")]
+    OtherScene,
 }
 
 /// A cursor over a [`Gathered`] blob.
@@ -182,25 +193,25 @@ struct Reader<'b> {
 impl Reader<'_> {
     /// A count of items of at least `size` bytes each, refused when the bytes left cannot hold that many (so a
     /// corrupt count never sizes an allocation).
-    fn count(&mut self, size: usize) -> Result<usize, String> {
-        let b = self.bytes.get(self.at..self.at + 4).ok_or("the frame's gathered light is truncated")?;
+    fn count(&mut self, size: usize) -> Result<usize, GatheredError> {
+        let b = self.bytes.get(self.at..self.at + 4).ok_or(GatheredError::Damaged("truncated"))?;
         self.at += 4;
         let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize;
         if n > (self.bytes.len() - self.at) / size {
-            return Err("the frame's gathered light is truncated".into());
+            return Err(GatheredError::Damaged("truncated"));
         }
         Ok(n)
     }
 
     /// `n` finite f32s.
-    fn f32s(&mut self, n: usize) -> Result<Vec<f32>, String> {
-        let b = self.bytes.get(self.at..self.at + 4 * n).ok_or("the frame's gathered light is truncated")?;
+    fn f32s(&mut self, n: usize) -> Result<Vec<f32>, GatheredError> {
+        let b = self.bytes.get(self.at..self.at + 4 * n).ok_or(GatheredError::Damaged("truncated"))?;
         self.at += 4 * n;
         let v: Vec<f32> = b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         if v.iter().all(|f| f.is_finite()) {
             Ok(v)
         } else {
-            Err("the frame's gathered light holds a value that is not finite".into())
+            Err(GatheredError::Damaged("a value that is not finite"))
         }
     }
 }
@@ -390,7 +401,12 @@ impl FrameLight {
     /// and environment): only the lights' shadow maps are made again, which pixels read; the environment's
     /// occlusion, which only the vertices and the ground's grids read, is not. An error names what does not fit
     /// the frame.
-    pub fn from_gathered(scene: &PosedScene, lights: &[Light], env: EnvLight, g: &Gathered) -> Result<FrameLight, String> {
+    pub fn from_gathered(
+        scene: &PosedScene,
+        lights: &[Light],
+        env: EnvLight,
+        g: Gathered,
+    ) -> Result<FrameLight, GatheredError> {
         let fits = scene.primitives.len() == g.vertices.len()
             && scene.primitives.iter().zip(&g.vertices).all(|(prim, v)| match prim.kind {
                 PrimKind::Triangles => v.len() == prim.positions.len(),
@@ -398,13 +414,13 @@ impl FrameLight {
             })
             && ground_planes(scene).count() == g.planes.len();
         if !fits {
-            return Err("the frame's gathered light does not fit its scene (another frame's, or a stale cache)".into());
+            return Err(GatheredError::OtherScene);
         }
         let mut light = FrameLight::bare(scene, lights, lamps(scene, lights, caster_bounds(scene)), env);
-        light.vertex_visibility = g.vertices.clone();
+        light.vertex_visibility = g.vertices;
         light.planes = ground_planes(scene)
-            .zip(&g.planes)
-            .map(|(prim, grids)| light.assemble(prim.material, &prim.positions, grids.clone()))
+            .zip(g.planes)
+            .map(|(prim, grids)| light.assemble(prim.material, &prim.positions, grids))
             .collect();
         Ok(light)
     }
@@ -430,7 +446,7 @@ impl FrameLight {
             // spread between them, then blurred over about five, where far from the subject a point's rays meet
             // it by chance or not (that noise falls under 1/255).
             let coarse = subject.onto(scene, &gathered, &plane.points(z, ground::BOUNCE_STRIDE), Vec3::Z);
-            plane.bounce = ground::blur(&ground::spread(&coarse, ground::BOUNCE_STRIDE), 2);
+            plane.grids.bounce = ground::blur(&ground::spread(&coarse, ground::BOUNCE_STRIDE), 2);
             plane.combine(&self.lights);
         }
         self
@@ -441,7 +457,7 @@ impl FrameLight {
     /// action and renders from it ([`FrameLight::from_gathered`]).
     pub fn gather(self, scene: &PosedScene) -> Gathered {
         let light = self.with_bounce(scene);
-        Gathered { vertices: light.vertex_visibility, planes: light.planes.iter().map(|p| p.grids()).collect() }
+        Gathered { vertices: light.vertex_visibility, planes: light.planes.into_iter().map(|p| p.grids).collect() }
     }
 
     /// What reaches `p` (unit normal `n`) of the environment's light: see [`Visibility`].
@@ -518,6 +534,7 @@ impl FrameLight {
         };
         let irradiance = self.irradiance(p, n, vis.below);
         let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (1.0 / PI);
+        let occlusion = ao * vis.env;
         let specular = if w > 0.0 {
             let r = 2.0 * n.dot(v) * n - v;
             let mut l = e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength;
@@ -543,7 +560,7 @@ impl FrameLight {
                     l = (l + (g - map) * (below * on)).max(Vec3::ZERO);
                 }
             }
-            spec_f * l
+            spec_f * l * specular_occlusion(n.dot(v), occlusion, s.roughness)
         } else {
             Vec3::ZERO
         };
@@ -551,13 +568,11 @@ impl FrameLight {
         // tracer follows). A mesh's vertices gathered it ([`bounce`]); a baked point estimates it by Jimenez et
         // al.'s multi-bounce fit ("Practical real-time strategies for accurate indirect occlusion", 2016), with
         // the surface's own colour standing in for its surroundings' (see `estimate_bounce`).
-        let occlusion = ao * vis.env;
         let returned =
             if estimate_bounce { multi_bounce(occlusion, s.diffuse()) } else { Vec3::splat(occlusion) };
         // The specular layer sees the same occluders where its lobe is blocked: their mean radiance, which the
         // gathered irradiance over π is (for a rough lobe; a sharp one would see one of them).
         let bounce = vis.bounce.max(Vec3::ZERO) * ao;
-        let specular = if w > 0.0 { specular * specular_occlusion(n.dot(v), occlusion, s.roughness) } else { specular };
         out + diffuse * (irradiance * returned + bounce) + specular + spec_f * bounce * (1.0 / PI)
     }
 
@@ -775,7 +790,7 @@ mod tests {
         assert_eq!(Gathered::decode(&bytes).as_ref(), Ok(&g));
         // Read back, it lights the frame exactly as preparing it in place does, without the environment's
         // occlusion maps.
-        let cached = FrameLight::from_gathered(&scene, lights, studio(), &g).expect("the same frame");
+        let cached = FrameLight::from_gathered(&scene, lights, studio(), g.clone()).expect("the same frame");
         assert!(cached.occlusion.is_empty() && !fresh.occlusion.is_empty());
         assert_eq!(fresh.vertex_visibility, cached.vertex_visibility);
         let ground = scene.primitives[0].material;
@@ -793,10 +808,10 @@ mod tests {
         assert!(Gathered::decode(&huge).is_err());
         let mut nan = bytes.clone();
         nan[8..12].copy_from_slice(&f32::NAN.to_le_bytes());
-        assert!(Gathered::decode(&nan).unwrap_err().contains("finite"));
+        assert!(Gathered::decode(&nan).unwrap_err().to_string().contains("finite"));
         // Another frame's shape is refused.
         let other = Gathered { vertices: vec![vec![Visibility::OPEN; 3]], planes: Vec::new() };
-        assert!(FrameLight::from_gathered(&scene, lights, studio(), &other).is_err());
+        assert!(FrameLight::from_gathered(&scene, lights, studio(), other).is_err());
     }
 
     #[test]

@@ -15,7 +15,7 @@ use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::scene::texture::floor;
-use crate::scene::{PosedScene, PrimKind};
+use crate::scene::PosedScene;
 
 /// How a map projects.
 #[derive(Debug, Clone, Copy)]
@@ -223,13 +223,13 @@ impl ShadowMap {
         let casters: Vec<(&crate::scene::PosedPrimitive, Vec<Vec3>, Vec<bool>)> = scene
             .primitives
             .iter()
-            .filter_map(|prim| {
-                let material = scene.materials.get(prim.material as usize);
-                if prim.kind != PrimKind::Triangles || !material.is_none_or(|m| m.casts_shadows) {
-                    return None;
-                }
+            .filter(|prim| super::is_caster(scene, prim))
+            .map(|prim| {
                 let light: Vec<Vec3> = prim.positions.iter().map(|&p| self.project(p)).collect();
-                let blend = material.filter(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend);
+                let blend = scene
+                    .materials
+                    .get(prim.material as usize)
+                    .filter(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend);
                 let mut glass = Vec::new();
                 if let Some(m) = blend {
                     for t in prim.indices.chunks_exact(3) {
@@ -253,7 +253,7 @@ impl ShadowMap {
                         });
                     }
                 }
-                Some((prim, light, glass))
+                (prim, light, glass)
             })
             .collect();
         // The opaque casters in bands of rows side by side: a texel keeps the least depth over it, which no order
@@ -604,6 +604,7 @@ fn triangle_alpha(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, m: &c
 mod tests {
     use super::*;
     use crate::scene::material::Material;
+    use crate::scene::PrimKind;
 
     fn quad(z: f32, half: f32) -> PosedScene {
         let p = vec![
