@@ -76,6 +76,8 @@ pub struct FbxAsset {
     blend_shapes: bool,
     /// Nodes whose layered rotation is blended as Maya blends it, not as ufbx does ([`super::fbx_layers`]).
     layered: Vec<super::fbx_layers::Layered>,
+    /// What the user should know about how it loaded: textures it names but neither holds nor has beside it.
+    pub warnings: Vec<String>,
 }
 
 impl FbxAsset {
@@ -170,7 +172,7 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
         .iter()
         .map(|s| Take { name: s.element.name.to_string(), begin: s.time_begin, end: s.time_end })
         .collect();
-    let (materials, textures) = materials(path, &scene)?;
+    let (materials, textures, warnings) = materials(path, &scene)?;
     let fallback = materials.len() as u32 - 1;
     let mut parts = Vec::new();
     let mut triangles = 0usize;
@@ -225,11 +227,11 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
     }
     let blend_shapes = scene.meshes.iter().any(|m| !m.blend_deformers.is_empty());
     let layered = super::fbx_layers::find(&scene);
-    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes, layered })
+    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes, layered, warnings })
 }
 
-/// Materials and the textures they use.
-type Shading = (Arc<Vec<Material>>, Arc<Vec<Texture>>);
+/// Materials, the textures they use, and warnings about textures they name that are missing.
+type Shading = (Arc<Vec<Material>>, Arc<Vec<Texture>>, Vec<String>);
 
 /// The scene's materials as the renderer's metallic-roughness, mapped from the FBX material's classic properties
 /// as Blender's importer maps them (`blen_read_material` in io_scene_fbx, 3.4 to 4.5): base colour
@@ -239,11 +241,17 @@ type Shading = (Arc<Vec<Material>>, Arc<Vec<Texture>>);
 /// colour's. Each property comes from the material, else its file's template, else Blender's default. The PBR
 /// properties some exporters add (Stingray, 3ds Max physical) are ignored, as Blender ignores them. A default
 /// material is last.
+///
+/// A texture the file names but neither embeds nor has beside it (exporters keep the path on the artist's
+/// machine; downloads often leave the images out) is a warning, not an error: the material keeps its colour
+/// alone, where Blender would show its missing-image magenta. The model still loads, and `--deny-warnings`
+/// makes it an error for whoever wants one.
 fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
     let dir = super::input::folder_of(path);
     let mut textures: Vec<Texture> = Vec::new();
-    let mut cache: std::collections::HashMap<u32, (u32, bool)> = Default::default();
+    let mut cache: std::collections::HashMap<u32, Option<(u32, bool)>> = Default::default();
     let mut mats = Vec::new();
+    let mut warnings = Vec::new();
     for m in scene.materials.iter() {
         let props = &m.element.props;
         // `find_prop` looks in the template (`props.defaults`) too, as Blender's `elem_props_get_*` do.
@@ -277,20 +285,29 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
         let diffuse_map = &m.fbx.diffuse_color;
         if let Some(t) = diffuse_map.texture.as_ref().filter(|_| diffuse_map.texture_enabled) {
             let id = t.element.typed_id;
-            let (index, alpha) = match cache.get(&id) {
+            let got = match cache.get(&id) {
                 Some(got) => *got,
                 None => {
-                    let (tex, alpha) = texture(path, dir, t)?;
-                    textures.push(tex);
-                    let got = (textures.len() as u32 - 1, alpha);
+                    let got = match texture(path, dir, t)? {
+                        Ok((tex, alpha)) => {
+                            textures.push(tex);
+                            Some((textures.len() as u32 - 1, alpha))
+                        }
+                        Err(missing) => {
+                            warnings.push(missing_texture(dir, &m.element.name, &missing));
+                            None
+                        }
+                    };
                     cache.insert(id, got);
                     got
                 }
             };
-            mat.base_color_texture = Some(TextureRef::new(index));
-            // Blender takes alpha from a diffuse image that has an alpha channel, and blends.
-            if alpha {
-                mat.alpha_mode = AlphaMode::Blend;
+            if let Some((index, alpha)) = got {
+                mat.base_color_texture = Some(TextureRef::new(index));
+                // Blender takes alpha from a diffuse image that has an alpha channel, and blends.
+                if alpha {
+                    mat.alpha_mode = AlphaMode::Blend;
+                }
             }
         }
         mat.base_color = mat.base_color.clamp(Vec4::ZERO, Vec4::splat(f32::MAX));
@@ -301,12 +318,30 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
         mats.push(mat);
     }
     mats.push(Material::default());
-    Ok((Arc::new(mats), Arc::new(textures)))
+    Ok((Arc::new(mats), Arc::new(textures), warnings))
+}
+
+/// The warning for material `material`'s texture `missing` (as the file names it), with where to put it: at
+/// that path in the folder `dir` when it is one, else (a path from another machine) by its name beside the file.
+fn missing_texture(dir: &Path, material: &str, missing: &str) -> String {
+    let name = Path::new(missing).file_name().map_or_else(|| missing.into(), |n| n.to_string_lossy());
+    let inside = !missing.contains(':') && !missing.starts_with('/') && !missing.split('/').any(|c| c == "..");
+    let place = if inside && missing != name {
+        format!("at `{}` or beside the FBX file as `{name}`", dir.join(missing).display())
+    } else {
+        format!("beside the FBX file as `{}`", dir.join(name.as_ref()).display())
+    };
+    format!(
+        "material `{material}`: texture `{missing}` is neither in the file nor beside it, so the material renders \
+         in its colour alone; put the image {place} to use it"
+    )
 }
 
 /// A texture: embedded in the file, or a file beside it that stays inside its folder (as glTF URIs must).
-/// With it, whether the image has an alpha channel.
-fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<(Texture, bool), Error> {
+/// With it, whether the image has an alpha channel; `Err` with the path it names (relative to the folder) when
+/// it is neither embedded nor there (see [`materials`]). An image that is there but does not decode, or a path
+/// out of the folder, is an error.
+fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Result<(Texture, bool), String>, Error> {
     let bytes: Vec<u8> = if t.content.size > 0 {
         t.content.to_vec()
     } else {
@@ -318,16 +353,16 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<(Texture, bool)
             _ => {
                 // Exporters often keep only an absolute path from another machine: try the name beside the file.
                 let name = Path::new(&rel).file_name().map(|n| dir.join(n));
-                match name.filter(|n| n.is_file()) {
-                    Some(n) => return crate::scene::obj::texture_and_alpha(&n),
-                    None => return Err(err(path, format!("texture `{rel}` is not in the file nor beside it"))),
-                }
+                return match name.filter(|n| n.is_file()) {
+                    Some(n) => crate::scene::obj::texture_and_alpha(&n).map(Ok),
+                    None => Ok(Err(rel)),
+                };
             }
         };
         if !inside {
             return Err(err(path, format!("texture `{rel}` points outside the FBX file's folder")));
         }
-        return crate::scene::obj::texture_and_alpha(&full);
+        return crate::scene::obj::texture_and_alpha(&full).map(Ok);
     };
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
@@ -341,7 +376,7 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<(Texture, bool)
         .map_err(|e| err(path, format!("embedded texture `{}` does not decode: {e}", t.element.name)))?;
     let alpha = img.color().has_alpha();
     let img = img.into_rgba8();
-    Ok((Texture::new(img.width(), img.height(), img.into_raw(), true), alpha))
+    Ok(Ok((Texture::new(img.width(), img.height(), img.into_raw(), true), alpha)))
 }
 
 impl FbxAsset {

@@ -53,7 +53,7 @@ pub struct LoadedSource {
     pub default_up: UpAxis,
     /// A built-in ground plane, placed in world units ([`super::Scene::open`] makes its geometry).
     pub ground: Option<Ground>,
-    /// What the user should know about how it loaded (a `.blend`'s import notes).
+    /// What the user should know about how it loaded (a `.blend`'s import notes, an FBX's missing textures).
     pub warnings: Vec<String>,
 }
 
@@ -76,6 +76,7 @@ impl LoadedSource {
             }
             SourceFile::Fbx(path) => {
                 let asset = super::fbx::load(path)?;
+                warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", path.display())));
                 let take = super::fbx::select_take(&asset, &name, &req.clips)?;
                 let duration = take.map_or(0.0, |t| asset.takes[t].duration());
                 let times = frame_times(&req.frames, duration);

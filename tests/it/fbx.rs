@@ -112,6 +112,51 @@ fn new_check_build_an_fbx_and_refuse_hostile_ones() {
     }
 }
 
+#[test]
+fn an_fbx_whose_texture_was_left_behind_loads_in_its_colours_and_says_where_to_put_it() {
+    // Blender 3.4's export of a quad whose checker texture stays a file, `textures/checker.png`
+    // (tests/data/fbx/external/make_checker_quad.py), copied without the image, as downloads often come.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let image = data("fbx/external/textures/checker.png");
+    std::fs::copy(data("fbx/external/checker_quad.fbx"), d.join("checker_quad.fbx")).unwrap();
+    let (code, err) = vvgen(d, &["new", "checker_quad.fbx"]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("checker-quad.toml")).unwrap();
+    std::fs::write(d.join("checker-quad.toml"), text.replace("resolution     = [400, 400]", "resolution = [48, 48]"))
+        .unwrap();
+    let (code, err) = vvgen(d, &["--color", "never", "check", "checker-quad.toml"]);
+    assert_eq!(code, 0, "{err}");
+    let said = "material `Checker`: texture `textures/checker.png` is neither in the file nor beside it";
+    assert!(
+        err.contains(said) && err.contains("textures/checker.png` or beside the FBX file as `checker.png`"),
+        "{err}"
+    );
+    let (code, err) = vvgen(d, &["--color", "never", "check", "--deny-warnings", "checker-quad.toml"]);
+    assert_eq!(code, 2, "{err}");
+    let (code, err) = vvgen(d, &["-q", "build", "checker-quad.toml"]);
+    assert_eq!(code, 0, "{err}");
+    let first = d.join("out/checker-quad/checker-quad_dnerf/train/r_0000.png");
+    let plain = std::fs::read(&first).unwrap();
+    let textured = |d: &Path| {
+        let asset = vvgen::scene::fbx::load(&d.join("checker_quad.fbx")).unwrap();
+        (asset.named_materials()[0].1.base_color_texture.is_some(), asset.warnings.len())
+    };
+    assert_eq!(textured(d), (false, 1));
+    // By its name beside the file (exporters keep paths from other machines), then where the file says.
+    std::fs::copy(&image, d.join("checker.png")).unwrap();
+    assert_eq!(textured(d), (true, 0));
+    std::fs::remove_file(d.join("checker.png")).unwrap();
+    std::fs::create_dir(d.join("textures")).unwrap();
+    std::fs::copy(&image, d.join("textures/checker.png")).unwrap();
+    assert_eq!(textured(d), (true, 0));
+    // The image found, the images render again, with it.
+    let (code, err) = vvgen(d, &["--color", "never", "build", "checker-quad.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    assert_ne!(std::fs::read(&first).unwrap(), plain);
+}
+
 /// vvgen's posed control points against Blender 3.4's own FBX import of the same files (arrays stored in
 /// `tests/data/fbx/blender/`, written by `benches/blender_fbx.py`), vertex for vertex: within 1e-4 of the
 /// subject's height at every stored time (measured: under 1e-6, the files' rounding).
