@@ -263,10 +263,24 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
             })
         };
         let mut alpha = 1.0 - real("TransparencyFactor", 0.0);
+        // Which property the alpha comes from, for the warning about a material nothing of which shows.
+        let mut from = "TransparencyFactor";
         if alpha == 1.0 || alpha == 0.0 {
             // The material's own `Opacity` only, not the template's (3ds Max writes it there).
             let own = props.props.iter().find(|p| p.name == "Opacity").map(|p| p.value_vec4.x);
+            from = if own.is_some() { "Opacity" } else { "TransparentColor" };
             alpha = own.unwrap_or_else(|| 1.0 - f64::from(rgb("TransparentColor", 0.0).x));
+        }
+        if alpha <= 0.0 {
+            // Blender's reading, kept (Cycles renders the material so), but a surprise: the FBX SDK takes a
+            // `TransparencyFactor` of 0 as opaque whatever `TransparentColor` says, and Eevee ignores alpha
+            // unless the blend mode says otherwise. A material's own `Opacity` comes first.
+            warnings.push(format!(
+                "material `{}` is fully transparent as Blender's importer reads it (alpha 0 from its `{from}`), so \
+                 nothing drawn in it shows, as in Cycles (Eevee and the FBX SDK draw it opaque); give the material \
+                 an `Opacity` of 1 in the file to see it",
+                m.element.name
+            ));
         }
         // Blender's shader inputs hold these in 0 … 1.
         let unit = |v: f64| v.clamp(0.0, 1.0) as f32;

@@ -157,6 +157,29 @@ fn an_fbx_whose_texture_was_left_behind_loads_in_its_colours_and_says_where_to_p
     assert_ne!(std::fs::read(&first).unwrap(), plain);
 }
 
+#[test]
+fn an_fbx_material_blenders_importer_reads_as_fully_transparent_is_a_warning_naming_it() {
+    // The sausage's material is white in `TransparentColor` with a `TransparencyFactor` of 0: Blender's importer
+    // (Unity's formula) takes the colour, and its own `Opacity` of 1 saves it. Without that line, alpha 0.
+    let text = std::fs::read_to_string(data("fbx/blender_279_sausage_6100_ascii.fbx")).unwrap();
+    let opacity = "\t\t\tProperty: \"Opacity\", \"double\", \"\",1.0\n";
+    assert_eq!(text.matches(opacity).count(), 1);
+    let tmp = tempfile::tempdir().unwrap();
+    let load = |text: &str| {
+        std::fs::write(tmp.path().join("sausage.fbx"), text).unwrap();
+        let asset = vvgen::scene::fbx::load(&tmp.path().join("sausage.fbx")).unwrap();
+        let alpha = asset.named_materials()[0].1.base_color.w;
+        (alpha, asset.warnings)
+    };
+    assert_eq!(load(&text), (1.0, Vec::new()));
+    let (alpha, warnings) = load(&text.replace(opacity, ""));
+    assert_eq!(alpha, 0.0);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    let w = &warnings[0];
+    assert!(w.contains("material `unnamed` is fully transparent") && w.contains("`TransparentColor`"), "{w}");
+    assert!(w.contains("an `Opacity` of 1"), "{w}");
+}
+
 /// vvgen's posed control points against Blender 3.4's own FBX import of the same files (arrays stored in
 /// `tests/data/fbx/blender/`, written by `benches/blender_fbx.py`), vertex for vertex: within 1e-4 of the
 /// subject's height at every stored time (measured: under 1e-6, the files' rounding).
