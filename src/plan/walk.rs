@@ -39,7 +39,8 @@ pub struct Keying<'a> {
     /// `[dataset] name` (previews are titled with it).
     pub dataset: String,
     /// The frame rate of videos, in thousandths of a frame per second (an integer, so it keys exactly): the first
-    /// source's `fps` (the sources of a scene share one time axis), 30 without one.
+    /// source's `fps` over its `step` (the sources of a scene share one time axis; its frames lie `step / fps`
+    /// seconds apart), 30 without one.
     pub video_fps_milli: u64,
     /// Resolved settings of every `ply-sequence` output, by name.
     pub points: std::collections::BTreeMap<String, PointSettings>,

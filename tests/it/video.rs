@@ -17,7 +17,9 @@ fn built(dir: &Path) -> PathBuf {
          [rig.ff]\nkind = \"forward-facing\"\n\
          [split.train]\nrig = \"ff\"\nviews = 3\n[split.test]\nrig = \"ff\"\nviews = 1\n\
          [output.llff]\nwriter = \"dynerf\"\ninit_points = 300\n",
+        // Every second frame of a 48 fps timeline: six frames 1/24 s apart, so 24 fps videos.
         cesium_head(6, 24, 2.4, "", "")
+            .replace("frames = { count = 6, fps = 24 }", "frames = { start = 0, end = 10, step = 2, fps = 48 }")
     );
     std::fs::write(dir.join("m.toml"), text).unwrap();
     let m = crate::common::load(&dir.join("m.toml"));
