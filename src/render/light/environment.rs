@@ -244,10 +244,11 @@ impl EnvMap {
         let xa = if (0..w).contains(&x0) { x0 } else { x0.rem_euclid(w) };
         let xb = if xa + 1 == w { 0 } else { xa + 1 };
         let (ya, yb) = (y0.clamp(0, h - 1) * w, (y0 + 1).clamp(0, h - 1) * w);
-        let at = |row: i64, x: i64| self.texels[(row + x) as usize];
+        // In SIMD lanes: the same products and sums per channel, so the same bits.
+        let at = |row: i64, x: i64| glam::Vec3A::from(self.texels[(row + x) as usize]);
         let top = at(ya, xa).lerp(at(ya, xb), tx);
         let bottom = at(yb, xa).lerp(at(yb, xb), tx);
-        top.lerp(bottom, ty)
+        top.lerp(bottom, ty).into()
     }
 
     /// Radiance arriving from world direction `d`.

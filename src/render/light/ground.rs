@@ -204,8 +204,9 @@ fn read3(g: &[Vec3], at: GridPoint) -> Vec3 {
     if g.len() < n * n {
         return Vec3::ZERO;
     }
-    let row = |j: usize| g[j * n + at.i].lerp(g[j * n + at.i + 1], at.t.x);
-    row(at.j).lerp(row(at.j + 1), at.t.y)
+    // In SIMD lanes: the same products and sums per channel, so the same bits.
+    let row = |j: usize| glam::Vec3A::from(g[j * n + at.i]).lerp(g[j * n + at.i + 1].into(), at.t.x);
+    row(at.j).lerp(row(at.j + 1), at.t.y).into()
 }
 
 /// Points in a plane's grids.
