@@ -8,7 +8,11 @@
 //! Images are named by number (`0000.png`, … in split order, the image's id less one): Deformable-3DGS'
 //! COLMAP reader takes `int(name)` of every image (`scene/dataset_readers.py` l.136) and stops with a
 //! ValueError on any other name; 3DGS, 4DGaussians and nerfstudio take the name as a file name. Which split and
-//! view each image is stays in `vvgen/dataset.json`.
+//! view each image is stays in `vvgen/dataset.json`, and beside each model in `train_list.txt`, `val_list.txt`
+//! and `test_list.txt`, the names nerfstudio's colmap parser reads its splits from (colmap_dataparser.py
+//! `_get_image_indices`): without them it would split by its own interval and train on the test views. It
+//! requires every list once one is there, so a missing split borrows its neighbour's, as the nerfstudio
+//! writer's lists do.
 
 use std::fmt::Write;
 
@@ -56,9 +60,16 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
              #   POINTS2D[] as (X, Y, POINT3D_ID)\n",
         );
         let pad = pad_for(in_frame.len());
+        // Each split's image names, in the order the splits first appear.
+        let mut lists: Vec<(&str, Vec<String>)> = Vec::new();
         for (id, &i) in in_frame.iter().enumerate() {
             let img = &x.plan.images[i];
             let name = format!("{id:0pad$}.png");
+            let split = x.plan.splits[img.split].name.as_str();
+            match lists.iter_mut().find(|(s, _)| *s == split) {
+                Some((_, names)) => names.push(name.clone()),
+                None => lists.push((split, vec![name.clone()])),
+            }
             files.image_blob(i, "rgb", &format!("{prefix}images/{name}"), x.opaque_rgb(i)?)?;
             let (q, t) = colmap_pose(&img.camera);
             let _ = writeln!(
@@ -73,6 +84,14 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
                 ryu_f64(t[1]),
                 ryu_f64(t[2])
             );
+        }
+        let get = |name: &str| lists.iter().find(|(n, _)| *n == name).map(|(_, l)| l.clone());
+        let train = get("train").unwrap_or_else(|| lists[0].1.clone());
+        let val = get("val").or_else(|| get("test")).unwrap_or_default();
+        let test = get("test").or_else(|| get("val")).unwrap_or_default();
+        for (split, names) in [("train", train), ("val", val), ("test", test)] {
+            let text: String = names.iter().map(|n| format!("{n}\n")).collect();
+            files.bytes(&format!("{prefix}{split}_list.txt"), text.as_bytes())?;
         }
         let pts = x.blob(&Action::ColmapPoints { frame: f, points: n_points })?;
         for model in MODELS {

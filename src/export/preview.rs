@@ -38,7 +38,8 @@ fn loading(writer: Writer) -> &'static str {
         }
         Writer::Colmap => {
             "Load with 3DGS (-s DIR, or DIR/frame_NNNN when the scene moves; it reads sparse/0) or nerfstudio \
-             (ns-train … colmap --data DIR; it reads colmap/sparse/0, the same model)."
+             (ns-train … colmap --data DIR; it reads colmap/sparse/0, the same model, and the splits from \
+             train_list.txt, val_list.txt and test_list.txt)."
         }
         Writer::Dynerf => {
             "Load DIR with K-Planes (DyNeRF config), 4DGaussians (dynerf) or Deformable-3DGS (plenoptic)."

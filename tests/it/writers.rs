@@ -414,6 +414,38 @@ fn colmap_text_model_per_frame_reprojects() {
             n += 1;
         }
         assert_eq!(n, 4 + 2 + 1, "train 4 + test 2 + val 1 images at frame {frame}");
+        // nerfstudio's colmap parser (`_get_image_indices`): once any list is there, `{split}_list.txt` must be
+        // for each split it loads (train, val, test), every name in it an image under images/; so the views
+        // trained on are the train split's, the evaluated ones the others'.
+        let names: Vec<String> = text
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+            .map(|l| l.split_whitespace().nth(9).unwrap().to_string())
+            .collect();
+        let list = |split: &str| -> Vec<String> {
+            let t = std::fs::read_to_string(model.join(format!("{split}_list.txt"))).unwrap();
+            t.lines().map(str::to_string).collect()
+        };
+        let meta = read_json(&root.join(vvgen::export::META));
+        let split_of = |name: &str| -> String {
+            // The image's id less one is its name; the metadata lists this frame's images in the same order.
+            let here: Vec<&Value> = meta["images"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|i| frame_of_time(i["time"].as_f64().unwrap()) == frame)
+                .collect();
+            let k: usize = name.split('.').next().unwrap().parse().unwrap();
+            here[k]["split"].as_str().unwrap().to_string()
+        };
+        let (train, val, test) = (list("train"), list("val"), list("test"));
+        assert_eq!((train.len(), val.len(), test.len()), (4, 1, 2), "frame {frame}");
+        for (split, l) in [("train", &train), ("val", &val), ("test", &test)] {
+            for name in l {
+                assert!(names.contains(name) && model.join("images").join(name).is_file(), "{name}");
+                assert_eq!(split_of(name), split, "{name} in {split}_list.txt");
+            }
+        }
         let pts = std::fs::read_to_string(model.join("sparse/0/points3D.txt")).unwrap();
         let p: Vec<&str> = pts.lines().filter(|l| !l.starts_with('#')).collect();
         assert_eq!(p.len(), 500);
