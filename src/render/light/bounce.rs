@@ -42,12 +42,14 @@ const GROUND_RAYS: u32 = 256;
 const CONE_RAYS: u32 = 64;
 
 /// Where one gathering ray met a caster: the triangle, the barycentric weights of its second and third corners
-/// there, and the diffuse reflectance of the surface there.
+/// there, the diffuse reflectance of the surface there and the radiance it emits (its material's emission: a
+/// glowing part lights the rest, as in a path tracer).
 #[derive(Clone, Copy)]
 struct Hit {
     tri: u32,
     k: [f32; 2],
     albedo: [u8; 3],
+    emission: Vec3,
 }
 
 /// The casters of one posed frame: their triangles as the ray tracer reads them and, per triangle, its
@@ -149,13 +151,14 @@ impl Subject {
     }
 
     /// The radiance coming back along a ray that met the subject at `h`: the diffuse surface there under all it
-    /// receives (`g`'s totals, interpolated across the triangle).
+    /// receives (`g`'s totals, interpolated across the triangle), and what it emits.
     #[inline]
     fn reflected(&self, g: &Gathered, h: &Hit) -> Vec3 {
         let (pi, [a, b, c]) = self.casters.corners[h.tri as usize];
         let at = |v: u32| g.total.get(self.first[pi as usize] + v as usize).map_or(Vec3::ZERO, |e| e.max(Vec3::ZERO));
         let e = at(a) * (1.0 - h.k[0] - h.k[1]) + at(b) * h.k[0] + at(c) * h.k[1];
         Vec3::new(h.albedo[0] as f32, h.albedo[1] as f32, h.albedo[2] as f32) * (1.0 / 255.0) * e * (1.0 / PI)
+            + h.emission
     }
 
     /// The serial numbers of primitive `prim`'s vertices.
@@ -254,9 +257,9 @@ impl Subject {
         let (pi, c) = casters.corners[tri];
         let t = &casters.tris[tri];
         let k = barycentric(o + d * hit.t, t.v0.into(), t.v1.into(), t.v2.into());
-        let albedo = diffuse_albedo(scene, &scene.primitives[pi as usize], c, k);
+        let (albedo, emission) = surface_at(scene, &scene.primitives[pi as usize], c, k);
         let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-        Some(Hit { tri: tri as u32, k, albedo: [q(albedo.x), q(albedo.y), q(albedo.z)] })
+        Some(Hit { tri: tri as u32, k, albedo: [q(albedo.x), q(albedo.y), q(albedo.z)], emission })
     }
 }
 
@@ -334,9 +337,10 @@ impl Neighbours {
     }
 }
 
-/// The diffuse layer's colour at barycentric weights `k` (of corners two and three) in triangle `c` of `prim`:
-/// base colour × (1 − metallic), textures and vertex colours included.
-fn diffuse_albedo(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, c: [u32; 3], k: [f32; 2]) -> Vec3 {
+/// The diffuse layer's colour at barycentric weights `k` (of corners two and three) in triangle `c` of `prim`
+/// (base colour × (1 − metallic), textures and vertex colours included), and the radiance it emits there
+/// (emissive factor × texture).
+fn surface_at(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, c: [u32; 3], k: [f32; 2]) -> (Vec3, Vec3) {
     let mat = scene.material(prim.material);
     let w = [1.0 - k[0] - k[1], k[0], k[1]];
     let uv = (!prim.uvs.is_empty()).then(|| {
@@ -352,7 +356,8 @@ fn diffuse_albedo(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, c: [u
         (Some((r, t)), Some(uv)) => mat.metallic * t.sample(&r, uv).z,
         _ => mat.metallic,
     };
-    mat.albedo(&scene.textures, uv, color).truncate() * (1.0 - metallic)
+    let emission = mat.emission(&scene.textures, uv).max(Vec3::ZERO);
+    (mat.albedo(&scene.textures, uv, color).truncate() * (1.0 - metallic), emission)
 }
 
 /// The barycentric weights of `b` and `c` for point `p` in triangle (a, b, c) (the projection onto its plane).
@@ -450,6 +455,25 @@ mod tests {
         // The same frame prepared again gives the same bits.
         let again = lit_from_below(&scene, 2.0);
         assert_eq!(format!("{:?}", again.vertex_visibility), format!("{:?}", light.vertex_visibility));
+    }
+
+    #[test]
+    fn a_glowing_ceiling_lights_the_floor_below_by_its_view_factor() {
+        // The floor and ceiling above, both black, the ceiling emitting 1.5 W/(m²·sr), no light and a dark
+        // environment: the floor's middle receives π · 1.5 · F, as from a lamp of that shape. Its own emission
+        // does not come back to the ceiling.
+        let mut scene = PosedScene::default();
+        let mut ceiling = square(2.0, 0.5, -Vec3::Z, 20, 0.0);
+        std::sync::Arc::make_mut(&mut ceiling.materials)[0].emissive = Vec3::splat(1.5);
+        crate::scene::merge(&[square(2.0, 0.0, Vec3::Z, 20, 0.0), ceiling], &mut scene);
+        let mut env = crate::render::Environment::default().studio();
+        env.strength = 0.0;
+        let light = FrameLight::prepare(&scene, &[], env).with_bounce(&scene);
+        let expected = PI * 1.5 * 4.0 * quadrant(2.0, 2.0, 0.5);
+        let middle = 10 * 21 + 10;
+        let got = light.vertex_visibility[0][middle].bounce;
+        assert!((got.x / expected - 1.0).abs() < 0.03 && got.x == got.y && got.y == got.z, "{got} vs {expected}");
+        assert!(light.vertex_visibility[1][middle].bounce.max_element() < 1e-6);
     }
 
     #[test]
