@@ -47,6 +47,8 @@ pub(super) struct PlaneVisibility {
     /// Summed-area tables of `vis` and `sun` ((PLANE_CELLS + 2)² entries, rows along +y; entry (i, j) sums the
     /// grid points below and left of it), for averages over a footprint.
     sums: Vec<[f64; 2]>,
+    /// The same of `lamps` (point and spot lights' irradiance), per channel; empty without such lights.
+    lamp_sums: Vec<[f64; 3]>,
     /// The environment's irradiance on the plane's top face (before its visibility): the same everywhere on it.
     sky: Vec3,
     /// Per light, per cell (rows along +y): whether the light's shadow surely misses the whole cell
@@ -125,9 +127,9 @@ impl PlaneVisibility {
     }
 
     /// The plane's light averaged over the square of half-side `w` (world units, at least half a cell) about
-    /// world (x, y), as fractions of the open plane's (environment, suns), and the fraction of the square on the
-    /// plane; `None` when none of it is.
-    fn light_over(&self, x: f32, y: f32, w: f32) -> Option<(Vec2, f32)> {
+    /// world (x, y): as fractions of the open plane's (environment, suns), the irradiance of its point and spot
+    /// lights, and the fraction of the square on the plane; `None` when none of it is.
+    fn light_over(&self, x: f32, y: f32, w: f32) -> Option<(Vec2, Vec3, f32)> {
         let n = PLANE_CELLS as f64;
         // In grid units, where grid point k stands for the span [k − ½, k + ½]; the box is cut to the plane.
         let uv = self.grid_uv(x, y);
@@ -139,25 +141,23 @@ impl PlaneVisibility {
             return None;
         }
         let on = ((u1 - u0) * (v1 - v0) / (4.0 * wu * wv)) as f32;
-        let at = |u: f64, v: f64| self.sum_at(u + 0.5, v + 0.5);
-        let (a, b, c, d) = (at(u1, v1), at(u0, v1), at(u1, v0), at(u0, v0));
         let area = (u1 - u0) * (v1 - v0);
+        // The box's sum from a table's four corners, over its area.
+        fn mean<const N: usize>(t: &[[f64; N]], [u0, v0, u1, v1]: [f64; 4], area: f64) -> [f64; N] {
+            let at = |u: f64, v: f64| sum_at(t, u + 0.5, v + 0.5);
+            let (a, b, c, d) = (at(u1, v1), at(u0, v1), at(u1, v0), at(u0, v0));
+            std::array::from_fn(|k| (a[k] - b[k] - c[k] + d[k]) / area)
+        }
+        let corners = [u0, v0, u1, v1];
         // (An empty sun grid was summed as all ones.)
-        let avg = |k: usize| ((a[k] - b[k] - c[k] + d[k]) / area).clamp(0.0, 1.0) as f32;
-        Some((Vec2::new(avg(0), avg(1)), on))
-    }
-
-    /// The summed-area tables at (u, v) in [0, PLANE_CELLS + 1]², interpolated bilinearly between entries.
-    fn sum_at(&self, u: f64, v: f64) -> [f64; 2] {
-        let m = PLANE_CELLS + 2;
-        let (i, j) = ((u as usize).min(m - 2), (v as usize).min(m - 2));
-        let (tu, tv) = (u - i as f64, v - j as f64);
-        let e = |i: usize, j: usize| self.sums[j * m + i];
-        std::array::from_fn(|k| {
-            let lo = e(i, j)[k] + (e(i + 1, j)[k] - e(i, j)[k]) * tu;
-            let hi = e(i, j + 1)[k] + (e(i + 1, j + 1)[k] - e(i, j + 1)[k]) * tu;
-            lo + (hi - lo) * tv
-        })
+        let light = mean(&self.sums, corners, area).map(|f| f.clamp(0.0, 1.0) as f32);
+        let lamps = if self.lamp_sums.is_empty() {
+            Vec3::ZERO
+        } else {
+            let e = mean(&self.lamp_sums, corners, area).map(|e| e.max(0.0) as f32);
+            Vec3::from_array(e)
+        };
+        Some((Vec2::new(light[0], light[1]), lamps, on))
     }
 
     /// World (x, y) in grid units: grid point (i, j) is at (i, j).
@@ -250,6 +250,36 @@ pub(super) fn blur(g: &[Vec3], r: usize) -> Vec<Vec3> {
         g = pass(&pass(&g, 1), n);
     }
     g
+}
+
+/// Summed-area table `t` ((PLANE_CELLS + 2)² entries) at (u, v) in [0, PLANE_CELLS + 1]², interpolated
+/// bilinearly between entries.
+fn sum_at<const N: usize>(t: &[[f64; N]], u: f64, v: f64) -> [f64; N] {
+    let m = PLANE_CELLS + 2;
+    let (i, j) = ((u as usize).min(m - 2), (v as usize).min(m - 2));
+    let (tu, tv) = (u - i as f64, v - j as f64);
+    let e = |i: usize, j: usize| t[j * m + i];
+    std::array::from_fn(|k| {
+        let lo = e(i, j)[k] + (e(i + 1, j)[k] - e(i, j)[k]) * tu;
+        let hi = e(i, j + 1)[k] + (e(i + 1, j + 1)[k] - e(i, j + 1)[k]) * tu;
+        lo + (hi - lo) * tv
+    })
+}
+
+/// The summed-area table of a grid of colours ((PLANE_CELLS + 1)² points), per channel.
+fn summed_colours(g: &[Vec3]) -> Vec<[f64; 3]> {
+    let (n, m) = (PLANE_CELLS + 1, PLANE_CELLS + 2);
+    let mut sums = vec![[0.0f64; 3]; m * m];
+    for j in 0..n {
+        let mut row = [0.0f64; 3];
+        for i in 0..n {
+            let c = g[j * n + i];
+            row = [row[0] + c.x as f64, row[1] + c.y as f64, row[2] + c.z as f64];
+            let below = sums[j * m + i + 1];
+            sums[(j + 1) * m + i + 1] = std::array::from_fn(|k| below[k] + row[k]);
+        }
+    }
+    sums
 }
 
 /// The summed-area tables of grids `vis` and `sun` ((PLANE_CELLS + 1)² points each; `sun` may be empty).
@@ -414,12 +444,14 @@ impl FrameLight {
             .collect();
         let sky = self.irradiance(lo, Vec3::Z, Vec3::ZERO);
         let sums = summed_areas(&grids.vis, &grids.sun);
+        let lamp_sums = if grids.lamps.len() == GRID_POINTS { summed_colours(&grids.lamps) } else { Vec::new() };
         let mut plane = PlaneVisibility {
             material,
             lo: lo.truncate(),
             cell,
             grids,
             sums,
+            lamp_sums,
             sky,
             open,
             lit: Vec::new(),
@@ -502,7 +534,7 @@ impl FrameLight {
             return None;
         }
         let (q, t) = g.hit(p, d);
-        plane.light_over(q.x, q.y, t * spread).map(|(light, on)| (g.radiance(light), on))
+        plane.light_over(q.x, q.y, t * spread).map(|(light, lamps, on)| (g.radiance(light) + g.albedo * lamps * (1.0 / PI), on))
     }
 
     /// [`FrameLight::shade`] of the top face (normal +Z) of ground plane material `material`, when it is one,
@@ -629,7 +661,7 @@ mod tests {
             last = Some(c.x);
         }
         // A box over the plane's corner is a quarter on it; one past the edges is not on it at all.
-        let (_, quarter) = plane.light_over(2.0, 2.0, 0.2).expect("partly on the plane");
+        let (_, _, quarter) = plane.light_over(2.0, 2.0, 0.2).expect("partly on the plane");
         assert!((quarter - 0.25).abs() < 0.02, "{quarter}");
         assert!(plane.light_over(3.0, 0.0, 0.2).is_none());
         // The summed areas agree with the grid: a box over whole cells averages the grid points it spans.
@@ -640,9 +672,28 @@ mod tests {
                 / (k * k) as f32
         };
         let (x, y) = (plane.lo.x + plane.cell.x * (i0 as f32 + 4.0), plane.lo.y + plane.cell.y * (j0 as f32 + 4.0));
-        let (avg, on) = plane.light_over(x, y, plane.cell.x * 4.5).expect("on the plane");
+        let (avg, _, on) = plane.light_over(x, y, plane.cell.x * 4.5).expect("on the plane");
         assert_eq!(on, 1.0);
         assert!((avg.x - mean(&plane.grids.vis)).abs() < 1e-4 && (avg.y - mean(&plane.grids.sun)).abs() < 1e-4, "{avg}");
+    }
+
+    #[test]
+    fn a_glossy_lobe_sees_the_ground_a_point_light_lights() {
+        // The square over the ground under a point light alone (the map's strength 0): looking down from a
+        // point beside the square, a narrow lobe sees the ground's radiance there, its colour times the lamp's
+        // irradiance over π (it saw black before point lights entered the footprint's average).
+        let lamp = light(LightKind::Point { position: Vec3::new(-1.0, 0.5, 2.0), radius: 0.1 });
+        let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
+        let mut scene = PosedScene::default();
+        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0)], &mut scene);
+        let mut env = crate::render::Environment::default().studio();
+        env.strength = 0.0;
+        let frame = FrameLight::prepare(&scene, std::slice::from_ref(&lamp), env);
+        let q = Vec3::new(0.8, -0.6, 0.0);
+        let (seen, on) = frame.ground_seen(q + Vec3::Z * 0.5, -Vec3::Z, 0.01).expect("on the plane");
+        let expected = Vec3::new(0.7, 0.6, 0.5) * frame.lights[0].irradiance(q, Vec3::Z) / PI;
+        assert_eq!(on, 1.0);
+        assert!(expected.x > 1e-3 && (seen - expected).abs().max_element() < 0.02 * expected.x, "{seen} vs {expected}");
     }
 
     #[test]
