@@ -11,8 +11,8 @@
 //! view each image is stays in `vvgen/dataset.json`, and beside each model in `train_list.txt`, `val_list.txt`
 //! and `test_list.txt`, the names nerfstudio's colmap parser reads its splits from (colmap_dataparser.py
 //! `_get_image_indices`): without them it would split by its own interval and train on the test views. It
-//! requires every list once one is there, so a missing split borrows its neighbour's, as the nerfstudio
-//! writer's lists do.
+//! requires every list once one is there, so a missing split borrows its neighbour's
+//! ([`super::nerfstudio_splits`], as the nerfstudio writer's lists do).
 
 use std::fmt::Write;
 
@@ -85,11 +85,7 @@ pub fn write(x: &Export, out: &Output, images: &[usize], files: &mut Files) -> R
                 ryu_f64(t[2])
             );
         }
-        let get = |name: &str| lists.iter().find(|(n, _)| *n == name).map(|(_, l)| l.clone());
-        let train = get("train").unwrap_or_else(|| lists[0].1.clone());
-        let val = get("val").or_else(|| get("test")).unwrap_or_default();
-        let test = get("test").or_else(|| get("val")).unwrap_or_default();
-        for (split, names) in [("train", train), ("val", val), ("test", test)] {
+        for (split, names) in ["train", "val", "test"].into_iter().zip(super::nerfstudio_splits(&lists)) {
             let text: String = names.iter().map(|n| format!("{n}\n")).collect();
             files.bytes(&format!("{prefix}{split}_list.txt"), text.as_bytes())?;
         }

@@ -309,6 +309,18 @@ fn r_name(img: &Image, pad: usize) -> String {
     format!("r_{:0pad$}", img.index)
 }
 
+/// nerfstudio's train, val and test lists from each split's names (`lists`, in split order, none empty): it
+/// requires all three once any is given, so a missing split borrows its neighbour's (train: the first split's;
+/// val and test each other's, else none). Its `transforms.json` lists and its colmap parser's `*_list.txt` read
+/// them alike.
+fn nerfstudio_splits(lists: &[(impl AsRef<str>, Vec<String>)]) -> [Vec<String>; 3] {
+    let get = |name: &str| lists.iter().find(|(n, _)| n.as_ref() == name).map(|(_, l)| l.clone());
+    let train = get("train").unwrap_or_else(|| lists.first().map(|(_, l)| l.clone()).unwrap_or_default());
+    let val = get("val").or_else(|| get("test")).unwrap_or_default();
+    let test = get("test").or_else(|| get("val")).unwrap_or_default();
+    [train, val, test]
+}
+
 /// Number of init points an image output asks for.
 fn init_points(out: &Output) -> u64 {
     out.init_points().unwrap_or(crate::plan::graph::DEFAULT_INIT_POINTS)

@@ -189,11 +189,7 @@ pub fn nerfstudio(x: &Export, out: &Output, images: &[usize], files: &mut Files)
     doc.insert("w".into(), json!(c.width));
     doc.insert("h".into(), json!(c.height));
     doc.insert("applied_transform".into(), json!([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]));
-    // nerfstudio requires all three lists when any is present; a missing split borrows its neighbour's.
-    let get = |name: &str| lists.iter().find(|(n, _)| n == name).map(|(_, l)| l.clone());
-    let train = get("train").unwrap_or_else(|| lists[0].1.clone());
-    let val = get("val").or_else(|| get("test")).unwrap_or_default();
-    let test = get("test").or_else(|| get("val")).unwrap_or_default();
+    let [train, val, test] = super::nerfstudio_splits(&lists);
     doc.insert("train_filenames".into(), json!(train));
     doc.insert("val_filenames".into(), json!(val));
     doc.insert("test_filenames".into(), json!(test));

@@ -303,11 +303,11 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
                 Some(got) => *got,
                 None => {
                     let got = match texture(path, dir, t)? {
-                        Ok((tex, alpha)) => {
+                        Image::Found(tex, alpha) => {
                             textures.push(tex);
                             Some((textures.len() as u32 - 1, alpha))
                         }
-                        Err(missing) => {
+                        Image::Missing(missing) => {
                             warnings.push(missing_texture(dir, &m.element.name, &missing));
                             None
                         }
@@ -351,11 +351,17 @@ fn missing_texture(dir: &Path, material: &str, missing: &str) -> String {
     )
 }
 
-/// A texture: embedded in the file, or a file beside it that stays inside its folder (as glTF URIs must).
-/// With it, whether the image has an alpha channel; `Err` with the path it names (relative to the folder) when
-/// it is neither embedded nor there (see [`materials`]). An image that is there but does not decode, or a path
-/// out of the folder, is an error.
-fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Result<(Texture, bool), String>, Error> {
+/// What a material's texture reference finds.
+enum Image {
+    /// The image, and whether it has an alpha channel.
+    Found(Texture, bool),
+    /// Nothing, embedded or in the folder: the path the file names (see [`materials`]).
+    Missing(String),
+}
+
+/// A texture: embedded in the file, or a file beside it that stays inside its folder (as glTF URIs must), or
+/// missing. An image that is there but does not decode, or a path out of the folder, is an error.
+fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
     let bytes: Vec<u8> = if t.content.size > 0 {
         t.content.to_vec()
     } else {
@@ -368,15 +374,15 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Result<(Texture
                 // Exporters often keep only an absolute path from another machine: try the name beside the file.
                 let name = Path::new(&rel).file_name().map(|n| dir.join(n));
                 return match name.filter(|n| n.is_file()) {
-                    Some(n) => crate::scene::obj::texture_and_alpha(&n).map(Ok),
-                    None => Ok(Err(rel)),
+                    Some(n) => found(&n),
+                    None => Ok(Image::Missing(rel)),
                 };
             }
         };
         if !inside {
             return Err(err(path, format!("texture `{rel}` points outside the FBX file's folder")));
         }
-        return crate::scene::obj::texture_and_alpha(&full).map(Ok);
+        return found(&full);
     };
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
@@ -390,7 +396,12 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Result<(Texture
         .map_err(|e| err(path, format!("embedded texture `{}` does not decode: {e}", t.element.name)))?;
     let alpha = img.color().has_alpha();
     let img = img.into_rgba8();
-    Ok(Ok((Texture::new(img.width(), img.height(), img.into_raw(), true), alpha)))
+    Ok(Image::Found(Texture::new(img.width(), img.height(), img.into_raw(), true), alpha))
+}
+
+/// The image file at `file`, read.
+fn found(file: &Path) -> Result<Image, Error> {
+    crate::scene::obj::texture_and_alpha(file).map(|(t, alpha)| Image::Found(t, alpha))
 }
 
 impl FbxAsset {

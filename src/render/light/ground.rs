@@ -266,33 +266,18 @@ fn sum_at<const N: usize>(t: &[[f64; N]], u: f64, v: f64) -> [f64; N] {
     })
 }
 
-/// The summed-area table of a grid of colours ((PLANE_CELLS + 1)² points), per channel.
-fn summed_colours(g: &[Vec3]) -> Vec<[f64; 3]> {
+/// The summed-area table ((PLANE_CELLS + 2)² entries, rows along +y; entry (i, j) sums the grid points below and
+/// left of it) of `N` grids at once, `point(k)` giving grid point k's values (row order).
+fn summed_areas<const N: usize>(point: impl Fn(usize) -> [f64; N]) -> Vec<[f64; N]> {
     let (n, m) = (PLANE_CELLS + 1, PLANE_CELLS + 2);
-    let mut sums = vec![[0.0f64; 3]; m * m];
+    let mut sums = vec![[0.0f64; N]; m * m];
     for j in 0..n {
-        let mut row = [0.0f64; 3];
+        let mut row = [0.0f64; N];
         for i in 0..n {
-            let c = g[j * n + i];
-            row = [row[0] + c.x as f64, row[1] + c.y as f64, row[2] + c.z as f64];
+            let p = point(j * n + i);
+            row = std::array::from_fn(|k| row[k] + p[k]);
             let below = sums[j * m + i + 1];
             sums[(j + 1) * m + i + 1] = std::array::from_fn(|k| below[k] + row[k]);
-        }
-    }
-    sums
-}
-
-/// The summed-area tables of grids `vis` and `sun` ((PLANE_CELLS + 1)² points each; `sun` may be empty).
-fn summed_areas(vis: &[f32], sun: &[f32]) -> Vec<[f64; 2]> {
-    let (n, m) = (PLANE_CELLS + 1, PLANE_CELLS + 2);
-    let mut sums = vec![[0.0f64; 2]; m * m];
-    for j in 0..n {
-        let mut row = [0.0f64; 2];
-        for i in 0..n {
-            row[0] += vis[j * n + i] as f64;
-            row[1] += sun.get(j * n + i).map_or(1.0, |&s| s as f64);
-            let below = sums[j * m + i + 1];
-            sums[(j + 1) * m + i + 1] = [below[0] + row[0], below[1] + row[1]];
         }
     }
     sums
@@ -443,8 +428,13 @@ impl FrameLight {
             })
             .collect();
         let sky = self.irradiance(lo, Vec3::Z, Vec3::ZERO);
-        let sums = summed_areas(&grids.vis, &grids.sun);
-        let lamp_sums = if grids.lamps.len() == GRID_POINTS { summed_colours(&grids.lamps) } else { Vec::new() };
+        // (An empty sun grid sums as all ones.)
+        let sums = summed_areas(|k| [grids.vis[k] as f64, grids.sun.get(k).map_or(1.0, |&s| s as f64)]);
+        let lamp_sums = if grids.lamps.len() == GRID_POINTS {
+            summed_areas(|k| grids.lamps[k].to_array().map(f64::from))
+        } else {
+            Vec::new()
+        };
         let mut plane = PlaneVisibility {
             material,
             lo: lo.truncate(),
