@@ -434,6 +434,23 @@ fn draw_triangles(
             });
             continue;
         }
+        if mat.alpha_mode == AlphaMode::Opaque {
+            // Opaque and shaded now (unlit, untextured: a ground plane, a vertex-coloured mesh), the same writes
+            // as the general case below without its alpha and blending branches. Apart, the walk inlines it:
+            // called per sample, the general closure cost an unlit build with a ground half its time.
+            walk.hits(x0, y0, w, depth, |i, _, k, _| {
+                let albedo = mat.base_color * vertex_colour(k);
+                let nrm = if shade.normals { tri.normal_at(k) } else { Vec3::ZERO };
+                color[i] = (shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive).extend(1.0);
+                normal[i] = nrm;
+                object[i] = tri.object + 1;
+                if deferring {
+                    tri_at[i] = NO_TRI;
+                }
+                true
+            });
+            continue;
+        }
         let tex = mat
             .base_color_texture
             .filter(|_| !deferred_texture)
