@@ -8,6 +8,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::brdf::{basis, hammersley};
+use super::penumbra::SunShade;
 use super::{EnvLight, FrameLight, Light, LightKind, Visibility};
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 
@@ -78,6 +79,9 @@ pub(super) struct PlaneGrids {
     /// The irradiance the subject reflects onto the same points ([`super::bounce::Subject::onto`]). Empty until
     /// the subject's own bounce is known, and without a subject.
     pub(super) bounce: Vec<Vec3>,
+    /// Per light (in the frame's order), its shadow sampled where it may fall on the plane: a sun's, once per
+    /// frame for all its views ([`SunShade`]); empty for other lights, which pixels look up themselves.
+    pub(super) shades: Vec<SunShade>,
 }
 
 /// Where a point falls on a plane's grid: its cell (column, row) and the fractions across it.
@@ -395,7 +399,17 @@ impl FrameLight {
                 })
                 .collect()
         };
-        self.assemble(material, corners, PlaneGrids { vis, sun, lamps, bounce: Vec::new() })
+        let mut plane = self.assemble(material, corners, PlaneGrids { vis, sun, lamps, bounce: Vec::new(), shades: Vec::new() });
+        plane.grids.shades = self
+            .lights
+            .iter()
+            .zip(&plane.open)
+            .map(|(lamp, open)| match lamp.maps.as_slice() {
+                [map] if !open.is_empty() => SunShade::sample(map, lamp.size, open, lo, cell, n),
+                _ => SunShade::default(),
+            })
+            .collect();
+        plane
     }
 
     /// The plane through `corners` with its grids `grids` (found by [`FrameLight::plane_visibility`], here or in
@@ -538,7 +552,7 @@ impl FrameLight {
         let cell = at.j * PLANE_CELLS + at.i;
         let sunlit = g.sunlit.get(cell) == Some(&true);
         let mut e = read3(if sunlit { &g.lit } else { &g.unsunned }, at);
-        for (lamp, open) in self.lights.iter().zip(&g.open) {
+        for (k, (lamp, open)) in self.lights.iter().zip(&g.open).enumerate() {
             let sun = matches!(lamp.light.kind, LightKind::Sun { .. });
             if sun && sunlit {
                 continue;
@@ -548,7 +562,12 @@ impl FrameLight {
                 continue;
             }
             let light = &lamp.light;
-            let vis = if open.get(cell) == Some(&true) { 1.0 } else { lamp.visibility(p, Vec3::Z) };
+            // A sun's shadow was sampled once for the frame where it may fall (open cells hold none: fully lit).
+            let vis = match g.grids.shades.get(k) {
+                Some(s) if !s.is_empty() => s.at(cell, at.t).unwrap_or(1.0),
+                _ if open.get(cell) == Some(&true) => 1.0,
+                _ => lamp.visibility(p, Vec3::Z),
+            };
             e += light.color * (radiance * light.intensity * vis * l.z);
         }
         Some(albedo * e / PI)
@@ -704,17 +723,29 @@ mod tests {
             (0..10_000).map(|i| Vec3::new(-1.98 + (i % 100) as f32 * 0.04, -1.98 + (i / 100) as f32 * 0.04, 0.0));
         let across = (0..1000).map(|i| Vec3::new(-0.2 + i as f32 * 1e-3, 0.2, 0.0));
         let along = (0..1000).map(|i| Vec3::new(0.3, -0.3 + i as f32 * 1e-3, 0.0));
+        // The shortcut reads the sun's shadow from the frame's lattice ([`SunShade`]), the full model looks it up:
+        // the two differ by the sun's light times the difference of the two visibilities, and by nothing else.
+        let sun_lamp = &frame.lights[0];
+        let sun_term = albedo / PI * sun_lamp.light.color * sun_lamp.light.intensity * sun_lamp.incidence(Vec3::ZERO).0.z;
+        let plane = &frame.planes[0];
+        let mut worst = 0.0f32;
         for p in grid.chain(across).chain(along) {
             let vis = frame.plane_visibility_at(ground, p).expect("the plane's material is a ground's");
             let full = frame.shade(p, Vec3::Z, Vec3::new(0.2, -0.4, 0.9).normalize(), &lambert, 1.0, vis, false);
             let fast = frame.shade_ground(ground, p, albedo).expect("a ground");
-            assert!((full - fast).abs().max_element() <= 1e-5 * (1.0 + full.max_element()), "{p}: {full} vs {fast}");
-            let sun = frame.lights[0].visibility(p, Vec3::Z);
+            let sun = sun_lamp.visibility(p, Vec3::Z);
+            let at = locate(plane.grid_uv(p.x, p.y));
+            let lattice = plane.grids.shades[0].at(at.j * PLANE_CELLS + at.i, at.t).unwrap_or(1.0);
+            let expected = full - sun_term * (sun - lattice);
+            assert!((expected - fast).abs().max_element() <= 1e-5 * (1.0 + full.max_element()), "{p}: {expected} vs {fast}");
+            worst = worst.max((sun - lattice).abs());
             (shadowed, open) = (shadowed + (sun == 0.0) as u32, open + (sun == 1.0) as u32);
         }
         // Both sides of the sun's shadow were compared, and the shortcut skipped the sun's lookup in most cells
         // but not near the shadow (the point light, a perspective map, always looks up).
         assert!(shadowed > 1000 && open > 8500, "{shadowed} in shadow, {open} open");
+        // The lattice's smooth lookup and the pixel's agree but for the latter's steps in the penumbra.
+        assert!(worst > 0.0 && worst < 0.2, "{worst}");
         let cells = &frame.planes[0].open;
         let skipped = cells[0].iter().filter(|&&o| o).count();
         assert!(skipped > cells[0].len() / 2 && skipped < cells[0].len(), "{skipped} of {}", cells[0].len());

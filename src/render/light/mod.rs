@@ -11,6 +11,7 @@ mod bounce;
 pub mod brdf;
 pub mod environment;
 mod ground;
+mod penumbra;
 pub mod shadow;
 
 use std::f32::consts::PI;
@@ -24,6 +25,7 @@ use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
 use ground::{ground_planes, Ground, PlaneVisibility};
+use penumbra::SunShade;
 use shadow::ShadowMap;
 
 /// What reaches a surface point of the environment's light: interpolated across a triangle from its vertices,
@@ -104,7 +106,8 @@ pub struct Gathered {
 impl Gathered {
     /// The bytes of the cache's blob, little-endian u32 counts and f32 values: the number of primitives, then per
     /// primitive its vertex count and each vertex's environment visibility, radiance from below and bounce;
-    /// then the number of planes and per plane its four grids, each as a count and values.
+    /// then the number of planes and per plane its four grids, each as a count and values, and the number of its
+    /// suns' shadow lattices and each lattice ([`SunShade::encode`]).
     pub fn encode(&self) -> Vec<u8> {
         let mut out = Vec::new();
         let u32s = |out: &mut Vec<u8>, n: usize| out.extend((n as u32).to_le_bytes());
@@ -128,6 +131,8 @@ impl Gathered {
                 u32s(&mut out, grid.len());
                 grid.iter().for_each(|c| f32s(&mut out, &c.to_array()));
             }
+            u32s(&mut out, g.shades.len());
+            g.shades.iter().for_each(|s| s.encode(&mut out));
         }
         out
     }
@@ -164,7 +169,16 @@ impl Gathered {
             if vis.len() != ground::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len()) {
                 return Err(GatheredError::Damaged("a ground grid of another size"));
             }
-            grids.push(ground::PlaneGrids { vis, sun, lamps, bounce });
+            let n = r.count(12)?;
+            let mut shades = Vec::with_capacity(n);
+            for _ in 0..n {
+                let side = r.u32()? as usize;
+                let block = r.n_u32()?;
+                let vis = r.n_u16()?;
+                let cells = ground::PLANE_CELLS * ground::PLANE_CELLS;
+                shades.push(SunShade::from_parts(side, block, vis, cells).map_err(GatheredError::Damaged)?);
+            }
+            grids.push(ground::PlaneGrids { vis, sun, lamps, bounce, shades });
         }
         if r.at != bytes.len() {
             return Err(GatheredError::Damaged("trailing bytes"));
@@ -194,19 +208,43 @@ impl Reader<'_> {
     /// A count of items of at least `size` bytes each, refused when the bytes left cannot hold that many (so a
     /// corrupt count never sizes an allocation).
     fn count(&mut self, size: usize) -> Result<usize, GatheredError> {
-        let b = self.bytes.get(self.at..self.at + 4).ok_or(GatheredError::Damaged("truncated"))?;
-        self.at += 4;
-        let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize;
+        let n = self.u32()? as usize;
         if n > (self.bytes.len() - self.at) / size {
             return Err(GatheredError::Damaged("truncated"));
         }
         Ok(n)
     }
 
+    /// One u32.
+    fn u32(&mut self) -> Result<u32, GatheredError> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// A count and that many u32s.
+    fn n_u32(&mut self) -> Result<Vec<u32>, GatheredError> {
+        let n = self.count(4)?;
+        let b = self.take(4 * n)?;
+        Ok(b.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    }
+
+    /// A count and that many u16s.
+    fn n_u16(&mut self) -> Result<Vec<u16>, GatheredError> {
+        let n = self.count(2)?;
+        let b = self.take(2 * n)?;
+        Ok(b.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect())
+    }
+
+    /// The next `len` bytes.
+    fn take(&mut self, len: usize) -> Result<&[u8], GatheredError> {
+        let b = self.bytes.get(self.at..self.at + len).ok_or(GatheredError::Damaged("truncated"))?;
+        self.at += len;
+        Ok(b)
+    }
+
     /// `n` finite f32s.
     fn f32s(&mut self, n: usize) -> Result<Vec<f32>, GatheredError> {
-        let b = self.bytes.get(self.at..self.at + 4 * n).ok_or(GatheredError::Damaged("truncated"))?;
-        self.at += 4 * n;
+        let b = self.take(4 * n)?;
         let v: Vec<f32> = b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         if v.iter().all(|f| f.is_finite()) {
             Ok(v)
@@ -786,6 +824,8 @@ mod tests {
         let g = FrameLight::prepare(&scene, lights, studio()).gather(&scene);
         assert_eq!(g.vertices.iter().map(Vec::len).collect::<Vec<_>>(), [4, 4]);
         assert!(g.planes[0].bounce.iter().any(|v| v.x > 1e-3));
+        // The sun's shadow on the ground was sampled where it falls, for every view to read.
+        assert!(g.planes[0].shades.iter().any(|s| !s.is_empty()));
         let bytes = g.encode();
         assert_eq!(Gathered::decode(&bytes).as_ref(), Ok(&g));
         // Read back, it lights the frame exactly as preparing it in place does, without the environment's

@@ -207,6 +207,11 @@ impl ShadowMap {
         }
     }
 
+    /// World size of one texel of a parallel map (a sun's); a perspective map's at unit depth.
+    pub fn texel_size(&self) -> f32 {
+        self.texel_world(1.0)
+    }
+
     /// World size of one texel at light depth `d`.
     #[inline]
     fn texel_world(&self, d: f32) -> f32 {
@@ -295,6 +300,20 @@ impl ShadowMap {
     /// caller weights by n·l). `size` is the light's angular radius as a tangent (sun) or its radius in world
     /// units (point, spot); 0 is a hard shadow.
     pub fn visibility(&self, p: Vec3, n: Vec3, size: f32) -> f32 {
+        self.visibility_with::<4>(p, n, size)
+    }
+
+    /// [`ShadowMap::visibility`] with 8 × 8 taps in the blocker search and the filter instead of 4 × 4: a wide
+    /// penumbra shows no steps (four copies of the caster's edge, where 4 × 4 taps spread over it), for four
+    /// times the reads inside a penumbra. For what is read once and seen many times (a ground's shadow, sampled
+    /// once per frame for every view: [`super::penumbra`]).
+    pub fn visibility_smooth(&self, p: Vec3, n: Vec3, size: f32) -> f32 {
+        self.visibility_with::<8>(p, n, size)
+    }
+
+    /// [`ShadowMap::visibility`] with `N` × `N` taps.
+    #[inline]
+    fn visibility_with<const N: usize>(&self, p: Vec3, n: Vec3, size: f32) -> f32 {
         // A parallel map's texels are one size at every depth: no need to project `p` to find it.
         let texel = match self.projection {
             Projection::Ortho { scale, .. } => 1.0 / scale,
@@ -303,7 +322,7 @@ impl ShadowMap {
         let q = self.project(p + n * (NORMAL_BIAS * texel));
         let bias = DEPTH_BIAS * self.texel_world(q.z);
         let recv = q.z - bias;
-        let opaque = self.opaque_visibility(q, recv, n, size);
+        let opaque = self.opaque_visibility::<N>(q, recv, n, size);
         if opaque == 0.0 {
             return 0.0;
         }
@@ -311,7 +330,7 @@ impl ShadowMap {
     }
 
     /// [`ShadowMap::visibility`] from the opaque casters alone, at light-space `q` and receiver depth `recv`.
-    fn opaque_visibility(&self, q: Vec3, recv: f32, n: Vec3, size: f32) -> f32 {
+    fn opaque_visibility<const N: usize>(&self, q: Vec3, recv: f32, n: Vec3, size: f32) -> f32 {
         let slope = self.receiver_slope(n);
         if size <= 0.0 {
             return self.pcf(q, recv, slope);
@@ -338,13 +357,13 @@ impl ShadowMap {
         if self.region_max(x0, y0, x1, y1) < recv - reach - 1e-5 * (1.0 + recv.abs()) {
             return 0.0;
         }
-        // The blocker search: a 4 × 4 grid of taps over ±`search`, the rows and columns of which are found once.
-        let a = axis(search);
+        // The blocker search: an N × N grid of taps over ±`search`, the rows and columns of which are found once.
+        let a = axis::<N>(search);
         let (xs, ys) = (a.map(|o| floor(q.x + o)), a.map(|o| floor(q.y + o)));
-        let inside = self.holds(xs[0], ys[0], xs[3], ys[3]);
+        let inside = self.holds(xs[0], ys[0], xs[N - 1], ys[N - 1]);
         let (mut sum, mut count) = (0.0, 0);
-        for j in 0..4 {
-            for i in 0..4 {
+        for j in 0..N {
+            for i in 0..N {
                 let d = if inside { self.texel(xs[i], ys[j]) } else { self.at(xs[i], ys[j]) };
                 if d < recv + (slope.x * a[i] + slope.y * a[j]) {
                     sum += d;
@@ -360,20 +379,20 @@ impl ShadowMap {
         if radius <= 1.0 {
             return self.pcf(q, recv, slope);
         }
-        // The filter: a bilinear percentage-closer lookup (see [`ShadowMap::pcf`]) at each of a 4 × 4 grid over
+        // The filter: a bilinear percentage-closer lookup (see [`ShadowMap::pcf`]) at each of an N × N grid over
         // ±`radius`, against the receiver's plane there; each column's and row's texels, weights and plane
         // offsets are found once.
-        let r = axis(radius.min(24.0));
+        let r = axis::<N>(radius.min(24.0));
         let cols = r.map(|o| PcfAxis::new(q.x + o, slope.x));
         let rows = r.map(|o| PcfAxis::new(q.y + o, slope.y));
-        let inside = self.holds(cols[0].texel, rows[0].texel, cols[3].texel + 1, rows[3].texel + 1);
+        let inside = self.holds(cols[0].texel, rows[0].texel, cols[N - 1].texel + 1, rows[N - 1].texel + 1);
         let mut lit = 0.0;
         for (j, row) in rows.iter().enumerate() {
             for (i, col) in cols.iter().enumerate() {
                 lit += self.pcf_at(col, row, recv + (slope.x * r[i] + slope.y * r[j]), inside);
             }
         }
-        lit / 16.0
+        lit / (N * N) as f32
     }
 
     /// Whether [`ShadowMap::visibility`] is sure to answer exactly 1 (its first test: no caster anywhere near)
@@ -498,10 +517,11 @@ fn pyramids(base: &[f32], side: usize) -> (Vec<Vec<f32>>, Vec<Vec<f32>>) {
     (mins, maxs)
 }
 
-/// One axis of a 4 × 4 grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's taps
-/// are the grid's points (x from this, y from this).
-fn axis(radius: f32) -> [f32; 4] {
-    std::array::from_fn(|i| (i as f32 - 1.5) * (radius / 1.5))
+/// One axis of an N × N grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's
+/// taps are the grid's points (x from this, y from this).
+fn axis<const N: usize>(radius: f32) -> [f32; N] {
+    let half = (N - 1) as f32 * 0.5;
+    std::array::from_fn(|i| (i as f32 - half) * (radius / half))
 }
 
 /// One axis of a bilinear percentage-closer lookup at light-space coordinate `c`: the lower of the two texels
