@@ -111,9 +111,13 @@ def main():
 
     # The exporter writes an object's own mesh, without its shape keys' mix, unless the object has modifiers
     # (then it writes the evaluated mesh). A modifier that does nothing (an armature with no armature) makes
-    # every mesh take the evaluated path, so each frame is exactly what Blender shows. The file is never saved.
-    for o in bpy.data.objects:
-        if o.type == "MESH" and len(o.modifiers) == 0 and o.library is None:
+    # every mesh take the evaluated path, so each frame is exactly what Blender shows. An object linked from
+    # another file takes no modifier (linked data is read-only): it is made local first (its mesh, shape keys
+    # and their animation stay linked, and still evaluate). The file is never saved.
+    for o in list(bpy.data.objects):
+        if o.type == "MESH" and len(o.modifiers) == 0:
+            if o.library is not None:
+                o = o.make_local()
             o.modifiers.new("vvgen-evaluate", "ARMATURE")
 
     # The files the import reads besides the .blend: its key's discovered inputs.

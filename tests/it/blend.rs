@@ -191,7 +191,7 @@ fn blend_errors_name_the_file_and_the_way_out() {
         return;
     }
     for (extra, says) in [
-        ("object = \"Nope\"", "has no object `Nope`; its objects: Arm, Cube, Rig"),
+        ("object = \"Nope\"", "has no object `Nope`; its objects: Arm, Cube, Linked, Rig"),
         ("scene = \"Nope\"", "has no scene `Nope`; its scenes: Scene"),
         ("collection = \"Nope\"", "has no collection `Nope`"),
     ] {

@@ -1,8 +1,10 @@
 # Writes the .blend the `.blend` source tests import, and Blender's own posed vertices of it (the reference):
 #   blender -b --factory-startup --python make_scene.py -- OUT_DIR
 # The scene: a keyframed cube (location and rotation, a texture it names beside the file), and a cylinder
-# skinned to a two-bone armature whose upper bone bends, with a shape key animated from 0 to 1. Its frame range
-# is 1-24 at 24 fps. The reference (`posed.json`) holds, for frames 1, 9, 17 and 24, every mesh object's
+# skinned to a two-bone armature whose upper bone bends, with a shape key animated from 0 to 1; and a box linked
+# from a second file (`library.blend`, written first) whose own animated shape key stretches it: linked data is
+# read-only, so vvgen's import cannot give it the modifier that makes Blender's exporter mix its shape keys
+# without making it local first. Its frame range is 1-24 at 24 fps. The reference (`posed.json`) holds, for frames 1, 9, 17 and 24, every mesh object's
 # evaluated vertices in world space: what Blender's viewport and renders show.
 import json
 import os
@@ -16,6 +18,21 @@ try:
 except ImportError:
     sys.stderr.write("numpy missing\n")
     os._exit(5)
+
+# The library: a box whose shape key, animated from 0 to 1, makes it three times as tall.
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.mesh.primitive_cube_add(size=0.5, location=(0, 1.5, 0.25))
+box = bpy.context.object
+box.name = "Linked"
+box.shape_key_add(name="Basis")
+tall = box.shape_key_add(name="Tall")
+for v in tall.data:
+    v.co.z *= 3.0
+tall.value = 0.0
+tall.keyframe_insert("value", frame=1)
+tall.value = 1.0
+tall.keyframe_insert("value", frame=24)
+bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "library.blend"))
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
@@ -77,6 +94,12 @@ bone.rotation_mode = "XYZ"
 bone.keyframe_insert("rotation_euler", frame=1)
 bone.rotation_euler = (0.9, 0, 0)
 bone.keyframe_insert("rotation_euler", frame=24)
+
+# The box, linked (not appended) from the library.
+with bpy.data.libraries.load(os.path.join(out, "library.blend"), link=True, relative=True) as (src, dst):
+    dst.objects = ["Linked"]
+for o in dst.objects:
+    scene.collection.objects.link(o)
 
 bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "scene.blend"), relative_remap=True)
 
