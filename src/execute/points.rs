@@ -13,7 +13,7 @@ use crate::cache::Digest;
 use crate::manifest::output::{ColorAverage, PlyFormat, PointColor};
 use crate::plan::actions::{Action, PointSettings};
 use crate::plan::graph::{ActionId, Graph};
-use crate::render::light::FrameLight;
+use crate::render::light::{FrameLight, Gathered, GatheredError};
 use crate::sample::voxel::{self, Reduction};
 use crate::sample::{self, Draw, Points};
 use crate::scene::material::{linear_to_srgb, srgb_to_linear};
@@ -181,26 +181,37 @@ fn samples(
     let mut poser = Poser::default();
     let posed = pose(x, s, f, &mut poser).map_err(scene_err)?.clone();
     super::check_posed(&posed, label)?;
-    // Lit colours: the whole frame's lighting (every source casts shadows, whichever is sampled); the sampled
-    // scene is the whole frame unless the output names one source.
+    // Lit colours: the whole frame's lighting (every source casts shadows, whichever is sampled). Sampling the
+    // whole frame, the frame's light action lights it as it lights the renders; one source alone, a light
+    // prepared here for the whole frame, with the subject's bounce estimated.
+    let lights = &g.keying.render.lighting;
     let light = match s.color {
+        PointColor::Lit if s.light_dep() => {
+            let light_id = node.deps[0];
+            let env = super::render::environment_light(g, x, blobs, g.node(light_id).deps.first().copied(), false)?;
+            let content = |e: GatheredError| Error::Content { action: label.to_string(), message: e.to_string() };
+            let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
+            Some(FrameLight::from_gathered(&posed, &lights.lights, env, gathered).map_err(content)?)
+        }
         PointColor::Lit => {
             let env_id = s.environment_dep(&g.keying.render).then(|| node.deps[0]);
             let env = super::render::environment_light(g, x, blobs, env_id, false)?;
-            let whole = match s.source {
-                Some(_) => x.scene.pose(f, &mut poser).map_err(scene_err)?,
-                None => &posed,
-            };
-            Some(
-                FrameLight::prepare(whole, &g.keying.render.lighting.lights, env)
-                    .with_exposure(g.keying.render.lighting.exposure)
-                    .with_view(g.keying.render.lighting.view),
-            )
+            let whole = x.scene.pose(f, &mut poser).map_err(scene_err)?;
+            Some(FrameLight::prepare(whole, &lights.lights, env))
         }
         PointColor::Albedo => None,
-    };
-    let bake =
-        light.as_ref().map(|l| move |p: Vec3, n: Vec3, albedo: Vec3, emission: Vec3| l.bake(p, n, albedo, emission));
+    }
+    .map(|l| l.with_exposure(lights.exposure).with_view(lights.view));
+    let gathered = s.light_dep();
+    let bake = light.as_ref().map(|l| {
+        let posed = &posed;
+        move |site: &sample::Site| match site.triangle {
+            Some((prim, corners, k)) if gathered => {
+                l.bake_on(posed, prim, corners, k, site.pos, site.normal, site.albedo, site.emission)
+            }
+            _ => l.bake(site.pos, site.normal, site.albedo, site.emission),
+        }
+    });
     let shader: Option<sample::Shader> = bake.as_ref().map(|b| b as sample::Shader);
     let Some(d) = draws.filter(|_| s.correspondence) else {
         let key: [&[u8]; 3] = [b"sequence", &seed, &(f as u64).to_le_bytes()];

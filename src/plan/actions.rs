@@ -264,9 +264,17 @@ pub struct PointSettings {
 }
 
 impl PointSettings {
-    /// Whether its sample actions read the prefiltered environment (their first dep): lit colours under a map.
+    /// Whether its sample actions read the prefiltered environment (their first dep, or their light action's):
+    /// lit colours under a map.
     pub fn environment_dep(&self, r: &RenderSettings) -> bool {
         self.color == PointColor::Lit && r.lighting.environment.map.is_some()
+    }
+
+    /// Whether its sample actions read their frame's light action (their first dep) for lit colours: when they
+    /// sample the whole frame, whose vertices that action gathered light at, as the renders read it. One source
+    /// alone is lit by a light prepared in the action itself.
+    pub fn light_dep(&self) -> bool {
+        self.color == PointColor::Lit && self.source.is_none()
     }
 
     /// Whether frames are reduced (so their unreduced samples are an action of their own).

@@ -153,7 +153,8 @@ impl<'a> Graph<'a> {
                 let frames: Vec<usize> = (0..plan.frames).collect();
                 self.add(Action::Bounds { frames }, format!("bounds {name}"), vec![])
             });
-            // Lit colours read the prefiltered environment: the first dep of whichever action samples.
+            // Lit colours read the frame's light action (the renders' own, which reads the prefiltered
+            // environment), or for one source the environment itself: the first dep of whichever action samples.
             let env: Vec<ActionId> = if s.environment_dep(&self.keying.render) {
                 vec![self.add(Action::Environment, "environment".into(), vec![])]
             } else {
@@ -161,12 +162,17 @@ impl<'a> Graph<'a> {
             };
             let mut frame_ids = Vec::with_capacity(plan.frames);
             for f in 0..plan.frames {
+                let light = if s.light_dep() {
+                    vec![self.add(Action::Light { frame: f }, format!("light {f}"), env.clone())]
+                } else {
+                    env.clone()
+                };
                 let mut inputs = Vec::new();
                 if s.reduces() {
                     let a = Action::SampleFrame { output: name.to_string(), frame: f };
-                    inputs.push(self.add(a, format!("samples {name}/{f}"), env.clone()));
+                    inputs.push(self.add(a, format!("samples {name}/{f}"), light));
                 } else {
-                    inputs.extend(&env);
+                    inputs.extend(&light);
                 }
                 inputs.extend(bounds);
                 let a = Action::PointFrame { output: name.to_string(), frame: f };

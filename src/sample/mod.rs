@@ -205,9 +205,24 @@ pub fn draw(scene: &PosedScene, n: usize, key: &[&[u8]]) -> Vec<Draw> {
     out
 }
 
-/// Colours a surface point from its position, unit normal (zero where unknown), linear albedo and emission:
-/// lit ("baked") point colours. Without one, a point's colour is its albedo.
-pub type Shader<'a> = &'a (dyn Fn(Vec3, Vec3, Vec3, Vec3) -> Vec3 + Sync);
+/// Colours a surface point ([`Site`]): lit ("baked") point colours. Without one, a point's colour is its albedo.
+pub type Shader<'a> = &'a (dyn Fn(&Site) -> Vec3 + Sync);
+
+/// A point a [`Shader`] colours: where it is and what it is made of.
+#[derive(Debug, Clone, Copy)]
+pub struct Site {
+    /// Position.
+    pub pos: Vec3,
+    /// Unit normal, zero where unknown.
+    pub normal: Vec3,
+    /// Linear albedo.
+    pub albedo: Vec3,
+    /// Emitted radiance.
+    pub emission: Vec3,
+    /// On a triangle: its primitive (index into the scene's), its corners' vertex indices and the point's
+    /// barycentric weights, so that what its vertices hold can be read there. `None` for a point primitive's.
+    pub triangle: Option<(usize, [u32; 3], [f32; 3])>,
+}
 
 /// Evaluates `draws` on `scene` (the frame they were drawn on, or another frame of the same meshes).
 pub fn evaluate(scene: &PosedScene, draws: &[Draw]) -> Result<Points, Error> {
@@ -268,7 +283,9 @@ fn push_point(
     let (m, uv) = (scene.material(p.material), p.uvs.get(i).copied());
     let c = m.albedo(&scene.textures, uv, p.colors.get(i).copied()).truncate();
     let c = match shader {
-        Some(shade) => shade(pos, n, c, m.emission(&scene.textures, uv)),
+        Some(shade) => {
+            shade(&Site { pos, normal: n, albedo: c, emission: m.emission(&scene.textures, uv), triangle: None })
+        }
         None => c,
     };
     out.colors.push(c.to_array());
@@ -345,7 +362,13 @@ fn surface_point(scene: &PosedScene, d: &Draw, shader: Option<Shader>) -> ([f32;
     let m = scene.material(p.material);
     let c = m.albedo(&scene.textures, uv, vc).truncate();
     let c = match shader {
-        Some(shade) => shade(pos, n, c, m.emission(&scene.textures, uv)),
+        Some(shade) => shade(&Site {
+            pos,
+            normal: n,
+            albedo: c,
+            emission: m.emission(&scene.textures, uv),
+            triangle: Some((d.prim as usize, idx.map(|i| i as u32), b)),
+        }),
         None => c,
     };
     (pos.to_array(), n.to_array(), c.to_array())

@@ -255,7 +255,7 @@ impl Reader<'_> {
 }
 
 /// Version of baked point colours ([`FrameLight::bake`]): part of their keys.
-pub const BAKE_SALT: &str = "bake 2";
+pub const BAKE_SALT: &str = "bake 3";
 
 /// Everything a frame's lit shading needs besides the camera.
 #[derive(Debug)]
@@ -540,6 +540,43 @@ impl FrameLight {
         let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
         let c = self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission);
         self.view.light(c)
+    }
+
+    /// [`FrameLight::bake`] of a point on the triangle of primitive `prim` with corners `corners` (vertex indices),
+    /// at barycentric weights `k`, lit as the frame's renders light it: a ground's top face by its grids (as its
+    /// pixels are read), any other surface by what its corners gathered, the subject's bounce included rather
+    /// than estimated. For a light read from the frame's light action ([`FrameLight::from_gathered`]); a corner
+    /// it holds nothing for bakes as [`FrameLight::bake`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn bake_on(
+        &self,
+        scene: &PosedScene,
+        prim: usize,
+        corners: [u32; 3],
+        k: [f32; 3],
+        p: Vec3,
+        n: Vec3,
+        albedo: Vec3,
+        emission: Vec3,
+    ) -> Vec3 {
+        let material = scene.primitives.get(prim).map(|q| q.material);
+        let top = n.z > 0.0;
+        if let Some(c) = material.filter(|_| top).and_then(|m| self.shade_ground(m, p, albedo)) {
+            return self.view.light(self.exposed(c + emission));
+        }
+        let gathered = self.vertex_visibility.get(prim).and_then(|v| {
+            let at = corners.map(|c| v.get(c as usize).copied());
+            Some([at[0]?, at[1]?, at[2]?])
+        });
+        match gathered {
+            Some(v) if n != Vec3::ZERO => {
+                // A plane's visibility is its grid's, as its pixels read it (its underside here).
+                let vis = material.and_then(|m| self.plane_visibility_at(m, p)).unwrap_or(Visibility::blend(&v, k));
+                let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
+                self.view.light(self.exposed(self.shade(p, n, n, &s, 1.0, vis, false) + emission))
+            }
+            _ => self.bake(p, n, albedo, emission),
+        }
     }
 
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
