@@ -18,7 +18,7 @@ use crate::sample::voxel::{self, Reduction};
 use crate::sample::{self, Draw, Points};
 use crate::scene::material::{linear_to_srgb, srgb_to_linear};
 use crate::scene::ply::{self, PlyOut};
-use crate::scene::{PosedScene, Poser};
+use crate::scene::{PosedScene, Poser, PrimKind};
 
 /// Runs the point actions `ids` (all of one kind).
 pub(super) fn run(
@@ -181,35 +181,39 @@ fn samples(
     let mut poser = Poser::default();
     let posed = pose(x, s, f, &mut poser).map_err(scene_err)?.clone();
     super::check_posed(&posed, label)?;
-    // Lit colours: the whole frame's lighting (every source casts shadows, whichever is sampled). Sampling the
-    // whole frame, the frame's light action lights it as it lights the renders; one source alone, a light
-    // prepared here for the whole frame, with the subject's bounce estimated.
+    // Lit colours: the frame's light action lights the samples as it lights the renders, the whole frame's
+    // (every source casts shadows and reflects light, whichever is sampled). A sample of one source is found
+    // among the whole frame's primitives past those of the sources before it.
     let lights = &g.keying.render.lighting;
-    let light = match s.color {
-        PointColor::Lit if s.light_dep() => {
+    let lit = match s.color {
+        PointColor::Lit => {
             let light_id = node.deps[0];
             let env = super::render::environment_light(g, x, blobs, g.node(light_id).deps.first().copied(), false)?;
             let content = |e: GatheredError| Error::Content { action: label.to_string(), message: e.to_string() };
             let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
-            Some(FrameLight::from_gathered(&posed, &lights.lights, env, gathered).map_err(content)?)
-        }
-        PointColor::Lit => {
-            let env_id = s.environment_dep(&g.keying.render).then(|| node.deps[0]);
-            let env = super::render::environment_light(g, x, blobs, env_id, false)?;
-            let whole = x.scene.pose(f, &mut poser).map_err(scene_err)?;
-            Some(FrameLight::prepare(whole, &lights.lights, env))
+            let (whole, first) = match &s.source {
+                Some((i, _)) => {
+                    let first = x.scene.first_primitive_of(*i, f, &mut poser).map_err(scene_err)?;
+                    (x.scene.pose(f, &mut poser).map_err(scene_err)?.clone(), first)
+                }
+                None => (posed.clone(), 0),
+            };
+            let seen = |l: FrameLight| l.with_exposure(lights.exposure).with_view(lights.view);
+            // A point primitive's points have no vertices that gathered light: they read the environment's
+            // occlusion maps, which the light action does not keep, so they are made here when there are any.
+            let points = posed.primitives.iter().any(|p| p.kind == PrimKind::Points);
+            let apart = points.then(|| seen(FrameLight::prepare(&whole, &lights.lights, env.clone())));
+            let light = FrameLight::from_gathered(&whole, &lights.lights, env, gathered).map_err(content)?;
+            Some((seen(light), apart, whole, first))
         }
         PointColor::Albedo => None,
-    }
-    .map(|l| l.with_exposure(lights.exposure).with_view(lights.view));
-    let gathered = s.light_dep();
-    let bake = light.as_ref().map(|l| {
-        let posed = &posed;
+    };
+    let bake = lit.as_ref().map(|(l, apart, whole, first)| {
         move |site: &sample::Site| match site.triangle {
-            Some((prim, corners, k)) if gathered => {
-                l.bake_on(posed, prim, corners, k, site.pos, site.normal, site.albedo, site.emission)
+            Some((prim, corners, k)) => {
+                l.bake_on(whole, first + prim, corners, k, site.pos, site.normal, site.albedo, site.emission)
             }
-            _ => l.bake(site.pos, site.normal, site.albedo, site.emission),
+            None => apart.as_ref().unwrap_or(l).bake(site.pos, site.normal, site.albedo, site.emission),
         }
     });
     let shader: Option<sample::Shader> = bake.as_ref().map(|b| b as sample::Shader);

@@ -168,17 +168,17 @@ pub enum Action {
         /// Scene frames, ascending.
         frames: Vec<usize>,
     },
-    /// Unreduced samples of `frame` for point output `output`. Deps: the prefiltered environment when its
-    /// colours are lit under a map ([`PointSettings::environment_dep`]).
+    /// Unreduced samples of `frame` for point output `output`. Deps: its frame's [`Action::Light`] when its
+    /// colours are lit ([`PointSettings::light_dep`]).
     SampleFrame {
         /// The `[output.NAME]`.
         output: String,
         /// Scene frame.
         frame: usize,
     },
-    /// Frame `frame` of point output `output`. Deps: its [`Action::SampleFrame`] when it reduces, else the
-    /// prefiltered environment when its colours are lit under a map; then the sequence's [`Action::Bounds`]
-    /// when it quantizes (`vox`).
+    /// Frame `frame` of point output `output`. Deps: its [`Action::SampleFrame`] when it reduces, else its
+    /// frame's [`Action::Light`] when its colours are lit; then the sequence's [`Action::Bounds`] when it
+    /// quantizes (`vox`).
     PointFrame {
         /// The `[output.NAME]`.
         output: String,
@@ -264,17 +264,15 @@ pub struct PointSettings {
 }
 
 impl PointSettings {
-    /// Whether its sample actions read the prefiltered environment (their first dep, or their light action's):
-    /// lit colours under a map.
+    /// Whether its sample actions' light action reads the prefiltered environment: lit colours under a map.
     pub fn environment_dep(&self, r: &RenderSettings) -> bool {
         self.color == PointColor::Lit && r.lighting.environment.map.is_some()
     }
 
-    /// Whether its sample actions read their frame's light action (their first dep) for lit colours: when they
-    /// sample the whole frame, whose vertices that action gathered light at, as the renders read it. One source
-    /// alone is lit by a light prepared in the action itself.
+    /// Whether its sample actions read their frame's light action (their first dep): lit colours, lit as the
+    /// renders light the frame (that action gathered light at every vertex of it, whichever source is sampled).
     pub fn light_dep(&self) -> bool {
-        self.color == PointColor::Lit && self.source.is_none()
+        self.color == PointColor::Lit
     }
 
     /// Whether frames are reduced (so their unreduced samples are an action of their own).

@@ -386,7 +386,7 @@ fn png_name(p: PngCompression) -> &'static str {
 }
 
 /// What shapes one frame's surface samples.
-/// `deps` are the action's: the prefiltered environment first when [`PointSettings::environment_dep`] says so.
+/// `deps` are the action's: for lit colours its frame's light action first ([`PointSettings::light_dep`]).
 fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize, deps: &[Digest]) {
     let frames = cx.frame_keys.len();
     w.str("sampler", SAMPLE_SALT);
@@ -415,8 +415,9 @@ fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize, deps
         if let Some(lights) = &cx.frame_lights[f] {
             w.digest("file lights", lights);
         }
-        if s.environment_dep(&cx.render) {
-            w.digest("prefiltered environment", &deps[0]);
+        // The frame's light action: what the whole frame gathered, under the lights and the environment.
+        if let Some(light) = deps.first() {
+            w.digest("frame light", light);
         }
     }
 }

@@ -306,6 +306,16 @@ impl Scene {
         Ok(&poser.out)
     }
 
+    /// Where source `i`'s primitives lie among those of frame `frame` posed whole ([`Scene::pose`] puts every
+    /// source's after the ones before it, in order): the index of its first.
+    pub fn first_primitive_of(&self, i: usize, frame: usize, poser: &mut Poser) -> Result<usize, Error> {
+        let mut first = 0;
+        for j in 0..i.min(self.sources.len()) {
+            first += self.pose_source(j, frame, poser)?.primitives.len();
+        }
+        Ok(first)
+    }
+
     /// Index of the source called `name`.
     pub fn source_index(&self, name: &str) -> Option<usize> {
         self.sources.iter().position(|s| s.name == name)
