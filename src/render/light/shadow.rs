@@ -396,11 +396,12 @@ impl ShadowMap {
     }
 
     /// Whether [`ShadowMap::visibility`] is sure to answer exactly 1 (its first test: no caster anywhere near)
-    /// for every receiver with unit normal `n` in the box spanned by `corners`, under a light of `size` (> 0).
-    /// Conservative: `false` when unsure, always for perspective maps and hard shadows. A ground plane asks it
-    /// once per cell of a grid, so its open cells skip the lookup per pixel.
+    /// for every receiver with unit normal `n` in the box spanned by `corners`, under a light of `size` (0 for a
+    /// hard shadow, whose lookup reads the texels within one of the receiver's: the search below at its
+    /// narrowest). Conservative: `false` when unsure, always for perspective maps. A ground plane asks it once
+    /// per cell of a grid, so its open cells skip the lookup per pixel, and its sun's lattice skips them.
     pub fn open_over(&self, corners: &[Vec3], n: Vec3, size: f32) -> bool {
-        if size <= 0.0 || !matches!(self.projection, Projection::Ortho { .. }) || corners.is_empty() {
+        if !matches!(self.projection, Projection::Ortho { .. }) || corners.is_empty() {
             return false;
         }
         // Parallel light: the lookup's point (normal offset included) is an affine function of the receiver, so
@@ -621,12 +622,13 @@ fn triangle_alpha(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, m: &c
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::scene::material::Material;
     use crate::scene::PrimKind;
 
-    fn quad(z: f32, half: f32) -> PosedScene {
+    /// A square of side 2·`half` at height `z`, facing +Z: the casters of the light module's tests.
+    pub(in crate::render::light) fn quad(z: f32, half: f32) -> PosedScene {
         let p = vec![
             Vec3::new(-half, -half, z),
             Vec3::new(half, -half, z),
@@ -675,6 +677,34 @@ mod tests {
         let cell = |x: f32, y: f32| [Vec3::new(x, y, 0.0), Vec3::new(x + 0.05, y + 0.05, 0.0)];
         assert!(!m.open_over(&cell(0.0, 0.0), Vec3::Z, 0.01));
         assert!(m.open_over(&cell(-0.9, 0.9), Vec3::Z, 0.01));
+    }
+
+    #[test]
+    fn a_box_said_open_is_lit_all_over_and_near_the_shadow_none_is() {
+        // Cells of 2 cm over the ground around a 1 m square's shadow, under a hard sun and a soft one: every
+        // point of a cell `open_over` calls open is looked up fully lit, and it calls open most of the ground but
+        // not the cells at the shadow's edge.
+        let scene = quad(1.0, 0.5);
+        let m = ShadowMap::sun(&scene, Vec3::new(0.3, 0.2, -1.0).normalize(), scene.bounds().unwrap(), 512);
+        for size in [0.0, 0.02] {
+            let (mut open, mut cells) = (0, 0);
+            for j in 0..60 {
+                for i in 0..60 {
+                    let (x, y) = (-1.2 + i as f32 * 0.04, -1.2 + j as f32 * 0.04);
+                    let corners = [Vec3::new(x, y, 0.0), Vec3::new(x + 0.02, y + 0.02, 0.0)];
+                    cells += 1;
+                    if !m.open_over(&corners, Vec3::Z, size) {
+                        continue;
+                    }
+                    open += 1;
+                    for (u, v) in [(0.0, 0.0), (0.5, 0.5), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.3, 0.8)] {
+                        let p = Vec3::new(x + 0.02 * u, y + 0.02 * v, 0.0);
+                        assert_eq!(m.visibility(p, Vec3::Z, size), 1.0, "size {size} at {p}");
+                    }
+                }
+            }
+            assert!(open > cells / 2 && open < cells, "size {size}: {open} of {cells} cells open");
+        }
     }
 
     #[test]
