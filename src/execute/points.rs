@@ -2,6 +2,7 @@
 //! COLMAP points. Every action is independent of the others of its kind, so they run in parallel, each posing
 //! what it reads with its own [`Poser`].
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -193,10 +194,10 @@ fn samples(
             let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
             let (whole, first) = match &s.source {
                 Some((i, _)) => {
-                    let first = x.scene.first_primitive_of(*i, f, &mut poser).map_err(scene_err)?;
-                    (x.scene.pose(f, &mut poser).map_err(scene_err)?.clone(), first)
+                    let whole = x.scene.pose(f, &mut poser).map_err(scene_err)?.clone();
+                    (Cow::Owned(whole), poser.first_primitive_of(*i))
                 }
-                None => (posed.clone(), 0),
+                None => (Cow::Borrowed(&posed), 0),
             };
             let seen = |l: FrameLight| l.with_exposure(lights.exposure).with_view(lights.view);
             // A point primitive's points have no vertices that gathered light: they read the environment's

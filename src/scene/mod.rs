@@ -146,6 +146,14 @@ pub struct Poser {
     out: PosedScene,
 }
 
+impl Poser {
+    /// Where source `i`'s primitives begin among those of the frame [`Scene::pose`] last posed whole with this
+    /// poser (it puts every source's after those of the sources before it, in order).
+    pub fn first_primitive_of(&self, i: usize) -> usize {
+        self.parts.iter().take(i).map(|p| p.primitives.len()).sum()
+    }
+}
+
 impl Scene {
     /// Loads every source and resolves the placements (reading every frame once when a placement needs the
     /// bounds of all frames). A `.blend` source needs [`Scene::open_importing`].
@@ -304,16 +312,6 @@ impl Scene {
             poser.out.lights.clear();
         }
         Ok(&poser.out)
-    }
-
-    /// Where source `i`'s primitives lie among those of frame `frame` posed whole ([`Scene::pose`] puts every
-    /// source's after the ones before it, in order): the index of its first.
-    pub fn first_primitive_of(&self, i: usize, frame: usize, poser: &mut Poser) -> Result<usize, Error> {
-        let mut first = 0;
-        for j in 0..i.min(self.sources.len()) {
-            first += self.pose_source(j, frame, poser)?.primitives.len();
-        }
-        Ok(first)
     }
 
     /// Index of the source called `name`.
