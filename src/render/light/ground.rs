@@ -583,17 +583,8 @@ mod tests {
     /// `lights` and the studio map.
     fn square_over_ground(lights: &[Light]) -> (PosedScene, FrameLight) {
         let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
-        let h = 0.3;
-        let caster = PosedScene::single(
-            PrimKind::Triangles,
-            vec![Vec3::new(-h, -h, 1.0), Vec3::new(h, -h, 1.0), Vec3::new(h, h, 1.0), Vec3::new(-h, h, 1.0)],
-            vec![Vec3::Z; 4],
-            Vec::new(),
-            vec![0, 1, 2, 0, 2, 3],
-            crate::scene::material::Material::default(),
-        );
         let mut scene = PosedScene::default();
-        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0), caster], &mut scene);
+        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0), super::super::shadow::tests::quad(1.0, 0.3)], &mut scene);
         let frame = FrameLight::prepare(&scene, lights, crate::render::Environment::default().studio());
         (scene, frame)
     }

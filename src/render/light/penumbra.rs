@@ -118,23 +118,14 @@ impl SunShade {
 
 #[cfg(test)]
 mod tests {
+    use super::super::shadow::tests::quad;
     use super::*;
-    use crate::scene::material::Material;
-    use crate::scene::{PosedScene, PrimKind};
 
     /// A 1 m square caster 1 m over the ground (z = 0), its map seen from straight above.
     fn caster() -> (ShadowMap, Vec3) {
         let h = 0.5;
-        let scene = PosedScene::single(
-            PrimKind::Triangles,
-            vec![Vec3::new(-h, -h, 1.0), Vec3::new(h, -h, 1.0), Vec3::new(h, h, 1.0), Vec3::new(-h, h, 1.0)],
-            vec![Vec3::Z; 4],
-            Vec::new(),
-            vec![0, 1, 2, 0, 2, 3],
-            Material::default(),
-        );
         let bounds = (Vec3::new(-h, -h, 0.0), Vec3::new(h, h, 1.0));
-        (ShadowMap::sun(&scene, -Vec3::Z, bounds, 512), Vec3::new(-1.0, -1.0, 0.0))
+        (ShadowMap::sun(&quad(1.0, h), -Vec3::Z, bounds, 512), Vec3::new(-1.0, -1.0, 0.0))
     }
 
     #[test]

@@ -19,19 +19,26 @@ except ImportError:
     sys.stderr.write("numpy missing\n")
     os._exit(5)
 
+
+
+def animated_key(obj, name, axis, scale):
+    """A shape key of `obj` that scales its `axis` coordinate (0, 1, 2) by `scale`, from 0 at frame 1 to 1 at 24."""
+    obj.shape_key_add(name="Basis")
+    key = obj.shape_key_add(name=name)
+    for v in key.data:
+        v.co[axis] *= scale
+    key.value = 0.0
+    key.keyframe_insert("value", frame=1)
+    key.value = 1.0
+    key.keyframe_insert("value", frame=24)
+
+
 # The library: a box whose shape key, animated from 0 to 1, makes it three times as tall.
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.mesh.primitive_cube_add(size=0.5, location=(0, 1.5, 0.25))
 box = bpy.context.object
 box.name = "Linked"
-box.shape_key_add(name="Basis")
-tall = box.shape_key_add(name="Tall")
-for v in tall.data:
-    v.co.z *= 3.0
-tall.value = 0.0
-tall.keyframe_insert("value", frame=1)
-tall.value = 1.0
-tall.keyframe_insert("value", frame=24)
+animated_key(box, "Tall", 2, 3.0)
 bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "library.blend"))
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -81,14 +88,7 @@ arm.select_set(True)
 rig.select_set(True)
 bpy.context.view_layer.objects.active = rig
 bpy.ops.object.parent_set(type="ARMATURE_AUTO")
-arm.shape_key_add(name="Basis")
-bulge = arm.shape_key_add(name="Bulge")
-for v in bulge.data:
-    v.co.x *= 1.6
-bulge.value = 0.0
-bulge.keyframe_insert("value", frame=1)
-bulge.value = 1.0
-bulge.keyframe_insert("value", frame=24)
+animated_key(arm, "Bulge", 0, 1.6)
 bone = rig.pose.bones["Upper"]
 bone.rotation_mode = "XYZ"
 bone.keyframe_insert("rotation_euler", frame=1)
