@@ -11,14 +11,12 @@
 use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
-use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
 use super::brdf::{basis, hammersley};
+use super::rays::Tracer;
 use super::{caster_bounds, is_caster, FrameLight, Visibility};
 use crate::scene::PosedScene;
 
@@ -52,37 +50,9 @@ struct Hit {
     emission: Vec3,
 }
 
-/// The casters of one posed frame: their triangles as the ray tracer reads them and, per triangle, its
-/// primitive and its corners' vertex indices.
-struct Casters {
-    tris: Vec<Triangle>,
-    corners: Vec<(u32, [u32; 3])>,
-}
-
-impl Casters {
-    fn of(scene: &PosedScene) -> Casters {
-        let (mut tris, mut corners) = (Vec::new(), Vec::new());
-        for (pi, prim) in scene.primitives.iter().enumerate() {
-            if !is_caster(scene, prim) {
-                continue;
-            }
-            for t in prim.indices.chunks_exact(3) {
-                let c = [t[0], t[1], t[2]];
-                let [a, b, d] = c.map(|i| prim.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
-                tris.push(Triangle { v0: a.into(), v1: b.into(), v2: d.into() });
-                corners.push((pi as u32, c));
-            }
-        }
-        Casters { tris, corners }
-    }
-}
-
 /// The frame's subject as the gather reads it: its casters, in a ray-tracing tree, and its vertices.
 pub(super) struct Subject {
-    casters: Casters,
-    bvh: CwBvh,
-    /// How far off a surface its rays start: a hair, scaled to the subject.
-    eps: f32,
+    tracer: Arc<Tracer>,
     /// A sphere about the casters: the middle of their bounds and half its diagonal.
     sphere: (Vec3, f32),
     /// The gathering vertices (every caster's), as (primitive, vertex), numbered in primitive order (a vertex's
@@ -99,9 +69,9 @@ pub(super) struct Gathered {
 }
 
 impl Subject {
-    /// The casters of `scene`, `None` when nothing casts shadows.
-    pub(super) fn of(scene: &PosedScene) -> Option<Subject> {
-        let casters = Casters::of(scene);
+    /// The casters of `scene`, in `tracer` when the frame's light made their tree already; `None` when nothing
+    /// casts shadows.
+    pub(super) fn of(scene: &PosedScene, tracer: Option<Arc<Tracer>>) -> Option<Subject> {
         let mut first = vec![0usize; scene.primitives.len()];
         let mut vertices: Vec<(u32, u32)> = Vec::new();
         for (i, prim) in scene.primitives.iter().enumerate() {
@@ -111,13 +81,15 @@ impl Subject {
             }
         }
         let (lo, hi) = caster_bounds(scene)?;
-        if casters.tris.is_empty() || vertices.is_empty() {
+        if vertices.is_empty() {
             return None;
         }
-        let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::fast_build(), &mut Default::default());
-        let eps = 1e-4 * (hi - lo).length().max(1e-6);
+        let tracer = match tracer {
+            Some(t) => t,
+            None => Arc::new(Tracer::of(scene)?),
+        };
         let sphere = ((lo + hi) * 0.5, 0.5 * (hi - lo).length());
-        Some(Subject { casters, bvh, eps, sphere, vertices, first })
+        Some(Subject { tracer, sphere, vertices, first })
     }
 
     /// The light the subject reflects onto each of its vertices, by serial number, in a frame whose direct
@@ -154,7 +126,7 @@ impl Subject {
     /// receives (`g`'s totals, interpolated across the triangle), and what it emits.
     #[inline]
     fn reflected(&self, g: &Gathered, h: &Hit) -> Vec3 {
-        let (pi, [a, b, c]) = self.casters.corners[h.tri as usize];
+        let (pi, [a, b, c]) = self.tracer.casters.corners[h.tri as usize];
         let at = |v: u32| g.total.get(self.first[pi as usize] + v as usize).map_or(Vec3::ZERO, |e| e.max(Vec3::ZERO));
         let e = at(a) * (1.0 - h.k[0] - h.k[1]) + at(b) * h.k[0] + at(c) * h.k[1];
         Vec3::new(h.albedo[0] as f32, h.albedo[1] as f32, h.albedo[2] as f32) * (1.0 / 255.0) * e * (1.0 / PI)
@@ -180,7 +152,7 @@ impl Subject {
             .enumerate()
             .map(|(serial, &p)| {
                 let shift = hammersley(serial as u32 % 4093, 4093);
-                let o = p + normal * self.eps;
+                let o = p + normal * self.tracer.eps;
                 let to = centre - p;
                 let far = to.length();
                 if far <= radius * 1.001 {
@@ -231,7 +203,8 @@ impl Subject {
                 // neighbours sample different directions, so their errors average out where they are smoothed.
                 let shift = hammersley(serial as u32 % 4093, 4093);
                 (0..rays as u32)
-                    .filter_map(|i| self.trace(scene, p + n * self.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
+                    
+                    .filter_map(|i| self.trace(scene, p + n * self.tracer.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
                     .collect()
             })
             .collect();
@@ -245,18 +218,11 @@ impl Subject {
 
     /// The nearest caster along the ray from `o` along unit `d`, with the diffuse reflectance there.
     fn trace(&self, scene: &PosedScene, o: Vec3, d: Vec3) -> Option<Hit> {
-        let (casters, bvh) = (&self.casters, &self.bvh);
-        let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
-        let mut hit = RayHit::none();
-        // The tree numbers its leaves' triangles in its own order: `primitive_indices` maps them back to ours.
-        let ours = |id: usize| bvh.primitive_indices[id] as usize;
-        if !bvh.ray_traverse(ray, &mut hit, |r, id| casters.tris[ours(id)].intersect(r)) {
-            return None;
-        }
-        let tri = ours(hit.primitive_id as usize);
+        let (tri, at) = self.tracer.nearest(o, d)?;
+        let casters = &self.tracer.casters;
         let (pi, c) = casters.corners[tri];
         let t = &casters.tris[tri];
-        let k = barycentric(o + d * hit.t, t.v0.into(), t.v1.into(), t.v2.into());
+        let k = barycentric(o + d * at, t.v0.into(), t.v1.into(), t.v2.into());
         let (albedo, emission) = surface_at(scene, &scene.primitives[pi as usize], c, k);
         let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
         Some(Hit { tri: tri as u32, k, albedo: [q(albedo.x), q(albedo.y), q(albedo.z)], emission })

@@ -1,0 +1,165 @@
+//! The frame's casters in a ray-tracing tree: what the gather's rays meet ([`super::bounce`]) and what blocks a
+//! glossy surface's reflection ([`Tracer::lobe_visibility`]).
+//!
+//! Why a glossy surface needs rays: the environment's occlusion at a vertex is one number for its whole
+//! hemisphere, and a glossy lobe sees a small part of it. FlightHelmet's varnished stand, under the helmet and
+//! over its base, sees a fifth of its hemisphere blocked, but its reflection points at the open sky: occluded by
+//! the hemisphere's number it was 7–11 % dark against Cycles. The helmet's lining, whose hemisphere the
+//! occlusion maps see open through the shell (their texels are a centimetre wide), mirrored the sky through it:
+//! twice Cycles' brightness. A few rays along the lobe tell both apart.
+
+use glam::Vec3;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+
+use super::brdf::{basis, ggx_half, hammersley};
+use super::{caster_bounds, is_caster};
+use crate::scene::PosedScene;
+
+/// Rays a glossy surface casts along its lobe ([`Tracer::lobe_visibility`]). Against Cycles (FlightHelmet from
+/// below, worst view), 4 rays reached SSIM 0.955, 8 reached 0.957 and 32 0.961: 8 keep most of it at a quarter of
+/// the cost of 32.
+pub(super) const LOBE_RAYS: u32 = 8;
+
+/// The casters of one posed frame: their triangles as the ray tracer reads them and, per triangle, its
+/// primitive and its corners' vertex indices.
+pub(super) struct Casters {
+    pub(super) tris: Vec<Triangle>,
+    pub(super) corners: Vec<(u32, [u32; 3])>,
+}
+
+impl Casters {
+    fn of(scene: &PosedScene) -> Casters {
+        let (mut tris, mut corners) = (Vec::new(), Vec::new());
+        for (pi, prim) in scene.primitives.iter().enumerate() {
+            if !is_caster(scene, prim) {
+                continue;
+            }
+            for t in prim.indices.chunks_exact(3) {
+                let c = [t[0], t[1], t[2]];
+                let [a, b, d] = c.map(|i| prim.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+                tris.push(Triangle { v0: a.into(), v1: b.into(), v2: d.into() });
+                corners.push((pi as u32, c));
+            }
+        }
+        Casters { tris, corners }
+    }
+}
+
+/// The casters in a tree, and how far off a surface rays start.
+pub(super) struct Tracer {
+    pub(super) casters: Casters,
+    bvh: CwBvh,
+    /// How far off a surface its rays start: a hair, scaled to the casters.
+    pub(super) eps: f32,
+}
+
+impl std::fmt::Debug for Tracer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tracer").field("triangles", &self.casters.tris.len()).field("eps", &self.eps).finish()
+    }
+}
+
+impl Tracer {
+    /// The casters of `scene` in a tree; `None` when nothing casts shadows.
+    pub(super) fn of(scene: &PosedScene) -> Option<Tracer> {
+        let (lo, hi) = caster_bounds(scene)?;
+        let casters = Casters::of(scene);
+        if casters.tris.is_empty() {
+            return None;
+        }
+        let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::fast_build(), &mut Default::default());
+        Some(Tracer { casters, bvh, eps: 1e-4 * (hi - lo).length().max(1e-6) })
+    }
+
+    /// The nearest caster along the ray from `o` along unit `d` (past [`Tracer::eps`]): its triangle (an index
+    /// into [`Tracer::casters`]) and how far along the ray.
+    pub(super) fn nearest(&self, o: Vec3, d: Vec3) -> Option<(usize, f32)> {
+        let (casters, bvh) = (&self.casters, &self.bvh);
+        let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
+        let mut hit = RayHit::none();
+        // The tree numbers its leaves' triangles in its own order: `primitive_indices` maps them back to ours.
+        let ours = |id: usize| bvh.primitive_indices[id] as usize;
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| casters.tris[ours(id)].intersect(r)) {
+            return None;
+        }
+        Some((ours(hit.primitive_id as usize), hit.t))
+    }
+
+    /// Whether the ray from `o` along unit `d` (past [`Tracer::eps`]) meets no caster. Which caster it meets
+    /// first does not matter here, so the walk stops at any.
+    pub(super) fn open(&self, o: Vec3, d: Vec3) -> bool {
+        let (casters, bvh) = (&self.casters, &self.bvh);
+        let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
+        let ours = |id: usize| bvh.primitive_indices[id] as usize;
+        bvh.ray_traverse_miss(ray, |r, id| casters.tris[ours(id)].intersect(r))
+    }
+
+    /// The share of a GGX lobe (α = `a`, about unit normal `n`, seen from unit `v`) that reaches past the
+    /// casters from point `p`: [`LOBE_RAYS`] reflected directions, importance-sampled as the environment's
+    /// prefiltering samples the lobe, each weighted by its cosine to `n`. The same directions at every point
+    /// (relative to its normal), so the answer varies smoothly over a surface, without noise; `None` when the
+    /// whole lobe lies below the surface. Rays start a few hairs off the surface, along `n`.
+    pub(super) fn lobe_visibility(&self, p: Vec3, n: Vec3, v: Vec3, a: f32) -> Option<f32> {
+        let (t, b) = basis(n);
+        let o = p + n * (4.0 * self.eps);
+        let (mut open, mut all) = (0.0f32, 0.0f32);
+        for i in 0..LOBE_RAYS {
+            let h = ggx_half(hammersley(i, LOBE_RAYS), a);
+            let h = t * h.x + b * h.y + n * h.z;
+            let l = 2.0 * v.dot(h) * h - v;
+            let nl = n.dot(l);
+            if nl <= 0.0 {
+                continue;
+            }
+            all += nl;
+            if self.open(o, l) {
+                open += nl;
+            }
+        }
+        (all > 0.0).then(|| open / all)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::PrimKind;
+
+    #[test]
+    fn a_ray_is_open_exactly_when_it_meets_nothing_and_a_lobe_under_its_surface_sees_nothing() {
+        // A unit square at z = 1 facing down.
+        let square = PosedScene::single(
+            PrimKind::Triangles,
+            vec![Vec3::new(-0.5, -0.5, 1.0), Vec3::new(0.5, -0.5, 1.0), Vec3::new(0.5, 0.5, 1.0), Vec3::new(-0.5, 0.5, 1.0)],
+            vec![-Vec3::Z; 4],
+            Vec::new(),
+            vec![0, 2, 1, 0, 3, 2],
+            crate::scene::material::Material::default(),
+        );
+        let tracer = Tracer::of(&square).expect("a caster");
+        let (mut met, mut missed) = (0, 0);
+        for i in 0..400 {
+            let xi = hammersley(i, 400);
+            let d = Vec3::new(xi.x * 2.0 - 1.0, xi.y * 2.0 - 1.0, 0.8).normalize();
+            let nearest = tracer.nearest(Vec3::ZERO, d);
+            assert_eq!(tracer.open(Vec3::ZERO, d), nearest.is_none(), "{d}");
+            if let Some((_, t)) = nearest {
+                assert!(((d * t).z - 1.0).abs() < 1e-5, "{d} at {t}");
+                met += 1;
+            } else {
+                missed += 1;
+            }
+        }
+        assert!(met > 50 && missed > 50, "{met} met, {missed} missed");
+        // From under the square's middle, a glossy lobe straight up meets it, one pointing away does not; a
+        // lobe seen from behind the surface has no direction above it.
+        let up = tracer.lobe_visibility(Vec3::ZERO, Vec3::Z, Vec3::Z, 0.01).expect("above the surface");
+        let away = tracer.lobe_visibility(Vec3::ZERO, -Vec3::Z, -Vec3::Z, 0.01).expect("above the surface");
+        assert_eq!((up, away), (0.0, 1.0));
+        assert_eq!(tracer.lobe_visibility(Vec3::ZERO, Vec3::Z, -Vec3::Z, 0.01), None);
+    }
+}
