@@ -92,6 +92,11 @@ impl Subject {
         Some(Subject { tracer, sphere, vertices, first })
     }
 
+    /// Its casters' tree.
+    pub(super) fn tracer(&self) -> Arc<Tracer> {
+        Arc::clone(&self.tracer)
+    }
+
     /// The light the subject reflects onto each of its vertices, by serial number, in a frame whose direct
     /// light, environment and vertices' view of it `light` holds.
     pub(super) fn gather(&self, scene: &PosedScene, light: &FrameLight) -> Gathered {

@@ -278,7 +278,9 @@ pub struct FrameLight {
     /// The light over each ground plane, on a grid (see [`PlaneVisibility`]).
     planes: Vec<PlaneVisibility>,
     /// The frame's casters in a ray-tracing tree, when a surface may be glossy enough to look its reflection's
-    /// occlusion up with rays ([`rays::Tracer::lobe_visibility`]); shared with the gather.
+    /// occlusion up with rays ([`rays::Tracer::lobe_visibility`]): made by [`FrameLight::from_gathered`], or the
+    /// gather's ([`FrameLight::with_bounce`]). A light only prepared has none (it bakes points, which have no
+    /// specular layer).
     tracer: Option<Arc<rays::Tracer>>,
 }
 
@@ -436,7 +438,7 @@ impl FrameLight {
             occlusion: Vec::new(),
             vertex_visibility: Vec::new(),
             planes: Vec::new(),
-            tracer: may_be_glossy(scene).then(|| rays::Tracer::of(scene).map(Arc::new)).flatten(),
+            tracer: None,
         }
     }
 
@@ -460,6 +462,7 @@ impl FrameLight {
             return Err(GatheredError::OtherScene);
         }
         let mut light = FrameLight::bare(scene, lights, lamps(scene, lights, caster_bounds(scene)), env);
+        light.tracer = may_be_glossy(scene).then(|| rays::Tracer::of(scene).map(Arc::new)).flatten();
         light.vertex_visibility = g.vertices;
         light.planes = ground_planes(scene)
             .zip(g.planes)
@@ -474,6 +477,10 @@ impl FrameLight {
         let Some(subject) = bounce::Subject::of(scene, self.tracer.clone()) else {
             return self;
         };
+        // The gather's tree serves the glossy lobes' rays too, as a render's does (`from_gathered`).
+        if may_be_glossy(scene) {
+            self.tracer = Some(subject.tracer());
+        }
         let gathered = subject.gather(scene, &self);
         for (i, vis) in self.vertex_visibility.iter_mut().enumerate() {
             if vis.is_empty() {
@@ -894,7 +901,7 @@ mod tests {
         let seen_from = |r: Vec3| 2.0 * n.dot(r) * n - r;
         let (below, above) = (seen_from(Vec3::new(1.0, 0.0, 1.0).normalize()), seen_from(Vec3::new(1.0, 0.0, -1.0).normalize()));
         let studio = || crate::render::Environment::default().studio();
-        let glossy = FrameLight::prepare(&scene_of(0.2), &[], studio());
+        let glossy = FrameLight::prepare(&scene_of(0.2), &[], studio()).with_bounce(&scene_of(0.2));
         assert!(glossy.tracer.is_some());
         let (up, down) = (glossy.lobe_occlusion(p, n, below, 0.2, hemisphere), glossy.lobe_occlusion(p, n, above, 0.2, hemisphere));
         assert!(up < 0.05 && down > 0.95, "mirroring the roof {up}, the open space {down}");
@@ -911,7 +918,7 @@ mod tests {
         assert!(mid > traced.min(rough) && mid < traced.max(rough), "{traced} < {mid} < {rough}");
         // Surfaces that cannot be glossy (roughness 1, no roughness texture: CesiumMan's) make no tree, and keep
         // the hemisphere's occlusion.
-        let rough_scene = FrameLight::prepare(&scene_of(1.0), &[], studio());
+        let rough_scene = FrameLight::prepare(&scene_of(1.0), &[], studio()).with_bounce(&scene_of(1.0));
         assert!(rough_scene.tracer.is_none());
         assert_eq!(rough_scene.lobe_occlusion(p, n, below, 0.2, hemisphere), a);
     }
