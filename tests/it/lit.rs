@@ -209,7 +209,13 @@ fn lit_renders_are_the_same_bytes_whatever_the_thread_count() {
             ..Material::default()
         },
     );
-    let scene = merged(&[ground_and_caster(), glass]);
+    // A glossy metal sphere beside the caster: its lobes look for what blocks them with rays, against a tree.
+    let metal = sphere(
+        0.25,
+        Vec3::new(-0.7, 0.4, 0.5),
+        Material { base_color: Vec4::new(0.9, 0.7, 0.4, 1.0), metallic: 1.0, roughness: 0.2, ..Material::default() },
+    );
+    let scene = merged(&[ground_and_caster(), glass, metal]);
     let c = cam(96, 120.0, Camera::look_at(Vec3::new(3.0, -4.0, 3.0), Vec3::new(0.0, 0.0, 0.5), Vec3::Z));
     let sun = Light {
         kind: LightKind::Sun { direction: Vec3::new(0.5, 0.3, -1.0).normalize(), angle: 0.05 },
