@@ -9,10 +9,9 @@
 //! environment's share of them is already in the occlusion.
 
 use std::f32::consts::PI;
-
-use glam::{Vec2, Vec3};
 use std::sync::Arc;
 
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::brdf::{basis, hammersley};
@@ -208,7 +207,6 @@ impl Subject {
                 // neighbours sample different directions, so their errors average out where they are smoothed.
                 let shift = hammersley(serial as u32 % 4093, 4093);
                 (0..rays as u32)
-                    
                     .filter_map(|i| self.trace(scene, p + n * self.tracer.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
                     .collect()
             })
