@@ -492,30 +492,40 @@ impl ShadowMap {
 fn pyramids(base: &[f32], side: usize) -> (Vec<Vec<f32>>, Vec<Vec<f32>>) {
     let (mut side, mut mins, mut maxs) = (side, Vec::<Vec<f32>>::new(), Vec::<Vec<f32>>::new());
     while side > 1 {
-        let next = side.div_ceil(2);
         let (lo, hi) = (mins.last().map_or(base, |l| l), maxs.last().map_or(base, |l| l));
-        let (mut m, mut n) = (Vec::with_capacity(next * next), Vec::with_capacity(next * next));
-        for y in (0..side).step_by(2) {
-            let rows = if y + 1 < side { [y, y + 1] } else { [y, y] };
-            for x in (0..side).step_by(2) {
-                let cols = if x + 1 < side { [x, x + 1] } else { [x, x] };
-                let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
-                for r in rows {
-                    for c in cols {
-                        let (u, v) = (lo[r * side + c], hi[r * side + c]);
-                        a = if u < a { u } else { a };
-                        b = if v > b { v } else { b };
-                    }
-                }
-                m.push(a);
-                n.push(b);
-            }
-        }
+        let (m, n) = fold(lo, hi, side);
         mins.push(m);
         maxs.push(n);
-        side = next;
+        side = side.div_ceil(2);
     }
     (mins, maxs)
+}
+
+/// One level of [`pyramids`]: the min of `lo`'s and the max of `hi`'s 2 × 2 blocks (`side`² each), rows of
+/// blocks side by side (a sun's 2048² map and its pyramids were folded on one thread, twice a frame). Each block
+/// is folded in the same order whatever the threads (its rows, then its columns; the first of equal values
+/// kept), so the same bits.
+fn fold(lo: &[f32], hi: &[f32], side: usize) -> (Vec<f32>, Vec<f32>) {
+    let next = side.div_ceil(2);
+    let (mut m, mut n) = (vec![0.0f32; next * next], vec![0.0f32; next * next]);
+    let row = |y: usize, (mins, maxs): (&mut [f32], &mut [f32])| {
+        let (r0, r1) = (2 * y, (2 * y + 1).min(side - 1));
+        let (a0, a1) = (&lo[r0 * side..(r0 + 1) * side], &lo[r1 * side..(r1 + 1) * side]);
+        let (b0, b1) = (&hi[r0 * side..(r0 + 1) * side], &hi[r1 * side..(r1 + 1) * side]);
+        for (x, (min, max)) in mins.iter_mut().zip(maxs.iter_mut()).enumerate() {
+            let (c0, c1) = (2 * x, (2 * x + 1).min(side - 1));
+            let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
+            for u in [a0[c0], a0[c1], a1[c0], a1[c1]] {
+                a = if u < a { u } else { a };
+            }
+            for v in [b0[c0], b0[c1], b1[c0], b1[c1]] {
+                b = if v > b { v } else { b };
+            }
+            (*min, *max) = (a, b);
+        }
+    };
+    m.par_chunks_mut(next).zip(n.par_chunks_mut(next)).enumerate().with_min_len(32).for_each(|(y, rows)| row(y, rows));
+    (m, n)
 }
 
 /// One axis of an N × N grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's
