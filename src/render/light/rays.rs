@@ -3,10 +3,11 @@
 //!
 //! Why a glossy surface needs rays: the environment's occlusion at a vertex is one number for its whole
 //! hemisphere, and a glossy lobe sees a small part of it. FlightHelmet's varnished stand, under the helmet and
-//! over its base, sees a fifth of its hemisphere blocked, but its reflection points at the open sky: occluded by
-//! the hemisphere's number it was 7–11 % dark against Cycles. The helmet's lining, whose hemisphere the
+//! over its base, has part of its hemisphere blocked, but its reflection points at the open sky: occluded by the
+//! hemisphere's number it was 7–11 % dark against Cycles. The helmet's lining, whose hemisphere the
 //! occlusion maps see open through the shell (their texels are a centimetre wide), mirrored the sky through it:
-//! twice Cycles' brightness. A few rays along the lobe tell both apart.
+//! twice Cycles' brightness. A few rays along the lobe tell both apart. A ray meets a caster's whole triangles: a
+//! cut-out (alpha-masked) or transparent one blocks it as an opaque one does, as it does the gather's rays.
 
 use glam::Vec3;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
