@@ -613,12 +613,7 @@ impl FrameLight {
         let e = &self.env;
         // A purely diffuse surface (the ground) reads no specular lobe: skip its lookups, which would add zero.
         let w = s.specular_weight();
-        let spec_f = if w > 0.0 {
-            let ab = brdf::dfg(n.dot(v).max(1e-4), s.roughness);
-            (s.f0() * ab.x + Vec3::splat(ab.y)) * w
-        } else {
-            Vec3::ZERO
-        };
+        let spec_f = if w > 0.0 { s.specular_albedo(n.dot(v).max(1e-4)) } else { Vec3::ZERO };
         let irradiance = self.irradiance(p, n, vis.below);
         let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (1.0 / PI);
         let occlusion = ao * vis.env;
@@ -855,10 +850,10 @@ mod tests {
                 let r = Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
                 let v = 2.0 * n.dot(r) * n - r;
                 let out = frame.shade(Vec3::new(0.0, 0.0, 0.5), n, v, &metal, 1.0, Visibility::OPEN, false);
-                (out, frame.ground.map(|g| g.radiance(glam::Vec2::ONE)), brdf::dfg(n.dot(v), 0.5))
+                (out, frame.ground.map(|g| g.radiance(glam::Vec2::ONE)), metal.specular_albedo(n.dot(v)))
             };
-            let ((lit, ground, ab), (black, _, _)) = (shade(0.8), shade(0.0));
-            ((lit - black).x / ground.expect("a ground").x) / (ab.x + ab.y)
+            let ((lit, ground, albedo), (black, _, _)) = (shade(0.8), shade(0.0));
+            ((lit - black).x / ground.expect("a ground").x) / albedo.x
         };
         // Looking level with the horizon: half of it. Well above: none; well below: all of it.
         let level = share(0.0);
