@@ -68,9 +68,8 @@ pub(super) struct Gathered {
 }
 
 impl Subject {
-    /// The casters of `scene`, in `tracer` when the frame's light made their tree already; `None` when nothing
-    /// casts shadows.
-    pub(super) fn of(scene: &PosedScene, tracer: Option<Arc<Tracer>>) -> Option<Subject> {
+    /// The casters of `scene`, `None` when nothing casts shadows.
+    pub(super) fn of(scene: &PosedScene) -> Option<Subject> {
         let mut first = vec![0usize; scene.primitives.len()];
         let mut vertices: Vec<(u32, u32)> = Vec::new();
         for (i, prim) in scene.primitives.iter().enumerate() {
@@ -83,10 +82,7 @@ impl Subject {
         if vertices.is_empty() {
             return None;
         }
-        let tracer = match tracer {
-            Some(t) => t,
-            None => Arc::new(Tracer::of(scene)?),
-        };
+        let tracer = Arc::new(Tracer::of(scene)?);
         let sphere = ((lo + hi) * 0.5, 0.5 * (hi - lo).length());
         Some(Subject { tracer, sphere, vertices, first })
     }

@@ -150,7 +150,7 @@ pub fn studio() -> EnvMap {
     EnvMap { width: w, height: h, texels }
 }
 
-fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+pub(super) fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }

@@ -474,7 +474,7 @@ impl FrameLight {
     /// This lighting with what the subject reflects onto itself and onto the ground gathered ([`bounce`]): what
     /// rendered meshes read (a baked point has no vertices to gather at, and estimates it instead).
     pub fn with_bounce(mut self, scene: &PosedScene) -> FrameLight {
-        let Some(subject) = bounce::Subject::of(scene, self.tracer.clone()) else {
+        let Some(subject) = bounce::Subject::of(scene) else {
             return self;
         };
         // The gather's tree serves the glossy lobes' rays too, as a render's does (`from_gathered`).
@@ -668,14 +668,12 @@ impl FrameLight {
     #[inline]
     fn lobe_occlusion(&self, p: Vec3, n: Vec3, v: Vec3, roughness: f32, occlusion: f32) -> f32 {
         let hemisphere = specular_occlusion(n.dot(v), occlusion, roughness);
-        let (glossy, rough) = GLOSSY_RAYS;
-        let rays = 1.0 - ((roughness - glossy) / (rough - glossy)).clamp(0.0, 1.0);
+        let rays = 1.0 - environment::smoothstep(GLOSSY_RAYS.0, GLOSSY_RAYS.1, roughness);
         let Some(tracer) = self.tracer.as_ref().filter(|_| rays > 0.0) else {
             return hemisphere;
         };
         let a = roughness.max(brdf::MIN_ROUGHNESS).powi(2);
-        let smooth = rays * rays * (3.0 - 2.0 * rays);
-        tracer.lobe_visibility(p, n, v, a).map_or(hemisphere, |open| hemisphere + (open - hemisphere) * smooth)
+        tracer.lobe_visibility(p, n, v, a).map_or(hemisphere, |open| hemisphere + (open - hemisphere) * rays)
     }
 
     /// The environment's irradiance at world point `p` on a surface of unit normal `n`, before occlusion, with
@@ -758,8 +756,8 @@ const GLOSSY_RAYS: (f32, f32) = (0.5, 0.8);
 fn may_be_glossy(scene: &PosedScene) -> bool {
     scene.primitives.iter().filter(|p| p.kind == PrimKind::Triangles).any(|p| {
         let m = scene.material(p.material);
-        let specular = m.specular + (1.0 - m.specular) * m.metallic > 0.0;
-        specular && (m.roughness < GLOSSY_RAYS.1 || m.metallic_roughness_texture.is_some())
+        let surface = Surface { base: Vec3::ONE, metallic: m.metallic, roughness: m.roughness, specular: m.specular };
+        surface.specular_weight() > 0.0 && (m.roughness < GLOSSY_RAYS.1 || m.metallic_roughness_texture.is_some())
     })
 }
 
