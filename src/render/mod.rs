@@ -23,7 +23,7 @@ use crate::scene::PosedScene;
 use raster::{Projection, Shade};
 
 /// Tile side in pixels.
-const TILE: i64 = 32;
+pub(crate) const TILE: i64 = 32;
 
 /// Surface shading.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -599,6 +599,24 @@ impl FrameLight {
     /// casters are mostly its own parts, of colours like its own.
     #[allow(clippy::too_many_arguments)]
     pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, vis: Visibility, estimate_bounce: bool) -> Vec3 {
+        self.shade_lobe(p, n, v, s, ao, vis, estimate_bounce, None).0
+    }
+
+    /// [`FrameLight::shade`], and what the glossy lobe's rays found ([`Tracer::lobe_visibility`]: the share of
+    /// the lobe open to the environment) when it cast them. `lobe`: that share when it is known already (a
+    /// neighbouring pixels' that agree; see `raster::lit`), so no ray is cast.
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade_lobe(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        v: Vec3,
+        s: &Surface,
+        ao: f32,
+        vis: Visibility,
+        estimate_bounce: bool,
+        lobe: Option<f32>,
+    ) -> (Vec3, Option<f32>) {
         let mut out = Vec3::ZERO;
         for lamp in &self.lights {
             let (l, radiance) = lamp.incidence(p);
@@ -617,6 +635,7 @@ impl FrameLight {
         let irradiance = self.irradiance(p, n, vis.below);
         let diffuse = s.diffuse() * (Vec3::ONE - spec_f) * (1.0 / PI);
         let occlusion = ao * vis.env;
+        let mut traced = None;
         let specular = if w > 0.0 {
             let r = 2.0 * n.dot(v) * n - v;
             let mut l = e.prefiltered.specular(e.rotation * r, s.roughness) * e.strength;
@@ -642,7 +661,9 @@ impl FrameLight {
                     l = (l + (g - map) * (below * on)).max(Vec3::ZERO);
                 }
             }
-            spec_f * l * self.lobe_occlusion(p, n, v, s.roughness, occlusion)
+            let (open, found) = self.lobe_occlusion(p, n, v, s.roughness, occlusion, lobe);
+            traced = found;
+            spec_f * l * open
         } else {
             Vec3::ZERO
         };
@@ -655,25 +676,27 @@ impl FrameLight {
         // The specular layer sees the same occluders where its lobe is blocked: their mean radiance, which the
         // gathered irradiance over π is (for a rough lobe; a sharp one would see one of them).
         let bounce = vis.bounce.max(Vec3::ZERO) * ao;
-        out + diffuse * (irradiance * returned + bounce) + specular + spec_f * bounce * (1.0 / PI)
+        (out + diffuse * (irradiance * returned + bounce) + specular + spec_f * bounce * (1.0 / PI), traced)
     }
 
     /// How much of the environment's specular light reaches a lobe of perceptual `roughness` about unit normal
     /// `n` at `p`, seen from `v`, under the environment's occlusion `occlusion` (the material's ambient occlusion
-    /// times the vertices' visibility). A glossy lobe ([`GLOSSY_RAYS`]) looks along itself with rays
-    /// ([`rays::Tracer::lobe_visibility`]); a rough one, whose lobe is about the hemisphere, reads the
-    /// hemisphere's occlusion (`specular_occlusion`); between the two, a blend. The rays leave the occlusion
-    /// texture out: it bakes the same geometry's occlusion they meet (FlightHelmet's, multiplied in, was 2 % dark
-    /// against Cycles, which Blender's importer does not give the texture to).
+    /// times the vertices' visibility), and what the lobe's rays found when it cast them. A glossy lobe
+    /// ([`GLOSSY_RAYS`]) looks along itself with rays ([`rays::Tracer::lobe_visibility`]), or takes `given`,
+    /// their answer found already; a rough one, whose lobe is about the hemisphere, reads the hemisphere's
+    /// occlusion (`specular_occlusion`); between the two, a blend. The rays leave the occlusion texture out: it
+    /// bakes the same geometry's occlusion they meet (FlightHelmet's, multiplied in, was 2 % dark against Cycles,
+    /// which Blender's importer does not give the texture to).
     #[inline]
-    fn lobe_occlusion(&self, p: Vec3, n: Vec3, v: Vec3, roughness: f32, occlusion: f32) -> f32 {
+    fn lobe_occlusion(&self, p: Vec3, n: Vec3, v: Vec3, roughness: f32, occlusion: f32, given: Option<f32>) -> (f32, Option<f32>) {
         let hemisphere = specular_occlusion(n.dot(v), occlusion, roughness);
         let rays = 1.0 - environment::smoothstep(GLOSSY_RAYS.0, GLOSSY_RAYS.1, roughness);
         let Some(tracer) = self.tracer.as_ref().filter(|_| rays > 0.0) else {
-            return hemisphere;
+            return (hemisphere, None);
         };
         let a = roughness.max(brdf::MIN_ROUGHNESS).powi(2);
-        tracer.lobe_visibility(p, n, v, a).map_or(hemisphere, |open| hemisphere + (open - hemisphere) * rays)
+        let open = given.or_else(|| tracer.lobe_visibility(p, n, v, a));
+        (open.map_or(hemisphere, |open| hemisphere + (open - hemisphere) * rays), open)
     }
 
     /// The environment's irradiance at world point `p` on a surface of unit normal `n`, before occlusion, with
@@ -896,24 +919,28 @@ mod tests {
         let studio = || crate::render::Environment::default().studio();
         let glossy = FrameLight::prepare(&scene_of(0.2), &[], studio()).with_bounce(&scene_of(0.2));
         assert!(glossy.tracer.is_some());
-        let (up, down) = (glossy.lobe_occlusion(p, n, below, 0.2, hemisphere), glossy.lobe_occlusion(p, n, above, 0.2, hemisphere));
+        let lobe = |light: &FrameLight, v: Vec3, roughness: f32| light.lobe_occlusion(p, n, v, roughness, hemisphere, None);
+        let ((up, found_up), (down, found_down)) = (lobe(&glossy, below, 0.2), lobe(&glossy, above, 0.2));
         assert!(up < 0.05 && down > 0.95, "mirroring the roof {up}, the open space {down}");
+        // What the rays found comes back with the answer; given, it stands for them (no ray is cast).
+        assert_eq!((found_up, found_down), (Some(up), Some(down)));
+        assert_eq!(glossy.lobe_occlusion(p, n, below, 0.2, hemisphere, Some(down)), (down, Some(down)));
         // The hemisphere's occlusion alone cannot tell the two apart.
         let (a, b) = (specular_occlusion(n.dot(below), hemisphere, 0.2), specular_occlusion(n.dot(above), hemisphere, 0.2));
         assert!((a - b).abs() < 1e-6 && a > 0.3 && a < 0.9, "{a} {b}");
         // A rough lobe, about the whole hemisphere, reads the hemisphere's occlusion, without rays.
         for v in [below, above] {
-            assert_eq!(glossy.lobe_occlusion(p, n, v, 0.9, hemisphere), specular_occlusion(n.dot(v), hemisphere, 0.9));
+            assert_eq!(lobe(&glossy, v, 0.9), (specular_occlusion(n.dot(v), hemisphere, 0.9), None));
         }
         // Between glossy and rough, between the two.
-        let mid = glossy.lobe_occlusion(p, n, below, 0.65, hemisphere);
-        let (traced, rough) = (glossy.lobe_occlusion(p, n, below, 0.5, hemisphere), specular_occlusion(n.dot(below), hemisphere, 0.65));
+        let (mid, traced) = (lobe(&glossy, below, 0.65).0, lobe(&glossy, below, 0.5).0);
+        let rough = specular_occlusion(n.dot(below), hemisphere, 0.65);
         assert!(mid > traced.min(rough) && mid < traced.max(rough), "{traced} < {mid} < {rough}");
         // Surfaces that cannot be glossy (roughness 1, no roughness texture: CesiumMan's) make no tree, and keep
         // the hemisphere's occlusion.
         let rough_scene = FrameLight::prepare(&scene_of(1.0), &[], studio()).with_bounce(&scene_of(1.0));
         assert!(rough_scene.tracer.is_none());
-        assert_eq!(rough_scene.lobe_occlusion(p, n, below, 0.2, hemisphere), a);
+        assert_eq!(lobe(&rough_scene, below, 0.2), (a, None));
     }
 
     #[test]

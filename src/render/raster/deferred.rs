@@ -29,20 +29,40 @@ pub(super) struct Share {
     pub bary: [f32; 3],
     /// View depth at the centroid (the mean of the samples').
     pub z: f32,
+    /// The pixel, counted from the tile's first.
+    pub px: u32,
+    pub py: u32,
 }
 
 /// Calls `f` for every triangle's share of every pixel of the tile, pixels in row order and, within a pixel,
 /// triangles in the order of their first sample (so the result never depends on anything but the tile).
-/// `k` is the number of samples along a pixel side (at most 4).
-pub(super) fn for_each_share(t: &mut SampleTile, x0: i64, y0: i64, k: i64, f: impl FnMut(&Share, &mut SampleTile)) {
+/// `k` is the number of samples along a pixel side (at most 4). Only the pixels `pixels` keeps are visited.
+pub(super) fn for_each_share(
+    t: &mut SampleTile,
+    x0: i64,
+    y0: i64,
+    k: i64,
+    pixels: Pixels,
+    f: impl FnMut(&Share, &mut SampleTile),
+) {
     // One copy per sample grid: with the pixel's sample count known, its loops unroll and its indexing is
     // checked once (the generic loops were as many instructions as the texture lookups they feed).
     match k {
-        1 => shares::<1, 1>(t, x0, y0, f),
-        2 => shares::<2, 4>(t, x0, y0, f),
-        3 => shares::<3, 9>(t, x0, y0, f),
-        _ => shares::<4, 16>(t, x0, y0, f),
+        1 => shares::<1, 1>(t, x0, y0, pixels, f),
+        2 => shares::<2, 4>(t, x0, y0, pixels, f),
+        3 => shares::<3, 9>(t, x0, y0, pixels, f),
+        _ => shares::<4, 16>(t, x0, y0, pixels, f),
     }
+}
+
+/// Which of a tile's pixels [`for_each_share`] visits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Pixels {
+    All,
+    /// Those in an even column of an even row (counted from the tile's first, 0).
+    Even,
+    /// The others.
+    NotEven,
 }
 
 /// [`for_each_share`] for `K` × `K` samples per pixel (`N` = `K`²).
@@ -51,6 +71,7 @@ fn shares<const K: usize, const N: usize>(
     t: &mut SampleTile,
     x0: i64,
     y0: i64,
+    pixels: Pixels,
     mut f: impl FnMut(&Share, &mut SampleTile),
 ) {
     debug_assert_eq!(N, K * K);
@@ -59,8 +80,11 @@ fn shares<const K: usize, const N: usize>(
     // mean, computed as `gather` computes any share's).
     let offset: [Vec2; N] = std::array::from_fn(|j| Vec2::new((j % K) as f32, (j / K) as f32));
     let full = offset.iter().fold(Vec2::ZERO, |a, &o| a + o) * (1.0 / N as f32);
-    let mut share = Share { id: NO_TRI, samples: [0; 16], n: 0, at: Vec2::ZERO, bary: [0.0; 3], z: 0.0 };
+    let mut share = Share { id: NO_TRI, samples: [0; 16], n: 0, at: Vec2::ZERO, bary: [0.0; 3], z: 0.0, px: 0, py: 0 };
     for py in 0..t.h as usize / K {
+        if pixels == Pixels::Even && py % 2 == 1 {
+            continue;
+        }
         // Only the pixels between the row's first and last deferred sample (a tile around a figure is mostly
         // empty, and scanning it was a third of texturing's instructions).
         let band = &t.tri[py * K * w..(py + 1) * K * w];
@@ -70,9 +94,14 @@ fn shares<const K: usize, const N: usize>(
         };
         let hi = band.chunks_exact(w).filter_map(|r| r.iter().rposition(deferred)).max().unwrap_or(lo);
         for px in lo / K..=hi / K {
+            let even = px % 2 == 0 && py % 2 == 0;
+            if (pixels == Pixels::Even && !even) || (pixels == Pixels::NotEven && even) {
+                continue;
+            }
             let index: [usize; N] = super::pixel_samples::<K, N>(w, px, py);
             let mut ids: [u32; N] = index.map(|i| t.tri[i]);
             let corner = Vec2::new(x0 as f32 + (px * K) as f32, y0 as f32 + (py * K) as f32) + 0.5;
+            (share.px, share.py) = (px as u32, py as u32);
             let id = ids[0];
             if id != NO_TRI && ids.iter().all(|&d| d == id) {
                 // Inside one triangle (most covered pixels): its centroid is the pixel's, no sorting out. `gather`'s
@@ -138,7 +167,7 @@ pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i
     // What the last share's material needs (its texture and emissive): neighbouring shares are mostly one
     // triangle's, or one mesh's, so the material is looked up again only when it changes.
     let mut last: Option<(u32, BaseColour, Vec3)> = None;
-    for_each_share(t, x0, y0, k, |s, t| {
+    for_each_share(t, x0, y0, k, Pixels::All, |s, t| {
         let tri = tris.get(s.id);
         let (texture, emissive) = match last {
             Some((m, texture, emissive)) if m == tri.material => (texture, emissive),

@@ -219,6 +219,8 @@ pub struct SampleTile {
     bary: Vec<[f32; 3]>,
     /// Fragments of alpha BLEND surfaces, composited over the opaque samples once every triangle is drawn.
     blend: Vec<blend::Fragment>,
+    /// What lit shading's anchor pixels found, kept from tile to tile ([`lit::shade_tile`]).
+    anchors: Vec<Option<lit::Anchor>>,
 }
 
 /// No triangle at a sample (deferred lit shading).
@@ -239,6 +241,7 @@ impl SampleTile {
             tri: Vec::new(),
             bary: Vec::new(),
             blend: Vec::new(),
+            anchors: Vec::new(),
         };
         t.reset(rect);
         t
