@@ -19,12 +19,17 @@ use crate::render::{self, Frame, RenderSettings, Shading};
 use crate::scene::Poser;
 use std::sync::Arc;
 
-/// Runs the environment action: reads the map and prefilters it.
+/// Runs the environment action: reads the map (the built-in studio map when the manifest names none) and
+/// prefilters it.
 pub(super) fn environment(g: &Graph, x: &Inputs, ids: &[ActionId], done: &(dyn Fn() + Sync)) -> Result<Made, Error> {
     x.each(g, ids, done, |id| Ok(environment::prefilter(&load_map(g, x, id)?).encode()))
 }
 
+/// The environment map: the manifest's, or the built-in studio map.
 fn load_map(g: &Graph, x: &Inputs, id: ActionId) -> Result<EnvMap, Error> {
+    if g.keying.render.lighting.environment.map.is_none() {
+        return Ok(environment::studio());
+    }
     let label = || g.node(id).label.clone();
     let path =
         x.environment.ok_or_else(|| Error::Content { action: label(), message: "BUG: no environment map".into() })?;

@@ -264,9 +264,10 @@ pub struct PointSettings {
 }
 
 impl PointSettings {
-    /// Whether its sample actions' light action reads the prefiltered environment: lit colours under a map.
+    /// Whether its sample actions' light action reads the prefiltered environment (a map's, or the built-in
+    /// studio's): lit colours under lit shading.
     pub fn environment_dep(&self, r: &RenderSettings) -> bool {
-        self.color == PointColor::Lit && r.lighting.environment.map.is_some()
+        self.color == PointColor::Lit && r.shading == crate::render::Shading::Pbr
     }
 
     /// Whether its sample actions read their frame's light action (their first dep): lit colours, lit as the

@@ -291,15 +291,11 @@ impl<'a> Graph<'a> {
 
     fn render_pass(&mut self, image: usize, pass: Pass) -> ActionId {
         let label = format!("render {} {}", image_label(self.keying.plan, image), pass_name(pass));
-        // A lit RGBA pass reads its frame's light, which reads the prefiltered environment map (the built-in
-        // studio map needs no action).
+        // A lit RGBA pass reads its frame's light, which reads the prefiltered environment (the manifest's map, or
+        // the built-in studio map).
         let r = &self.keying.render;
         let deps = if pass == Pass::Rgba && r.shading == Shading::Pbr {
-            let env = if r.lighting.environment.map.is_some() {
-                vec![self.add(Action::Environment, "environment".into(), vec![])]
-            } else {
-                vec![]
-            };
+            let env = vec![self.add(Action::Environment, "environment".into(), vec![])];
             let frame = self.keying.plan.images[image].frame;
             vec![self.add(Action::Light { frame }, format!("light {frame}"), env)]
         } else {

@@ -53,7 +53,8 @@ impl Action {
         match self {
             Action::Environment => {
                 w.str("prefilter", crate::render::light::environment::SALT);
-                w.str("map content", cx.render.lighting.environment.map.as_deref().unwrap_or("studio"));
+                let studio = crate::render::light::environment::STUDIO;
+                w.str("map content", cx.render.lighting.environment.map.as_deref().unwrap_or(studio));
             }
             Action::Light { frame } => {
                 // What the gather reads: the posed frame, its materials and lights, the manifest's lights and the
@@ -345,7 +346,7 @@ fn light_fields(w: &mut dyn KeyWriter, l: &crate::render::Lighting) {
         w.bool("shadows", *shadows);
     }
     let crate::render::Environment { map, strength, rotation_deg, visible: _ } = environment;
-    // The built-in studio map has no prefiltering action: its version is the renderer's.
+    // Which map it is enters through the environment action's key (the light action's dep).
     w.str("environment", if map.is_some() { "map" } else { "studio" });
     w.f64("environment strength", *strength as f64);
     w.f64("environment rotation (deg)", *rotation_deg as f64);

@@ -19,6 +19,9 @@ pub const LEVELS: usize = 6;
 /// Version of the prefiltered data's bytes: bump when prefiltering changes.
 pub const SALT: &str = "environment 4";
 
+/// Version of the built-in studio map ([`studio`]), which stands for a map's content key: bump when it changes.
+pub const STUDIO: &str = "studio 1";
+
 /// What can go wrong reading an environment map.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
