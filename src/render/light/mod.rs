@@ -602,7 +602,7 @@ impl FrameLight {
         self.shade_lobe(p, n, v, s, ao, vis, estimate_bounce, None).0
     }
 
-    /// [`FrameLight::shade`], and what the glossy lobe's rays found ([`Tracer::lobe_visibility`]: the share of
+    /// [`FrameLight::shade`], and what the glossy lobe's rays found ([`rays::Tracer::lobe_visibility`]: the share of
     /// the lobe open to the environment) when it cast them. `lobe`: that share when it is known already (a
     /// neighbouring pixels' that agree; see `raster::lit`), so no ray is cast.
     #[allow(clippy::too_many_arguments)]
