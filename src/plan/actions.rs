@@ -13,7 +13,7 @@ use crate::render::RenderSettings;
 pub const RENDER_SALT: &str = "render 7";
 /// Version of lit shading (what only `pbr` renders and lit point colours read): bump when a change moves lit
 /// bytes only, so that unlit datasets keep their keys.
-pub const LIT_SALT: &str = "lit 20";
+pub const LIT_SALT: &str = "lit 21";
 /// Version of the point sampler's output.
 pub const SAMPLE_SALT: &str = "sample 3";
 /// How a cloud of a given size picks among a point cloud's own points (at most its share, keyed).

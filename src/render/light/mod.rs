@@ -9,6 +9,7 @@
 
 mod bounce;
 pub mod brdf;
+mod cutout;
 pub mod environment;
 mod ground;
 mod penumbra;
@@ -256,7 +257,7 @@ impl Reader<'_> {
 }
 
 /// Version of baked point colours ([`FrameLight::bake`]): part of their keys.
-pub const BAKE_SALT: &str = "bake 3";
+pub const BAKE_SALT: &str = "bake 4";
 
 /// Everything a frame's lit shading needs besides the camera.
 #[derive(Debug)]

@@ -6,8 +6,9 @@
 //! over its base, has part of its hemisphere blocked, but its reflection points at the open sky: occluded by the
 //! hemisphere's number it was 7–11 % dark against Cycles. The helmet's lining, whose hemisphere the
 //! occlusion maps see open through the shell (their texels are a centimetre wide), mirrored the sky through it:
-//! twice Cycles' brightness. A few rays along the lobe tell both apart. A ray meets a caster's whole triangles: a
-//! cut-out (alpha-masked) or transparent one blocks it as an opaque one does, as it does the gather's rays.
+//! twice Cycles' brightness. A few rays along the lobe tell both apart. A ray passes through a cut-out (`MASK`)
+//! caster's holes ([`super::cutout`]), as the shadow maps do; a transparent (`BLEND`) caster blocks it as an opaque
+//! one does, as it does the gather's rays.
 
 use glam::Vec3;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
@@ -16,8 +17,12 @@ use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
+use std::sync::Arc;
+
 use super::brdf::{basis, ggx_half, hammersley};
+use super::cutout::{Cutout, Hole};
 use super::{caster_bounds, is_caster};
+use crate::scene::texture::Texture;
 use crate::scene::PosedScene;
 
 /// Rays a glossy surface casts along its lobe ([`Tracer::lobe_visibility`]). Against Cycles (FlightHelmet from
@@ -26,27 +31,54 @@ use crate::scene::PosedScene;
 pub(super) const LOBE_RAYS: u32 = 8;
 
 /// The casters of one posed frame: their triangles as the ray tracer reads them and, per triangle, its
-/// primitive and its corners' vertex indices.
+/// primitive and its corners' vertex indices; the cut-out ones' alpha ([`Hole`], by `hole`: `u32::MAX` for an
+/// opaque triangle) and the textures it reads.
 pub(super) struct Casters {
     pub(super) tris: Vec<Triangle>,
     pub(super) corners: Vec<(u32, [u32; 3])>,
+    hole: Vec<u32>,
+    holes: Vec<Hole>,
+    textures: Arc<Vec<Texture>>,
 }
 
 impl Casters {
     fn of(scene: &PosedScene) -> Casters {
-        let (mut tris, mut corners) = (Vec::new(), Vec::new());
+        let (mut tris, mut corners, mut hole, mut holes) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (pi, prim) in scene.primitives.iter().enumerate() {
             if !is_caster(scene, prim) {
                 continue;
             }
+            let cutout = Cutout::of(scene, prim);
             for t in prim.indices.chunks_exact(3) {
                 let c = [t[0], t[1], t[2]];
                 let [a, b, d] = c.map(|i| prim.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
                 tris.push(Triangle { v0: a.into(), v1: b.into(), v2: d.into() });
                 corners.push((pi as u32, c));
+                hole.push(cutout.as_ref().map_or(u32::MAX, |cut| {
+                    holes.push(Hole::of(prim, cut, c));
+                    holes.len() as u32 - 1
+                }));
             }
         }
-        Casters { tris, corners }
+        Casters { tris, corners, hole, holes, textures: scene.textures.clone() }
+    }
+
+    /// Where ray `r` meets triangle `i` (ours), as [`Triangle::intersect`] answers; a miss (∞) where a
+    /// cut-out's alpha leaves a hole there.
+    #[inline]
+    fn meet(&self, i: usize, r: &Ray) -> f32 {
+        let t = self.tris[i].intersect(r);
+        match self.hole.get(i) {
+            Some(&h) if h != u32::MAX && t < f32::INFINITY => {
+                let (o, d) = (Vec3::from(r.origin), Vec3::from(r.direction));
+                if self.holes[h as usize].holds(&self.textures, o, d, t) {
+                    t
+                } else {
+                    f32::INFINITY
+                }
+            }
+            _ => t,
+        }
     }
 }
 
@@ -84,7 +116,7 @@ impl Tracer {
         let mut hit = RayHit::none();
         // The tree numbers its leaves' triangles in its own order: `primitive_indices` maps them back to ours.
         let ours = |id: usize| bvh.primitive_indices[id] as usize;
-        if !bvh.ray_traverse(ray, &mut hit, |r, id| casters.tris[ours(id)].intersect(r)) {
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| casters.meet(ours(id), r)) {
             return None;
         }
         Some((ours(hit.primitive_id as usize), hit.t))
@@ -96,7 +128,7 @@ impl Tracer {
         let (casters, bvh) = (&self.casters, &self.bvh);
         let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
         let ours = |id: usize| bvh.primitive_indices[id] as usize;
-        bvh.ray_traverse_miss(ray, |r, id| casters.tris[ours(id)].intersect(r))
+        bvh.ray_traverse_miss(ray, |r, id| casters.meet(ours(id), r))
     }
 
     /// The share of a GGX lobe (α = `a`, about unit normal `n`, seen from unit `v`) that reaches past the

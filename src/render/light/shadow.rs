@@ -225,7 +225,8 @@ impl ShadowMap {
         let (size, persp) = (self.size, matches!(self.projection, Projection::Persp { .. }));
         // The casters projected once, and per triangle whether it is glass (a transparent triangle passes 1 − α of
         // the light: into the glass layer, not the depth map).
-        let casters: Vec<(&crate::scene::PosedPrimitive, Vec<Vec3>, Vec<bool>)> = scene
+        #[allow(clippy::type_complexity)]
+        let casters: Vec<(&crate::scene::PosedPrimitive, Vec<Vec3>, Vec<bool>, Option<super::cutout::Cutout>)> = scene
             .primitives
             .iter()
             .filter(|prim| super::is_caster(scene, prim))
@@ -252,13 +253,13 @@ impl ShadowMap {
                         let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
                         // Strictly inside (half-open edges would count a texel on a shared edge twice, squaring
                         // 1 − α).
-                        scan(v, size, persp, 0.0, (0, size), |i, d| {
+                        scan(v, size, persp, 0.0, (0, size), |i, d, _| {
                             g.depth[i] = g.depth[i].min(d);
                             g.pass[i] *= 1.0 - alpha;
                         });
                     }
                 }
-                (prim, light, glass)
+                (prim, light, glass, super::cutout::Cutout::of(scene, prim))
             })
             .collect();
         // The opaque casters in bands of rows side by side: a texel keeps the least depth over it, which no order
@@ -268,17 +269,18 @@ impl ShadowMap {
         self.depth.par_chunks_mut((band * size) as usize).enumerate().for_each(|(b, depth)| {
             let rows = (b as u32 * band, ((b as u32 + 1) * band).min(size));
             let first = (rows.0 * size) as usize;
-            for (prim, light, glass) in &casters {
+            for (prim, light, glass, cutout) in &casters {
                 for (k, t) in prim.indices.chunks_exact(3).enumerate() {
                     if glass.get(k) == Some(&true) {
                         continue;
                     }
                     let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
                     // A texel whose centre any triangle touches counts (conservative by a hair: casters thinner
-                    // than a texel still cast).
-                    scan(v, size, persp, -1e-4, rows, |i, d| {
+                    // than a texel still cast), unless a cut-out's alpha leaves a hole there.
+                    let corners = [t[0], t[1], t[2]];
+                    scan(v, size, persp, -1e-4, rows, |i, d, w| {
                         let i = i - first;
-                        if d < depth[i] {
+                        if d < depth[i] && cutout.as_ref().is_none_or(|c| c.holds(corners, w)) {
                             depth[i] = d;
                         }
                     });
@@ -581,9 +583,9 @@ pub fn cube_face(d: Vec3) -> usize {
 }
 
 /// Visits each texel of a `size`² map in rows `rows.0..rows.1` whose centre light-space triangle `v` covers
-/// (barycentrics all at least `min_w`) with its index and the triangle's depth there; perspective maps interpolate 1/depth (linear in
-/// screen space), parallel ones depth. Triangles crossing the near plane or of no area visit nothing.
-fn scan(v: [Vec3; 3], size: u32, persp: bool, min_w: f32, rows: (u32, u32), mut visit: impl FnMut(usize, f32)) {
+/// (barycentrics all at least `min_w`) with its index, the triangle's depth there and its barycentric weights on the
+/// triangle; perspective maps interpolate 1/depth (linear in screen space), parallel ones depth. Triangles crossing the near plane or of no area visit nothing.
+fn scan(v: [Vec3; 3], size: u32, persp: bool, min_w: f32, rows: (u32, u32), mut visit: impl FnMut(usize, f32, [f32; 3])) {
     let n = size as f32;
     if persp && v.iter().any(|p| p.z < NEAR) {
         return;
@@ -612,7 +614,9 @@ fn scan(v: [Vec3; 3], size: u32, persp: bool, min_w: f32, rows: (u32, u32), mut 
                 continue;
             }
             let zi = w0 * z[0] + w1 * z[1] + w2 * z[2];
-            visit((y * size + x) as usize, if persp { 1.0 / zi } else { zi });
+            // The weights on the triangle itself (perspective-correct: z holds 1/depth there).
+            let w = if persp { [w0 * z[0] / zi, w1 * z[1] / zi, w2 * z[2] / zi] } else { [w0, w1, w2] };
+            visit((y * size + x) as usize, if persp { 1.0 / zi } else { zi }, w);
         }
     }
 }

@@ -1,0 +1,144 @@
+//! Cut-out casters: a glTF `MASK` material is there only where its alpha (the base colour factor's, times the
+//! vertex colour's and the base colour texture's) reaches its cutoff, as the camera's rasterizer draws it. Its
+//! shadows and the rays that meet it see the same holes: a leaf card's shadow is a leaf's, not a rectangle's,
+//! and light reaches through a fence.
+
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3, Vec4};
+
+use crate::scene::material::AlphaMode;
+use crate::scene::texture::{Texture, TextureRef};
+use crate::scene::{PosedPrimitive, PosedScene};
+
+/// A cut-out primitive's alpha, as its corners and texture give it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Cutout<'a> {
+    factor: f32,
+    cutoff: f32,
+    /// Vertex colours, when the primitive has one per vertex.
+    colors: Option<&'a [Vec4]>,
+    /// The base colour texture and the coordinates it is read at, when it has both.
+    texture: Option<(TextureRef, &'a Texture, &'a [Vec2])>,
+}
+
+impl<'a> Cutout<'a> {
+    /// The cut-out of primitive `prim` of `scene`, when its material is `MASK`.
+    pub(super) fn of(scene: &'a PosedScene, prim: &'a PosedPrimitive) -> Option<Cutout<'a>> {
+        let m = scene.materials.get(prim.material as usize).filter(|m| m.alpha_mode == AlphaMode::Mask)?;
+        let n = prim.positions.len();
+        let colors = (prim.colors.len() == n).then_some(prim.colors.as_slice());
+        let texture = m
+            .base_color_texture
+            .and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)))
+            .filter(|_| prim.uvs.len() == n)
+            .map(|(r, t)| (r, t, prim.uvs.as_slice()));
+        Some(Cutout { factor: m.base_color.w, cutoff: m.alpha_cutoff, colors, texture })
+    }
+
+    /// Whether triangle `t` (vertex indices) is there at barycentric weights `w`: its alpha reaches the cutoff.
+    #[inline]
+    pub(super) fn holds(&self, t: [u32; 3], w: [f32; 3]) -> bool {
+        let blend = |v: &[Vec4]| t.iter().zip(w).map(|(&i, w)| v.get(i as usize).map_or(1.0, |c| c.w) * w).sum::<f32>();
+        let mut a = self.factor * self.colors.map_or(1.0, blend);
+        if let Some((r, tex, uvs)) = &self.texture {
+            let uv = t.iter().zip(w).fold(Vec2::ZERO, |uv, (&i, w)| uv + uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO) * w);
+            a *= tex.sample(r, uv).w;
+        }
+        a >= self.cutoff
+    }
+}
+
+/// One cut-out triangle as a ray tracer keeps it, apart from the scene: its corners' positions, alpha
+/// (factor × vertex colour) and texture coordinates, the cutoff and the texture.
+#[derive(Debug, Clone)]
+pub(super) struct Hole {
+    corners: [Vec3; 3],
+    alpha: [f32; 3],
+    uv: [Vec2; 3],
+    cutoff: f32,
+    texture: Option<TextureRef>,
+}
+
+impl Hole {
+    /// Triangle `t` of primitive `prim` (whose cut-out is `c`), kept for rays.
+    pub(super) fn of(prim: &PosedPrimitive, c: &Cutout, t: [u32; 3]) -> Hole {
+        let at = |i: u32| prim.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO);
+        let alpha = t.map(|i| c.factor * c.colors.map_or(1.0, |v| v.get(i as usize).map_or(1.0, |c| c.w)));
+        let uv = t.map(|i| c.texture.and_then(|(_, _, uvs)| uvs.get(i as usize).copied()).unwrap_or(Vec2::ZERO));
+        Hole { corners: t.map(at), alpha, uv, cutoff: c.cutoff, texture: c.texture.map(|(r, _, _)| r) }
+    }
+
+    /// Whether the triangle is there where the ray from `o` along `d` meets its plane at distance `t`.
+    pub(super) fn holds(&self, textures: &Arc<Vec<Texture>>, o: Vec3, d: Vec3, t: f32) -> bool {
+        let p = o + d * t;
+        let [a, b, c] = self.corners;
+        // Barycentric weights of p by areas against the triangle's normal.
+        let n = (b - a).cross(c - a);
+        let nn = n.length_squared();
+        if nn <= 0.0 {
+            return true;
+        }
+        let w1 = (p - a).cross(c - a).dot(n) / nn;
+        let w2 = (b - a).cross(p - a).dot(n) / nn;
+        let w = [1.0 - w1 - w2, w1, w2];
+        let mut alpha = self.alpha[0] * w[0] + self.alpha[1] * w[1] + self.alpha[2] * w[2];
+        if let Some(r) = &self.texture {
+            let uv = self.uv[0] * w[0] + self.uv[1] * w[1] + self.uv[2] * w[2];
+            alpha *= textures.get(r.texture as usize).map_or(1.0, |tex| tex.sample(r, uv).w);
+        }
+        alpha >= self.cutoff
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::light::rays::Tracer;
+    use crate::render::light::shadow::ShadowMap;
+    use crate::scene::material::Material;
+    use crate::scene::PrimKind;
+
+    #[test]
+    fn a_cut_out_casts_its_shape_and_lets_rays_through_its_holes() {
+        // A 2 m square at z = 1 facing down, of a MASK material whose texture is clear (alpha 0) on its -x half
+        // and solid on its +x half; a sun straight down. Under the clear half the ground is lit and a ray up
+        // is open; under the solid half both are blocked. The same square OPAQUE blocks both everywhere.
+        let (w, h) = (8u32, 2u32);
+        let rgba: Vec<u8> =
+            (0..w * h).flat_map(|i| if i % w < w / 2 { [255, 255, 255, 0] } else { [255, 255, 255, 255] }).collect();
+        let square = |mode: AlphaMode| {
+            let m = Material {
+                alpha_mode: mode,
+                base_color_texture: Some(TextureRef::new(0)),
+                double_sided: true,
+                ..Material::default()
+            };
+            let mut s = PosedScene::single(
+                PrimKind::Triangles,
+                vec![Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(1.0, 1.0, 1.0), Vec3::new(-1.0, 1.0, 1.0)],
+                vec![-Vec3::Z; 4],
+                Vec::new(),
+                vec![0, 2, 1, 0, 3, 2],
+                m,
+            );
+            s.primitives[0].uvs =
+                Arc::new(vec![Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)]);
+            s.textures = Arc::new(vec![Texture::new(w, h, rgba.clone(), true)]);
+            s
+        };
+        let (clear, solid) = (Vec3::new(-0.5, 0.2, 0.0), Vec3::new(0.5, -0.2, 0.0));
+        for (mode, holes) in [(AlphaMode::Mask, true), (AlphaMode::Opaque, false)] {
+            let scene = square(mode);
+            let bounds = (Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, 1.0, 1.0));
+            let map = ShadowMap::sun(&scene, -Vec3::Z, bounds, 256);
+            let tracer = Tracer::of(&scene).expect("a caster");
+            let (lit, shaded) = (map.visibility(clear, Vec3::Z, 0.0), map.visibility(solid, Vec3::Z, 0.0));
+            let (open, shut) = (tracer.open(clear, Vec3::Z), tracer.open(solid, Vec3::Z));
+            assert_eq!(shaded, 0.0, "{mode:?}");
+            assert!(!shut, "{mode:?}");
+            assert_eq!((lit, open), if holes { (1.0, true) } else { (0.0, false) }, "{mode:?}");
+            assert_eq!(tracer.nearest(clear, Vec3::Z).is_none(), holes, "{mode:?}");
+        }
+    }
+}
