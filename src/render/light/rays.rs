@@ -68,8 +68,11 @@ impl Casters {
     #[inline]
     fn meet(&self, i: usize, r: &Ray) -> f32 {
         let t = self.tris[i].intersect(r);
+        if t == f32::INFINITY || self.holes.is_empty() {
+            return t;
+        }
         match self.hole.get(i) {
-            Some(&h) if h != u32::MAX && t < f32::INFINITY => {
+            Some(&h) if h != u32::MAX => {
                 let (o, d) = (Vec3::from(r.origin), Vec3::from(r.direction));
                 if self.holes[h as usize].holds(&self.textures, o, d, t) {
                     t
@@ -88,6 +91,8 @@ pub(super) struct Tracer {
     bvh: CwBvh,
     /// How far off a surface its rays start: a hair, scaled to the casters.
     pub(super) eps: f32,
+    /// Whether some caster is a cut-out.
+    cut: bool,
 }
 
 impl std::fmt::Debug for Tracer {
@@ -105,11 +110,13 @@ impl Tracer {
             return None;
         }
         let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::fast_build(), &mut Default::default());
-        Some(Tracer { casters, bvh, eps: 1e-4 * (hi - lo).length().max(1e-6) })
+        let cut = !casters.holes.is_empty();
+        Some(Tracer { casters, bvh, eps: 1e-4 * (hi - lo).length().max(1e-6), cut })
     }
 
     /// The nearest caster along the ray from `o` along unit `d` (past [`Tracer::eps`]): its triangle (an index
     /// into [`Tracer::casters`]) and how far along the ray.
+    #[inline(never)]
     pub(super) fn nearest(&self, o: Vec3, d: Vec3) -> Option<(usize, f32)> {
         let (casters, bvh) = (&self.casters, &self.bvh);
         let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
@@ -123,12 +130,16 @@ impl Tracer {
     }
 
     /// Whether the ray from `o` along unit `d` (past [`Tracer::eps`]) meets no caster. Which caster it meets
-    /// first does not matter here, so the walk stops at any.
+    /// first does not matter here, so the walk stops at any; with cut-out casters, whose holes a hit must be
+    /// checked for, it is the nearest caster's walk, and the plain walk stays as it was for every other scene.
     pub(super) fn open(&self, o: Vec3, d: Vec3) -> bool {
+        if self.cut {
+            return self.nearest(o, d).is_none();
+        }
         let (casters, bvh) = (&self.casters, &self.bvh);
         let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
         let ours = |id: usize| bvh.primitive_indices[id] as usize;
-        bvh.ray_traverse_miss(ray, |r, id| casters.meet(ours(id), r))
+        bvh.ray_traverse_miss(ray, |r, id| casters.tris[ours(id)].intersect(r))
     }
 
     /// The share of a GGX lobe (α = `a`, about unit normal `n`, seen from unit `v`) that reaches past the
