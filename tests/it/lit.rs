@@ -327,6 +327,12 @@ fn a_lit_build_prefilters_once_keys_its_lights_and_writes_albedo_beside_rgba() {
         .replace("map = \"sky.hdr\"\n", "map = \"sky.hdr\"\nvisible = true\n");
     let shown = build_in(d, &shown);
     assert_eq!((shown.ran(Kind::RenderPass), shown.ran(Kind::Environment), shown.ran(Kind::Light)), (4, 0, 0));
+    // Without a map, the built-in studio map is prefiltered by an environment action of its own, once.
+    let studio = lit_manifest("").replace("map = \"sky.hdr\"\n", "");
+    assert!(!studio.contains("sky.hdr"));
+    let r = build_in(d, &studio);
+    assert_eq!((r.ran(Kind::Environment), r.ran(Kind::Light)), (1, 2));
+    assert!(build_in(d, &studio).nothing_to_do());
 }
 
 /// A pixel filter keys the colour passes alone: switching to Cycles' filter re-renders `rgba` and `albedo`,
