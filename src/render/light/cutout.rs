@@ -39,18 +39,32 @@ impl<'a> Cutout<'a> {
     /// Whether triangle `t` (vertex indices) is there at barycentric weights `w`: its alpha reaches the cutoff.
     #[inline]
     pub(super) fn holds(&self, t: [u32; 3], w: [f32; 3]) -> bool {
-        let blend = |v: &[Vec4]| t.iter().zip(w).map(|(&i, w)| v.get(i as usize).map_or(1.0, |c| c.w) * w).sum::<f32>();
-        let mut a = self.factor * self.colors.map_or(1.0, blend);
-        if let Some((r, tex, uvs)) = &self.texture {
-            let uv = t.iter().zip(w).fold(Vec2::ZERO, |uv, (&i, w)| uv + uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO) * w);
-            a *= tex.sample(r, uv).w;
-        }
-        a >= self.cutoff
+        let (alpha, uv) = self.corners(t);
+        reaches(alpha, uv, self.cutoff, self.texture.map(|(r, tex, _)| (r, tex)), w)
+    }
+
+    /// Triangle `t`'s corners' alpha before the texture (factor × vertex colour) and texture coordinates.
+    #[inline]
+    fn corners(&self, t: [u32; 3]) -> ([f32; 3], [Vec2; 3]) {
+        let alpha = t.map(|i| self.factor * self.colors.map_or(1.0, |v| v.get(i as usize).map_or(1.0, |c| c.w)));
+        let uv = t.map(|i| self.texture.and_then(|(_, _, uvs)| uvs.get(i as usize).copied()).unwrap_or(Vec2::ZERO));
+        (alpha, uv)
     }
 }
 
-/// One cut-out triangle as a ray tracer keeps it, apart from the scene: its corners' positions, alpha
-/// (factor × vertex colour) and texture coordinates, the cutoff and the texture.
+/// Whether a cut-out triangle whose corners have alpha `alpha` (before the texture) and texture coordinates `uv`
+/// is there at barycentric weights `w`: the blended alpha, times the texture's there, reaches `cutoff`.
+#[inline]
+fn reaches(alpha: [f32; 3], uv: [Vec2; 3], cutoff: f32, texture: Option<(TextureRef, &Texture)>, w: [f32; 3]) -> bool {
+    let mut a = alpha[0] * w[0] + alpha[1] * w[1] + alpha[2] * w[2];
+    if let Some((r, tex)) = texture {
+        a *= tex.sample(&r, uv[0] * w[0] + uv[1] * w[1] + uv[2] * w[2]).w;
+    }
+    a >= cutoff
+}
+
+/// One cut-out triangle as a ray tracer keeps it, apart from the scene: its corners' positions, alpha before the
+/// texture and texture coordinates ([`Cutout::corners`]), the cutoff and the texture.
 #[derive(Debug, Clone)]
 pub(super) struct Hole {
     corners: [Vec3; 3],
@@ -64,8 +78,7 @@ impl Hole {
     /// Triangle `t` of primitive `prim` (whose cut-out is `c`), kept for rays.
     pub(super) fn of(prim: &PosedPrimitive, c: &Cutout, t: [u32; 3]) -> Hole {
         let at = |i: u32| prim.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO);
-        let alpha = t.map(|i| c.factor * c.colors.map_or(1.0, |v| v.get(i as usize).map_or(1.0, |c| c.w)));
-        let uv = t.map(|i| c.texture.and_then(|(_, _, uvs)| uvs.get(i as usize).copied()).unwrap_or(Vec2::ZERO));
+        let (alpha, uv) = c.corners(t);
         Hole { corners: t.map(at), alpha, uv, cutoff: c.cutoff, texture: c.texture.map(|(r, _, _)| r) }
     }
 
@@ -81,13 +94,8 @@ impl Hole {
         }
         let w1 = (p - a).cross(c - a).dot(n) / nn;
         let w2 = (b - a).cross(p - a).dot(n) / nn;
-        let w = [1.0 - w1 - w2, w1, w2];
-        let mut alpha = self.alpha[0] * w[0] + self.alpha[1] * w[1] + self.alpha[2] * w[2];
-        if let Some(r) = &self.texture {
-            let uv = self.uv[0] * w[0] + self.uv[1] * w[1] + self.uv[2] * w[2];
-            alpha *= textures.get(r.texture as usize).map_or(1.0, |tex| tex.sample(r, uv).w);
-        }
-        alpha >= self.cutoff
+        let texture = self.texture.and_then(|r| textures.get(r.texture as usize).map(|tex| (r, tex)));
+        reaches(self.alpha, self.uv, self.cutoff, texture, [1.0 - w1 - w2, w1, w2])
     }
 }
 

@@ -680,6 +680,11 @@ impl FrameLight {
         (out + diffuse * (irradiance * returned + bounce) + specular + spec_f * bounce * (1.0 / PI), traced)
     }
 
+    /// Whether some surface of the frame may cast rays along its glossy lobe ([`FrameLight::shade_lobe`]).
+    pub(crate) fn casts_rays(&self) -> bool {
+        self.tracer.is_some()
+    }
+
     /// How much of the environment's specular light reaches a lobe of perceptual `roughness` about unit normal
     /// `n` at `p`, seen from `v`, under the environment's occlusion `occlusion` (the material's ambient occlusion
     /// times the vertices' visibility), and what the lobe's rays found when it cast them. A glossy lobe

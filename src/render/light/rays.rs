@@ -91,8 +91,6 @@ pub(super) struct Tracer {
     bvh: CwBvh,
     /// How far off a surface its rays start: a hair, scaled to the casters.
     pub(super) eps: f32,
-    /// Whether some caster is a cut-out.
-    cut: bool,
 }
 
 impl std::fmt::Debug for Tracer {
@@ -110,13 +108,11 @@ impl Tracer {
             return None;
         }
         let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::fast_build(), &mut Default::default());
-        let cut = !casters.holes.is_empty();
-        Some(Tracer { casters, bvh, eps: 1e-4 * (hi - lo).length().max(1e-6), cut })
+        Some(Tracer { casters, bvh, eps: 1e-4 * (hi - lo).length().max(1e-6) })
     }
 
     /// The nearest caster along the ray from `o` along unit `d` (past [`Tracer::eps`]): its triangle (an index
     /// into [`Tracer::casters`]) and how far along the ray.
-    #[inline(never)]
     pub(super) fn nearest(&self, o: Vec3, d: Vec3) -> Option<(usize, f32)> {
         let (casters, bvh) = (&self.casters, &self.bvh);
         let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
@@ -133,7 +129,7 @@ impl Tracer {
     /// first does not matter here, so the walk stops at any; with cut-out casters, whose holes a hit must be
     /// checked for, it is the nearest caster's walk, and the plain walk stays as it was for every other scene.
     pub(super) fn open(&self, o: Vec3, d: Vec3) -> bool {
-        if self.cut {
+        if !self.casters.holes.is_empty() {
             return self.nearest(o, d).is_none();
         }
         let (casters, bvh) = (&self.casters, &self.bvh);

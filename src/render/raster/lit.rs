@@ -52,11 +52,19 @@ pub(super) fn shade_tile(
     proj: &Projection,
     t: &mut SampleTile,
 ) {
+    let sample = |s: &Share| Sample { at: s.at, bary: s.bary, z: s.z, footprint: k as f32 };
+    if !l.light.casts_rays() {
+        // No glossy lobe casts rays (CesiumMan's frames): one pass, no anchors.
+        for_each_share(t, rect.x0, rect.y0, k, Pixels::All, |s, t| {
+            let c = shade_sample(scene, tris.get(s.id), l, proj, sample(s), albedo(s, t));
+            fill(t, s, c);
+        });
+        return;
+    }
     let aw = ((t.w / k) as usize).div_ceil(2);
     let mut anchors = std::mem::take(&mut t.anchors);
     anchors.clear();
     anchors.resize(aw * ((t.h / k) as usize).div_ceil(2), None);
-    let sample = |s: &Share| Sample { at: s.at, bary: s.bary, z: s.z, footprint: k as f32 };
     for_each_share(t, rect.x0, rect.y0, k, Pixels::Even, |s, t| {
         let tri = tris.get(s.id);
         let (c, open) = shade_lobe(scene, tri, l, proj, sample(s), albedo(s, t), None);
@@ -91,26 +99,30 @@ fn fill(t: &mut SampleTile, s: &Share, c: Vec3) {
     }
 }
 
-/// The mean of the open shares the anchors about whole pixel `s` (not an anchor) of triangle `tri` found, when
-/// there are such anchors (of `anchors`, `aw` to a row) and they agree; else `None`, and the pixel casts its own
-/// rays. The anchors about a pixel: left and right on an anchor row, above and below on an anchor column, the
-/// four corners otherwise.
+/// The mean of the open shares the anchors about share `s` (of a pixel that is not an anchor) of triangle `tri`
+/// found, when there are such anchors (of `anchors`, `aw` to a row) and they agree; else `None`, and the share
+/// casts its own rays. The anchors about a pixel: left and right on an anchor row, above and below on an anchor
+/// column, the four corners otherwise.
 fn agreed(tri: &Tri, s: &Share, anchors: &[Option<Anchor>], aw: usize) -> Option<f32> {
     let (ax, ay) = ((s.px / 2) as usize, (s.py / 2) as usize);
     let (nx, ny) = (1 + (s.px % 2) as usize, 1 + (s.py % 2) as usize);
     if ax + nx > aw {
         return None;
     }
-    let normal = tri.normal_at(s.bary);
-    let (mut lo, mut hi, mut sum, mut inv_z) = (f32::INFINITY, f32::NEG_INFINITY, 0.0, 0.0);
+    let mut found = [None; 4];
     for j in 0..ny {
         for i in 0..nx {
-            let a = anchors.get((ay + j) * aw + ax + i).copied().flatten()?;
-            if a.material != tri.material || a.normal.dot(normal) < SAME_FACING {
-                return None;
-            }
-            (lo, hi, sum, inv_z) = (lo.min(a.open), hi.max(a.open), sum + a.open, inv_z + a.inv_z);
+            found[j * nx + i] = Some(anchors.get((ay + j) * aw + ax + i).copied().flatten()?);
         }
+    }
+    // (The normal only once every anchor is there: most pixels with a missing one are not glossy at all.)
+    let normal = tri.normal_at(s.bary);
+    let (mut lo, mut hi, mut sum, mut inv_z) = (f32::INFINITY, f32::NEG_INFINITY, 0.0, 0.0);
+    for a in found.iter().flatten() {
+        if a.material != tri.material || a.normal.dot(normal) < SAME_FACING {
+            return None;
+        }
+        (lo, hi, sum, inv_z) = (lo.min(a.open), hi.max(a.open), sum + a.open, inv_z + a.inv_z);
     }
     let w = 1.0 / (nx * ny) as f32;
     let mine = 1.0 / s.z;
