@@ -533,7 +533,13 @@ impl Prefiltered {
         let i = (f as usize).min(LEVELS - 2);
         let t = f - i as f32;
         let uv = dir_to_uv(r);
-        self.levels[i].lookup(uv).lerp(self.levels[i + 1].lookup(uv), t)
+        // On a level (roughness 0 or 1, the glTF defaults, or a multiple of a fifth) the other weighs nothing:
+        // one read instead of two.
+        match t {
+            0.0 => self.levels[i].lookup(uv),
+            1.0 => self.levels[i + 1].lookup(uv),
+            _ => self.levels[i].lookup(uv).lerp(self.levels[i + 1].lookup(uv), t),
+        }
     }
 
     /// The bytes of the cache's blob: SH, then each level's size and texels, little-endian f32.

@@ -226,7 +226,8 @@ pub(super) fn spread(c: &[Vec3], stride: usize) -> Vec<Vec3> {
     (0..n * n)
         .map(|k| {
             let (u, v) = ((k % n) as f32 / stride as f32, (k / n) as f32 / stride as f32);
-            let (i, j) = ((u as usize).min(m - 2), (v as usize).min(m - 2));
+            // Through i32, as `locate` does: x86-64 converts an f64 to i32 in one instruction, to usize in eight.
+    let (i, j) = ((u as i32 as usize).min(m - 2), (v as i32 as usize).min(m - 2));
             let (tu, tv) = (u - i as f32, v - j as f32);
             let row = |j: usize| c[j * m + i].lerp(c[j * m + i + 1], tu);
             row(j).lerp(row(j + 1), tv)
@@ -260,7 +261,8 @@ pub(super) fn blur(g: &[Vec3], r: usize) -> Vec<Vec3> {
 /// bilinearly between entries.
 fn sum_at<const N: usize>(t: &[[f64; N]], u: f64, v: f64) -> [f64; N] {
     let m = PLANE_CELLS + 2;
-    let (i, j) = ((u as usize).min(m - 2), (v as usize).min(m - 2));
+    // Through i32, as `locate` does: x86-64 converts an f64 to i32 in one instruction, to usize in eight.
+    let (i, j) = ((u as i32 as usize).min(m - 2), (v as i32 as usize).min(m - 2));
     let (tu, tv) = (u - i as f64, v - j as f64);
     let e = |i: usize, j: usize| t[j * m + i];
     std::array::from_fn(|k| {
