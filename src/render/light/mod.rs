@@ -14,6 +14,7 @@ pub mod environment;
 mod ground;
 mod penumbra;
 mod rays;
+mod scan;
 pub mod shadow;
 
 use std::f32::consts::PI;

@@ -14,6 +14,7 @@
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::scan::{Scan, SCAN_RUN};
 use crate::scene::texture::floor;
 use crate::scene::PosedScene;
 
@@ -59,7 +60,7 @@ struct Glass {
 const NORMAL_BIAS: f32 = 1.5;
 const DEPTH_BIAS: f32 = 1.5;
 /// Nearest depth a perspective map records.
-const NEAR: f32 = 1e-3;
+pub(super) const NEAR: f32 = 1e-3;
 
 /// A light-space frame looking along `dir` (unit) from `eye`.
 fn look(eye: Vec3, dir: Vec3) -> Mat4 {
@@ -265,43 +266,46 @@ impl ShadowMap {
             })
             .collect();
         // Each opaque triangle set up once, in the casters' order: its bounds, area and depths (set up in every
-        // band below, with libm's floor and ceil, this was a third of FlightHelmet's light action).
-        let opaque: Vec<(usize, [u32; 3], Scan)> = casters
-            .iter()
-            .enumerate()
-            .flat_map(|(c, (prim, light, glass, _))| {
-                prim.indices.chunks_exact(3).enumerate().filter_map(move |(k, t)| {
-                    if glass.get(k) == Some(&true) {
-                        return None;
-                    }
-                    let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
-                    // A texel whose centre any triangle touches counts (conservative by a hair: casters thinner
-                    // than a texel still cast).
-                    Scan::new(v, size, persp, -1e-4).map(|s| (c, [t[0], t[1], t[2]], s))
-                })
+        // band below, with libm's floor and ceil, this was a sixth of FlightHelmet's lit frame). In runs of
+        // `SCAN_RUN`, so that a mesh of millions of triangles holds a run's set-ups at a time, not all of them.
+        let mut opaque = casters.iter().enumerate().flat_map(|(c, (prim, light, glass, _))| {
+            prim.indices.chunks_exact(3).enumerate().filter_map(move |(k, t)| {
+                if glass.get(k) == Some(&true) {
+                    return None;
+                }
+                let v = [light[t[0] as usize], light[t[1] as usize], light[t[2] as usize]];
+                // A texel whose centre any triangle touches counts (conservative by a hair: casters thinner than a
+                // texel still cast).
+                Scan::new(v, size, persp, -1e-4).map(|s| (c, [t[0], t[1], t[2]], s))
             })
-            .collect();
-        // The opaque casters in bands of rows side by side, each band drawing the triangles that reach it: a texel
+        });
+        // Each run's triangles in bands of rows side by side, each band drawing those whose rows reach it: a texel
         // keeps the least depth over it, which no order changes, so the map is the same bits as one pass over it
         // (a sun's 2048² map on one thread held up every view of its frame).
         let band = size.div_ceil(8).max(1);
-        self.depth.par_chunks_mut((band * size) as usize).enumerate().for_each(|(b, depth)| {
-            let rows = (b as u32 * band, ((b as u32 + 1) * band).min(size));
-            let first = (rows.0 * size) as usize;
-            for (c, corners, t) in &opaque {
-                if t.y.0 >= rows.1 || t.y.1 < rows.0 {
-                    continue;
-                }
-                // Unless a cut-out's alpha leaves a hole there.
-                let cutout = casters[*c].3.as_ref();
-                t.rows(size, rows, |i, d, w| {
-                    let i = i - first;
-                    if d < depth[i] && cutout.is_none_or(|c| c.holds(*corners, w)) {
-                        depth[i] = d;
-                    }
-                });
+        loop {
+            let run: Vec<(usize, [u32; 3], Scan)> = opaque.by_ref().take(SCAN_RUN).collect();
+            if run.is_empty() {
+                break;
             }
-        });
+            self.depth.par_chunks_mut((band * size) as usize).enumerate().for_each(|(b, depth)| {
+                let rows = (b as u32 * band, ((b as u32 + 1) * band).min(size));
+                let first = (rows.0 * size) as usize;
+                for (c, corners, t) in &run {
+                    if t.y.0 >= rows.1 || t.y.1 < rows.0 {
+                        continue;
+                    }
+                    // Unless a cut-out's alpha leaves a hole there.
+                    let cutout = casters[*c].3.as_ref();
+                    t.rows(size, rows, |i, d, w| {
+                        let i = i - first;
+                        if d < depth[i] && cutout.is_none_or(|c| c.holds(*corners, w)) {
+                            depth[i] = d;
+                        }
+                    });
+                }
+            });
+        }
     }
 
     /// Nearest caster depth at texel (x, y); outside the map, nothing.
@@ -597,76 +601,6 @@ pub fn cube_face(d: Vec3) -> usize {
     }
 }
 
-/// A light-space triangle `v` of a `size`² map set up to visit the texels whose centre it covers (barycentrics
-/// all at least `min_w`): its bounding texels, clamped to the map, and what the barycentrics need. Perspective
-/// maps interpolate 1/depth (linear in screen space), parallel ones depth.
-struct Scan {
-    v: [Vec3; 3],
-    /// Depth (parallel) or 1/depth (perspective) at the corners.
-    z: [f32; 3],
-    inv_area: f32,
-    persp: bool,
-    min_w: f32,
-    /// First and last texel column and row (inclusive).
-    x: (u32, u32),
-    y: (u32, u32),
-}
-
-impl Scan {
-    /// `None` for a triangle that visits nothing: crossing a perspective map's near plane, of no area, or off
-    /// the map.
-    fn new(v: [Vec3; 3], size: u32, persp: bool, min_w: f32) -> Option<Scan> {
-        let n = size as f32;
-        if persp && v.iter().any(|p| p.z < NEAR) {
-            return None;
-        }
-        let area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
-        if area.abs() < 1e-12 {
-            return None;
-        }
-        // (`floor` and `ceil` through integers, as `texture::floor`: the same values once clamped to the map.)
-        let floor_f = |x: f32| floor(x) as f32;
-        let ceil_f = |x: f32| -(floor(-x) as f32);
-        let x0 = floor_f(v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min)).max(0.0);
-        let x1 = ceil_f(v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max)).min(n - 1.0);
-        let y0 = floor_f(v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min)).max(0.0);
-        let y1 = ceil_f(v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max)).min(n - 1.0);
-        if x0 > x1 || y0 > y1 {
-            return None;
-        }
-        let z = v.map(|p| if persp { 1.0 / p.z } else { p.z });
-        let (x, y) = ((x0 as u32, x1 as u32), (y0 as u32, y1 as u32));
-        Some(Scan { v, z, inv_area: 1.0 / area, persp, min_w, x, y })
-    }
-
-    /// Visits each covered texel in rows `rows.0..rows.1` with its index, the triangle's depth there and its
-    /// barycentric weights on the triangle.
-    #[inline(always)]
-    fn rows(&self, size: u32, rows: (u32, u32), mut visit: impl FnMut(usize, f32, [f32; 3])) {
-        let Scan { v, z, inv_area, persp, min_w, .. } = *self;
-        let (y0, y1) = (self.y.0.max(rows.0), self.y.1.min(rows.1.saturating_sub(1)));
-        if rows.1 == 0 || y0 > y1 {
-            return;
-        }
-        for y in y0..=y1 {
-            let py = y as f32 + 0.5;
-            for x in self.x.0..=self.x.1 {
-                let px = x as f32 + 0.5;
-                let w0 = ((v[1].x - px) * (v[2].y - py) - (v[1].y - py) * (v[2].x - px)) * inv_area;
-                let w1 = ((v[2].x - px) * (v[0].y - py) - (v[2].y - py) * (v[0].x - px)) * inv_area;
-                let w2 = 1.0 - w0 - w1;
-                if w0 < min_w || w1 < min_w || w2 < min_w {
-                    continue;
-                }
-                let zi = w0 * z[0] + w1 * z[1] + w2 * z[2];
-                // The weights on the triangle itself (perspective-correct: z holds 1/depth there).
-                let w = if persp { [w0 * z[0] / zi, w1 * z[1] / zi, w2 * z[2] / zi] } else { [w0, w1, w2] };
-                visit((y * size + x) as usize, if persp { 1.0 / zi } else { zi }, w);
-            }
-        }
-    }
-}
-
 /// A transparent triangle's alpha: its material's factor times the mean alpha of its corners' vertex colours
 /// and base-colour texture (read at the corners' uvs).
 fn triangle_alpha(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, m: &crate::scene::material::Material, t: &[u32]) -> f32 {
@@ -779,6 +713,32 @@ pub(super) mod tests {
         // A soft sun blurs the edge: half-lit right under it.
         let edge = m.visibility(Vec3::new(0.5, 0.0, 0.0), Vec3::Z, 0.05);
         assert!(edge > 0.2 && edge < 0.8, "{edge}");
+    }
+
+    #[test]
+    fn a_caster_of_more_triangles_than_a_run_casts_every_run() {
+        // A square of 2 × 182² triangles (a run and more), its last triangles at its +y edge: the map drawn
+        // from it holds the depth the two-triangle square's map holds wherever either is covered.
+        let (n, half) = (182usize, 0.5f32);
+        assert!(2 * n * n > SCAN_RUN);
+        let at = |i: usize, j: usize| Vec3::new(-half + 2.0 * half * i as f32 / n as f32, -half + 2.0 * half * j as f32 / n as f32, 1.0);
+        let p: Vec<Vec3> = (0..=n).flat_map(|j| (0..=n).map(move |i| at(i, j))).collect();
+        let k = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let indices: Vec<u32> = (0..n)
+            .flat_map(|j| (0..n).flat_map(move |i| [k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j), k(i + 1, j + 1), k(i, j + 1)]))
+            .collect();
+        let fine = PosedScene::single(PrimKind::Triangles, p.clone(), vec![Vec3::Z; p.len()], Vec::new(), indices, Material::default());
+        let coarse = quad(1.0, half);
+        let bounds = coarse.bounds().unwrap();
+        let (a, b) = (ShadowMap::sun(&fine, -Vec3::Z, bounds, 256), ShadowMap::sun(&coarse, -Vec3::Z, bounds, 256));
+        let covered = b.depth.iter().filter(|d| d.is_finite()).count();
+        assert!(covered > 170 * 170, "{covered}");
+        for (i, (x, y)) in a.depth.iter().zip(&b.depth).enumerate() {
+            assert_eq!(x.is_finite(), y.is_finite(), "texel {i}");
+            if y.is_finite() {
+                assert!((x - y).abs() < 1e-4, "texel {i}: {x} against {y}");
+            }
+        }
     }
 
     #[test]

@@ -1,0 +1,81 @@
+//! Scan conversion of a light-space triangle into a square depth map's texels: what every shadow map
+//! ([`super::shadow::ShadowMap`]) draws its casters with. A triangle is set up once ([`Scan::new`]) and drawn band
+//! by band of rows ([`Scan::rows`]), the bands side by side.
+
+use glam::Vec3;
+
+use super::shadow::NEAR;
+use crate::scene::texture::floor;
+
+/// How many caster triangles a shadow map sets up at a time (`ShadowMap::rasterize`): 64 k of about 90 bytes.
+pub(super) const SCAN_RUN: usize = 1 << 16;
+
+/// A light-space triangle `v` of a `size`² map set up to visit the texels whose centre it covers (barycentrics
+/// all at least `min_w`): its bounding texels, clamped to the map, and what the barycentrics need. Perspective
+/// maps interpolate 1/depth (linear in screen space), parallel ones depth.
+pub(super) struct Scan {
+    v: [Vec3; 3],
+    /// Depth (parallel) or 1/depth (perspective) at the corners.
+    z: [f32; 3],
+    inv_area: f32,
+    persp: bool,
+    min_w: f32,
+    /// First and last texel column and row (inclusive).
+    x: (u32, u32),
+    pub(super) y: (u32, u32),
+}
+
+impl Scan {
+    /// `None` for a triangle that visits nothing: crossing a perspective map's near plane, of no area, or off
+    /// the map.
+    pub(super) fn new(v: [Vec3; 3], size: u32, persp: bool, min_w: f32) -> Option<Scan> {
+        let n = size as f32;
+        if persp && v.iter().any(|p| p.z < NEAR) {
+            return None;
+        }
+        let area = (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[1].y - v[0].y) * (v[2].x - v[0].x);
+        if area.abs() < 1e-12 {
+            return None;
+        }
+        // (`floor` and `ceil` through integers, as `texture::floor`: the same values once clamped to the map.)
+        let floor_f = |x: f32| floor(x) as f32;
+        let ceil_f = |x: f32| -(floor(-x) as f32);
+        let x0 = floor_f(v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min)).max(0.0);
+        let x1 = ceil_f(v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max)).min(n - 1.0);
+        let y0 = floor_f(v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min)).max(0.0);
+        let y1 = ceil_f(v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max)).min(n - 1.0);
+        if x0 > x1 || y0 > y1 {
+            return None;
+        }
+        let z = v.map(|p| if persp { 1.0 / p.z } else { p.z });
+        let (x, y) = ((x0 as u32, x1 as u32), (y0 as u32, y1 as u32));
+        Some(Scan { v, z, inv_area: 1.0 / area, persp, min_w, x, y })
+    }
+
+    /// Visits each covered texel in rows `rows.0..rows.1` with its index, the triangle's depth there and its
+    /// barycentric weights on the triangle.
+    #[inline(always)]
+    pub(super) fn rows(&self, size: u32, rows: (u32, u32), mut visit: impl FnMut(usize, f32, [f32; 3])) {
+        let Scan { v, z, inv_area, persp, min_w, .. } = *self;
+        let (y0, y1) = (self.y.0.max(rows.0), self.y.1.min(rows.1.saturating_sub(1)));
+        if rows.1 == 0 || y0 > y1 {
+            return;
+        }
+        for y in y0..=y1 {
+            let py = y as f32 + 0.5;
+            for x in self.x.0..=self.x.1 {
+                let px = x as f32 + 0.5;
+                let w0 = ((v[1].x - px) * (v[2].y - py) - (v[1].y - py) * (v[2].x - px)) * inv_area;
+                let w1 = ((v[2].x - px) * (v[0].y - py) - (v[2].y - py) * (v[0].x - px)) * inv_area;
+                let w2 = 1.0 - w0 - w1;
+                if w0 < min_w || w1 < min_w || w2 < min_w {
+                    continue;
+                }
+                let zi = w0 * z[0] + w1 * z[1] + w2 * z[2];
+                // The weights on the triangle itself (perspective-correct: z holds 1/depth there).
+                let w = if persp { [w0 * z[0] / zi, w1 * z[1] / zi, w2 * z[2] / zi] } else { [w0, w1, w2] };
+                visit((y * size + x) as usize, if persp { 1.0 / zi } else { zi }, w);
+            }
+        }
+    }
+}
