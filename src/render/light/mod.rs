@@ -802,8 +802,7 @@ fn spot_falloff(cos_angle: f32, cone: f32, blend: f32) -> f32 {
     let smooth = (1.0 - cos_half) * blend;
     let mut a = cos_angle;
     if t < smooth {
-        let x = t / smooth;
-        a *= x * x * (3.0 - 2.0 * x);
+        a *= environment::smoothstep(0.0, smooth, t);
     }
     a
 }
