@@ -7,7 +7,6 @@ use serde::Serialize;
 use super::Plan;
 use crate::manifest::output::{ColorAverage, PlyFormat, PointColor, Reduce, VoxelPosition};
 use crate::manifest::render::Pass;
-use crate::render::RenderSettings;
 
 /// Version of the renderer's output: bump when a change moves rendered bytes.
 pub const RENDER_SALT: &str = "render 7";
@@ -265,9 +264,10 @@ pub struct PointSettings {
 
 impl PointSettings {
     /// Whether its sample actions' light action reads the prefiltered environment (a map's, or the built-in
-    /// studio's): lit colours under lit shading.
-    pub fn environment_dep(&self, r: &RenderSettings) -> bool {
-        self.color == PointColor::Lit && r.shading == crate::render::Shading::Pbr
+    /// studio's): lit colours, whatever the images' shading (they need no `pbr` images, and read the manifest's
+    /// `[environment]` all the same).
+    pub fn environment_dep(&self) -> bool {
+        self.color == PointColor::Lit
     }
 
     /// Whether its sample actions read their frame's light action (their first dep): lit colours, lit as the

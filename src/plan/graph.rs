@@ -155,7 +155,7 @@ impl<'a> Graph<'a> {
             });
             // Lit colours read the frame's light action (the renders' own, which reads the prefiltered
             // environment), or for one source the environment itself: the first dep of whichever action samples.
-            let env: Vec<ActionId> = if s.environment_dep(&self.keying.render) {
+            let env: Vec<ActionId> = if s.environment_dep() {
                 vec![self.add(Action::Environment, "environment".into(), vec![])]
             } else {
                 vec![]

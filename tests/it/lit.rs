@@ -460,6 +460,25 @@ fn lit_point_colours_bake_the_lighting_and_its_shadows_and_are_keyed_by_it() {
 }
 
 #[test]
+fn lit_point_colours_read_the_environment_map_whatever_the_images_shading() {
+    // The same lit cloud under `pbr` images and under unlit ones: both bake the manifest's map (before, unlit
+    // images' clouds baked the built-in studio map, prefiltered inside the light action, and ignored the map).
+    use vvgen::plan::actions::Kind;
+    let dir = lit_project();
+    let d = dir.path();
+    let outputs = "[output.baked]\nwriter = \"ply-sequence\"\ndir = \"baked\"\npoints = 3000\ncolor = \"lit\"\n";
+    let pbr = format!("{}{outputs}", lit_manifest(""));
+    let unlit = pbr.replace("shading = \"pbr\"", "shading = \"unlit\"");
+    assert_ne!(pbr, unlit);
+    let read = || std::fs::read(d.join("out/baked/m_0000.ply")).unwrap();
+    build_in(d, &pbr);
+    let lit_images = read();
+    let report = build_in(d, &unlit);
+    assert_eq!(report.ran(Kind::Environment), 0, "the map's prefiltering is the pbr build's, cached");
+    assert!(read() == lit_images, "the unlit images' cloud differs from the lit images' cloud");
+}
+
+#[test]
 fn a_ground_plane_lights_what_stands_on_it_from_below() {
     // A sky of radiance 1 above the horizon, black below. Over a 0.8 ground, a white sphere's underside faces
     // the ground, which reflects L = 0.8·π/π = 0.8: a face looking straight down receives E = π·0.8 and shows
