@@ -3,8 +3,6 @@
 //! shadows and the rays that meet it see the same holes: a leaf card's shadow is a leaf's, not a rectangle's,
 //! and light reaches through a fence.
 
-use std::sync::Arc;
-
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::scene::material::AlphaMode;
@@ -63,11 +61,11 @@ fn reaches(alpha: [f32; 3], uv: [Vec2; 3], cutoff: f32, texture: Option<(Texture
     a >= cutoff
 }
 
-/// One cut-out triangle as a ray tracer keeps it, apart from the scene: its corners' positions, alpha before the
-/// texture and texture coordinates ([`Cutout::corners`]), the cutoff and the texture.
+/// One cut-out triangle's alpha as a ray tracer keeps it, apart from the scene: its corners' alpha before the
+/// texture and texture coordinates ([`Cutout::corners`]), the cutoff and the texture (the corners' positions are
+/// the tracer's own triangle).
 #[derive(Debug, Clone)]
 pub(super) struct Hole {
-    corners: [Vec3; 3],
     alpha: [f32; 3],
     uv: [Vec2; 3],
     cutoff: f32,
@@ -75,17 +73,16 @@ pub(super) struct Hole {
 }
 
 impl Hole {
-    /// Triangle `t` of primitive `prim` (whose cut-out is `c`), kept for rays.
-    pub(super) fn of(prim: &PosedPrimitive, c: &Cutout, t: [u32; 3]) -> Hole {
-        let at = |i: u32| prim.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO);
+    /// Triangle `t` (vertex indices) of a primitive whose cut-out is `c`, kept for rays.
+    pub(super) fn of(c: &Cutout, t: [u32; 3]) -> Hole {
         let (alpha, uv) = c.corners(t);
-        Hole { corners: t.map(at), alpha, uv, cutoff: c.cutoff, texture: c.texture.map(|(r, _, _)| r) }
+        Hole { alpha, uv, cutoff: c.cutoff, texture: c.texture.map(|(r, _, _)| r) }
     }
 
-    /// Whether the triangle is there where the ray from `o` along `d` meets its plane at distance `t`.
-    pub(super) fn holds(&self, textures: &Arc<Vec<Texture>>, o: Vec3, d: Vec3, t: f32) -> bool {
+    /// Whether the triangle of corners `[a, b, c]` is there where the ray from `o` along `d` meets its plane at
+    /// distance `t`, its texture one of `textures`.
+    pub(super) fn holds(&self, [a, b, c]: [Vec3; 3], textures: &[Texture], o: Vec3, d: Vec3, t: f32) -> bool {
         let p = o + d * t;
-        let [a, b, c] = self.corners;
         // Barycentric weights of p by areas against the triangle's normal.
         let n = (b - a).cross(c - a);
         let nn = n.length_squared();
@@ -101,6 +98,8 @@ impl Hole {
 
 #[cfg(test)]
 mod tests {
+    use std::sync::Arc;
+
     use super::*;
     use crate::render::light::rays::Tracer;
     use crate::render::light::shadow::ShadowMap;

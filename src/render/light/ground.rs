@@ -226,8 +226,7 @@ pub(super) fn spread(c: &[Vec3], stride: usize) -> Vec<Vec3> {
     (0..n * n)
         .map(|k| {
             let (u, v) = ((k % n) as f32 / stride as f32, (k / n) as f32 / stride as f32);
-            // Through i32, as `locate` does: x86-64 converts an f64 to i32 in one instruction, to usize in eight.
-    let (i, j) = ((u as i32 as usize).min(m - 2), (v as i32 as usize).min(m - 2));
+            let (i, j) = ((u as i32 as usize).min(m - 2), (v as i32 as usize).min(m - 2));
             let (tu, tv) = (u - i as f32, v - j as f32);
             let row = |j: usize| c[j * m + i].lerp(c[j * m + i + 1], tu);
             row(j).lerp(row(j + 1), tv)

@@ -55,7 +55,7 @@ impl Casters {
                 tris.push(Triangle { v0: a.into(), v1: b.into(), v2: d.into() });
                 corners.push((pi as u32, c));
                 hole.push(cutout.as_ref().map_or(u32::MAX, |cut| {
-                    holes.push(Hole::of(prim, cut, c));
+                    holes.push(Hole::of(cut, c));
                     holes.len() as u32 - 1
                 }));
             }
@@ -74,7 +74,9 @@ impl Casters {
         match self.hole.get(i) {
             Some(&h) if h != u32::MAX => {
                 let (o, d) = (Vec3::from(r.origin), Vec3::from(r.direction));
-                if self.holes[h as usize].holds(&self.textures, o, d, t) {
+                let tri = &self.tris[i];
+                let corners = [tri.v0, tri.v1, tri.v2].map(Vec3::from);
+                if self.holes[h as usize].holds(corners, &self.textures, o, d, t) {
                     t
                 } else {
                     f32::INFINITY
