@@ -11,7 +11,9 @@ mod bounce;
 pub mod brdf;
 mod cutout;
 pub mod environment;
+mod gathered;
 mod ground;
+mod lamp;
 mod penumbra;
 mod rays;
 mod scan;
@@ -24,11 +26,12 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 pub use crate::scene::light::{Light, LightKind};
-use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
+use crate::scene::{PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
+pub use gathered::{Gathered, GatheredError};
 use ground::{ground_planes, Ground, PlaneVisibility};
-use penumbra::SunShade;
+use lamp::{caster_bounds, is_caster, lamps, Lamp};
 use shadow::ShadowMap;
 
 /// What reaches a surface point of the environment's light: interpolated across a triangle from its vertices,
@@ -72,10 +75,6 @@ impl Visibility {
     }
 }
 
-/// Side of a sun's shadow map, of a spot's, and of each face of a point light's cube.
-const SUN_MAP: u32 = 2048;
-const SPOT_MAP: u32 = 1024;
-const POINT_MAP: u32 = 512;
 /// Directions the environment's visibility is sampled in, and the side of each direction's map.
 const ENV_DIRECTIONS: usize = 32;
 /// Each direction stands for a cone of the sphere's 1/32 (half-angle acos(1 − 1/16) ≈ 20.4°): its shadows are
@@ -95,166 +94,6 @@ pub struct EnvLight {
     pub rotation: Mat3,
     /// The full-resolution map, when it is the visible background.
     pub background: Option<Arc<EnvMap>>,
-}
-
-/// What a frame's light action keeps ([`FrameLight::gather`]): per primitive, per vertex, its [`Visibility`] with
-/// the bounce gathered (none for points), and per ground plane its grids. Encoded for the cache by
-/// [`Gathered::encode`].
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Gathered {
-    vertices: Vec<Vec<Visibility>>,
-    planes: Vec<ground::PlaneGrids>,
-}
-
-impl Gathered {
-    /// The bytes of the cache's blob, little-endian u32 counts and f32 values: the number of primitives, then per
-    /// primitive its vertex count and each vertex's environment visibility, radiance from below and bounce;
-    /// then the number of planes and per plane its four grids, each as a count and values, and the number of its
-    /// suns' shadow lattices and each lattice ([`SunShade::encode`]).
-    pub fn encode(&self) -> Vec<u8> {
-        let mut out = Vec::new();
-        let u32s = |out: &mut Vec<u8>, n: usize| out.extend((n as u32).to_le_bytes());
-        let f32s = |out: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|f| out.extend(f.to_le_bytes()));
-        u32s(&mut out, self.vertices.len());
-        for prim in &self.vertices {
-            u32s(&mut out, prim.len());
-            for v in prim {
-                f32s(&mut out, &[v.env]);
-                f32s(&mut out, &v.below.to_array());
-                f32s(&mut out, &v.bounce.to_array());
-            }
-        }
-        u32s(&mut out, self.planes.len());
-        for g in &self.planes {
-            u32s(&mut out, g.vis.len());
-            f32s(&mut out, &g.vis);
-            u32s(&mut out, g.sun.len());
-            f32s(&mut out, &g.sun);
-            for grid in [&g.lamps, &g.bounce] {
-                u32s(&mut out, grid.len());
-                grid.iter().for_each(|c| f32s(&mut out, &c.to_array()));
-            }
-            u32s(&mut out, g.shades.len());
-            g.shades.iter().for_each(|s| s.encode(&mut out));
-        }
-        out
-    }
-
-    /// Reads back what [`Gathered::encode`] wrote: an error for bytes it cannot have written (truncated,
-    /// trailing, a grid of another size, a value that is not finite), and never an allocation larger than the
-    /// bytes.
-    pub fn decode(bytes: &[u8]) -> Result<Gathered, GatheredError> {
-        let mut r = Reader { bytes, at: 0 };
-        let prims = r.count(4)?;
-        let mut vertices = Vec::with_capacity(prims);
-        for _ in 0..prims {
-            let n = r.count(28)?;
-            let f = r.f32s(n * 7)?;
-            let v3 = |c: &[f32]| Vec3::new(c[0], c[1], c[2]);
-            vertices.push(
-                f.chunks_exact(7).map(|c| Visibility { env: c[0], below: v3(&c[1..4]), bounce: v3(&c[4..7]) }).collect(),
-            );
-        }
-        let planes = r.count(16)?;
-        let mut grids = Vec::with_capacity(planes);
-        for _ in 0..planes {
-            let n = r.count(4)?;
-            let vis = r.f32s(n)?;
-            let n = r.count(4)?;
-            let sun = r.f32s(n)?;
-            let mut colours = [Vec::new(), Vec::new()];
-            for c in &mut colours {
-                let n = r.count(12)?;
-                *c = r.f32s(n * 3)?.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
-            }
-            let [lamps, bounce] = colours;
-            let sized = |len: usize| len == 0 || len == ground::GRID_POINTS;
-            if vis.len() != ground::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len()) {
-                return Err(GatheredError::Damaged("a ground grid of another size"));
-            }
-            let n = r.count(12)?;
-            let mut shades = Vec::with_capacity(n);
-            for _ in 0..n {
-                let side = r.u32()? as usize;
-                let block = r.n_u32()?;
-                let vis = r.n_u16()?;
-                let cells = ground::PLANE_CELLS * ground::PLANE_CELLS;
-                shades.push(SunShade::from_parts(side, block, vis, cells).map_err(GatheredError::Damaged)?);
-            }
-            grids.push(ground::PlaneGrids { vis, sun, lamps, bounce, shades });
-        }
-        if r.at != bytes.len() {
-            return Err(GatheredError::Damaged("trailing bytes"));
-        }
-        Ok(Gathered { vertices, planes: grids })
-    }
-}
-
-/// Why a frame's gathered light read back from the cache cannot light it (a damaged or stale cache).
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum GatheredError {
-    /// The bytes are not what [`Gathered::encode`] writes.
-    #[error("damaged gathered light: {0}")]
-    Damaged(&'static str),
-    /// It was gathered for a scene of another shape.
-    #[error("the frame's gathered light does not fit its scene (another frame's, or a stale cache)")]
-    OtherScene,
-}
-
-/// A cursor over a [`Gathered`] blob.
-struct Reader<'b> {
-    bytes: &'b [u8],
-    at: usize,
-}
-
-impl Reader<'_> {
-    /// A count of items of at least `size` bytes each, refused when the bytes left cannot hold that many (so a
-    /// corrupt count never sizes an allocation).
-    fn count(&mut self, size: usize) -> Result<usize, GatheredError> {
-        let n = self.u32()? as usize;
-        if n > (self.bytes.len() - self.at) / size {
-            return Err(GatheredError::Damaged("truncated"));
-        }
-        Ok(n)
-    }
-
-    /// One u32.
-    fn u32(&mut self) -> Result<u32, GatheredError> {
-        let b = self.take(4)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-
-    /// A count and that many u32s.
-    fn n_u32(&mut self) -> Result<Vec<u32>, GatheredError> {
-        let n = self.count(4)?;
-        let b = self.take(4 * n)?;
-        Ok(b.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
-    }
-
-    /// A count and that many u16s.
-    fn n_u16(&mut self) -> Result<Vec<u16>, GatheredError> {
-        let n = self.count(2)?;
-        let b = self.take(2 * n)?;
-        Ok(b.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect())
-    }
-
-    /// The next `len` bytes.
-    fn take(&mut self, len: usize) -> Result<&[u8], GatheredError> {
-        let b = self.bytes.get(self.at..self.at + len).ok_or(GatheredError::Damaged("truncated"))?;
-        self.at += len;
-        Ok(b)
-    }
-
-    /// `n` finite f32s.
-    fn f32s(&mut self, n: usize) -> Result<Vec<f32>, GatheredError> {
-        let b = self.take(4 * n)?;
-        let v: Vec<f32> = b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-        if v.iter().all(|f| f.is_finite()) {
-            Ok(v)
-        } else {
-            Err(GatheredError::Damaged("a value that is not finite"))
-        }
-    }
 }
 
 /// Version of baked point colours ([`FrameLight::bake`]): part of their keys.
@@ -284,102 +123,6 @@ pub struct FrameLight {
     /// gather's ([`FrameLight::with_bounce`]). A light only prepared has none (it bakes points, which have no
     /// specular layer).
     tracer: Option<Arc<rays::Tracer>>,
-}
-
-/// A light as a frame's shading reads it.
-#[derive(Debug)]
-struct Lamp {
-    light: Light,
-    /// Its shadow maps: none (no shadows), one (sun, spot) or a cube's six (point).
-    maps: Vec<ShadowMap>,
-    /// Its size as [`ShadowMap::visibility`] reads it: a sun's angular radius as a tangent, else its radius.
-    size: f32,
-}
-
-impl Lamp {
-    /// The unit direction toward the light from `p`, and the radiance it brings there per unit of its colour ×
-    /// intensity (before shadows).
-    #[inline]
-    fn incidence(&self, p: Vec3) -> (Vec3, f32) {
-        match self.light.kind {
-            LightKind::Sun { direction, .. } => (-direction, 1.0),
-            LightKind::Point { position, .. } => {
-                let d = position - p;
-                let d2 = d.length_squared().max(1e-8);
-                (d / d2.sqrt(), 1.0 / (4.0 * PI * d2))
-            }
-            LightKind::Spot { position, direction, cone, blend, .. } => {
-                let d = position - p;
-                let d2 = d.length_squared().max(1e-8);
-                let l = d / d2.sqrt();
-                (l, spot_falloff(-l.dot(direction), cone, blend) / (4.0 * PI * d2))
-            }
-        }
-    }
-
-    /// The irradiance the light brings `p` on a surface of unit normal `n`, past its shadow casters.
-    #[inline]
-    fn irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
-        let (l, radiance) = self.incidence(p);
-        let c = n.dot(l);
-        if c <= 0.0 || radiance == 0.0 {
-            return Vec3::ZERO;
-        }
-        self.light.color * (radiance * self.light.intensity * c * self.visibility(p, n))
-    }
-
-    /// The fraction of the light reaching `p` (unit normal `n`) past its shadow casters.
-    #[inline]
-    fn visibility(&self, p: Vec3, n: Vec3) -> f32 {
-        match (self.light.kind, self.maps.len()) {
-            (_, 0) => 1.0,
-            (LightKind::Point { position, .. }, 6) => {
-                self.maps[shadow::cube_face(p - position)].visibility(p, n, self.size)
-            }
-            _ => self.maps[0].visibility(p, n, self.size),
-        }
-    }
-}
-
-/// Whether primitive `p` casts shadows, and so occludes and reflects light onto others: triangles whose material
-/// casts them (every material but a `plane` source's).
-fn is_caster(scene: &PosedScene, p: &PosedPrimitive) -> bool {
-    p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows)
-}
-
-/// Bounds of the geometry that casts shadows.
-fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
-    let mut it = scene.primitives.iter().filter(|p| is_caster(scene, p)).flat_map(|p| p.positions.iter());
-    let first = *it.next()?;
-    Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
-}
-
-/// The lights (`lights`, the manifest's, then the scene's own) with their shadow maps over the casters within
-/// `bounds`, made side by side.
-fn lamps(scene: &PosedScene, lights: &[Light], bounds: Option<(Vec3, Vec3)>) -> Vec<Lamp> {
-    let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
-    all.par_iter()
-        .map(|l| {
-            let maps = match (l.shadows, bounds) {
-                (true, Some(b)) => match l.kind {
-                    LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP)],
-                    LightKind::Spot { position, direction, cone, .. } => {
-                        vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP)]
-                    }
-                    LightKind::Point { position, .. } => shadow::CUBE
-                        .iter()
-                        .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP))
-                        .collect(),
-                },
-                _ => Vec::new(),
-            };
-            let size = match l.kind {
-                LightKind::Sun { angle, .. } => (0.5 * angle).tan(),
-                LightKind::Point { radius, .. } | LightKind::Spot { radius, .. } => radius,
-            };
-            Lamp { light: (*l).clone(), maps, size }
-        })
-        .collect()
 }
 
 /// `n` directions spread evenly over the sphere (a Fibonacci lattice).
@@ -791,22 +534,6 @@ fn may_be_glossy(scene: &PosedScene) -> bool {
     })
 }
 
-/// Blender 3.x's spot falloff at `cos_angle` off the axis: the cosine itself inside the cone, smoothed to 0 over
-/// the outer `blend` fraction.
-fn spot_falloff(cos_angle: f32, cone: f32, blend: f32) -> f32 {
-    let cos_half = (0.5 * cone).cos();
-    let t = cos_angle - cos_half;
-    if t <= 0.0 {
-        return 0.0;
-    }
-    let smooth = (1.0 - cos_half) * blend;
-    let mut a = cos_angle;
-    if t < smooth {
-        a *= environment::smoothstep(0.0, smooth, t);
-    }
-    a
-}
-
 /// The environment's occlusion maps: [`ENV_DIRECTIONS`] parallel shadow maps from directions over the sphere,
 /// each weighted by the environment's brightness there (so a bright sky above shadows more than a dark floor).
 fn occlusion_maps(scene: &PosedScene, env: &EnvLight, bounds: (Vec3, Vec3)) -> Vec<(Vec3, f32, ShadowMap)> {
@@ -1007,13 +734,4 @@ mod tests {
         assert!(FrameLight::from_gathered(&scene, lights, studio(), other).is_err());
     }
 
-    #[test]
-    fn blenders_spot_is_its_point_light_times_the_cosine_inside_the_cone() {
-        let cone = 120f32.to_radians();
-        assert!((spot_falloff(1.0, cone, 0.0) - 1.0).abs() < 1e-6);
-        assert!((spot_falloff(0.9, cone, 0.0) - 0.9).abs() < 1e-6);
-        assert_eq!(spot_falloff(0.4, cone, 0.0), 0.0);
-        // Blend fades toward the edge.
-        assert!(spot_falloff(0.55, cone, 1.0) < 0.1);
-    }
 }
