@@ -189,7 +189,7 @@ fn samples(
     let lit = match s.color {
         PointColor::Lit => {
             let light_id = node.deps[0];
-            let env = super::render::environment_light(g, x, blobs, g.node(light_id).deps.first().copied(), false)?;
+            let env = super::render::environment_light(g, x, blobs, light_id, false)?;
             let content = |e: GatheredError| Error::Content { action: label.to_string(), message: e.to_string() };
             let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
             let (whole, first) = match &s.source {

@@ -36,9 +36,9 @@ fn load_map(g: &Graph, x: &Inputs, id: ActionId) -> Result<EnvMap, Error> {
     environment::load(path).map_err(|source| Error::Environment { action: label(), source })
 }
 
-/// The environment lit renders read: the prefiltered map from the environment action (the deps of their frames'
-/// light actions), with the map itself when it is the visible background; the built-in studio environment when no
-/// map is named.
+/// The environment lit renders read: the prefiltered map from the environment action (the dep of their frames'
+/// light actions: the manifest's map or the built-in studio map, prefiltered by that action), with the map itself
+/// when it is the visible background; `None` when no pass of `ids` renders lit (no light action among their deps).
 fn env_light(
     g: &Graph,
     x: &Inputs,
@@ -48,10 +48,9 @@ fn env_light(
     if g.keying.render.shading != Shading::Pbr {
         return Ok(None);
     }
-    let light = ids.iter().find_map(|&id| g.node(id).deps.first().copied());
-    let env_id = light.and_then(|l| g.node(l).deps.first().copied());
+    let Some(light) = ids.iter().find_map(|&id| g.node(id).deps.first().copied()) else { return Ok(None) };
     let visible = g.keying.render.lighting.environment.visible;
-    environment_light(g, x, blobs, env_id, visible).map(Some)
+    environment_light(g, x, blobs, light, visible).map(Some)
 }
 
 /// Runs the light actions `ids`: per frame, the lights and environment prepared at the vertices and over the
@@ -63,8 +62,8 @@ pub(super) fn lights(
     ids: &[ActionId],
     done: &(dyn Fn() + Sync),
 ) -> Result<Made, Error> {
-    let env_id = ids.iter().find_map(|&id| g.node(id).deps.first().copied());
-    let env = environment_light(g, x, blobs, env_id, false)?;
+    let Some(&first) = ids.first() else { return Ok(Vec::new()) };
+    let env = environment_light(g, x, blobs, first, false)?;
     // Frames side by side: a frame's preparation has parts on one thread (a sun's map, the gather's tree), which
     // another frame's fill. Each result depends on its frame alone.
     ids.par_iter()
@@ -84,22 +83,29 @@ pub(super) fn lights(
         .collect()
 }
 
-/// The environment as the prefiltered map of action `env_id` (the built-in studio environment without one),
-/// with the full map as the `background` when asked (read again only for that).
+/// The environment as light action `light_id` reads it: the prefiltered map of its environment action (its
+/// first dep, planned for every light action, the built-in studio map's too), with the full map as the
+/// `background` when asked (read again only for that). A light action planned without one is an error, not a
+/// studio map prefiltered here: that would be work no action keys.
 pub(super) fn environment_light(
     g: &Graph,
     x: &Inputs,
     blobs: &[Option<Vec<Digest>>],
-    env_id: Option<ActionId>,
+    light_id: ActionId,
     background: bool,
 ) -> Result<EnvLight, Error> {
-    let settings = &g.keying.render.lighting.environment;
-    let Some(env_id) = env_id else { return Ok(settings.studio()) };
+    let light = g.node(light_id);
+    let env_id = light
+        .deps
+        .first()
+        .copied()
+        .filter(|&id| g.node(id).action == Action::Environment)
+        .ok_or_else(|| Error::Content { action: light.label.clone(), message: "BUG: no environment action".into() })?;
     let label = g.node(env_id).label.clone();
     let pre = Prefiltered::decode(&x.read(g, blobs, env_id, 0)?)
         .map_err(|source| Error::Environment { action: label.clone(), source })?;
     let map = if background { Some(Arc::new(load_map(g, x, env_id)?)) } else { None };
-    Ok(settings.with(Arc::new(pre), map))
+    Ok(g.keying.render.lighting.environment.with(Arc::new(pre), map))
 }
 
 /// Runs the render-pass actions `ids`.

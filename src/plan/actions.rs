@@ -120,7 +120,7 @@ pub enum Action {
     Environment,
     /// Scene frame `frame`'s light at its vertices and over its ground, the bounce included
     /// ([`crate::render::light::Gathered`]), shared by every lit view of it.
-    /// Deps: the [`Action::Environment`] when a map lights the scene.
+    /// Deps: the [`Action::Environment`] (the manifest's map or the built-in studio map, prefiltered).
     Light {
         /// Scene frame.
         frame: usize,
