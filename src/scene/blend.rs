@@ -105,7 +105,7 @@ impl<'a> Importer<'a> {
     pub fn import(&self, blend: &Path, select: &BlendSelect, frames: &FrameRange) -> Result<Imported, Error> {
         let io = |path: &Path, e: std::io::Error| Error::Io { path: path.to_path_buf(), source: e };
         let content = self.stat.digest(blend).map_err(|e| io(blend, e))?;
-        let exe = blender_exe().map_err(|message| Error::Blend { path: blend.to_path_buf(), message })?;
+        let exe = blender_exe().map_err(|e| Error::Blend { path: blend.to_path_buf(), message: e.to_string() })?;
         let version = self.version(&exe).map_err(|message| Error::Blend { path: blend.to_path_buf(), message })?;
         let spec = FrameSpec { start: frames.start, end: frames.end, count: frames.count, step: frames.step };
         let selection = Selection {
@@ -395,23 +395,32 @@ fn newer_hint(blend: &Path, version: &str) -> String {
     }
 }
 
-/// The Blender to run: `VVGEN_BLENDER`, else `blender` on the PATH; the error names the ways out.
-pub fn blender_exe() -> Result<PathBuf, String> {
-    const WAYS_OUT: &str = "install Blender (Debian/Ubuntu: apt install blender python3-numpy; or blender.org) and \
-                            put it on the PATH or in VVGEN_BLENDER; or, in Blender, File > Export > glTF 2.0 and \
-                            use `gltf = \"….glb\"` instead";
+/// What to do without a Blender: install one, point at it, or export glTF from it.
+const WAYS_OUT: &str = "install Blender (Debian/Ubuntu: apt install blender python3-numpy; or blender.org) and put \
+                        it on the PATH or in VVGEN_BLENDER; or, in Blender, File > Export > glTF 2.0 and use \
+                        `gltf = \"….glb\"` instead";
+
+/// Why no Blender can read a `.blend`; its message names the ways out.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum NoBlender {
+    /// `VVGEN_BLENDER` names something that is not a file.
+    #[error("VVGEN_BLENDER is {}, which is not a file: {WAYS_OUT}", .0.display())]
+    NotAFile(PathBuf),
+    /// No `blender` executable is on the `PATH`.
+    #[error("a .blend needs Blender to read it, and none is on the PATH: {WAYS_OUT}")]
+    NotOnPath,
+}
+
+/// The Blender to run: `VVGEN_BLENDER`, else `blender` on the PATH.
+pub fn blender_exe() -> Result<PathBuf, NoBlender> {
     if let Some(p) = std::env::var_os("VVGEN_BLENDER").filter(|p| !p.is_empty()) {
         let p = PathBuf::from(p);
-        return if p.is_file() {
-            Ok(p)
-        } else {
-            Err(format!("VVGEN_BLENDER is {}, which is not a file: {WAYS_OUT}", p.display()))
-        };
+        return if p.is_file() { Ok(p) } else { Err(NoBlender::NotAFile(p)) };
     }
     let found = std::env::var_os("PATH").and_then(|path| {
         std::env::split_paths(&path).map(|d| d.join("blender")).find(|p| p.is_file() && executable(p))
     });
-    found.ok_or_else(|| format!("a .blend needs Blender to read it, and none is on the PATH: {WAYS_OUT}"))
+    found.ok_or(NoBlender::NotOnPath)
 }
 
 #[cfg(unix)]
