@@ -14,6 +14,7 @@ pub mod environment;
 mod gathered;
 mod ground;
 mod lamp;
+mod pcf;
 mod penumbra;
 mod rays;
 mod scan;

@@ -14,6 +14,7 @@
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::pcf::{self, Depths, PcfAxis};
 use super::scan::{Scan, SCAN_RUN};
 use crate::scene::texture::floor;
 use crate::scene::PosedScene;
@@ -308,13 +309,16 @@ impl ShadowMap {
         }
     }
 
+    /// The depths as the lookups read them.
+    #[inline]
+    fn depths(&self) -> Depths<'_> {
+        Depths { depth: &self.depth, size: self.size }
+    }
+
     /// Nearest caster depth at texel (x, y); outside the map, nothing.
     #[inline]
     fn at(&self, x: i64, y: i64) -> f32 {
-        if x < 0 || y < 0 || x >= self.size as i64 || y >= self.size as i64 {
-            return f32::INFINITY;
-        }
-        self.depth[(y as u32 * self.size + x as u32) as usize]
+        self.depths().at(x, y)
     }
 
     /// The fraction of the light reaching world point `p` with unit normal `n` (facing the light or not: the
@@ -403,17 +407,7 @@ impl ShadowMap {
         // The filter: a bilinear percentage-closer lookup (see [`ShadowMap::pcf`]) at each of an N × N grid over
         // ±`radius`, against the receiver's plane there; each column's and row's texels, weights and plane
         // offsets are found once.
-        let r = axis::<N>(radius.min(24.0));
-        let cols = r.map(|o| PcfAxis::new(q.x + o, slope.x));
-        let rows = r.map(|o| PcfAxis::new(q.y + o, slope.y));
-        let inside = self.holds(cols[0].texel, rows[0].texel, cols[N - 1].texel + 1, rows[N - 1].texel + 1);
-        let mut lit = 0.0;
-        for (j, row) in rows.iter().enumerate() {
-            for (i, col) in cols.iter().enumerate() {
-                lit += self.pcf_at(col, row, recv + (slope.x * r[i] + slope.y * r[j]), inside);
-            }
-        }
-        lit / (N * N) as f32
+        pcf::filter(self.depths(), q, recv, slope, &axis::<N>(radius.min(24.0)))
     }
 
     /// Whether [`ShadowMap::visibility`] is sure to answer exactly 1 (its first test: no caster anywhere near)
@@ -450,14 +444,13 @@ impl ShadowMap {
     /// Whether texels `x0..=x1` × `y0..=y1` all lie in the map.
     #[inline]
     fn holds(&self, x0: i64, y0: i64, x1: i64, y1: i64) -> bool {
-        let n = self.size as i64;
-        x0 >= 0 && y0 >= 0 && x1 < n && y1 < n
+        self.depths().holds(x0, y0, x1, y1)
     }
 
     /// Nearest caster depth at texel (x, y), which lies in the map.
     #[inline]
     fn texel(&self, x: i64, y: i64) -> f32 {
-        self.depth[(y * self.size as i64 + x) as usize]
+        self.depths().texel(x, y)
     }
 
     /// How the depth of the receiver's plane (normal `n`) changes per texel across an orthographic map: taps away
@@ -485,26 +478,7 @@ impl ShadowMap {
     #[inline]
     fn pcf(&self, q: Vec3, recv: f32, slope: Vec2) -> f32 {
         let (col, row) = (PcfAxis::new(q.x, slope.x), PcfAxis::new(q.y, slope.y));
-        self.pcf_at(&col, &row, recv, self.holds(col.texel, row.texel, col.texel + 1, row.texel + 1))
-    }
-
-    /// The bilinear percentage-closer lookup of one column and row against the receiver's depth `recv` at their
-    /// point; `inside` when its four texels lie in the map.
-    #[inline]
-    fn pcf_at(&self, col: &PcfAxis, row: &PcfAxis, recv: f32, inside: bool) -> f32 {
-        let tap = |dx: usize, dy: usize| {
-            let (x, y) = (col.texel + dx as i64, row.texel + dy as i64);
-            let d = if inside { self.texel(x, y) } else { self.at(x, y) };
-            if d < recv + (col.plane[dx] + row.plane[dy]) {
-                0.0
-            } else {
-                1.0
-            }
-        };
-        let (l00, l10, l01, l11) = (tap(0, 0), tap(1, 0), tap(0, 1), tap(1, 1));
-        let top = l00 + (l10 - l00) * col.weight;
-        let bottom = l01 + (l11 - l01) * col.weight;
-        top + (bottom - top) * row.weight
+        pcf::bilinear(self.depths(), &col, &row, recv, self.holds(col.texel, row.texel, col.texel + 1, row.texel + 1))
     }
 }
 
@@ -554,25 +528,6 @@ fn fold(lo: &[f32], hi: &[f32], side: usize) -> (Vec<f32>, Vec<f32>) {
 fn axis<const N: usize>(radius: f32) -> [f32; N] {
     let half = (N - 1) as f32 * 0.5;
     std::array::from_fn(|i| (i as f32 - half) * (radius / half))
-}
-
-/// One axis of a bilinear percentage-closer lookup at light-space coordinate `c`: the lower of the two texels
-/// read, the upper one's weight, and the receiver plane's offset (`slope` per texel) at the two texels' centres
-/// from `c`.
-struct PcfAxis {
-    texel: i64,
-    weight: f32,
-    plane: [f32; 2],
-}
-
-impl PcfAxis {
-    #[inline]
-    fn new(c: f32, slope: f32) -> PcfAxis {
-        let f = c - 0.5;
-        let texel = floor(f);
-        let plane = [slope * (texel as f32 + 0.5 - c), slope * ((texel + 1) as f32 + 0.5 - c)];
-        PcfAxis { texel, weight: f - texel as f32, plane }
-    }
 }
 
 /// The six 90° faces of a point light's cube, as directions.
