@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::environment;
 use super::shadow::{self, ShadowMap};
 use crate::scene::light::{Light, LightKind};
-use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
+use crate::scene::PosedScene;
 
 /// Side of a sun's shadow map, of a spot's, and of each face of a point light's cube.
 const SUN_MAP: u32 = 2048;
@@ -69,19 +69,6 @@ impl Lamp {
             _ => self.maps[0].visibility(p, n, self.size),
         }
     }
-}
-
-/// Whether primitive `p` casts shadows, and so occludes and reflects light onto others: triangles whose material
-/// casts them (every material but a `plane` source's).
-pub(super) fn is_caster(scene: &PosedScene, p: &PosedPrimitive) -> bool {
-    p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows)
-}
-
-/// Bounds of the geometry that casts shadows.
-pub(super) fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
-    let mut it = scene.primitives.iter().filter(|p| is_caster(scene, p)).flat_map(|p| p.positions.iter());
-    let first = *it.next()?;
-    Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
 }
 
 /// The lights (`lights`, the manifest's, then the scene's own) with their shadow maps over the casters within

@@ -27,12 +27,12 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 pub use crate::scene::light::{Light, LightKind};
-use crate::scene::{PosedScene, PrimKind};
+use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
 pub use gathered::{Gathered, GatheredError};
 use ground::{ground_planes, Ground, PlaneVisibility};
-use lamp::{caster_bounds, is_caster, lamps, Lamp};
+use lamp::{lamps, Lamp};
 use shadow::ShadowMap;
 
 /// What reaches a surface point of the environment's light: interpolated across a triangle from its vertices,
@@ -124,6 +124,19 @@ pub struct FrameLight {
     /// gather's ([`FrameLight::with_bounce`]). A light only prepared has none (it bakes points, which have no
     /// specular layer).
     tracer: Option<Arc<rays::Tracer>>,
+}
+
+/// Whether primitive `p` casts shadows, and so occludes and reflects light onto others: triangles whose material
+/// casts them (every material but a `plane` source's).
+fn is_caster(scene: &PosedScene, p: &PosedPrimitive) -> bool {
+    p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows)
+}
+
+/// Bounds of the geometry that casts shadows.
+fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
+    let mut it = scene.primitives.iter().filter(|p| is_caster(scene, p)).flat_map(|p| p.positions.iter());
+    let first = *it.next()?;
+    Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
 }
 
 /// `n` directions spread evenly over the sphere (a Fibonacci lattice).
