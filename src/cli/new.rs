@@ -55,7 +55,13 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     let cache = std::env::var_os("VVGEN_CACHE")
         .filter(|p| !p.is_empty())
         .map_or_else(|| crate::manifest::folder_of(&out).join("cache"), PathBuf::from);
-    let (kind, up, note) = describe(asset, &cache, ui)?;
+    let (kind, up, mut note, rest) = describe(asset, &cache, ui)?;
+    let flat = one_colour(&rest);
+    if flat {
+        note.push_str(
+            "; no texture or vertex colours: lit (`shading = \"pbr\"`), since unlit every view is one flat colour",
+        );
+    }
     if out.exists() {
         bail!("{} exists: choose another with -o", out.display());
     }
@@ -63,7 +69,7 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     std::fs::create_dir_all(folder).with_context(|| format!("creating the folder {}", folder.display()))?;
     let manifest_dir = absolute(folder)?;
     let rel = |p: &Path| -> anyhow::Result<String> { Ok(relative(&manifest_dir, &absolute(p)?)) };
-    let text = manifest(&name, asset, &kind, up, &note, writer, &rel)?;
+    let text = manifest(&name, asset, &kind, up, &note, flat, writer, &rel)?;
     std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
     if !ui.quiet {
         eprintln!("wrote {}: {note}", out.display());
@@ -72,8 +78,8 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     Ok(ExitCode::SUCCESS)
 }
 
-/// The asset's kind, its up axis and a line saying how that was decided.
-fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'static str, String)> {
+/// The asset's kind, its up axis, a line saying how that was decided, and its first frame at rest.
+fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'static str, String, scene::PosedScene)> {
     let ext = |p: &Path| p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     if asset.is_dir() {
         let mut files: Vec<PathBuf> = std::fs::read_dir(asset)
@@ -94,7 +100,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
         let (up, why) = if e == "obj" { obj_up() } else { tallest(&frame, first) };
         let n = count(e);
         let seq = Asset::Sequence { key, glob: format!("*.{e}"), frames: n };
-        return Ok((seq, up, format!("{n} {e} frames; {why}")));
+        return Ok((seq, up, format!("{n} {e} frames; {why}"), frame));
     }
     match ext(asset).as_str() {
         "gltf" | "glb" => {
@@ -112,8 +118,10 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             let mut rest = scene::PosedScene::default();
             a.pose(&[], 0.0, glam::Mat4::IDENTITY, &mut Default::default(), &mut rest);
             drawable(&rest, asset)?;
+            // Posing fills geometry only; the source layer brings the materials.
+            rest.materials = std::sync::Arc::new(a.materials.clone());
             let kind = if clips.is_empty() { Asset::Mesh } else { Asset::Gltf { clips } };
-            Ok((kind, "y", format!("{what}; up \"y\": glTF is +Y up by its specification")))
+            Ok((kind, "y", format!("{what}; up \"y\": glTF is +Y up by its specification"), rest))
         }
         "fbx" => {
             let a = scene::fbx::load(asset)?;
@@ -125,7 +133,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
                 Some((n, d)) => format!("{} take(s), the first (`{n}`, {d:.2} s) selected", takes.len()),
                 None => "no take: a static mesh".into(),
             };
-            Ok((Asset::Fbx { takes }, "z", format!("{what}; in metres and +Z up, as vvgen loads FBX")))
+            Ok((Asset::Fbx { takes }, "z", format!("{what}; in metres and +Z up, as vvgen loads FBX"), rest))
         }
         "blend" => {
             let store = crate::cache::Store::open(cache)?;
@@ -143,19 +151,20 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             } else {
                 format!("scene `{}`, frames {}–{} at {} fps", info.scene, info.frame_start, info.frame_end, info.fps)
             };
-            Ok((Asset::Blend { info }, "z", format!("{what}; +Z up, as Blender shows it")))
+            Ok((Asset::Blend { info }, "z", format!("{what}; +Z up, as Blender shows it"), first))
         }
         "ply" => {
             let s = scene::source::ply_scene(asset)?;
             drawable(&s, asset)?;
             let (up, why) = tallest(&s, asset);
-            Ok((Asset::Mesh, up, why))
+            Ok((Asset::Mesh, up, why, s))
         }
         "obj" => {
-            drawable(&scene::obj::scene(asset)?, asset)?;
+            let s = scene::obj::scene(asset)?;
+            drawable(&s, asset)?;
             let (up, why) = obj_up();
             let glob = asset.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
-            Ok((Asset::Sequence { key: "mesh_sequence", glob, frames: 1 }, up, why))
+            Ok((Asset::Sequence { key: "mesh_sequence", glob, frames: 1 }, up, why, s))
         }
         _ => bail!("{}: not a glTF, FBX, .blend, PLY or OBJ file, nor a folder of frames", asset.display()),
     }
@@ -170,6 +179,21 @@ fn drawable(s: &scene::PosedScene, path: &Path) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Whether the subject is surfaces of one colour each: triangles only, none with a base colour texture or
+/// vertex colours that vary. Unlit, every view of such a subject is a silhouette filled with one colour, from
+/// which no NeRF learns a shape; lit, its shading shows the shape (the built-in studio light when the manifest
+/// names none). Points are left as they are: a cloud without colours has no normals to light either.
+fn one_colour(s: &scene::PosedScene) -> bool {
+    let triangles = |p: &&scene::PosedPrimitive| p.kind == scene::PrimKind::Triangles && !p.indices.is_empty();
+    s.primitives.iter().any(|p| triangles(&p))
+        && s.primitives.iter().all(|p| {
+            let textured = !p.uvs.is_empty()
+                && s.materials.get(p.material as usize).is_some_and(|m| m.base_color_texture.is_some());
+            let varying = p.colors.first().is_some_and(|c| p.colors.iter().any(|d| d != c));
+            triangles(&p) && !textured && !varying
+        })
 }
 
 /// OBJ's up axis: +Y, the convention of Blender's and most exporters. Not guessed from the extents, which a
@@ -193,6 +217,7 @@ fn manifest(
     kind: &Asset,
     up: &str,
     note: &str,
+    flat: bool,
     writer: &str,
     rel: &dyn Fn(&Path) -> anyhow::Result<String>,
 ) -> anyhow::Result<String> {
@@ -282,8 +307,16 @@ fn manifest(
         w,
         "[render]\nresolution     = [400, 400]   # D-NeRF's half_res; 800 is NeRF-synthetic's full size\n\
          camera_angle_x = 0.6911112070083618   # Blender's 50 mm lens on a 36 mm sensor\n\
-         samples        = 4\npasses         = [\"rgba\", \"depth\"]\n"
+         samples        = 4\npasses         = [\"rgba\", \"depth\"]"
     );
+    if flat {
+        let _ = writeln!(
+            w,
+            "shading        = \"pbr\"   # no texture or vertex colours: unlit, every view would be one flat colour;\n\
+             \x20                          # lit by the built-in studio environment ([environment], [light.*] to change)"
+        );
+    }
+    let _ = writeln!(w);
     let dynamic = frames > 1;
     match writer {
         "dynerf" => {

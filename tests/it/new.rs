@@ -65,3 +65,48 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
     let (code, err) = vvgen(d, &["new", "no-such.glb"]);
     assert_eq!(code, 2, "{err}");
 }
+
+/// A subject of one colour (a scan without colours, a mesh without materials) unlit is a filled silhouette in
+/// every view: `new` writes it lit, and its views show its shape (many shades where unlit has one). A textured
+/// subject stays unlit, as the NeRF-synthetic recipe renders it.
+#[test]
+fn a_subject_of_one_colour_is_written_lit_and_its_views_show_its_shape() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // A pyramid: four sloped faces and a base, no colours.
+    std::fs::write(
+        d.join("pyramid.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 6\nproperty list uchar int vertex_indices\nend_header\n\
+         -1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n0 0 1.2\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n3 0 2 1\n3 0 3 2\n",
+    )
+    .unwrap();
+    let (code, err) = vvgen(d, &["new", "pyramid.ply"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("no texture or vertex colours"), "{err}");
+    let text = std::fs::read_to_string(d.join("pyramid.toml")).unwrap();
+    assert!(text.contains("shading        = \"pbr\""), "{text}");
+    // Fewer views than `new` writes, to keep the test quick; the rest is as written.
+    let quick = text
+        .replace("views = 100", "views = 4")
+        .replace("views = 10", "views = 1")
+        .replace("views    = 20", "views    = 1");
+    let shades = |manifest: &str, name: &str| {
+        std::fs::write(d.join(name), manifest).unwrap();
+        let (code, err) = vvgen(d, &["-q", "build", name]);
+        assert_eq!(code, 0, "{err}");
+        let img = image::open(d.join("out/pyramid/pyramid_dnerf/train/r_0000.png")).unwrap().to_rgba8();
+        let mut seen: Vec<[u8; 3]> = img.pixels().filter(|p| p[3] == 255).map(|p| [p[0], p[1], p[2]]).collect();
+        seen.sort_unstable();
+        seen.dedup();
+        seen.len()
+    };
+    let lit = shades(&quick, "lit.toml");
+    let unlit = shades(&quick.replace("shading        = \"pbr\"", "shading        = \"unlit\""), "unlit.toml");
+    assert!(unlit <= 2, "unlit, the pyramid is one colour: {unlit} shades");
+    assert!(lit >= 20, "lit, its faces differ: {lit} shades");
+    // A textured subject is written unlit.
+    let (code, err) = vvgen(d, &["new", &data("gltf/BoxTextured/BoxTextured.glb").display().to_string()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!std::fs::read_to_string(d.join("BoxTextured.toml")).unwrap().contains("shading"));
+}
