@@ -31,6 +31,7 @@ mod rigs;
 mod scene;
 mod schema;
 mod slurm;
+mod spec_gloss;
 mod transform;
 mod transparency;
 mod video;

@@ -17,8 +17,12 @@ use crate::scene::posed::PrimKind;
 use crate::scene::texture::Texture;
 
 /// Extensions vvgen understands; a file that *requires* any other is refused.
-const SUPPORTED_REQUIRED: &[&str] =
-    &["KHR_texture_transform", "KHR_materials_emissive_strength", "KHR_lights_punctual"];
+const SUPPORTED_REQUIRED: &[&str] = &[
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
+    "KHR_materials_pbrSpecularGlossiness",
+];
 
 /// A loaded glTF: everything needed to pose it at any time, with no further I/O.
 #[derive(Debug, Clone)]
@@ -143,11 +147,6 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene
 pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene::Error> {
     let gltf = parse(bytes).map_err(|e| err(path, e))?;
     let doc = &gltf.document;
-    for ext in doc.extensions_required() {
-        if !SUPPORTED_REQUIRED.contains(&ext) {
-            return Err(err(path, format!("requires extension `{ext}`, which vvgen does not support")));
-        }
-    }
     let dir = crate::scene::input::folder_of(path);
     let mut buffers = Vec::new();
     for b in doc.buffers() {
@@ -202,8 +201,14 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
         textures.push(Texture::new(img.width(), img.height(), img.as_raw().clone(), true));
     }
 
-    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m)).collect();
+    let (mut materials, spec_gloss): (Vec<Material>, Vec<_>) = doc.materials().map(|m| material(&m)).unzip();
     linear_data_textures(&mut materials, &mut textures);
+    // After the linear copies: the baked metallic-roughness images are linear already.
+    for (i, (m, sg)) in materials.iter_mut().zip(&spec_gloss).enumerate() {
+        if let Some(w) = sg.as_ref().and_then(|sg| sg.apply(m, &mut textures)) {
+            warnings.push(format!("materials[{i}]: {w}"));
+        }
+    }
     let default_material = materials.len() as u32;
     materials.push(Material::default());
 
@@ -402,6 +407,7 @@ fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
         bytes.into()
     };
     let doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
+    required_extensions(&doc)?;
     super::validate::check(&doc)?;
     let parsed = match gltf::Gltf::from_slice(bytes) {
         Err(gltf::Error::Validation(errors))
@@ -416,6 +422,31 @@ fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
         other => other,
     };
     parsed.map_err(|e| e.to_string())
+}
+
+/// Refuses an extension the file requires and vvgen does not read, saying the way out. Checked on the raw
+/// JSON, before gltf's validation, which says only "Unsupported extension".
+fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
+    let Some(required) = doc.get("extensionsRequired").and_then(|v| v.as_array()) else { return Ok(()) };
+    for (i, ext) in required.iter().enumerate() {
+        let Some(ext) = ext.as_str() else { return Err(format!("extensionsRequired[{i}] is not a string")) };
+        if SUPPORTED_REQUIRED.contains(&ext) {
+            continue;
+        }
+        let what = match ext {
+            "KHR_draco_mesh_compression" | "EXT_meshopt_compression" | "KHR_mesh_quantization" => {
+                " (its meshes are compressed)"
+            }
+            "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => " (its textures are KTX2, WebP or AVIF)",
+            _ => "",
+        };
+        return Err(format!(
+            "requires the extension `{ext}`, which vvgen does not read{what}. Way out: import the file in Blender \
+             (File → Import → glTF 2.0), save it as a .blend and name that (`blend = \"….blend\"`), or export it \
+             again from its tool without `{ext}`"
+        ));
+    }
+    Ok(())
 }
 
 fn vec3s(v: Vec<f32>) -> Vec<Vec3> {

@@ -3,10 +3,19 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
+use super::spec_gloss::SpecGloss;
 use crate::scene::material::{AlphaMode, Material};
 use crate::scene::texture::{Texture, TextureRef, Wrap};
 
-pub(super) fn material(m: &gltf::Material<'_>) -> Material {
+/// The material, and its specular-glossiness parameters when it has `KHR_materials_pbrSpecularGlossiness`
+/// (which then takes the place of its metallic-roughness ones, as in Blender's importer, once the textures are
+/// decoded: [`SpecGloss::apply`]).
+pub(super) fn material(m: &gltf::Material<'_>) -> (Material, Option<SpecGloss>) {
+    let sg = SpecGloss::of(m, |i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform()));
+    (core(m), sg)
+}
+
+fn core(m: &gltf::Material<'_>) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, a] = pbr.base_color_factor();
     let strength = m.emissive_strength().unwrap_or(1.0);

@@ -5,6 +5,7 @@ pub mod anim;
 pub mod load;
 mod materials;
 pub mod pose;
+mod spec_gloss;
 mod tangents;
 mod uri;
 
