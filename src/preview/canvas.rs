@@ -164,9 +164,10 @@ impl Canvas {
         pen - x
     }
 
-    /// The width `text` takes in `size`-pixel type.
-    pub fn text_width(&self, size: f32, text: &str) -> f32 {
-        let scaled = self.font.as_scaled(PxScale::from(size));
+    /// The width `text` takes in `size`-pixel type (no canvas needed: a layout measures before it draws).
+    pub fn text_width(size: f32, text: &str) -> f32 {
+        let font = FontRef::try_from_slice(FONT).expect("BUG: the embedded font parses");
+        let scaled = font.as_scaled(PxScale::from(size));
         let mut w = 0.0;
         let mut last = None;
         for ch in text.chars() {
@@ -295,7 +296,7 @@ mod tests {
         let mut c = Canvas::new(120, 30, [0, 0, 0]);
         let w = c.text(4.0, 20.0, 16.0, "view 3", [255, 255, 255]);
         assert!(w > 30.0 && w < 80.0, "{w}");
-        assert!((w - c.text_width(16.0, "view 3")).abs() < 1e-3);
+        assert!((w - Canvas::text_width(16.0, "view 3")).abs() < 1e-3);
         let inked: Vec<usize> = (0..c.px.len()).filter(|&i| c.px[i][0] > 0).collect();
         assert!(inked.len() > 40, "{}", inked.len());
         assert!(inked.iter().all(|&i| (i % 120) as f32 <= 4.0 + w + 1.0 && i / 120 <= 22));

@@ -94,21 +94,34 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
     let thumbs: Vec<Thumbs> = cells.par_iter().map(|c| thumbs(c, tw, th)).collect::<Result<_, _>>()?;
     let extras = thumbs.first().is_some_and(|c| c.depth.is_some() || c.mask.is_some());
     let strip = if extras { th / 2 } else { 0 };
-    let (pad, label, head) = (8u32, 16u32, 34u32);
-    let cell_h = th + strip + label;
-    let columns = columns.max(1);
-    let rows = cells.len().div_ceil(columns).max(1);
-    let width = pad + columns as u32 * (tw + pad);
-    let height = head + rows as u32 * (cell_h + pad) + pad;
-    let mut c = Canvas::new(width, height, [32, 32, 36]);
-    c.text(pad as f32, 22.0, 15.0, title, [235, 235, 235]);
-
     // Depth is coloured over one range for the whole sheet, so depths compare across thumbnails.
     let (lo, hi) = thumbs
         .iter()
         .filter_map(|t| t.depth.as_ref())
         .filter(|(_, lo, hi)| lo <= hi)
         .fold((u16::MAX, 0u16), |(a, b), (_, lo, hi)| (a.min(*lo), b.max(*hi)));
+    let note = (extras && hi > 0).then(|| {
+        let mask = if thumbs.first().is_some_and(|c| c.mask.is_some()) { " · mask" } else { "" };
+        format!("below each: depth {:.2}–{:.2} m (near bright){mask}", lo as f64 / 1000.0, hi as f64 / 1000.0)
+    });
+
+    let (pad, label) = (8u32, 16u32);
+    let cell_h = th + strip + label;
+    let columns = columns.max(1);
+    let rows = cells.len().div_ceil(columns).max(1);
+    let width = pad + columns as u32 * (tw + pad);
+    // The note goes right of the title where both fit, else on a line of its own below it (a sheet of one or
+    // two thumbnails is narrower than the two).
+    let note_w = note.as_deref().map_or(0.0, |n| Canvas::text_width(12.0, n));
+    let beside = pad as f32 + Canvas::text_width(15.0, title) + 16.0 + note_w + pad as f32 <= width as f32;
+    let head = if beside { 34 } else { 50 };
+    let height = head + rows as u32 * (cell_h + pad) + pad;
+    let mut c = Canvas::new(width, height, [32, 32, 36]);
+    c.text(pad as f32, 22.0, 15.0, title, [235, 235, 235]);
+    if let Some(note) = &note {
+        let (x, y) = if beside { (width as f32 - pad as f32 - note_w, 22.0) } else { (pad as f32, 40.0) };
+        c.text(x, y, 12.0, note, [170, 170, 170]);
+    }
 
     for (k, (cell, t)) in cells.iter().zip(&thumbs).enumerate() {
         let (col, row) = ((k % columns) as u32, (k / columns) as u32);
@@ -138,12 +151,38 @@ pub fn draw(title: &str, cells: &[Cell], columns: usize) -> Result<Vec<u8>, Erro
         let text = format!("v{} · f{} · t {:.2}", cell.view, cell.frame, cell.time);
         c.text(x as f32 + 2.0, (y + (th + strip + label) as i64 - 3) as f32, 12.0, &text, [200, 200, 200]);
     }
-    if extras && hi > 0 {
-        let mask = if thumbs.first().is_some_and(|c| c.mask.is_some()) { " · mask" } else { "" };
-        let note =
-            format!("below each: depth {:.2}–{:.2} m (near bright){mask}", lo as f64 / 1000.0, hi as f64 / 1000.0);
-        let w = c.text_width(12.0, &note);
-        c.text(width as f32 - pad as f32 - w, 22.0, 12.0, &note, [170, 170, 170]);
-    }
     Ok(c.png())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn png<P: image::PixelWithColorType>(img: &image::ImageBuffer<P, Vec<P::Subpixel>>) -> Vec<u8>
+    where
+        [P::Subpixel]: image::EncodableLayout,
+    {
+        let mut out = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png).unwrap();
+        out
+    }
+
+    /// The depth note sits right of the title when both fit, and on a line of its own below it on a sheet too
+    /// narrow for both (one or two thumbnails): they overlapped there.
+    #[test]
+    fn the_depth_note_never_overlaps_the_title() {
+        let rgba = png(&image::RgbaImage::from_pixel(64, 64, image::Rgba([200, 30, 30, 255])));
+        let depth = png(&image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(64, 64, image::Luma([3000u16])));
+        let cell = || Cell { view: 0, frame: 0, time: 0.0, rgba: rgba.clone(), depth: Some(depth.clone()), mask: None };
+        let title = "a dataset · split `train` · 2 images, 2 shown";
+        let size = |cells: usize| {
+            let sheet = draw(title, &(0..cells).map(|_| cell()).collect::<Vec<_>>(), cells).unwrap();
+            let sheet = image::load_from_memory(&sheet).unwrap();
+            (sheet.width(), sheet.height())
+        };
+        // One row each: two thumbnails are too narrow for the title and the note side by side, eight are not.
+        let ((w2, h2), (w8, h8)) = (size(2), size(8));
+        // The narrow sheet's header is one text line taller than the wide one's, its cells the same.
+        assert_eq!(h2, h8 + 16, "narrow {w2}×{h2}, wide {w8}×{h8}");
+    }
 }
