@@ -81,8 +81,8 @@ pub struct FbxAsset {
 }
 
 impl FbxAsset {
-    /// The file's materials as the renderer's, by name, in file order (the default material for faces with
-    /// none is not listed).
+    /// The file's materials as the renderer's, by name, in file order (the two defaults for faces with none are
+    /// not listed).
     pub fn named_materials(&self) -> Vec<(String, &Material)> {
         self.scene.materials.iter().map(|m| m.element.name.to_string()).zip(self.materials.iter()).collect()
     }
@@ -173,7 +173,8 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
         .map(|s| Take { name: s.element.name.to_string(), begin: s.time_begin, end: s.time_end })
         .collect();
     let (materials, textures, warnings) = materials(path, &scene)?;
-    let fallback = materials.len() as u32 - 1;
+    // The first of the two defaults for faces without a material (white, then unassigned grey).
+    let fallback = materials.len() as u32 - 2;
     let mut parts = Vec::new();
     let mut triangles = 0usize;
     for (ni, node) in scene.nodes.iter().enumerate() {
@@ -193,7 +194,7 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
         for (slot, corners) in by_material {
             // The node's material in that slot (instances may override the mesh's), else the mesh's.
             let m = node.materials.get(slot as usize).or_else(|| mesh.materials.get(slot as usize));
-            let material = m.map_or(fallback, |m| m.element.typed_id);
+            let material = m.map_or(fallback + u32::from(!mesh.vertex_color.exists), |m| m.element.typed_id);
             let uvs: Vec<Vec2> = if mesh.vertex_uv.exists {
                 // FBX's v runs up, the renderer's (glTF's) down.
                 corners
@@ -331,7 +332,9 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
         }
         mats.push(mat);
     }
+    // Faces without a material: white where the mesh has vertex colours, else Blender's grey.
     mats.push(Material::default());
+    mats.push(Material::unassigned());
     Ok((Arc::new(mats), Arc::new(textures), warnings))
 }
 

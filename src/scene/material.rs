@@ -77,6 +77,17 @@ impl Default for Material {
     }
 }
 
+impl Material {
+    /// What a surface renders as when its file gives it neither a material nor colours: Blender's default
+    /// surface, a diffuse grey of 0.8 without a specular layer (Cycles 4.5 renders it 0.80 under a uniform white
+    /// sky, head-on and at 69°). White instead sat at the top of the range, clipped when lit and lost on the
+    /// white backgrounds NeRF-synthetic trains on. A surface with vertex colours keeps the white default: its
+    /// colours are its colour (as glTF specifies for a primitive's COLOR_0).
+    pub fn unassigned() -> Material {
+        Material { base_color: Vec4::new(0.8, 0.8, 0.8, 1.0), specular: 0.0, ..Material::default() }
+    }
+}
+
 /// sRGB byte → linear float.
 #[inline]
 pub fn srgb_to_linear(c: f32) -> f32 {

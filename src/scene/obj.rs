@@ -176,9 +176,10 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
         }
         mats.push(mat);
     }
-    // Faces without a material.
+    // Faces without a material: white where the file gives vertex colours, else Blender's grey.
     let plain = mats.len() as u32;
     mats.push(Material { double_sided: true, ..Material::default() });
+    mats.push(Material { double_sided: true, ..Material::unassigned() });
     let mut primitives = Vec::new();
     for (object, model) in models.iter().enumerate() {
         let m = &model.mesh;
@@ -206,6 +207,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
         } else {
             Vec::new()
         };
+        let material = m.material_id.map_or(plain + u32::from(colors.is_empty()), |i| i as u32);
         primitives.push(PosedPrimitive {
             kind: if indices.is_empty() { PrimKind::Points } else { PrimKind::Triangles },
             positions,
@@ -214,7 +216,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
             uvs: Arc::new(uvs),
             colors: Arc::new(colors),
             indices: Arc::new(indices),
-            material: m.material_id.map_or(plain, |i| i as u32),
+            material,
             object: object as u32,
         });
     }

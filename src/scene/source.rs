@@ -335,7 +335,7 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
         (None, PrimKind::Triangles) => super::gltf::load::smooth_normals(&positions, &triangles),
         (None, PrimKind::Points) => vec![Vec3::ZERO; positions.len()],
     };
-    let colors = colors
+    let colors: Vec<Vec4> = colors
         .map(|c| {
             c.iter()
                 .map(|c| {
@@ -349,13 +349,16 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
                 .collect()
         })
         .unwrap_or_default();
-    // Scans rarely have consistent winding: draw both sides.
-    let mut material = Material { double_sided: true, ..Material::default() };
     // A textured mesh (MeshLab's convention: per-vertex texture_u/v or s/t, `comment TextureFile`).
     let texture = match (&uvs, kind) {
         (Some(_), PrimKind::Triangles) => texture_file(&comments, path)?,
         _ => None,
     };
+    // A mesh with neither colours nor a texture is Blender's grey (points stay white: Blender draws none).
+    let plain = kind == PrimKind::Triangles && colors.is_empty() && texture.is_none();
+    let base = if plain { Material::unassigned() } else { Material::default() };
+    // Scans rarely have consistent winding: draw both sides.
+    let mut material = Material { double_sided: true, ..base };
     let mut scene = PosedScene::single(kind, positions, normals, colors, triangles, material.clone());
     if let (Some(tex), Some(uvs)) = (texture, &uvs) {
         material.base_color_texture = Some(super::texture::TextureRef::new(0));

@@ -238,7 +238,14 @@ fn interrupt_and_resume(d: &Path) {
         assert!(said.contains("actions finished and are kept in the cache"), "{started}\n{said}");
         let (code, err) = vvgen(d, &["build", "m.toml"]);
         assert_eq!(code, 0, "{err}");
-        assert!(!err.contains(" 0 cached"), "the build started over: {err}");
+        // "N actions cached, running M": what the interrupted build finished is not run again (a lit build's
+        // first finished actions may be its environment and light actions, not yet an image).
+        let cached = err
+            .split(" actions cached")
+            .next()
+            .and_then(|s| s.rsplit(|c: char| !c.is_ascii_digit()).next())
+            .and_then(|n| n.parse::<u32>().ok());
+        assert!(cached.is_some_and(|n| n > 0), "the build started over: {err}");
     } else {
         // The build won the race and finished first: nothing to check of the interruption.
         assert!(status.success(), "{status:?}");

@@ -51,7 +51,8 @@ fn previews_are_planned_cached_locked_and_out_of_the_consumers_way() {
 
     // The training sheet: 3 views down, 3 frames across (multi-view video), each cell with its depth and mask.
     let sheet = png(&root.join("preview/sheet-train.png"));
-    let (pad, thumb, head) = (8, 160, 34);
+    // (three thumbnails across are too narrow for the title and the depth note side by side: two header lines)
+    let (pad, thumb, head) = (8, 160, 50);
     assert_eq!(sheet.width(), pad + 3 * (thumb + pad));
     assert_eq!(sheet.height(), head + 3 * (thumb + thumb / 2 + 16 + pad) + pad);
     // Each thumbnail shows the subject: it differs from the bare checkerboard somewhere.

@@ -572,3 +572,82 @@ fn huge_and_corrupt_uvs_sample_inside_the_texture() {
         }
     }
 }
+
+/// A surface its file gives neither a material nor colours is Blender's default surface (diffuse grey 0.8, no
+/// specular layer), as Blender renders it; one with vertex colours keeps white, its colours being its colour
+/// (glTF's COLOR_0 rule); PLY points stay white (Blender draws no points). OBJ, PLY, glTF and FBX alike.
+#[test]
+fn surfaces_without_a_material_or_colours_are_blenders_grey() {
+    use vvgen::scene::material::Material;
+    let grey = |m: &Material| m.base_color == glam::Vec4::new(0.8, 0.8, 0.8, 1.0) && m.specular == 0.0;
+    let white = |m: &Material| m.base_color == glam::Vec4::ONE;
+    let first = |s: &PosedScene| s.material(s.primitives[0].material).clone();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+
+    // OBJ without a material library, without and with vertex colours.
+    std::fs::write(d.join("plain.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(d.join("coloured.obj"), "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n").unwrap();
+    let plain = vvgen::scene::obj::scene(&d.join("plain.obj")).unwrap();
+    assert!(grey(&first(&plain)), "{:?}", first(&plain));
+    let coloured = vvgen::scene::obj::scene(&d.join("coloured.obj")).unwrap();
+    assert!(white(&first(&coloured)), "{:?}", first(&coloured));
+
+    // PLY: a mesh without colours, the same with colours, points without colours.
+    let ply = |faces: bool, colours: bool| {
+        let mut s = String::from(
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n",
+        );
+        if colours {
+            s.push_str("property uchar red\nproperty uchar green\nproperty uchar blue\n");
+        }
+        if faces {
+            s.push_str("element face 1\nproperty list uchar int vertex_indices\n");
+        }
+        s.push_str("end_header\n");
+        for v in ["0 0 0", "1 0 0", "0 1 0"] {
+            s.push_str(v);
+            s.push_str(if colours { " 200 10 10\n" } else { "\n" });
+        }
+        if faces {
+            s.push_str("3 0 1 2\n");
+        }
+        std::fs::write(d.join("m.ply"), s).unwrap();
+        first(&vvgen::scene::source::ply_scene(&d.join("m.ply")).unwrap())
+    };
+    assert!(grey(&ply(true, false)));
+    assert!(white(&ply(true, true)));
+    assert!(white(&ply(false, false)));
+
+    // A triangle without a material, with and without COLOR_0.
+    let triangle = |colours: bool| {
+        use base64::Engine;
+        let mut buf: Vec<u8> = Vec::new();
+        for c in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0] {
+            buf.extend(c.to_le_bytes());
+        }
+        let colour = if colours { r#", "COLOR_0": 1"# } else { "" };
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+              "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0{colour}}}}}]}}],
+              "buffers": [{{"byteLength": 72, "uri": "data:application/octet-stream;base64,{}"}}],
+              "bufferViews": [{{"buffer": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 36}}],
+              "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+                            {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}}]}}"#,
+            base64::engine::general_purpose::STANDARD.encode(&buf)
+        );
+        let a = gltf::load_slice(json.as_bytes(), Path::new("t.gltf"), None).unwrap();
+        let mut posed = PosedScene { materials: std::sync::Arc::new(a.materials.clone()), ..Default::default() };
+        a.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
+        first(&posed)
+    };
+    assert!(grey(&triangle(false)));
+    assert!(white(&triangle(true)));
+
+    // FBX: the two defaults for faces without a material follow the file's own.
+    let fbx = vvgen::scene::fbx::load(&asset_path("fbx/blender_340_z_up_7400_binary.fbx")).unwrap();
+    let mut rest = PosedScene::default();
+    fbx.pose(None, 0.0, Mat4::IDENTITY, &mut rest).unwrap();
+    let n = rest.materials.len();
+    assert!(white(&rest.materials[n - 2]) && grey(&rest.materials[n - 1]));
+}

@@ -103,7 +103,7 @@ fn several_sources_merge_with_their_own_transforms() {
     let s = scene(&text);
     let mut p = Poser::default();
     let posed = s.pose(2, &mut p).unwrap();
-    assert_eq!(posed.materials.len(), 2 + 2, "each glTF's materials plus its default material");
+    assert_eq!(posed.materials.len(), 2 * (1 + 2), "each glTF's material plus its two defaults");
     assert_eq!(posed.textures.len(), 2);
     let boxes: Vec<_> = posed.primitives.iter().filter(|p| p.positions.iter().all(|v| v.x > 4.0)).collect();
     assert_eq!(boxes.len(), 1);

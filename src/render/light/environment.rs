@@ -24,7 +24,7 @@ pub const LEVELS: usize = 6;
 pub const SALT: &str = "environment 5";
 
 /// Version of the built-in studio map ([`studio`]), which stands for a map's content key: bump when it changes.
-pub const STUDIO: &str = "studio 1";
+pub const STUDIO: &str = "studio 2";
 
 /// What can go wrong reading an environment map.
 #[derive(Debug, thiserror::Error)]
@@ -141,7 +141,7 @@ fn clean(v: f32) -> f32 {
 
 /// The built-in neutral "studio" environment (for `shading = "pbr"` without an `[environment]` map): a soft
 /// overhead sky fading to a darker floor, grey, with a broad brighter key from the front-left (+X −Y, above),
-/// so forms read without one harsh highlight. Radiance about 1 overall.
+/// so forms read without one harsh highlight. Radiance 0.2 below to 0.65 overhead, 2 in the key.
 pub fn studio() -> EnvMap {
     let (w, h) = (256u32, 128u32);
     let key = Vec3::new(0.6, -0.5, 0.62).normalize();
@@ -149,8 +149,10 @@ pub fn studio() -> EnvMap {
         .flat_map(|y| (0..w).map(move |x| (x, y)))
         .map(|(x, y)| {
             let d = uv_to_dir(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
-            let sky = 0.35 + 0.85 * smoothstep(-0.3, 0.6, d.z);
-            let lobe = d.dot(key).max(0.0).powi(8) * 2.5;
+            // Exposed so that a white diffuse surface facing up or into the key reflects 0.80 (a side 0.55,
+            // the underside 0.20): at 1.46, as it was, lit subjects of plain white or grey clipped.
+            let sky = 0.2 + 0.45 * smoothstep(-0.3, 0.6, d.z);
+            let lobe = d.dot(key).max(0.0).powi(8) * 1.4;
             Vec3::splat(sky + lobe)
         })
         .collect();

@@ -29,7 +29,8 @@ const SUPPORTED_REQUIRED: &[&str] = &[
 pub struct GltfAsset {
     /// The file.
     pub path: PathBuf,
-    /// Materials (index = glTF material index; the last one is the default material).
+    /// Materials (index = glTF material index), then the two a primitive without one gets: white for one with
+    /// COLOR_0 (its colours are its colour), [`Material::unassigned`] for one without.
     pub materials: Vec<Material>,
     /// Decoded textures (index = glTF texture index), shared with every posed frame (so their mip chains are
     /// built once per build, not once per frame or per poser).
@@ -211,6 +212,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
     }
     let default_material = materials.len() as u32;
     materials.push(Material::default());
+    materials.push(Material::unassigned());
 
     let mut meshes = Vec::new();
     for mesh in doc.meshes() {
@@ -457,6 +459,7 @@ fn primitive(
     p: &gltf::Primitive<'_>,
     buffers: &[Vec<u8>],
     materials: &[Material],
+    // The first of the two defaults (white, then unassigned grey).
     default_material: u32,
 ) -> Result<Option<Primitive>, String> {
     let kind = match p.mode() {
@@ -505,7 +508,8 @@ fn primitive(
             v
         }
     };
-    let material = p.material().index().map_or(default_material, |i| i as u32);
+    let coloured = p.get(&gltf::Semantic::Colors(0)).is_some();
+    let material = p.material().index().map_or(default_material + u32::from(!coloured), |i| i as u32);
     // One uv set is carried: the base colour texture's, else the first other texture's (glTF files in practice
     // share TEXCOORD_0 between a material's textures).
     let mut mat = materials[material as usize].clone();
