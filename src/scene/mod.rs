@@ -190,6 +190,7 @@ impl Scene {
             let mut stats = Stats::default();
             if transform::needs_stats(t) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.add(p))?;
+                warnings.extend(stats.far_from_origin().map(|w| format!("source `{}`: {w}", src.name)));
             }
             if let Some(c) = transform::frame_centre(t, &stats) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.far = stats.far.max(farthest(p, c)))?;
@@ -208,7 +209,13 @@ impl Scene {
         let fitted = || sources.iter().zip(&locals).filter(|(s, _)| s.ground.is_none());
         if transform::needs_stats(&g) {
             for (src, local) in fitted() {
-                gather(src, g_pre * *local, over, &mut scratch, &mut posed, &mut |p| stats.add(p))?;
+                // Per source, to name the one whose coordinates are too far out for single precision.
+                let mut own = Stats::default();
+                gather(src, g_pre * *local, over, &mut scratch, &mut posed, &mut |p| {
+                    own.add(p);
+                    stats.add(p);
+                })?;
+                warnings.extend(own.far_from_origin().map(|w| format!("source `{}`: {w}", src.name)));
             }
         }
         if let Some(c) = transform::frame_centre(&g, &stats) {

@@ -51,6 +51,33 @@ impl Stats {
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }
+
+    /// A warning when the points lie so far from the origin for their size that single precision, which
+    /// positions are held in, resolves fewer than 10 000 steps across them (a scan in georeferenced
+    /// coordinates: at 4 000 km from the origin, steps of 0.25 m). Positions arrive in single precision, so the
+    /// damage is done when this can tell: what is left is to say so, with the way out.
+    pub fn far_from_origin(&self) -> Option<String> {
+        let extent = (self.hi - self.lo).max_element();
+        let reach = self.lo.abs().max(self.hi.abs()).max_element();
+        if self.is_empty() || !(extent > 0.0) || !reach.is_finite() || reach == 0.0 {
+            return None;
+        }
+        let step = 2f64.powi(reach.log2().floor() as i32 - 23);
+        if step * 10_000.0 <= extent {
+            return None;
+        }
+        let c = (self.lo + self.hi) * 0.5;
+        Some(format!(
+            "its coordinates lie around ({:.1}, {:.1}, {:.1}) and span {extent:.3}: in single precision, which \
+             vvgen (like Blender) holds positions in, they are {step} apart there ({:.2} % of that span), so its \
+             shape comes in steps. Move it near the origin where it is made (CloudCompare offers a global shift on \
+             import; save after it) and name that file",
+            c.x,
+            c.y,
+            c.z,
+            100.0 * step / extent
+        ))
+    }
 }
 
 /// `up · matrix`: the part of the transform that does not depend on bounds.

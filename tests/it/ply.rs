@@ -1,6 +1,7 @@
 //! PLY reading on real odd and malformed files (tests/data/bad/ply): each loads correctly or fails clearly.
 
 use std::path::Path;
+use std::process::Command;
 
 use vvgen::scene::ply::{self, PlyError};
 
@@ -199,4 +200,61 @@ fn check_refuses_a_sequence_frame_that_is_cut_short_or_not_a_ply() {
         }
         assert!(!d.join("out/t_dnerf/train").exists(), "{name}: nothing is rendered");
     }
+}
+
+/// A scan in georeferenced coordinates (UTM: millions of metres from the origin) is stepped by single
+/// precision, which positions are held in: `check` says so, with the spacing there and the way out; the same
+/// scan near the origin is not warned about.
+#[test]
+fn a_scan_far_from_the_origin_for_its_size_is_warned_about() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let write = |name: &str, offset: [f64; 3]| {
+        // A 2 m tent of doubles, 4 × 4 vertices, its peak 0.35 high.
+        let mut body = Vec::new();
+        for j in 0..4 {
+            for i in 0..4 {
+                let (x, y) = (i as f64 * 2.0 / 3.0, j as f64 * 2.0 / 3.0);
+                let z = 0.35 * (1.0 - ((x - 1.0).abs().max((y - 1.0).abs())));
+                for (v, o) in [x, y, z].iter().zip(offset) {
+                    body.extend((v + o).to_le_bytes());
+                }
+            }
+        }
+        for j in 0..3u32 {
+            for i in 0..3u32 {
+                let a = j * 4 + i;
+                for t in [[a, a + 1, a + 5], [a, a + 5, a + 4]] {
+                    body.push(3u8);
+                    t.iter().for_each(|k| body.extend(k.to_le_bytes()));
+                }
+            }
+        }
+        let mut file = b"ply\nformat binary_little_endian 1.0\nelement vertex 16\nproperty double x\n\
+            property double y\nproperty double z\nelement face 18\nproperty list uchar uint vertex_indices\n\
+            end_header\n"
+            .to_vec();
+        file.extend(body);
+        std::fs::write(d.join(format!("{name}.ply")), file).unwrap();
+        std::fs::write(
+            d.join(format!("{name}.toml")),
+            format!(
+                "[dataset]\nname = \"{name}\"\nout = \"out\"\n[source.{name}]\nmesh = \"{name}.ply\"\n\
+                 [transform]\nfit = \"frame\"\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\n\
+                 views = 2\n[output.d]\nwriter = \"dnerf\"\n"
+            ),
+        )
+        .unwrap();
+        let manifest = format!("{name}.toml");
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["check", &manifest]).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (code, err) = write("utm", [500_000.0, 4_000_000.0, 100.0]);
+    assert_eq!(code, Some(0), "a warning, not an error: {err}");
+    for says in ["source `utm`", "(500001.0, 4000001.0, 100.1)", "0.25 apart", "global shift"] {
+        assert!(err.contains(says), "`{says}` not in: {err}");
+    }
+    let (code, err) = write("local", [10.0, -20.0, 3.0]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("single precision"), "{err}");
 }
