@@ -59,7 +59,7 @@ impl Stats {
     pub fn far_from_origin(&self) -> Option<String> {
         let extent = (self.hi - self.lo).max_element();
         let reach = self.lo.abs().max(self.hi.abs()).max_element();
-        if self.is_empty() || !(extent > 0.0) || !reach.is_finite() || reach == 0.0 {
+        if self.is_empty() || extent.is_nan() || extent <= 0.0 || !reach.is_finite() || reach == 0.0 {
             return None;
         }
         let step = 2f64.powi(reach.log2().floor() as i32 - 23);
