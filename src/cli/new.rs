@@ -57,6 +57,16 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
         .map_or_else(|| crate::manifest::folder_of(&out).join("cache"), PathBuf::from);
     let (kind, up, mut note, rest) = describe(asset, &cache, ui)?;
     let flat = one_colour(&rest);
+    let is_ply = |p: &Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    let ply = if asset.is_dir() {
+        matches!(&kind, Asset::Sequence { glob, .. } if glob.ends_with(".ply"))
+    } else {
+        is_ply(asset)
+    };
+    let origin = if ply { far_origin(&rest) } else { None };
+    if let Some(o) = origin {
+        let _ = write!(note, "; its coordinates are far from zero for its size: read relative to {o:?} (`origin`)");
+    }
     if flat {
         note.push_str(
             "; no texture or vertex colours: lit (`shading = \"pbr\"`), since unlit every view is one flat colour",
@@ -69,7 +79,7 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     std::fs::create_dir_all(folder).with_context(|| format!("creating the folder {}", folder.display()))?;
     let manifest_dir = absolute(folder)?;
     let rel = |p: &Path| -> anyhow::Result<String> { Ok(relative(&manifest_dir, &absolute(p)?)) };
-    let text = manifest(&name, asset, &kind, up, &note, flat, writer, &rel)?;
+    let text = manifest(&name, asset, &kind, up, &note, Look { flat, origin }, writer, &rel)?;
     std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
     if !ui.quiet {
         eprintln!("wrote {}: {note}", out.display());
@@ -196,6 +206,24 @@ fn one_colour(s: &scene::PosedScene) -> bool {
         })
 }
 
+/// The point to read a PLY's coordinates relative to (`origin`), when they lie so far from zero for the
+/// subject's size that single precision would step its shape ([`crate::scene::transform::Stats::far_from_origin`]):
+/// the middle of its bounds, in whole units.
+fn far_origin(s: &scene::PosedScene) -> Option<[f64; 3]> {
+    let mut stats = crate::scene::transform::Stats::default();
+    s.primitives.iter().for_each(|p| stats.add(&p.positions));
+    stats.far_from_origin(glam::DMat4::IDENTITY)?;
+    Some(((stats.lo + stats.hi) * 0.5).round().to_array())
+}
+
+/// What `new` read off the asset for its manifest besides its kind and axes.
+struct Look {
+    /// One colour: written lit ([`one_colour`]).
+    flat: bool,
+    /// The PLY's `origin`, when its coordinates are far from zero ([`far_origin`]).
+    origin: Option<[f64; 3]>,
+}
+
 /// OBJ's up axis: +Y, the convention of Blender's and most exporters. Not guessed from the extents, which a
 /// wide subject (a car, a plate) would get wrong.
 fn obj_up() -> (&'static str, String) {
@@ -217,7 +245,7 @@ fn manifest(
     kind: &Asset,
     up: &str,
     note: &str,
-    flat: bool,
+    look: Look,
     writer: &str,
     rel: &dyn Fn(&Path) -> anyhow::Result<String>,
 ) -> anyhow::Result<String> {
@@ -295,6 +323,13 @@ fn manifest(
             *frames
         }
     };
+    if let Some([x, y, z]) = look.origin {
+        let _ = writeln!(
+            w,
+            "origin = [{x}, {y}, {z}]   # subtracted from the file's coordinates as they are read, in double\n\
+             \x20                                  # precision: they lie far from zero for the subject's size"
+        );
+    }
     let _ = writeln!(w, "\n[transform]\nup     = \"{up}\"    # {}", up_note(note));
     let _ = writeln!(
         w,
@@ -309,7 +344,7 @@ fn manifest(
          camera_angle_x = 0.6911112070083618   # Blender's 50 mm lens on a 36 mm sensor\n\
          samples        = 4\npasses         = [\"rgba\", \"depth\"]"
     );
-    if flat {
+    if look.flat {
         let _ = writeln!(
             w,
             "shading        = \"pbr\"   # no texture or vertex colours: unlit, every view would be one flat colour;\n\

@@ -53,6 +53,12 @@ pub struct Source {
     pub(super) frames: Option<Spanned<Frames>>,
     /// A transform applied to this source alone, before the global `[transform]`.
     pub transform: Option<Transform>,
+    /// A point subtracted from a PLY file's coordinates as they are read, in double precision: a scan in
+    /// georeferenced coordinates (millions of metres from the origin) read relative to a point near it keeps
+    /// detail that single precision, which positions are held in, would step (0.25 m at 4 000 km). For PLY files:
+    /// `mesh`, `ply_sequence`, and `mesh_sequence` of `.ply` frames.
+    #[schemars(with = "Option<[f64; 3]>")]
+    pub(super) origin: Option<Spanned<[f64; 3]>>,
 }
 
 /// `plane = { size = [w, d], color = [r, g, b], z = … }`.
@@ -207,6 +213,25 @@ impl Source {
                 }
             }
         }
+        if let (Some(o), Some((kind, file))) = (&self.origin, self.kind_spanned()) {
+            let ply = |f: &str| f.to_ascii_lowercase().ends_with(".ply");
+            let reads_ply = match kind {
+                SourceKind::PlySequence => true,
+                SourceKind::Mesh | SourceKind::MeshSequence => ply(file.get_ref()),
+                _ => false,
+            };
+            if !o.get_ref().iter().all(|v| v.is_finite()) {
+                diags.push(Diagnostic::error("`origin` must be three finite numbers", Some(o.span())));
+            } else if !reads_ply {
+                diags.push(
+                    Diagnostic::error(
+                        "`origin` applies to PLY files, whose coordinates may be doubles; this source reads none",
+                        Some(o.span()),
+                    )
+                    .with_help("to move this source, use `transform = { translate = [x, y, z] }`"),
+                );
+            }
+        }
         if let Some((kind, _)) = self.kind() {
             if !matches!(kind, SourceKind::Gltf | SourceKind::Fbx) {
                 if let Some(a) = &self.animation {
@@ -342,6 +367,11 @@ impl Source {
     /// The mesh file, when given.
     pub fn mesh(&self) -> Option<&str> {
         self.mesh.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// `origin = [x, y, z]`: the point subtracted from its PLY files' coordinates as they are read.
+    pub fn origin(&self) -> Option<[f64; 3]> {
+        self.origin.as_ref().map(|o| *o.get_ref())
     }
 
     /// The PLY sequence pattern or glob, when given.

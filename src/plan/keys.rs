@@ -33,12 +33,17 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
     for (i, src) in scene.sources.iter().enumerate() {
         let world = scene.world_from_source(i).to_cols_array();
         let world: &[u8] = bytemuck::cast_slice(&world);
+        // A sequence's frames are keyed by their files' bytes: the `origin` subtracted as they are read shapes
+        // the positions too (a source without one keeps its keys).
+        let origin: Option<&[u8]> = (src.origin != [0.0; 3]).then(|| bytemuck::cast_slice(&src.origin));
         let keys = match &src.data {
             SourceData::Sequence(files) => files
                 .iter()
                 .map(|f| {
                     let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
-                    Ok(key("frame ply", &[world, &d.0]))
+                    let mut bytes: Vec<&[u8]> = vec![world, &d.0];
+                    bytes.extend(origin);
+                    Ok(key("frame ply", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?,
             SourceData::MeshSequence(files) => files
@@ -51,6 +56,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         parts.push(stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e })?);
                     }
                     let mut bytes: Vec<&[u8]> = vec![world];
+                    bytes.extend(origin);
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))
                 })

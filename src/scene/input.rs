@@ -32,6 +32,8 @@ pub struct SourceRequest {
     pub frames: FrameRange,
     /// Source → scene.
     pub placement: Placement,
+    /// Subtracted from its PLY files' coordinates as they are read, in double precision (zero: none).
+    pub origin: [f64; 3],
 }
 
 /// What a source reads. Paths are as the caller resolved them (the manifest's folder joined).

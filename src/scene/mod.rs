@@ -190,7 +190,8 @@ impl Scene {
             let mut stats = Stats::default();
             if transform::needs_stats(t) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.add(p))?;
-                warnings.extend(stats.far_from_origin().map(|w| format!("source `{}`: {w}", src.name)));
+                let to_file = pre.as_dmat4().inverse();
+                warnings.extend(stats.far_from_origin(to_file).map(|w| format!("source `{}`: {w}", src.name)));
             }
             if let Some(c) = transform::frame_centre(t, &stats) {
                 gather(src, pre, over, &mut scratch, &mut posed, &mut |p| stats.far = stats.far.max(farthest(p, c)))?;
@@ -215,7 +216,8 @@ impl Scene {
                     own.add(p);
                     stats.add(p);
                 })?;
-                warnings.extend(own.far_from_origin().map(|w| format!("source `{}`: {w}", src.name)));
+                let to_file = (g_pre * *local).as_dmat4().inverse();
+                warnings.extend(own.far_from_origin(to_file).map(|w| format!("source `{}`: {w}", src.name)));
             }
         }
         if let Some(c) = transform::frame_centre(&g, &stats) {

@@ -55,6 +55,8 @@ pub struct LoadedSource {
     pub ground: Option<Ground>,
     /// What the user should know about how it loaded (a `.blend`'s import notes, an FBX's missing textures).
     pub warnings: Vec<String>,
+    /// Subtracted from its PLY files' coordinates as they are read, in double precision.
+    pub origin: [f64; 3],
 }
 
 impl LoadedSource {
@@ -94,7 +96,7 @@ impl LoadedSource {
                     frames.map(|(i, &number)| FrameFile { number, path: got.dir.join(format!("frame_{i:05}.gltf")) }).collect(),
                 )
             }
-            SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene(path)?),
+            SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
             SourceFile::Mesh { path, scene } => SourceData::Static(gltf_at_rest(path, *scene)?),
             SourceFile::PlySequence(frames) => SourceData::Sequence(frames.clone()),
             SourceFile::MeshSequence(frames) => SourceData::MeshSequence(frames.clone()),
@@ -107,7 +109,7 @@ impl LoadedSource {
             SourceFile::Gltf { .. } | SourceFile::Mesh { .. } | SourceFile::MeshSequence(_) => UpAxis::Y,
             _ => UpAxis::Z,
         };
-        Ok(LoadedSource { name, data, default_up, ground, warnings })
+        Ok(LoadedSource { name, data, default_up, ground, warnings, origin: req.origin })
     }
 
     /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
@@ -152,10 +154,10 @@ impl LoadedSource {
             // buffers would hold a second copy of its positions and normals (24 bytes a point) for nothing.
             SourceData::Sequence(frames) => {
                 let f = &frames[frame.min(frames.len() - 1)];
-                *out = transformed(ply_scene(&f.path)?, post);
+                *out = transformed(ply_scene_at(&f.path, self.origin)?, post);
             }
             SourceData::MeshSequence(frames) => {
-                *out = transformed(mesh_frame(&frames[frame.min(frames.len() - 1)].path)?, post);
+                *out = transformed(mesh_frame_at(&frames[frame.min(frames.len() - 1)].path, self.origin)?, post);
             }
         }
         Ok(())
@@ -209,10 +211,16 @@ fn frame_times(f: &FrameRange, duration: f64) -> Vec<f32> {
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has
 /// `texture_u/v` or `s/t` and a `comment TextureFile`), or glTF posed at rest.
 pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
+    mesh_frame_at(path, [0.0; 3])
+}
+
+/// [`mesh_frame`] with `origin` subtracted from a PLY frame's coordinates as they are read (the manifest
+/// allows `origin` only where the frames are PLY).
+fn mesh_frame_at(path: &std::path::Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => super::obj::scene(path),
-        "ply" => ply_scene(path),
+        "ply" => ply_scene_at(path, origin),
         _ => gltf_at_rest(path, None),
     }
 }
@@ -302,8 +310,13 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
 
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.
 pub fn ply_scene(path: &std::path::Path) -> Result<PosedScene, Error> {
+    ply_scene_at(path, [0.0; 3])
+}
+
+/// [`ply_scene`] with `origin` subtracted from the coordinates as they are read, in double precision.
+pub fn ply_scene_at(path: &std::path::Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     // Streamed from the file where its layout allows (`ply::read_file`): a sequence's frames are read this way.
-    ply_posed(ply::read_file(path).map_err(|e| file_error(path, e))?, path)
+    ply_posed(ply::read_file_at(path, origin).map_err(|e| file_error(path, e))?, path)
 }
 
 /// The header of the PLY file at `path`, after what its header and size decide is checked (`ply::check_file`):

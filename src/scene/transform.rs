@@ -56,7 +56,8 @@ impl Stats {
     /// positions are held in, resolves fewer than 10 000 steps across them (a scan in georeferenced
     /// coordinates: at 4 000 km from the origin, steps of 0.25 m). Positions arrive in single precision, so the
     /// damage is done when this can tell: what is left is to say so, with the way out.
-    pub fn far_from_origin(&self) -> Option<String> {
+    /// `to_file` maps the points' space back to the file's, where an `origin` to suggest is.
+    pub fn far_from_origin(&self, to_file: DMat4) -> Option<String> {
         let extent = (self.hi - self.lo).max_element();
         let reach = self.lo.abs().max(self.hi.abs()).max_element();
         if self.is_empty() || extent.is_nan() || extent <= 0.0 || !reach.is_finite() || reach == 0.0 {
@@ -67,15 +68,20 @@ impl Stats {
             return None;
         }
         let c = (self.lo + self.hi) * 0.5;
+        let o = to_file.transform_point3(c).round();
         Some(format!(
             "its coordinates lie around ({:.1}, {:.1}, {:.1}) and span {extent:.3}: in single precision, which \
              vvgen (like Blender) holds positions in, they are {step} apart there ({:.2} % of that span), so its \
-             shape comes in steps. Move it near the origin where it is made (CloudCompare offers a global shift on \
-             import; save after it) and name that file",
+             shape comes in steps. A PLY file of doubles: set `origin = [{:.0}, {:.0}, {:.0}]` on the source, \
+             subtracted as it is read; otherwise move it near the origin where it is made (CloudCompare offers a \
+             global shift on import)",
             c.x,
             c.y,
             c.z,
-            100.0 * step / extent
+            100.0 * step / extent,
+            o.x,
+            o.y,
+            o.z,
         ))
     }
 }

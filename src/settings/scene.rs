@@ -72,6 +72,7 @@ fn source(m: &Manifest, name: &str, s: &Source) -> Result<SourceRequest, Error> 
         clips: clips(s.animation()),
         frames,
         placement: placement(&s.transform.clone().unwrap_or_default(), &m.transform),
+        origin: s.origin().unwrap_or_default(),
     })
 }
 

@@ -203,14 +203,19 @@ fn check_refuses_a_sequence_frame_that_is_cut_short_or_not_a_ply() {
 }
 
 /// A scan in georeferenced coordinates (UTM: millions of metres from the origin) is stepped by single
-/// precision, which positions are held in: `check` says so, with the spacing there and the way out; the same
-/// scan near the origin is not warned about.
+/// precision, which positions are held in: `check` says so, with the spacing there and the `origin` to set;
+/// with it, the file's doubles are read relative to that point and keep their detail (the same positions as
+/// the scan near zero), `vvgen new` writes it, and a sequence's frames are keyed by it.
 #[test]
-fn a_scan_far_from_the_origin_for_its_size_is_warned_about() {
+fn a_scan_far_from_the_origin_is_warned_about_and_read_relative_to_its_origin() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let write = |name: &str, offset: [f64; 3]| {
-        // A 2 m tent of doubles, 4 × 4 vertices, its peak 0.35 high.
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    // A 2 m tent of doubles, 4 × 4 vertices, its ridge 0.23 high, at `offset`.
+    let ply = |file: &str, offset: [f64; 3]| {
         let mut body = Vec::new();
         for j in 0..4 {
             for i in 0..4 {
@@ -230,31 +235,90 @@ fn a_scan_far_from_the_origin_for_its_size_is_warned_about() {
                 }
             }
         }
-        let mut file = b"ply\nformat binary_little_endian 1.0\nelement vertex 16\nproperty double x\n\
+        let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 16\nproperty double x\n\
             property double y\nproperty double z\nelement face 18\nproperty list uchar uint vertex_indices\n\
             end_header\n"
             .to_vec();
-        file.extend(body);
-        std::fs::write(d.join(format!("{name}.ply")), file).unwrap();
+        bytes.extend(body);
+        std::fs::write(d.join(file), bytes).unwrap();
+    };
+    let manifest = |name: &str, source: &str, transform: &str| {
         std::fs::write(
             d.join(format!("{name}.toml")),
             format!(
-                "[dataset]\nname = \"{name}\"\nout = \"out\"\n[source.{name}]\nmesh = \"{name}.ply\"\n\
-                 [transform]\nfit = \"frame\"\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\n\
-                 views = 2\n[output.d]\nwriter = \"dnerf\"\n"
+                "[dataset]\nname = \"{name}\"\nout = \"out-{name}\"\npreview = false\n[source.{name}]\n{source}\n\
+                 [transform]\n{transform}\n[render]\nresolution = [32, 32]\n[rig.h]\nkind = \"hemisphere\"\n\
+                 [split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n"
             ),
         )
         .unwrap();
-        let manifest = format!("{name}.toml");
-        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["check", &manifest]).output().unwrap();
-        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
     };
-    let (code, err) = write("utm", [500_000.0, 4_000_000.0, 100.0]);
+    let utm = [500_000.0, 4_000_000.0, 100.0];
+    ply("utm.ply", utm);
+    ply("local.ply", [10.0, -20.0, 3.0]);
+
+    manifest("utm", "mesh = \"utm.ply\"", "fit = \"frame\"");
+    let (code, err) = run(&["check", "utm.toml"]);
     assert_eq!(code, Some(0), "a warning, not an error: {err}");
-    for says in ["source `utm`", "(500001.0, 4000001.0, 100.1)", "0.25 apart", "global shift"] {
+    for says in ["source `utm`", "(500001.0, 4000001.0, 100.1)", "0.25 apart", "origin = [500001, 4000001, 100]"] {
         assert!(err.contains(says), "`{says}` not in: {err}");
     }
-    let (code, err) = write("local", [10.0, -20.0, 3.0]);
+    manifest("local", "mesh = \"local.ply\"", "fit = \"frame\"");
+    let (code, err) = run(&["check", "local.toml"]);
     assert_eq!(code, Some(0), "{err}");
     assert!(!err.contains("single precision"), "{err}");
+
+    // With the origin it suggests: no warning, and the positions of the scan near zero (single precision
+    // stepped them by up to 0.125 without).
+    manifest("utm", "mesh = \"utm.ply\"\norigin = [500001, 4000001, 100]", "fit = \"frame\"");
+    let (code, err) = run(&["check", "utm.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("single precision"), "{err}");
+    let at = |file: &str, o: [f64; 3]| {
+        vvgen::scene::source::ply_scene_at(&d.join(file), o).unwrap().primitives[0].positions.clone()
+    };
+    let (near, read) = (at("local.ply", [11.0, -19.0, 3.0]), at("utm.ply", [500_001.0, 4_000_001.0, 100.0]));
+    let worst = near.iter().zip(&read).map(|(a, b)| (*a - *b).abs().max_element()).fold(0.0, f32::max);
+    assert!(worst < 1e-6, "{worst}");
+    let stepped = at("utm.ply", [0.0; 3]);
+    let lost = near
+        .iter()
+        .zip(&stepped)
+        .map(|(a, b)| (*a - (*b - glam::Vec3::new(500_001.0, 4_000_001.0, 100.0))).abs().max_element())
+        .fold(0.0, f32::max);
+    assert!(lost > 0.05, "without the origin the scan is stepped: {lost}");
+
+    // `origin` is for PLY files; a glTF source is told how to move instead.
+    manifest(
+        "box",
+        &format!(
+            "mesh = \"{}\"\norigin = [1, 2, 3]",
+            crate::common::data("gltf/BoxTextured/BoxTextured.glb").display()
+        ),
+        "fit = \"frame\"",
+    );
+    let (code, err) = run(&["check", "box.toml"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("`origin` applies to PLY files") && err.contains("translate"), "{err}");
+
+    // `vvgen new` sets it.
+    let (code, err) = run(&["new", "utm.ply", "-o", "new.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+    let text = std::fs::read_to_string(d.join("new.toml")).unwrap();
+    assert!(text.contains("origin = [500001, 4000001, 100]"), "{text}");
+
+    // A sequence's frames are keyed by their bytes and by the origin: moving it re-renders them, even where
+    // the placement (a scale about zero) stays the same.
+    std::fs::create_dir_all(d.join("seq")).unwrap();
+    std::fs::copy(d.join("utm.ply"), d.join("seq/f_0.ply")).unwrap();
+    for (x, want) in [(500_001.0, "0 cached"), (500_001.0, "2 cached"), (500_001.5, "0 cached")] {
+        manifest(
+            "seq",
+            &format!("ply_sequence = \"seq/f_*.ply\"\norigin = [{x}, 4000001, 100]"),
+            "fit = { height = 2.0 }",
+        );
+        let (code, err) = run(&["build", "seq.toml"]);
+        assert_eq!(code, Some(0), "{err}");
+        assert!(err.contains(&format!("2 images: {want}")), "origin x {x}: {err}");
+    }
 }

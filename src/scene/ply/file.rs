@@ -13,7 +13,7 @@ use std::io::Read;
 use std::path::Path;
 
 use super::columns::{Columns, Layout};
-use super::read::{check_finite, min_row, points_element, read, require_xyz, too_many_rows, PlyData};
+use super::read::{check_finite, min_row, points_element, read_at, require_xyz, shift, too_many_rows, PlyData};
 use super::{parse_header, Header, PlyError};
 
 /// Reading a PLY file failed.
@@ -35,16 +35,21 @@ const CHUNK_ROWS: usize = 16 << 10;
 
 /// Reads and decodes the PLY file at `path`, as [`read()`] decodes its bytes.
 pub fn read_file(path: &Path) -> Result<PlyData, FileError> {
-    read_file_in(path, HEAD, CHUNK_ROWS)
+    read_file_in(path, HEAD, CHUNK_ROWS, [0.0; 3])
 }
 
-/// [`read_file`] with the first read's size and the rows per chunk given (the tests make both small).
-fn read_file_in(path: &Path, head_len: usize, chunk_rows: usize) -> Result<PlyData, FileError> {
+/// [`read_file`] with `origin` subtracted from the positions, as [`read_at`] does.
+pub fn read_file_at(path: &Path, origin: [f64; 3]) -> Result<PlyData, FileError> {
+    read_file_in(path, HEAD, CHUNK_ROWS, origin)
+}
+
+/// [`read_file_at`] with the first read's size and the rows per chunk given (the tests make both small).
+fn read_file_in(path: &Path, head_len: usize, chunk_rows: usize, origin: [f64; 3]) -> Result<PlyData, FileError> {
     let (mut file, len, head) = open(path, head_len)?;
-    // What does not stream is read whole; `read` gives its result or its error.
+    // What does not stream is read whole; `read_at` gives its result or its error.
     let whole = |mut bytes: Vec<u8>, mut file: File| -> Result<PlyData, FileError> {
         file.read_to_end(&mut bytes)?;
-        Ok(read(&bytes)?)
+        Ok(read_at(&bytes, origin)?)
     };
     if (head.len() as u64) >= len {
         return whole(head, file);
@@ -80,6 +85,7 @@ fn read_file_in(path: &Path, head_len: usize, chunk_rows: usize) -> Result<PlyDa
     }
     let mut out = PlyData { comments: header.comments, ..Default::default() };
     let finite = cols.finish(&mut out);
+    let finite = !shift(&mut out.positions, origin) && finite;
     check_finite(&out.positions, finite, &el.name)?;
     Ok(out)
 }
@@ -129,6 +135,7 @@ fn open(path: &Path, head_len: usize) -> std::io::Result<(File, u64, Vec<u8>)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::ply::read;
 
     fn file(bytes: &[u8]) -> (tempfile::TempDir, std::path::PathBuf) {
         let d = tempfile::tempdir().unwrap();
@@ -145,7 +152,7 @@ mod tests {
     fn same_in(bytes: &[u8], head: usize, chunk_rows: usize) -> Result<PlyData, PlyError> {
         let (_d, p) = file(bytes);
         let whole = read(bytes);
-        match read_file_in(&p, head, chunk_rows) {
+        match read_file_in(&p, head, chunk_rows, [0.0; 3]) {
             Ok(d) => assert_eq!(Ok(&d), whole.as_ref()),
             Err(FileError::Ply(e)) => assert_eq!(Err(&e), whole.as_ref()),
             Err(FileError::Io(e)) => panic!("{e}"),

@@ -51,6 +51,12 @@ pub(super) fn slot(name: &str) -> usize {
 
 /// Reads a PLY from memory.
 pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
+    read_at(bytes, [0.0; 3])
+}
+
+/// [`read`] with `origin` subtracted from the positions as they are decoded, in double precision: a file's
+/// double coordinates far from zero keep the detail near `origin` that single precision would lose.
+pub fn read_at(bytes: &[u8], origin: [f64; 3]) -> Result<PlyData, PlyError> {
     let header = parse_header(bytes)?;
     let body = &bytes[header.body_start..];
     let mut out = PlyData { comments: header.comments.clone(), ..Default::default() };
@@ -61,7 +67,7 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
         match el.name.as_str() {
             name if name == points && !vertex_seen => {
                 vertex_seen = true;
-                let checked = read_vertices(&mut cursor, el, &mut out)?;
+                let checked = read_vertices(&mut cursor, el, &mut out, origin)?;
                 check_finite(&out.positions, checked, points)?;
             }
             "face" => read_faces(&mut cursor, el, out.positions.len(), &mut out.triangles)?,
@@ -72,6 +78,18 @@ pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
         return Err(PlyError::Unusable("no `vertex` (or `point`) element".into()));
     }
     Ok(out)
+}
+
+/// Subtracts `origin` from single-precision positions (a layout read as f32), in double precision; returns
+/// whether it moved them (and so whether their finiteness must be checked again: a far origin can overflow).
+pub(super) fn shift(positions: &mut [[f32; 3]], origin: [f64; 3]) -> bool {
+    if origin == [0.0; 3] {
+        return false;
+    }
+    for p in positions {
+        *p = [0, 1, 2].map(|k| (f64::from(p[k]) - origin[k]) as f32);
+    }
+    true
 }
 
 /// Refuses positions with a NaN or an infinity (they would reach fits, bounds, cameras and images as garbage),
@@ -241,7 +259,7 @@ fn parse_number(t: &[u8]) -> Option<f64> {
 
 /// Reads the vertex element into `out`; returns whether the positions were already found finite on the way (the
 /// fast path checks as it reads; otherwise the caller checks).
-fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<bool, PlyError> {
+fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f64; 3]) -> Result<bool, PlyError> {
     c.check_count(el)?;
     require_xyz(el)?;
     let n = el.count;
@@ -251,7 +269,8 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
         let mut cols = Columns::new(&layout, n);
         layout.append(&mut cols, data);
         c.pos += data.len();
-        return Ok(cols.finish(out));
+        let finite = cols.finish(out);
+        return Ok(!shift(&mut out.positions, origin) && finite);
     }
     let slots: Vec<usize> = el.props.iter().map(|p| if p.list.is_some() { NO_SLOT } else { slot(&p.name) }).collect();
     let has = |s: usize| slots.contains(&s);
@@ -290,7 +309,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<
     v[SLOT_A] = 255.0;
     // One row's values (by slot) onto the columns the element has.
     let mut push = |v: &[f64; 12]| {
-        out.positions.push([v[0] as f32, v[1] as f32, v[2] as f32]);
+        out.positions.push([(v[0] - origin[0]) as f32, (v[1] - origin[1]) as f32, (v[2] - origin[2]) as f32]);
         if has_n {
             normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
         }
