@@ -55,15 +55,8 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     let cache = std::env::var_os("VVGEN_CACHE")
         .filter(|p| !p.is_empty())
         .map_or_else(|| crate::manifest::folder_of(&out).join("cache"), PathBuf::from);
-    let (kind, up, mut note, rest) = describe(asset, &cache, ui)?;
+    let Described { kind, up, mut note, rest, origin } = describe(asset, &cache, ui)?;
     let flat = one_colour(&rest);
-    let is_ply = |p: &Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-    let ply = if asset.is_dir() {
-        matches!(&kind, Asset::Sequence { glob, .. } if glob.ends_with(".ply"))
-    } else {
-        is_ply(asset)
-    };
-    let origin = if ply { far_origin(&rest) } else { None };
     if let Some(o) = origin {
         let _ = write!(note, "; its coordinates are far from zero for its size: read relative to {o:?} (`origin`)");
     }
@@ -88,8 +81,31 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     Ok(ExitCode::SUCCESS)
 }
 
-/// The asset's kind, its up axis, a line saying how that was decided, and its first frame at rest.
-fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'static str, String, scene::PosedScene)> {
+/// What `new` reads off an asset.
+struct Described {
+    /// Its kind.
+    kind: Asset,
+    /// Its up axis.
+    up: &'static str,
+    /// A line saying how those were decided.
+    note: String,
+    /// Its first frame at rest.
+    rest: scene::PosedScene,
+    /// A PLY's `origin`, when its coordinates are far from zero for its size ([`far_origin`]).
+    origin: Option<[f64; 3]>,
+}
+
+/// A PLY file at rest, read relative to its `origin` when its coordinates are far from zero for its size.
+fn ply_at_rest(path: &Path) -> anyhow::Result<(scene::PosedScene, Option<[f64; 3]>)> {
+    let s = scene::source::ply_scene(path)?;
+    Ok(match far_origin(&s) {
+        Some(o) => (scene::source::ply_scene_at(path, o)?, Some(o)),
+        None => (s, None),
+    })
+}
+
+/// The asset's kind, its up axis, a line saying how that was decided, its first frame at rest, and a PLY's origin.
+fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
     let ext = |p: &Path| p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     if asset.is_dir() {
         let mut files: Vec<PathBuf> = std::fs::read_dir(asset)
@@ -105,12 +121,13 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             _ => ("mesh_sequence", "obj"),
         };
         let first = files.iter().find(|p| ext(p) == e).expect("counted above");
-        let frame = if e == "obj" { scene::obj::scene(first)? } else { scene::source::ply_scene(first)? };
+        let (frame, origin) = if e == "obj" { (scene::obj::scene(first)?, None) } else { ply_at_rest(first)? };
         drawable(&frame, first)?;
         let (up, why) = if e == "obj" { obj_up() } else { tallest(&frame, first) };
         let n = count(e);
         let seq = Asset::Sequence { key, glob: format!("*.{e}"), frames: n };
-        return Ok((seq, up, format!("{n} {e} frames; {why}"), frame));
+        let note = format!("{n} {e} frames; {why}");
+        return Ok(Described { kind: seq, up, note, rest: frame, origin });
     }
     match ext(asset).as_str() {
         "gltf" | "glb" => {
@@ -131,7 +148,8 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             // Posing fills geometry only; the source layer brings the materials.
             rest.materials = std::sync::Arc::new(a.materials.clone());
             let kind = if clips.is_empty() { Asset::Mesh } else { Asset::Gltf { clips } };
-            Ok((kind, "y", format!("{what}; up \"y\": glTF is +Y up by its specification"), rest))
+            let note = format!("{what}; up \"y\": glTF is +Y up by its specification");
+            Ok(Described { kind, up: "y", note, rest, origin: None })
         }
         "fbx" => {
             let a = scene::fbx::load(asset)?;
@@ -143,7 +161,8 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
                 Some((n, d)) => format!("{} take(s), the first (`{n}`, {d:.2} s) selected", takes.len()),
                 None => "no take: a static mesh".into(),
             };
-            Ok((Asset::Fbx { takes }, "z", format!("{what}; in metres and +Z up, as vvgen loads FBX"), rest))
+            let note = format!("{what}; in metres and +Z up, as vvgen loads FBX");
+            Ok(Described { kind: Asset::Fbx { takes }, up: "z", note, rest, origin: None })
         }
         "blend" => {
             let store = crate::cache::Store::open(cache)?;
@@ -161,20 +180,22 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<(Asset, &'stat
             } else {
                 format!("scene `{}`, frames {}–{} at {} fps", info.scene, info.frame_start, info.frame_end, info.fps)
             };
-            Ok((Asset::Blend { info }, "z", format!("{what}; +Z up, as Blender shows it"), first))
+            let note = format!("{what}; +Z up, as Blender shows it");
+            Ok(Described { kind: Asset::Blend { info }, up: "z", note, rest: first, origin: None })
         }
         "ply" => {
-            let s = scene::source::ply_scene(asset)?;
+            let (s, origin) = ply_at_rest(asset)?;
             drawable(&s, asset)?;
-            let (up, why) = tallest(&s, asset);
-            Ok((Asset::Mesh, up, why, s))
+            let (up, note) = tallest(&s, asset);
+            Ok(Described { kind: Asset::Mesh, up, note, rest: s, origin })
         }
         "obj" => {
             let s = scene::obj::scene(asset)?;
             drawable(&s, asset)?;
             let (up, why) = obj_up();
             let glob = asset.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
-            Ok((Asset::Sequence { key: "mesh_sequence", glob, frames: 1 }, up, why, s))
+            let kind = Asset::Sequence { key: "mesh_sequence", glob, frames: 1 };
+            Ok(Described { kind, up, note: why, rest: s, origin: None })
         }
         _ => bail!("{}: not a glTF, FBX, .blend, PLY or OBJ file, nor a folder of frames", asset.display()),
     }
