@@ -1,7 +1,7 @@
 //! Reading a PLY file from disk. A cloud in the common binary layouts (one `vertex` element of float positions,
 //! optionally float normals and uchar colours, either byte order: see [`Layout`]) streams through a buffer that stays in
-//! the CPU's cache and is decoded as it arrives; any other file is read whole and decoded by [`read()`], so the
-//! results and errors are the same either way. [`check_file`] refuses what the header and the file's size
+//! the CPU's cache and is decoded as it arrives; any other file is read whole and decoded by
+//! [`read_at`](super::read_at) (what [`read()`](super::read()) runs), so the results and errors are the same either way. [`check_file`] refuses what the header and the file's size
 //! decide, reading only the header: what `vvgen check` runs on every frame of a sequence.
 //!
 //! Why stream: reading a 1M-point, 15 MB frame whole copies it once from the page cache into memory and then
@@ -33,7 +33,7 @@ const HEAD: usize = 64 << 10;
 /// Rows decoded per chunk: 240 KB of 15-byte rows, within a core's L2 cache.
 const CHUNK_ROWS: usize = 16 << 10;
 
-/// Reads and decodes the PLY file at `path`, as [`read()`] decodes its bytes.
+/// Reads and decodes the PLY file at `path`, as [`read()`](super::read()) decodes its bytes.
 pub fn read_file(path: &Path) -> Result<PlyData, FileError> {
     read_file_in(path, HEAD, CHUNK_ROWS, [0.0; 3])
 }
