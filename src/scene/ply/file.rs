@@ -1,7 +1,8 @@
 //! Reading a PLY file from disk. A cloud in the common binary layouts (one `vertex` element of float positions,
 //! optionally float normals and uchar colours, either byte order: see [`Layout`]) streams through a buffer that stays in
-//! the CPU's cache and is decoded as it arrives; any other file is read whole and decoded by
-//! [`read_at`](super::read_at) (what [`read()`](super::read()) runs), so the results and errors are the same either way. [`check_file`] refuses what the header and the file's size
+//! the CPU's cache and is decoded as it arrives; any other file is read whole and decoded by [`read_at`] (what
+//! [`read()`](super::read()) runs), so the results and errors are the same either way. [`check_file`] refuses
+//! what the header and the file's size
 //! decide, reading only the header: what `vvgen check` runs on every frame of a sequence.
 //!
 //! Why stream: reading a 1M-point, 15 MB frame whole copies it once from the page cache into memory and then
