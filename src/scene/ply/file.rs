@@ -2,8 +2,8 @@
 //! optionally float normals and uchar colours, either byte order: see [`Layout`]) streams through a buffer that stays in
 //! the CPU's cache and is decoded as it arrives; any other file is read whole and decoded by [`read_at`] (what
 //! [`read()`](super::read()) runs), so the results and errors are the same either way. [`check_file`] refuses
-//! what the header and the file's size
-//! decide, reading only the header: what `vvgen check` runs on every frame of a sequence.
+//! what the header and the file's size decide, reading only the header: what `vvgen check` runs on every frame
+//! of a sequence.
 //!
 //! Why stream: reading a 1M-point, 15 MB frame whole copies it once from the page cache into memory and then
 //! reads it back out of memory to decode it. Decoding from a 240 KB buffer saves that round trip, about half of
