@@ -228,13 +228,13 @@ fn one_colour(s: &scene::PosedScene) -> bool {
 }
 
 /// The point to read a PLY's coordinates relative to (`origin`), when they lie so far from zero for the
-/// subject's size that single precision would step its shape ([`crate::scene::transform::Stats::far_from_origin`]):
+/// subject's size that single precision would step its shape ([`crate::scene::transform::Stats::coarse_step`]):
 /// the middle of its bounds, in whole units.
 fn far_origin(s: &scene::PosedScene) -> Option<[f64; 3]> {
     let mut stats = crate::scene::transform::Stats::default();
     s.primitives.iter().for_each(|p| stats.add(&p.positions));
-    stats.far_from_origin(glam::DMat4::IDENTITY)?;
-    Some(((stats.lo + stats.hi) * 0.5).round().to_array())
+    stats.coarse_step()?;
+    Some(stats.centre().round().to_array())
 }
 
 /// What `new` read off the asset for its manifest besides its kind and axes.

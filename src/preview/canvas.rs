@@ -7,6 +7,11 @@ use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
 /// DejaVu Sans, subset to printable ASCII and a few symbols (`vendor/DejaVu.LICENSE`): 26 KB in the binary.
 const FONT: &[u8] = include_bytes!("vendor/DejaVuSans-subset.ttf");
 
+/// The embedded font (parsing it reads its table directory only).
+fn font() -> FontRef<'static> {
+    FontRef::try_from_slice(FONT).expect("BUG: the embedded font parses")
+}
+
 /// An sRGB colour.
 pub type Rgb = [u8; 3];
 
@@ -45,7 +50,7 @@ pub struct Canvas {
 impl Canvas {
     /// A `width` × `height` canvas filled with `background`.
     pub fn new(width: u32, height: u32, background: Rgb) -> Canvas {
-        let font = FontRef::try_from_slice(FONT).expect("BUG: the embedded font parses");
+        let font = font();
         Canvas { width, height, px: vec![background; width as usize * height as usize], font }
     }
 
@@ -166,7 +171,7 @@ impl Canvas {
 
     /// The width `text` takes in `size`-pixel type (no canvas needed: a layout measures before it draws).
     pub fn text_width(size: f32, text: &str) -> f32 {
-        let font = FontRef::try_from_slice(FONT).expect("BUG: the embedded font parses");
+        let font = font();
         let scaled = font.as_scaled(PxScale::from(size));
         let mut w = 0.0;
         let mut last = None;

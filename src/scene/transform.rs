@@ -52,22 +52,31 @@ impl Stats {
         self.count == 0
     }
 
-    /// A warning when the points lie so far from the origin for their size that single precision, which
-    /// positions are held in, resolves fewer than 10 000 steps across them (a scan in georeferenced
-    /// coordinates: at 4 000 km from the origin, steps of 0.25 m). Positions arrive in single precision, so the
-    /// damage is done when this can tell: what is left is to say so, with the way out.
-    /// `to_file` maps the points' space back to the file's, where an `origin` to suggest is.
-    pub fn far_from_origin(&self, to_file: DMat4) -> Option<String> {
+    /// The spacing of single precision, which positions are held in, where the points lie, when it resolves
+    /// fewer than 10 000 steps across them: a scan in georeferenced coordinates (at 4 000 km from the origin,
+    /// steps of 0.25 m). `None` when the points are near enough zero for their size.
+    pub fn coarse_step(&self) -> Option<f64> {
         let extent = (self.hi - self.lo).max_element();
         let reach = self.lo.abs().max(self.hi.abs()).max_element();
         if self.is_empty() || extent.is_nan() || extent <= 0.0 || !reach.is_finite() || reach == 0.0 {
             return None;
         }
         let step = 2f64.powi(reach.log2().floor() as i32 - 23);
-        if step * 10_000.0 <= extent {
-            return None;
-        }
-        let c = (self.lo + self.hi) * 0.5;
+        (step * 10_000.0 > extent).then_some(step)
+    }
+
+    /// The middle of the bounds.
+    pub fn centre(&self) -> DVec3 {
+        (self.lo + self.hi) * 0.5
+    }
+
+    /// The warning for points whose [`Stats::coarse_step`] is too coarse, with the way out: the `origin` to set
+    /// on a PLY source (the middle of the bounds in whole units; `to_file` maps the points' space back to the
+    /// file's), else moving the file near zero where it is made.
+    pub fn far_from_origin(&self, to_file: DMat4) -> Option<String> {
+        let step = self.coarse_step()?;
+        let extent = (self.hi - self.lo).max_element();
+        let c = self.centre();
         let o = to_file.transform_point3(c).round();
         Some(format!(
             "its coordinates lie around ({:.1}, {:.1}, {:.1}) and span {extent:.3}: in single precision, which \

@@ -92,8 +92,8 @@ impl SpecGloss {
             Some(r) => textures[r.texture as usize].sample(&TextureRef { transform: None, ..r }, uv),
             None => Vec4::ONE,
         };
-        let (mut base_rgba, mut mr_rgba) = (Vec::with_capacity((w * h * 4) as usize), Vec::new());
-        mr_rgba.reserve((w * h * 4) as usize);
+        let mut base_rgba = Vec::with_capacity((w * h * 4) as usize);
+        let mut mr_rgba = Vec::with_capacity((w * h * 4) as usize);
         for y in 0..h {
             for x in 0..w {
                 let uv = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
@@ -120,9 +120,7 @@ impl SpecGloss {
         m.metallic_roughness_texture = Some(TextureRef { texture: textures.len() as u32 - 1, ..layout });
         warning
     }
-}
 
-impl SpecGloss {
     /// The material's dielectric F0: the mean brightness of its dielectric specular colours (the factor's, or
     /// the factor × each texel's of the texture up to [`MAX_DIELECTRIC`]), or glTF's 0.04 when it has none.
     fn dielectric_f0(&self, texture: Option<&Texture>) -> f32 {
@@ -134,7 +132,11 @@ impl SpecGloss {
             }
         };
         match texture {
-            Some(t) => (0..t.height).for_each(|y| (0..t.width).for_each(|x| add(brightness(self.specular * t.texel(x, y).truncate())))),
+            Some(t) => {
+                for (y, x) in (0..t.height).flat_map(|y| (0..t.width).map(move |x| (y, x))) {
+                    add(brightness(self.specular * t.texel(x, y).truncate()));
+                }
+            }
             None => add(brightness(self.specular)),
         }
         if n == 0 { GLTF_DIELECTRIC } else { (sum / n as f64) as f32 }
