@@ -132,6 +132,9 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
     match ext(asset).as_str() {
         "gltf" | "glb" => {
             let a = scene::gltf::load(asset, None)?;
+            if !a.draws_anything() {
+                bail!("{}", scene::source::nothing_drawn(asset, a.holds()));
+            }
             let clips: Vec<(String, f32)> = a
                 .animations
                 .iter()
@@ -153,6 +156,9 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         }
         "fbx" => {
             let a = scene::fbx::load(asset)?;
+            if !a.draws_anything() {
+                bail!("{}", scene::source::nothing_drawn(asset, a.holds()));
+            }
             let takes: Vec<(String, f32)> = a.takes.iter().map(|t| (t.name.clone(), t.duration() as f32)).collect();
             let mut rest = scene::PosedScene::default();
             a.pose(None, 0.0, glam::Mat4::IDENTITY, &mut rest)?;

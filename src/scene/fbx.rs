@@ -81,6 +81,22 @@ pub struct FbxAsset {
 }
 
 impl FbxAsset {
+    /// Whether some mesh has a triangle. An animation-only export (a skeleton and its takes) has none.
+    pub fn draws_anything(&self) -> bool {
+        self.parts.iter().any(|p| !p.indices.is_empty())
+    }
+
+    /// What the file holds, for the error when it draws nothing.
+    pub fn holds(&self) -> super::source::Holds {
+        super::source::Holds {
+            // ufbx lists the scene's root as a node.
+            nodes: self.scene.nodes.len().saturating_sub(1),
+            meshes: !self.scene.meshes.is_empty(),
+            clips: self.takes.len(),
+            clip: "take",
+        }
+    }
+
     /// The file's materials as the renderer's, by name, in file order (the two defaults for faces with none are
     /// not listed).
     pub fn named_materials(&self) -> Vec<(String, &Material)> {

@@ -71,6 +71,10 @@ impl LoadedSource {
             }
             SourceFile::Gltf { path, scene } => {
                 let asset = super::gltf::load(path, *scene)?;
+                if !asset.draws_anything() {
+                    let message = nothing_drawn(path, asset.holds());
+                    return Err(Error::Source { name, message });
+                }
                 let clips = select_clips(&asset, &req.clips).map_err(|message| Error::Clip { name: name.clone(), message })?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
                 let times = frame_times(&req.frames, duration as f64);
@@ -78,6 +82,10 @@ impl LoadedSource {
             }
             SourceFile::Fbx(path) => {
                 let asset = super::fbx::load(path)?;
+                if !asset.draws_anything() {
+                    let message = nothing_drawn(path, asset.holds());
+                    return Err(Error::Source { name, message });
+                }
                 warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", path.display())));
                 let take = super::fbx::select_take(&asset, &name, &req.clips)?;
                 let duration = take.map_or(0.0, |t| asset.takes[t].duration());
@@ -161,6 +169,39 @@ impl LoadedSource {
             }
         }
         Ok(())
+    }
+}
+
+/// What a glTF or FBX file that draws nothing holds, for the error that refuses it ([`nothing_drawn`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Holds {
+    /// Its nodes.
+    pub nodes: usize,
+    /// Whether some node has a mesh (of lines, or empty: nothing vvgen draws).
+    pub meshes: bool,
+    /// Its clips (glTF animations, FBX takes).
+    pub clips: usize,
+    /// What the format calls a clip: "animation", "take".
+    pub clip: &'static str,
+}
+
+/// Why a glTF or FBX file with nothing to draw (nor, in glTF, a light) cannot be a source, and the way out. A
+/// file without any mesh is most often an animation-only export, a skeleton and its clips: Mixamo's "Without
+/// Skin" download, or an exporter asked for the animation alone.
+pub fn nothing_drawn(path: &std::path::Path, h: Holds) -> String {
+    let file = path.file_name().map_or_else(|| path.display().to_string(), |f| f.to_string_lossy().into_owned());
+    match h {
+        Holds { meshes: true, .. } => {
+            format!("`{file}`: nothing to render: no triangles or points (vvgen draws neither lines nor empty meshes)")
+        }
+        Holds { clips: 0, nodes, .. } => {
+            format!("`{file}` holds {nodes} node(s) and no mesh: nothing to render; name a file with the subject's mesh")
+        }
+        Holds { nodes, clips, clip, .. } => format!(
+            "`{file}` holds {nodes} node(s) and {clips} {clip}(s) but no mesh: an animation-only export (a skeleton \
+             and its motion, as Mixamo's \"Without Skin\" download); download or export the character with its mesh \
+             (Mixamo: \"With Skin\"), or in Blender apply the motion to the character and name the .blend"
+        ),
     }
 }
 

@@ -108,3 +108,30 @@ pub fn hausdorff(a: &[glam::Vec3], b: &[glam::Vec3]) -> f32 {
     };
     one(a, b).max(one(b, a))
 }
+
+/// A GLB's JSON and BIN chunks.
+pub fn glb_split(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    let json_len = word(12);
+    let json = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let bin_at = 20 + json_len;
+    (json, glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec())
+}
+
+/// A GLB of `json` and `bin`.
+pub fn glb_join(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(json).unwrap();
+    j.resize(j.len().next_multiple_of(4), b' ');
+    let mut b = bin.to_vec();
+    b.resize(b.len().next_multiple_of(4), 0);
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((12 + 8 + j.len() + 8 + b.len()) as u32).to_le_bytes());
+    out.extend((j.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(j);
+    out.extend((b.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(b);
+    out
+}

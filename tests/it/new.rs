@@ -110,3 +110,45 @@ fn a_subject_of_one_colour_is_written_lit_and_its_views_show_its_shape() {
     assert_eq!(code, 0, "{err}");
     assert!(!std::fs::read_to_string(d.join("BoxTextured.toml")).unwrap().contains("shading"));
 }
+
+/// An animation-only export (a skeleton and its clips, no mesh: Mixamo's "Without Skin") is refused by `new`,
+/// `check` and `build` alike, naming the file, what it holds and the way out, in glTF and in FBX.
+#[test]
+fn an_animation_only_export_is_refused_with_the_way_out() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // CesiumMan without its mesh and skin: the joints and the walk remain.
+    let (mut json, bin) = crate::common::glb_split(&std::fs::read(data("gltf/CesiumMan/CesiumMan.glb")).unwrap());
+    let o = json.as_object_mut().unwrap();
+    for key in ["meshes", "skins", "materials", "textures", "images", "samplers"] {
+        o.remove(key);
+    }
+    for n in json["nodes"].as_array_mut().unwrap() {
+        let n = n.as_object_mut().unwrap();
+        n.remove("mesh");
+        n.remove("skin");
+    }
+    std::fs::write(d.join("Walk Only.glb"), crate::common::glb_join(&json, &bin)).unwrap();
+    std::fs::copy(data("fbx/external/skeleton_only.fbx"), d.join("skeleton_only.fbx")).unwrap();
+    let says = |err: &str, file: &str, clip: &str| {
+        for s in [file, "no mesh", clip, "animation-only", "With Skin", ".blend"] {
+            assert!(err.contains(s), "`{s}` not in: {err}");
+        }
+    };
+    for (file, key, clip) in [("Walk Only.glb", "gltf", "1 animation"), ("skeleton_only.fbx", "fbx", "1 take")] {
+        let (code, err) = vvgen(d, &["new", file]);
+        assert_eq!(code, 2, "{err}");
+        says(&err, file, clip);
+        let manifest = format!(
+            "[dataset]\nname = \"a\"\nout = \"out\"\n[source.a]\n{key} = \"{file}\"\n[rig.r]\nkind = \"orbit\"\n\
+             [split.train]\nrig = \"r\"\nviews = 2\n[output.o]\nwriter = \"nerfstudio\"\n"
+        );
+        std::fs::write(d.join("a.toml"), manifest).unwrap();
+        for cmd in ["check", "build"] {
+            let (code, err) = vvgen(d, &[cmd, "a.toml"]);
+            assert_eq!(code, 2, "{cmd}: {err}");
+            says(&err, file, clip);
+        }
+        assert!(!d.join("out").exists(), "a refused build wrote its output");
+    }
+}

@@ -22,6 +22,9 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_lights_punctual",
     "KHR_materials_pbrSpecularGlossiness",
+    // Integer attributes (gltfpack's and glTF-Transform's `quantize` default): the accessor decoder reads every
+    // component type, normalized or not, as the spec allows; the dequantizing scale is the nodes' transform.
+    "KHR_mesh_quantization",
 ];
 
 /// A loaded glTF: everything needed to pose it at any time, with no further I/O.
@@ -394,8 +397,9 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
     Ok(asset)
 }
 
-/// Parses and validates, except that an accessor without a bufferView is accepted: the spec says it reads as
-/// zeros (then sparse values), but gltf 1.4's validation calls it missing data. vvgen's own reference check
+/// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
+/// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required
+/// `KHR_mesh_quantization` (which gltf 1.4 calls unsupported). vvgen's own reference check
 /// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
 /// references.
 fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
@@ -414,9 +418,12 @@ fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     let parsed = match gltf::Gltf::from_slice(bytes) {
         Err(gltf::Error::Validation(errors))
             if errors.iter().all(|(p, e)| {
-                p.as_str().starts_with("accessors[")
-                    && p.as_str().ends_with("].bufferView")
-                    && matches!(e, gltf::json::validation::Error::Missing)
+                let p = p.as_str();
+                let no_view = p.starts_with("accessors[") && p.ends_with("].bufferView");
+                // gltf 1.4 has no feature for it; vvgen's decoder reads quantized attributes.
+                let quantized = p.starts_with("extensionsRequired[") && p.ends_with("= \"KHR_mesh_quantization\"");
+                use gltf::json::validation::Error::{Missing, Unsupported};
+                (no_view && matches!(e, Missing)) || (quantized && matches!(e, Unsupported))
             }) =>
         {
             gltf::Gltf::from_slice_without_validation(bytes)
@@ -435,10 +442,15 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
         if SUPPORTED_REQUIRED.contains(&ext) {
             continue;
         }
+        if matches!(ext, "KHR_draco_mesh_compression" | "EXT_meshopt_compression") {
+            // Blender's importer reads Draco but not meshopt; glTF-Transform decodes both.
+            return Err(format!(
+                "requires the extension `{ext}`, which vvgen does not read (its meshes are compressed). Way out: \
+                 `npx @gltf-transform/cli copy in.glb plain.glb` writes the file with plain meshes (or quantized \
+                 ones, which vvgen reads); name that"
+            ));
+        }
         let what = match ext {
-            "KHR_draco_mesh_compression" | "EXT_meshopt_compression" | "KHR_mesh_quantization" => {
-                " (its meshes are compressed)"
-            }
             "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => " (its textures are KTX2, WebP or AVIF)",
             _ => "",
         };

@@ -1,0 +1,170 @@
+//! glTF files that require an extension: `KHR_materials_pbrSpecularGlossiness` (many downloads of 2017–2021)
+//! loads and renders its diffuse colour, `KHR_mesh_quantization` (gltfpack's and glTF-Transform's output) renders
+//! as its float twin, and a required extension vvgen does not read is refused with the way out.
+
+use std::path::Path;
+use std::process::Command;
+
+use serde_json::json;
+
+use crate::common::{data, glb_join as join, glb_split as split};
+
+fn vvgen(dir: &Path, args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(dir).args(args).output().unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// Builds `model.glb` in `dir` unlit, two views at 64², and returns the first image's RGBA.
+fn render(dir: &Path) -> image::RgbaImage {
+    render_with(dir, "[transform]\nfit = \"frame\"\n", "unlit")
+}
+
+/// Builds `model.glb` in `dir` placed by `transform` (a table, or nothing) with `shading`, two views at 64², and
+/// returns the first image's RGBA.
+fn render_with(dir: &Path, transform: &str, shading: &str) -> image::RgbaImage {
+    let manifest = format!(
+        "[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n\
+         {transform}[render]\nresolution = [64, 64]\nshading = \"{shading}\"\n\
+         [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n"
+    );
+    std::fs::write(dir.join("m.toml"), manifest).unwrap();
+    let (code, err) = vvgen(dir, &["-q", "build", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    image::open(dir.join("out/s_dnerf/train/r_0000.png")).unwrap().to_rgba8()
+}
+
+/// BoxTextured with its material in the specular-glossiness model, as a dielectric (specular 0.04): the
+/// diffuse texture is then the base colour, and the images are BoxTextured's, though the file's core
+/// metallic-roughness colour is black (as in the downloads that carry both: the extension wins, as in Blender).
+#[test]
+fn a_specular_glossiness_dielectric_renders_as_its_metallic_roughness_twin() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let twin = tempfile::tempdir().unwrap();
+    std::fs::write(twin.path().join("model.glb"), join(&json, &bin)).unwrap();
+    let want = render(twin.path());
+
+    let mut sg = json.clone();
+    let texture = sg["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"].clone();
+    assert!(texture.is_object(), "BoxTextured has a base colour texture");
+    sg["materials"][0]["pbrMetallicRoughness"] = json!({"baseColorFactor": [0, 0, 0, 1]});
+    sg["materials"][0]["extensions"] = json!({"KHR_materials_pbrSpecularGlossiness": {
+        "diffuseTexture": texture, "specularFactor": [0.04, 0.04, 0.04], "glossinessFactor": 0.5}});
+    sg["extensionsUsed"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
+    sg["extensionsRequired"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("model.glb"), join(&sg, &bin)).unwrap();
+    let got = render(tmp.path());
+    assert!(want.pixels().filter(|p| p[3] == 255).count() > 500, "the box is in view");
+    let worst = want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(|c| a[c].abs_diff(b[c]))).max();
+    assert!(worst <= Some(1), "the dielectric's images differ from the twin's by up to {worst:?} levels");
+
+    // The same texture read as a coloured metal's specular instead: no longer the twin.
+    sg["materials"][0]["extensions"] = json!({"KHR_materials_pbrSpecularGlossiness": {
+        "diffuseFactor": [0, 0, 0, 1], "specularGlossinessTexture": texture, "specularFactor": [1, 1, 1]}});
+    let metal = tempfile::tempdir().unwrap();
+    std::fs::write(metal.path().join("model.glb"), join(&sg, &bin)).unwrap();
+    let got = render(metal.path());
+    let differ = want.pixels().zip(got.pixels()).filter(|(a, b)| a[0].abs_diff(b[0]) > 8).count();
+    assert!(differ == 0, "unlit, a metal's base colour is its specular colour: {differ} pixels differ");
+}
+
+/// A required extension vvgen does not read: every command refuses the file, naming it, the extension and
+/// the way out, with exit 2.
+#[test]
+fn a_required_extension_vvgen_does_not_read_is_refused_with_the_way_out() {
+    let (mut json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    // Compressed meshes: glTF-Transform decodes them (Blender's importer does not read meshopt); other
+    // extensions: Blender.
+    let cases = [
+        ("KHR_draco_mesh_compression", ["compressed", "gltf-transform/cli copy", "plain"]),
+        ("EXT_meshopt_compression", ["compressed", "gltf-transform/cli copy", "plain"]),
+        ("KHR_texture_basisu", ["KTX2", "Blender", "blend = "]),
+    ];
+    for (ext, way_out) in cases {
+        json["extensionsUsed"] = json!([ext]);
+        json["extensionsRequired"] = json!([ext]);
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        std::fs::write(d.join("model.glb"), join(&json, &bin)).unwrap();
+        let (code, err) = vvgen(d, &["new", "model.glb"]);
+        assert_eq!(code, 2, "{err}");
+        let named = format!("`{ext}`");
+        for says in ["model.glb", named.as_str()].into_iter().chain(way_out) {
+            assert!(err.contains(says), "`{says}` not in: {err}");
+        }
+    }
+}
+
+/// BoxTextured quantized as gltfpack quantizes (`KHR_mesh_quantization`): positions as unnormalized 16-bit
+/// integers scaled back by their node, normals as normalized bytes, texture coordinates as unnormalized bytes.
+/// Every value dequantizes exactly, so its images are the float file's, unlit and lit; nothing rescales the
+/// subject to fit (a dequantizing scale read wrongly would show).
+#[test]
+fn a_quantized_mesh_renders_as_its_float_twin() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let floats = |acc: usize| -> Vec<f32> {
+        let a = &json["accessors"][acc];
+        let view = &json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        let at = (view["byteOffset"].as_u64().unwrap() + a["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        let n = a["count"].as_u64().unwrap() as usize * if a["type"] == "VEC2" { 2 } else { 3 };
+        bin[at..at + 4 * n].chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect()
+    };
+    let attributes = json["meshes"][0]["primitives"][0]["attributes"].clone();
+    let index = |name: &str| attributes[name].as_u64().unwrap() as usize;
+    let (positions, normals, uvs) = (floats(index("POSITION")), floats(index("NORMAL")), floats(index("TEXCOORD_0")));
+    // The box's corners are ±0.5: 16 384 × 2⁻¹⁵. Its normals are axes (±127 normalized is ±1), its uvs 0 … 6.
+    let mut q = bin.clone();
+    let mut chunk = |bytes: Vec<u8>| -> (usize, usize) {
+        let at = q.len();
+        q.extend(&bytes);
+        q.resize(q.len().next_multiple_of(4), 0);
+        (at, bytes.len())
+    };
+    // Each element padded to 4 bytes, as glTF 2.0 § 3.6.2.4 asks of vertex attributes: strides 8, 4 and 4.
+    let padded = |values: Vec<u8>, size: usize, stride: usize| -> Vec<u8> {
+        values.chunks_exact(size).flat_map(|e| e.iter().copied().chain(std::iter::repeat_n(0, stride - size))).collect()
+    };
+    let p16: Vec<u8> = positions.iter().flat_map(|&v| ((v * 32768.0).round() as i16).to_le_bytes()).collect();
+    let n8: Vec<u8> = normals.iter().map(|&v| (v * 127.0).round() as i8 as u8).collect();
+    let t8: Vec<u8> = uvs.iter().map(|&v| v.round() as u8).collect();
+    assert!(uvs.iter().all(|v| (v - v.round()).abs() < 1e-6), "BoxTextured's uvs are whole numbers");
+    let (p, n, t) = (chunk(padded(p16, 6, 8)), chunk(padded(n8, 3, 4)), chunk(padded(t8, 2, 4)));
+    let mut qj = json.clone();
+    let views = qj["bufferViews"].as_array_mut().unwrap();
+    let first = views.len();
+    for ((at, len), stride) in [(p, 8), (n, 4), (t, 4)] {
+        views.push(json!({"buffer": 0, "byteOffset": at, "byteLength": len, "byteStride": stride}));
+    }
+    let accessors = qj["accessors"].as_array_mut().unwrap();
+    let count = positions.len() / 3;
+    let base = accessors.len();
+    accessors.push(json!({"bufferView": first, "componentType": 5122, "count": count, "type": "VEC3",
+        "min": [-16384, -16384, -16384], "max": [16384, 16384, 16384]}));
+    accessors.push(json!({"bufferView": first + 1, "componentType": 5120, "normalized": true, "count": count,
+        "type": "VEC3"}));
+    accessors.push(json!({"bufferView": first + 2, "componentType": 5121, "count": count, "type": "VEC2"}));
+    qj["meshes"][0]["primitives"][0]["attributes"] =
+        json!({"POSITION": base, "NORMAL": base + 1, "TEXCOORD_0": base + 2});
+    qj["buffers"][0]["byteLength"] = json!(q.len());
+    // The mesh moves to a child node whose scale dequantizes it.
+    let mesh_node = (0..qj["nodes"].as_array().unwrap().len()).find(|&i| qj["nodes"][i]["mesh"] == 0).unwrap();
+    qj["nodes"][mesh_node].as_object_mut().unwrap().remove("mesh");
+    let child = qj["nodes"].as_array().unwrap().len();
+    qj["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"mesh": 0, "scale": [1.0 / 32768.0, 1.0 / 32768.0, 1.0 / 32768.0]}));
+    qj["nodes"][mesh_node]["children"] = json!([child]);
+    qj["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+    qj["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    for shading in ["unlit", "pbr"] {
+        let (twin, quantized) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        std::fs::write(twin.path().join("model.glb"), join(&json, &bin)).unwrap();
+        std::fs::write(quantized.path().join("model.glb"), join(&qj, &q)).unwrap();
+        let (want, got) = (render_with(twin.path(), "", shading), render_with(quantized.path(), "", shading));
+        let covered = want.pixels().filter(|p| p[3] == 255).count();
+        assert!((200..2000).contains(&covered), "the 1 m box is in view at its size: {covered} pixels");
+        let worst = want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(|c| a[c].abs_diff(b[c]))).max();
+        assert!(worst <= Some(1), "{shading}: the quantized box's image differs from the float one's by {worst:?}");
+    }
+}
