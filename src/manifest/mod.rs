@@ -122,14 +122,51 @@ impl Manifest {
 
 /// Reads and checks a manifest file. `Ok` carries the manifest and its warnings; `Err` every problem found.
 pub fn load(path: &Path) -> Result<(Manifest, Report), Report> {
+    let fail = |d: Diagnostic| Report { path: path.to_path_buf(), source: String::new(), diagnostics: vec![d] };
+    if let Some(d) = not_a_manifest(path) {
+        return Err(fail(d));
+    }
     match std::fs::read_to_string(path) {
         Ok(text) => parse(&text, path),
-        Err(e) => Err(Report {
-            path: path.to_path_buf(),
-            source: String::new(),
-            diagnostics: vec![Diagnostic::error(format!("cannot read the manifest: {e}"), None)],
-        }),
+        Err(e) => Err(fail(Diagnostic::error(format!("cannot read the manifest: {e}"), None))),
     }
+}
+
+/// A newcomer's first try is often `vvgen build model.glb`: an asset or a folder where a manifest belongs is
+/// named as such, with the command that writes its manifest, instead of a TOML syntax error at its first byte.
+fn not_a_manifest(path: &Path) -> Option<Diagnostic> {
+    let shown = path.display().to_string();
+    // As it would be typed: a name with spaces (`Breathing Idle.fbx`, as Mixamo names them) in quotes.
+    let typed = if shown.contains(|c: char| c.is_whitespace() || "'\"$&;|()<>*?".contains(c)) {
+        format!("'{}'", shown.replace('\'', r"'\''"))
+    } else {
+        shown.clone()
+    };
+    if path.is_dir() {
+        let mut tomls: Vec<String> = std::fs::read_dir(path)
+            .ok()?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "toml") && p.is_file())
+            .map(|p| p.display().to_string())
+            .collect();
+        tomls.sort();
+        let help = match tomls.len() {
+            0 => format!("`vvgen new {typed}` writes a manifest for a folder of PLY or OBJ frames"),
+            _ => format!("name a manifest: {}", tomls.join(", ")),
+        };
+        return Some(Diagnostic::error(format!("{shown} is a folder, not a manifest"), None).with_help(help));
+    }
+    let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
+    let kind = match ext.as_str() {
+        "gltf" | "glb" => "a glTF file",
+        "fbx" => "an FBX file",
+        "blend" => "a Blender file",
+        "ply" => "a PLY file",
+        "obj" => "an OBJ file",
+        _ => return None,
+    };
+    let help = format!("`vvgen new {typed}` writes a manifest for it; check and build that");
+    Some(Diagnostic::error(format!("{shown} is {kind}, not a manifest"), None).with_help(help))
 }
 
 /// Checks manifest `text` as if read from `path` (paths in it resolve against `path`'s directory).

@@ -369,3 +369,33 @@ fn a_rig_kind_typo_is_one_error_and_a_points_build_prints_no_image_rate() {
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("images") && err.contains(" s in all"), "{err}");
 }
+
+/// A first try is often `vvgen build model.glb`: every command that takes a manifest names an asset or a folder
+/// for what it is, with exit 2 and the command that writes its manifest (quoted as typed when the name has
+/// spaces), instead of a TOML syntax error at its first byte.
+#[test]
+fn an_asset_named_where_a_manifest_belongs_is_told_what_to_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    longbox(d);
+    std::fs::copy(d.join("longbox.gltf"), d.join("Samba Dancing.gltf")).unwrap();
+    for cmd in ["check", "build", "plan", "inspect"] {
+        for (arg, says) in [
+            ("longbox.gltf", ["longbox.gltf is a glTF file, not a manifest", "`vvgen new longbox.gltf`"]),
+            ("Samba Dancing.gltf", ["is a glTF file", "`vvgen new 'Samba Dancing.gltf'`"]),
+            (".", [". is a folder, not a manifest", "`vvgen new .`"]),
+        ] {
+            let (code, err) = vvgen(d, &[cmd, arg]);
+            assert_eq!(code, 2, "{cmd} {arg}: {err}");
+            for s in says {
+                assert!(err.contains(s), "{cmd} {arg}: `{s}` not in: {err}");
+            }
+        }
+    }
+    // A folder with manifests lists them.
+    let (code, err) = vvgen(d, &["new", "longbox.gltf", "-o", "longbox.toml"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = vvgen(d, &["build", "."]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("name a manifest: ./longbox.toml"), "{err}");
+}
