@@ -1,6 +1,7 @@
 //! glTF files that require an extension: `KHR_materials_pbrSpecularGlossiness` (many downloads of 2017–2021)
-//! loads and renders its diffuse colour, `KHR_mesh_quantization` (gltfpack's and glTF-Transform's output) renders
-//! as its float twin, and a required extension vvgen does not read is refused with the way out.
+//! loads and renders its diffuse colour, `KHR_mesh_quantization` (gltfpack's and glTF-Transform's output) and
+//! `EXT_texture_webp` render as their float and PNG twins, and a required extension vvgen does not read is
+//! refused with the way out.
 
 use std::path::Path;
 use std::process::Command;
@@ -167,4 +168,46 @@ fn a_quantized_mesh_renders_as_its_float_twin() {
         let worst = want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(|c| a[c].abs_diff(b[c]))).max();
         assert!(worst <= Some(1), "{shading}: the quantized box's image differs from the float one's by {worst:?}");
     }
+}
+
+/// BoxTextured with its texture as a WebP image only (`EXT_texture_webp` required, no core `source`, as
+/// glTF-Transform's `webp` writes it): lossless, so its images are the PNG file's.
+#[test]
+fn a_webp_texture_renders_as_its_png_twin() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let image = &json["images"][0];
+    let view = &json["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let png = &bin[at..at + view["byteLength"].as_u64().unwrap() as usize];
+    let rgba = image::load_from_memory(png).unwrap().to_rgba8();
+    let mut webp = Vec::new();
+    image::codecs::webp::WebPEncoder::new_lossless(&mut webp)
+        .encode(rgba.as_raw(), rgba.width(), rgba.height(), image::ExtendedColorType::Rgba8)
+        .unwrap();
+    assert!(webp.starts_with(b"RIFF"), "a WebP file");
+    let mut w = bin.clone();
+    w.resize(w.len().next_multiple_of(4), 0);
+    let offset = w.len();
+    w.extend(&webp);
+    let mut wj = json.clone();
+    let views = wj["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": webp.len()}));
+    let webp_view = views.len() - 1;
+    wj["images"] = json!([{"bufferView": webp_view, "mimeType": "image/webp"}]);
+    for t in wj["textures"].as_array_mut().unwrap() {
+        let t = t.as_object_mut().unwrap();
+        t.remove("source");
+        t.insert("extensions".into(), json!({"EXT_texture_webp": {"source": 0}}));
+    }
+    wj["buffers"][0]["byteLength"] = json!(w.len());
+    wj["extensionsUsed"] = json!(["EXT_texture_webp"]);
+    wj["extensionsRequired"] = json!(["EXT_texture_webp"]);
+    let (twin, webp_dir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    std::fs::write(twin.path().join("model.glb"), join(&json, &bin)).unwrap();
+    std::fs::write(webp_dir.path().join("model.glb"), join(&wj, &w)).unwrap();
+    let (want, got) = (render(twin.path()), render(webp_dir.path()));
+    let shades: std::collections::BTreeSet<_> = want.pixels().filter(|p| p[3] == 255).map(|p| p.0).collect();
+    assert!(shades.len() > 20, "the texture shows: {} shades", shades.len());
+    let worst = want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(|c| a[c].abs_diff(b[c]))).max();
+    assert!(worst <= Some(1), "the WebP box's image differs from the PNG one's by {worst:?} levels");
 }

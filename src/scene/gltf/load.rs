@@ -25,6 +25,9 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     // Integer attributes (gltfpack's and glTF-Transform's `quantize` default): the accessor decoder reads every
     // component type, normalized or not, as the spec allows; the dequantizing scale is the nodes' transform.
     "KHR_mesh_quantization",
+    // WebP images (glTF-Transform's `optimize` default; image-to-3D generators' output): `parse` points the
+    // texture at its WebP image and the image decoder reads it.
+    "EXT_texture_webp",
 ];
 
 /// A loaded glTF: everything needed to pose it at any time, with no further I/O.
@@ -412,25 +415,53 @@ fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     } else {
         bytes.into()
     };
-    let doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
+    let mut doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
     required_extensions(&doc)?;
+    let webp = webp_sources(&mut doc);
     super::validate::check(&doc)?;
-    let parsed = match gltf::Gltf::from_slice(bytes) {
+    // The JSON is parsed again from the edited document only when there was something to edit.
+    let read = |validate: bool| -> Result<gltf::Gltf, gltf::Error> {
+        if !webp {
+            return if validate { gltf::Gltf::from_slice(bytes) } else { gltf::Gltf::from_slice_without_validation(bytes) };
+        }
+        let blob = if bytes.starts_with(b"glTF") { gltf::Glb::from_slice(bytes)?.bin.map(|b| b.into_owned()) } else { None };
+        let root: gltf::json::Root = serde_json::from_value(doc.clone()).map_err(gltf::Error::Deserialize)?;
+        let document =
+            if validate { gltf::Document::from_json(root)? } else { gltf::Document::from_json_without_validation(root) };
+        Ok(gltf::Gltf { document, blob })
+    };
+    let parsed = match read(true) {
         Err(gltf::Error::Validation(errors))
             if errors.iter().all(|(p, e)| {
                 let p = p.as_str();
                 let no_view = p.starts_with("accessors[") && p.ends_with("].bufferView");
-                // gltf 1.4 has no feature for it; vvgen's decoder reads quantized attributes.
-                let quantized = p.starts_with("extensionsRequired[") && p.ends_with("= \"KHR_mesh_quantization\"");
+                // gltf 1.4 has no feature for these; vvgen reads quantized attributes and WebP images.
+                let read_here = p.starts_with("extensionsRequired[")
+                    && ["\"KHR_mesh_quantization\"", "\"EXT_texture_webp\""].iter().any(|x| p.ends_with(x));
                 use gltf::json::validation::Error::{Missing, Unsupported};
-                (no_view && matches!(e, Missing)) || (quantized && matches!(e, Unsupported))
+                (no_view && matches!(e, Missing)) || (read_here && matches!(e, Unsupported))
             }) =>
         {
-            gltf::Gltf::from_slice_without_validation(bytes)
+            read(false)
         }
         other => other,
     };
     parsed.map_err(|e| e.to_string())
+}
+
+/// Points every texture with an `EXT_texture_webp` image at that image (the extension's intent: a reader that
+/// decodes WebP uses it, the core `source`, if any, being a fallback of the same picture; Blender's importer does
+/// the same). Returns whether anything changed.
+fn webp_sources(doc: &mut serde_json::Value) -> bool {
+    let Some(textures) = doc.get_mut("textures").and_then(|t| t.as_array_mut()) else { return false };
+    let mut changed = false;
+    for t in textures {
+        let webp = t.pointer("/extensions/EXT_texture_webp/source").and_then(|s| s.as_u64());
+        if let (Some(source), Some(t)) = (webp, t.as_object_mut()) {
+            changed |= t.insert("source".into(), source.into()).is_none_or(|old| old != source);
+        }
+    }
+    changed
 }
 
 /// Refuses an extension the file requires and vvgen does not read, saying the way out. Checked on the raw
@@ -451,7 +482,7 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
             ));
         }
         let what = match ext {
-            "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => " (its textures are KTX2, WebP or AVIF)",
+            "KHR_texture_basisu" | "EXT_texture_avif" => " (its textures are KTX2 or AVIF)",
             _ => "",
         };
         return Err(format!(
