@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::penumbra::SunShade;
-use super::{ground, Visibility};
+use super::{plane_grid, Visibility};
 
 /// What a frame's light action keeps ([`super::FrameLight::gather`]): per primitive, per vertex, its [`Visibility`] with
 /// the bounce gathered (none for points), and per ground plane its grids. Encoded for the cache by
@@ -12,7 +12,7 @@ use super::{ground, Visibility};
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Gathered {
     pub(super) vertices: Vec<Vec<Visibility>>,
-    pub(super) planes: Vec<ground::PlaneGrids>,
+    pub(super) planes: Vec<plane_grid::PlaneGrids>,
 }
 
 impl Gathered {
@@ -77,8 +77,8 @@ impl Gathered {
                 *c = r.f32s(n * 3)?.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
             }
             let [lamps, bounce] = colours;
-            let sized = |len: usize| len == 0 || len == ground::GRID_POINTS;
-            if vis.len() != ground::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len()) {
+            let sized = |len: usize| len == 0 || len == plane_grid::GRID_POINTS;
+            if vis.len() != plane_grid::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len()) {
                 return Err(GatheredError::Damaged("a ground grid of another size"));
             }
             let n = r.count(12)?;
@@ -87,10 +87,10 @@ impl Gathered {
                 let side = r.u32()? as usize;
                 let block = r.n_u32()?;
                 let vis = r.n_u16()?;
-                let cells = ground::PLANE_CELLS * ground::PLANE_CELLS;
+                let cells = plane_grid::PLANE_CELLS * plane_grid::PLANE_CELLS;
                 shades.push(SunShade::from_parts(side, block, vis, cells).map_err(GatheredError::Damaged)?);
             }
-            grids.push(ground::PlaneGrids { vis, sun, lamps, bounce, shades });
+            grids.push(plane_grid::PlaneGrids { vis, sun, lamps, bounce, shades });
         }
         if r.at != bytes.len() {
             return Err(GatheredError::Damaged("trailing bytes"));

@@ -15,6 +15,7 @@ mod gathered;
 mod ground;
 mod lamp;
 mod pcf;
+mod plane_grid;
 mod penumbra;
 mod rays;
 mod scan;
@@ -31,7 +32,8 @@ use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
 pub use gathered::{Gathered, GatheredError};
-use ground::{ground_planes, Ground, PlaneVisibility};
+use ground::{ground_planes, Ground};
+use plane_grid::PlaneVisibility;
 use lamp::{lamps, Lamp};
 use shadow::ShadowMap;
 
@@ -254,8 +256,8 @@ impl FrameLight {
             // The bounce varies over the subject's size, not a cell's: gathered on every fourth grid point,
             // spread between them, then blurred over about five, where far from the subject a point's rays meet
             // it by chance or not (that noise falls under 1/255).
-            let coarse = subject.onto(scene, &gathered, &plane.points(z, ground::BOUNCE_STRIDE), Vec3::Z);
-            plane.grids.bounce = ground::blur(&ground::spread(&coarse, ground::BOUNCE_STRIDE), 2);
+            let coarse = subject.onto(scene, &gathered, &plane.points(z, plane_grid::BOUNCE_STRIDE), Vec3::Z);
+            plane.grids.bounce = plane_grid::blur(&plane_grid::spread(&coarse, plane_grid::BOUNCE_STRIDE), 2);
             plane.combine(&self.lights);
         }
         self

@@ -2,6 +2,7 @@
 
 mod accessor;
 pub mod anim;
+mod document;
 pub mod load;
 mod materials;
 pub mod pose;

@@ -1,0 +1,111 @@
+//! From a file's bytes to a validated glTF document, and which extensions a file may require: those vvgen reads
+//! are let through (editing the document where gltf 1.4 cannot read them itself), any other is refused before
+//! gltf's validation, with the way out.
+
+/// Extensions vvgen understands; a file that *requires* any other is refused.
+const SUPPORTED_REQUIRED: &[&str] = &[
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
+    "KHR_materials_pbrSpecularGlossiness",
+    // Integer attributes (gltfpack's and glTF-Transform's `quantize` default): the accessor decoder reads every
+    // component type, normalized or not, as the spec allows; the dequantizing scale is the nodes' transform.
+    "KHR_mesh_quantization",
+    // WebP images (glTF-Transform's `webp`; image-to-3D generators' output, TRELLIS 2's among them): `parse`
+    // points the texture at its WebP image and the image decoder reads it.
+    "EXT_texture_webp",
+];
+
+/// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
+/// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required
+/// `KHR_mesh_quantization` or `EXT_texture_webp` (which gltf 1.4 calls unsupported). vvgen's own reference check
+/// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
+/// references.
+pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+    let json: std::borrow::Cow<'_, [u8]> = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?.json
+    } else if bytes.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
+        return Err("neither a GLB (it does not start with `glTF`) nor glTF JSON (it does not start with `{`); \
+                    a .bin is a glTF's side-car buffer: name the .gltf"
+            .into());
+    } else {
+        bytes.into()
+    };
+    let mut doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
+    required_extensions(&doc)?;
+    let webp = webp_sources(&mut doc);
+    super::validate::check(&doc)?;
+    // The JSON is parsed again from the edited document only when there was something to edit.
+    let read = |validate: bool| -> Result<gltf::Gltf, gltf::Error> {
+        if !webp {
+            return if validate { gltf::Gltf::from_slice(bytes) } else { gltf::Gltf::from_slice_without_validation(bytes) };
+        }
+        let blob = if bytes.starts_with(b"glTF") { gltf::Glb::from_slice(bytes)?.bin.map(|b| b.into_owned()) } else { None };
+        let root: gltf::json::Root = serde_json::from_value(doc.clone()).map_err(gltf::Error::Deserialize)?;
+        let document =
+            if validate { gltf::Document::from_json(root)? } else { gltf::Document::from_json_without_validation(root) };
+        Ok(gltf::Gltf { document, blob })
+    };
+    let parsed = match read(true) {
+        Err(gltf::Error::Validation(errors))
+            if errors.iter().all(|(p, e)| {
+                let p = p.as_str();
+                let no_view = p.starts_with("accessors[") && p.ends_with("].bufferView");
+                // gltf 1.4 has no feature for these; vvgen reads quantized attributes and WebP images.
+                let read_here = p.starts_with("extensionsRequired[")
+                    && ["\"KHR_mesh_quantization\"", "\"EXT_texture_webp\""].iter().any(|x| p.ends_with(x));
+                use gltf::json::validation::Error::{Missing, Unsupported};
+                (no_view && matches!(e, Missing)) || (read_here && matches!(e, Unsupported))
+            }) =>
+        {
+            read(false)
+        }
+        other => other,
+    };
+    parsed.map_err(|e| e.to_string())
+}
+
+/// Points every texture with an `EXT_texture_webp` image at that image (the extension's intent: a reader that
+/// decodes WebP uses it, the core `source`, if any, being a fallback of the same picture; Blender's importer does
+/// the same). Returns whether anything changed.
+fn webp_sources(doc: &mut serde_json::Value) -> bool {
+    let Some(textures) = doc.get_mut("textures").and_then(|t| t.as_array_mut()) else { return false };
+    let mut changed = false;
+    for t in textures {
+        let webp = t.pointer("/extensions/EXT_texture_webp/source").and_then(|s| s.as_u64());
+        if let (Some(source), Some(t)) = (webp, t.as_object_mut()) {
+            changed |= t.insert("source".into(), source.into()).is_none_or(|old| old != source);
+        }
+    }
+    changed
+}
+
+/// Refuses an extension the file requires and vvgen does not read, saying the way out. Checked on the raw
+/// JSON, before gltf's validation, which says only "Unsupported extension".
+fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
+    let Some(required) = doc.get("extensionsRequired").and_then(|v| v.as_array()) else { return Ok(()) };
+    for (i, ext) in required.iter().enumerate() {
+        let Some(ext) = ext.as_str() else { return Err(format!("extensionsRequired[{i}] is not a string")) };
+        if SUPPORTED_REQUIRED.contains(&ext) {
+            continue;
+        }
+        if matches!(ext, "KHR_draco_mesh_compression" | "EXT_meshopt_compression") {
+            // Blender's importer reads Draco but not meshopt; glTF-Transform decodes both.
+            return Err(format!(
+                "requires the extension `{ext}`, which vvgen does not read (its meshes are compressed). Way out: \
+                 `npx @gltf-transform/cli copy in.glb plain.glb` writes the file with plain meshes (or quantized \
+                 ones, which vvgen reads); name that"
+            ));
+        }
+        let what = match ext {
+            "KHR_texture_basisu" | "EXT_texture_avif" => " (its textures are KTX2 or AVIF)",
+            _ => "",
+        };
+        return Err(format!(
+            "requires the extension `{ext}`, which vvgen does not read{what}. Way out: import the file in Blender \
+             (File → Import → glTF 2.0), save it as a .blend and name that (`blend = \"….blend\"`), or export it \
+             again from its tool without `{ext}`"
+        ));
+    }
+    Ok(())
+}
