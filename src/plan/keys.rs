@@ -78,6 +78,11 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     if posed.materials.iter().any(|m| m.alpha_mode == crate::scene::material::AlphaMode::Blend) {
                         parts.push(b"alpha blend composited");
                     }
+                    // Shadeless (`KHR_materials_unlit`) surfaces ignore Lambert's lights since they were read:
+                    // frames with them re-render; others keep their keys.
+                    if posed.materials.iter().any(|m| m.unlit) {
+                        parts.push(b"unlit materials shadeless");
+                    }
                     keys.push(key("frame posed", &parts));
                     // Every material field and the tangents (posed for normal textures): lit shading's alone.
                     lit_keys.push(lit.then(|| {

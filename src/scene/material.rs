@@ -51,6 +51,10 @@ pub struct Material {
     pub specular: f32,
     /// Whether the surface casts shadows (the ground plane receives only).
     pub casts_shadows: bool,
+    /// Shadeless (glTF's `KHR_materials_unlit`, as Blender's importer builds it): lit or not, it shows its
+    /// base colour (× vertex colour × texture) as it is, and it is transparent to every ray but the camera's,
+    /// so it casts no shadow and bounces no light.
+    pub unlit: bool,
 }
 
 impl Default for Material {
@@ -73,6 +77,7 @@ impl Default for Material {
             normal_texture: None,
             specular: 1.0,
             casts_shadows: true,
+            unlit: false,
         }
     }
 }

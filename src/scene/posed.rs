@@ -304,6 +304,7 @@ mod canonical {
             normal_texture,
             specular,
             casts_shadows,
+            unlit,
         } = m;
         f32s(out, &base_color.to_array());
         texture(out, base_color_texture);
@@ -317,7 +318,8 @@ mod canonical {
         scaled(out, occlusion_texture);
         scaled(out, normal_texture);
         f32s(out, &[*specular]);
-        out.push(*casts_shadows as u8);
+        // One byte for both flags: a material that is not unlit keeps the bytes (and cached images) it had.
+        out.push(*casts_shadows as u8 | (*unlit as u8) << 1);
     }
 
     pub(super) fn light(l: &Light, out: &mut Vec<u8>) {
@@ -388,6 +390,8 @@ mod canonical {
                 Material { normal_texture: Some((t, 0.5)), ..base.clone() },
                 Material { specular: 0.0, ..base.clone() },
                 Material { casts_shadows: false, ..base.clone() },
+                Material { unlit: true, ..base.clone() },
+                Material { casts_shadows: false, unlit: true, ..base.clone() },
             ];
             let mut seen = vec![bytes(&base)];
             for m in &changed {

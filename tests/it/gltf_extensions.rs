@@ -211,3 +211,63 @@ fn a_webp_texture_renders_as_its_png_twin() {
     let worst = want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(|c| a[c].abs_diff(b[c]))).max();
     assert!(worst <= Some(1), "the WebP box's image differs from the PNG one's by {worst:?} levels");
 }
+
+/// Builds `model.glb` (no fit), beside a ground plane when `floor`, lit by an oblique sun and the studio map, two
+/// views at 64², and returns the first image's RGBA.
+fn render_lit(dir: &Path, floor: bool, model: bool) -> image::RgbaImage {
+    let mut m = String::from("[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n");
+    if model {
+        m += "[source.s]\ngltf = \"model.glb\"\n";
+    }
+    if floor {
+        m += "[source.floor]\nplane = { size = [6, 6], z = -0.5 }\n";
+    }
+    m += "[render]\nresolution = [64, 64]\nshading = \"pbr\"\n\
+          [light.sun]\nkind = \"sun\"\ndirection = [0.5, 0.3, -0.8]\nintensity = 2\n\
+          [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n";
+    std::fs::write(dir.join("m.toml"), m).unwrap();
+    let (code, err) = vvgen(dir, &["-q", "build", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    image::open(dir.join("out/s_dnerf/train/r_0000.png")).unwrap().to_rgba8()
+}
+
+/// `KHR_materials_unlit`, as Blender's importer builds it (an Emission of the base colour seen by camera rays
+/// only): lit, the box shows its texture as unlit shading does, and it is transparent to every other ray: the
+/// ground around it is lit as if the box were not there (no shadow, no occlusion, no bounce). The same box with
+/// its ordinary material shades and shadows.
+#[test]
+fn a_shadeless_material_shows_its_colour_and_casts_no_shadow() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let mut unlit = json.clone();
+    unlit["materials"][0]["extensions"] = json!({"KHR_materials_unlit": {}});
+    unlit["extensionsUsed"] = json!(["KHR_materials_unlit"]);
+    let write = |j: &serde_json::Value| {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("model.glb"), join(j, &bin)).unwrap();
+        d
+    };
+    let (plain_dir, unlit_dir) = (write(&json), write(&unlit));
+    let albedo = render_with(plain_dir.path(), "", "unlit");
+    let differ = |a: &image::RgbaImage, b: &image::RgbaImage, at: &dyn Fn(usize) -> bool| {
+        a.pixels()
+            .zip(b.pixels())
+            .enumerate()
+            .filter(|(i, _)| at(*i))
+            .map(|(_, (p, q))| (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap())
+            .max()
+            .unwrap_or(0)
+    };
+    let on_box = |i: usize| albedo.as_raw()[4 * i + 3] == 255;
+    assert!((0..64 * 64).filter(|&i| on_box(i)).count() > 200, "the box is in view");
+    let lit_unlit = render_lit(unlit_dir.path(), false, true);
+    let lit_plain = render_lit(plain_dir.path(), false, true);
+    assert!(differ(&albedo, &lit_unlit, &on_box) <= 1, "lit, a shadeless box shows its albedo");
+    assert!(differ(&albedo, &lit_plain, &on_box) > 16, "lit, an ordinary box is shaded");
+    // The ground where the box is not: as bare ground with the shadeless box, shadowed with the ordinary one.
+    let off_box = |i: usize| albedo.as_raw()[4 * i + 3] == 0;
+    let bare = render_lit(tempfile::tempdir().unwrap().path(), true, false);
+    let with_unlit = render_lit(unlit_dir.path(), true, true);
+    let with_plain = render_lit(plain_dir.path(), true, true);
+    assert!(differ(&bare, &with_unlit, &off_box) <= 1, "the shadeless box changes no light on the ground");
+    assert!(differ(&bare, &with_plain, &off_box) > 16, "the ordinary box shadows the ground");
+}

@@ -76,7 +76,7 @@ pub(super) fn ground_planes(scene: &PosedScene) -> impl Iterator<Item = &PosedPr
     scene.primitives.iter().filter(|p| {
         p.kind == PrimKind::Triangles
             && !p.positions.is_empty()
-            && scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows)
+            && scene.materials.get(p.material as usize).is_some_and(|m| !m.casts_shadows && !m.unlit)
     })
 }
 

@@ -131,7 +131,7 @@ pub struct FrameLight {
 /// Whether primitive `p` casts shadows, and so occludes and reflects light onto others: triangles whose material
 /// casts them (every material but a `plane` source's).
 fn is_caster(scene: &PosedScene, p: &PosedPrimitive) -> bool {
-    p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows)
+    p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows && !m.unlit)
 }
 
 /// Bounds of the geometry that casts shadows.
@@ -319,7 +319,7 @@ impl FrameLight {
     /// at barycentric weights `k`, lit as the frame's renders light it: a ground's top face by its grids (as its
     /// pixels are read), any other surface by what its corners gathered, the subject's bounce included rather
     /// than estimated. For a light read from the frame's light action ([`FrameLight::from_gathered`]); a corner
-    /// it holds nothing for bakes as [`FrameLight::bake`].
+    /// it holds nothing for bakes as [`FrameLight::bake`]. A shadeless (`unlit`) surface keeps its albedo.
     #[allow(clippy::too_many_arguments)]
     pub fn bake_on(
         &self,
@@ -333,6 +333,10 @@ impl FrameLight {
         emission: Vec3,
     ) -> Vec3 {
         let material = scene.primitives.get(prim).map(|q| q.material);
+        if material.and_then(|m| scene.materials.get(m as usize)).is_some_and(|m| m.unlit) {
+            // Shadeless: its colour as the camera sees it.
+            return self.view.light(self.exposed(albedo));
+        }
         let top = n.z > 0.0;
         if let Some(c) = material.filter(|_| top).and_then(|m| self.shade_ground(m, p, albedo)) {
             return self.view.light(self.exposed(c + emission));

@@ -166,19 +166,19 @@ pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i
     let k = shade.per_side;
     // What the last share's material needs (its texture and emissive): neighbouring shares are mostly one
     // triangle's, or one mesh's, so the material is looked up again only when it changes.
-    let mut last: Option<(u32, BaseColour, Vec3)> = None;
+    let mut last: Option<(u32, BaseColour, Vec3, bool)> = None;
     for_each_share(t, x0, y0, k, Pixels::All, |s, t| {
         let tri = tris.get(s.id);
-        let (texture, emissive) = match last {
-            Some((m, texture, emissive)) if m == tri.material => (texture, emissive),
+        let (texture, emissive, shadeless) = match last {
+            Some((m, texture, emissive, shadeless)) if m == tri.material => (texture, emissive, shadeless),
             _ => {
                 let mat = scene.material(tri.material);
                 debug_assert_eq!(mat.alpha_mode, AlphaMode::Opaque);
                 // A texture the scene does not have (never from the loaders) reads as white.
                 let texture =
                     mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t)));
-                last = Some((tri.material, texture, mat.emissive));
-                (texture, mat.emissive)
+                last = Some((tri.material, texture, mat.emissive, mat.unlit));
+                (texture, mat.emissive, mat.unlit)
             }
         };
         let texel = match texture {
@@ -196,7 +196,7 @@ pub(super) fn texture_tile(scene: &PosedScene, tris: &Tris, shade: &Shade, x0: i
         } else {
             samples.for_each(|i| {
                 let albedo = t.color[i].truncate() * texel;
-                t.color[i] = (super::shade_unlit(shade, albedo, t.normal[i]) + emissive).extend(1.0);
+                t.color[i] = (super::shade_unlit(shade, shadeless, albedo, t.normal[i]) + emissive).extend(1.0);
             });
         }
     });

@@ -444,7 +444,7 @@ fn draw_triangles(
             walk.hits(x0, y0, w, depth, |i, _, k, _| {
                 let albedo = mat.base_color * vertex_colour(k);
                 let nrm = if shade.normals { tri.normal_at(k) } else { Vec3::ZERO };
-                color[i] = (shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive).extend(1.0);
+                color[i] = (shade_unlit(shade, mat.unlit, albedo.truncate(), nrm) + mat.emissive).extend(1.0);
                 normal[i] = nrm;
                 object[i] = tri.object + 1;
                 if deferring {
@@ -480,7 +480,7 @@ fn draw_triangles(
                         let s = lit::Sample { at, bary: k, z, footprint: 1.0 };
                         lit::shade_sample(scene, tri, l, proj, s, albedo.truncate())
                     }
-                    None => shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive,
+                    None => shade_unlit(shade, mat.unlit, albedo.truncate(), nrm) + mat.emissive,
                 };
                 let color = rgb.extend(albedo.w.min(1.0));
                 blends.push(blend::Fragment { i: i as u32, tri: ti, z, color, normal: nrm, object: tri.object });
@@ -497,7 +497,7 @@ fn draw_triangles(
                 bary[i] = k;
                 return true;
             }
-            let rgb = shade_unlit(shade, albedo.truncate(), nrm) + mat.emissive;
+            let rgb = shade_unlit(shade, mat.unlit, albedo.truncate(), nrm) + mat.emissive;
             color[i] = rgb.extend(1.0);
             normal[i] = nrm;
             object[i] = tri.object + 1;
@@ -510,15 +510,15 @@ fn draw_triangles(
     }
 }
 
-/// Unlit or Lambert colour of albedo `albedo` with normal `nrm`.
+/// Unlit or Lambert colour of albedo `albedo` with normal `nrm`; a `shadeless` material's is its albedo in either.
 #[inline]
-fn shade_unlit(shade: &Shade, albedo: Vec3, nrm: Vec3) -> Vec3 {
+fn shade_unlit(shade: &Shade, shadeless: bool, albedo: Vec3, nrm: Vec3) -> Vec3 {
     match &shade.lambert {
-        Some((ambient, lights)) => {
+        Some((ambient, lights)) if !shadeless => {
             let sum: f32 = lights.iter().map(|(l, k)| k * nrm.dot(*l).max(0.0)).sum();
             albedo * (ambient + sum)
         }
-        None => albedo,
+        _ => albedo,
     }
 }
 

@@ -18,7 +18,9 @@ pub(super) fn material(m: &gltf::Material<'_>) -> (Material, Option<SpecGloss>) 
 fn core(m: &gltf::Material<'_>) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, a] = pbr.base_color_factor();
-    let strength = m.emissive_strength().unwrap_or(1.0);
+    // An unlit material shows its base colour alone (the extension's other properties are ignored, as Blender's
+    // importer ignores them).
+    let strength = if m.unlit() { 0.0 } else { m.emissive_strength().unwrap_or(1.0) };
     Material {
         base_color: Vec4::new(r, g, b, a),
         base_color_texture: pbr
@@ -32,7 +34,10 @@ fn core(m: &gltf::Material<'_>) -> Material {
         alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
         double_sided: m.double_sided(),
         emissive: Vec3::from(m.emissive_factor()) * strength,
-        emissive_texture: m.emissive_texture().map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
+        emissive_texture: m
+            .emissive_texture()
+            .filter(|_| !m.unlit())
+            .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
         metallic: pbr.metallic_factor(),
         roughness: pbr.roughness_factor(),
         metallic_roughness_texture: pbr
@@ -44,6 +49,7 @@ fn core(m: &gltf::Material<'_>) -> Material {
         normal_texture: m.normal_texture().map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.scale())),
         specular: 1.0,
         casts_shadows: true,
+        unlit: m.unlit(),
     }
 }
 
