@@ -271,3 +271,21 @@ fn a_shadeless_material_shows_its_colour_and_casts_no_shadow() {
     assert!(differ(&bare, &with_unlit, &off_box) <= 1, "the shadeless box changes no light on the ground");
     assert!(differ(&bare, &with_plain, &off_box) > 16, "the ordinary box shadows the ground");
 }
+
+/// A material extension that changes a surface's look far past what vvgen draws (here glass) is warned of by
+/// `check`, naming the material and how it renders; the file still builds.
+#[test]
+fn a_material_extension_vvgen_does_not_draw_is_warned_of() {
+    let (mut json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    json["materials"][0]["name"] = json!("Glass");
+    json["materials"][0]["extensions"] = json!({"KHR_materials_transmission": {"transmissionFactor": 1.0}});
+    json["extensionsUsed"] = json!(["KHR_materials_transmission"]);
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("model.glb"), join(&json, &bin)).unwrap();
+    render(tmp.path());
+    let (code, err) = vvgen(tmp.path(), &["check", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    for says in ["model.glb", "material 0 (`Glass`) uses `KHR_materials_transmission`", "opaque"] {
+        assert!(err.contains(says), "`{says}` not in: {err}");
+    }
+}

@@ -9,7 +9,7 @@ use gltf::mesh::Mode;
 
 use super::accessor::{read_f32, read_u32};
 use super::anim::{Animation, Channel, Interp, Sampler, Target};
-use super::materials::{linear_data_textures, material};
+use super::materials::{linear_data_textures, material, unread_looks};
 use super::uri::fetch_uri;
 use crate::scene::light::{FileLight, GltfLightKind};
 use crate::scene::material::Material;
@@ -195,6 +195,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
     }
 
     let (mut materials, spec_gloss): (Vec<Material>, Vec<_>) = doc.materials().map(|m| material(&m)).unzip();
+    warnings.extend(unread_looks(doc.materials()));
     linear_data_textures(&mut materials, &mut textures);
     // After the linear copies: the baked metallic-roughness images are linear already.
     for (i, (m, sg)) in materials.iter_mut().zip(&spec_gloss).enumerate() {

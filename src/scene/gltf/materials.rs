@@ -53,6 +53,51 @@ fn core(m: &gltf::Material<'_>) -> Material {
     }
 }
 
+/// Material extensions that change a surface's look far past what vvgen draws without them (glass, coats,
+/// cloth, thin films): a file that uses one is warned of, naming the materials, since its images will not look
+/// as Blender's do. Subtler ones (`KHR_materials_specular`, `KHR_materials_ior`, which Blender's exporter writes
+/// for most materials) are not named.
+const UNREAD_LOOKS: &[(&str, &str)] = &[
+    ("KHR_materials_transmission", "renders opaque, where Blender renders glass"),
+    ("KHR_materials_volume", "renders without its absorption"),
+    ("KHR_materials_diffuse_transmission", "renders opaque"),
+    ("KHR_materials_clearcoat", "renders without its coat"),
+    ("KHR_materials_sheen", "renders without its sheen"),
+    ("KHR_materials_iridescence", "renders without its thin film"),
+    ("KHR_materials_anisotropy", "renders with round highlights"),
+    ("KHR_materials_dispersion", "renders without dispersion"),
+];
+
+/// A warning per extension of [`UNREAD_LOOKS`] the materials use: which materials, and how they render.
+pub(super) fn unread_looks<'a>(materials: impl Iterator<Item = gltf::Material<'a>>) -> Vec<String> {
+    let mut users: Vec<Vec<String>> = vec![Vec::new(); UNREAD_LOOKS.len()];
+    for m in materials {
+        let Some(ext) = m.extensions() else { continue };
+        for (i, (name, _)) in UNREAD_LOOKS.iter().enumerate() {
+            if ext.contains_key(*name) {
+                users[i].push(match (m.index(), m.name()) {
+                    (Some(i), Some(n)) => format!("{i} (`{n}`)"),
+                    (Some(i), None) => i.to_string(),
+                    (None, _) => "the default".into(),
+                });
+            }
+        }
+    }
+    let shown = |u: &[String]| match u.len() {
+        0..=3 => u.join(", "),
+        n => format!("{} and {} more", u[..3].join(", "), n - 3),
+    };
+    UNREAD_LOOKS
+        .iter()
+        .zip(&users)
+        .filter(|(_, u)| !u.is_empty())
+        .map(|((name, how), u)| {
+            let (who, uses) = if u.len() == 1 { ("material", "uses") } else { ("materials", "use") };
+            format!("{who} {} {uses} `{name}`, which vvgen does not read: it {how}", shown(u))
+        })
+        .collect()
+}
+
 /// A material's use of `texture`, with its sampler and `KHR_texture_transform`.
 fn texture_ref(
     texture: &gltf::Texture<'_>,
