@@ -105,7 +105,13 @@ impl LoadedSource {
                 )
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
-            SourceFile::Mesh { path, scene } => SourceData::Static(gltf_at_rest(path, *scene)?),
+            SourceFile::Mesh { path, scene } => {
+                let asset = super::gltf::load(path, *scene)?;
+                if !asset.draws_anything() {
+                    return Err(Error::Source { name, message: nothing_drawn(path, asset.holds()) });
+                }
+                SourceData::Static(at_rest(&asset))
+            }
             SourceFile::PlySequence(frames) => SourceData::Sequence(frames.clone()),
             SourceFile::MeshSequence(frames) => SourceData::MeshSequence(frames.clone()),
         };
@@ -268,14 +274,18 @@ fn mesh_frame_at(path: &std::path::Path, origin: [f64; 3]) -> Result<PosedScene,
 
 /// A glTF file's scene `scene` (default: the file's) posed at rest, in source space.
 fn gltf_at_rest(path: &std::path::Path, scene: Option<usize>) -> Result<PosedScene, Error> {
-    let asset = super::gltf::load(path, scene)?;
+    Ok(at_rest(&super::gltf::load(path, scene)?))
+}
+
+/// A glTF asset posed at rest (no clip), with its materials and textures.
+fn at_rest(asset: &GltfAsset) -> PosedScene {
     let mut posed = PosedScene {
         materials: Arc::new(asset.materials.clone()),
         textures: Arc::clone(&asset.textures),
         ..Default::default()
     };
     asset.pose(&[], 0.0, Mat4::IDENTITY, &mut PoseScratch::default(), &mut posed);
-    Ok(posed)
+    posed
 }
 
 /// The files one mesh-sequence frame is read from besides itself (an OBJ's MTL files and textures, a PLY's

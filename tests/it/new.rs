@@ -135,7 +135,11 @@ fn an_animation_only_export_is_refused_with_the_way_out() {
             assert!(err.contains(s), "`{s}` not in: {err}");
         }
     };
-    for (file, key, clip) in [("Walk Only.glb", "gltf", "1 animation"), ("skeleton_only.fbx", "fbx", "1 take")] {
+    for (file, key, clip) in [
+        ("Walk Only.glb", "gltf", "1 animation"),
+        ("Walk Only.glb", "mesh", "1 animation"),
+        ("skeleton_only.fbx", "fbx", "1 take"),
+    ] {
         let (code, err) = vvgen(d, &["new", file]);
         assert_eq!(code, 2, "{err}");
         says(&err, file, clip);
