@@ -221,11 +221,14 @@ fn drawable(s: &scene::PosedScene, path: &Path) -> anyhow::Result<()> {
 /// Whether the subject is surfaces of one colour each: triangles only, none with a base colour texture or
 /// vertex colours that vary. Unlit, every view of such a subject is a silhouette filled with one colour, from
 /// which no NeRF learns a shape; lit, its shading shows the shape (the built-in studio light when the manifest
-/// names none). Points are left as they are: a cloud without colours has no normals to light either.
+/// names none). Points are left as they are: a cloud without colours has no normals to light either; so are
+/// shadeless (`unlit`) surfaces.
 fn one_colour(s: &scene::PosedScene) -> bool {
     let triangles = |p: &&scene::PosedPrimitive| p.kind == scene::PrimKind::Triangles && !p.indices.is_empty();
-    s.primitives.iter().any(|p| triangles(&p))
-        && s.primitives.iter().all(|p| {
+    // A shadeless surface shows its colour lit or not: light cannot give it a shape.
+    let shaded = |p: &&scene::PosedPrimitive| s.materials.get(p.material as usize).is_none_or(|m| !m.unlit);
+    s.primitives.iter().filter(shaded).any(|p| triangles(&p))
+        && s.primitives.iter().filter(shaded).all(|p| {
             let textured = !p.uvs.is_empty()
                 && s.materials.get(p.material as usize).is_some_and(|m| m.base_color_texture.is_some());
             let varying = p.colors.first().is_some_and(|c| p.colors.iter().any(|d| d != c));
