@@ -270,6 +270,16 @@ fn a_shadeless_material_shows_its_colour_and_casts_no_shadow() {
     let with_plain = render_lit(plain_dir.path(), true, true);
     assert!(differ(&bare, &with_unlit, &off_box) <= 1, "the shadeless box changes no light on the ground");
     assert!(differ(&bare, &with_plain, &off_box) > 16, "the ordinary box shadows the ground");
+    // Untextured, `vvgen new` writes a one-colour box lit (its shape shows only so), a shadeless one unlit.
+    for (shadeless, lit) in [(false, true), (true, false)] {
+        let mut j = if shadeless { unlit.clone() } else { json.clone() };
+        j["materials"][0]["pbrMetallicRoughness"].as_object_mut().unwrap().remove("baseColorTexture");
+        let d = write(&j);
+        let (code, err) = vvgen(d.path(), &["new", "model.glb", "-o", "n.toml"]);
+        assert_eq!(code, 0, "{err}");
+        let text = std::fs::read_to_string(d.path().join("n.toml")).unwrap();
+        assert_eq!(text.contains("shading        = \"pbr\""), lit, "shadeless {shadeless}:\n{text}");
+    }
 }
 
 /// A material extension that changes a surface's look far past what vvgen draws (here glass) is warned of by
@@ -288,4 +298,32 @@ fn a_material_extension_vvgen_does_not_draw_is_warned_of() {
     for says in ["model.glb", "material 0 (`Glass`) uses `KHR_materials_transmission`", "opaque"] {
         assert!(err.contains(says), "`{says}` not in: {err}");
     }
+}
+
+/// `KHR_materials_specular`'s factor is the dielectric layer's weight: Blender 4.5 exports a matte material
+/// (Specular IOR Level 0) as `specularFactor: 0`, which renders without reflection; the factor 1 is the
+/// material without the extension, byte for byte.
+#[test]
+fn a_specular_factor_weighs_the_dielectric_layer() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let with = |factor: Option<f64>| {
+        let mut j = json.clone();
+        if let Some(f) = factor {
+            j["materials"][0]["extensions"] = json!({"KHR_materials_specular": {"specularFactor": f}});
+            j["extensionsUsed"] = json!(["KHR_materials_specular"]);
+        }
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("model.glb"), join(&j, &bin)).unwrap();
+        let asset = vvgen::scene::gltf::load(&d.path().join("model.glb"), None).unwrap();
+        let lit = render_with(d.path(), "[transform]\nfit = \"frame\"\n", "pbr");
+        (asset.materials[0].specular, lit)
+    };
+    let (plain, plain_lit) = with(None);
+    let (one, one_lit) = with(Some(1.0));
+    let (matte, matte_lit) = with(Some(0.0));
+    let (half, _) = with(Some(0.5));
+    assert_eq!((plain, one, matte, half), (1.0, 1.0, 0.0, 0.5));
+    assert!(plain_lit == one_lit, "the factor 1 is the material without the extension");
+    let differ = plain_lit.pixels().zip(matte_lit.pixels()).filter(|(a, b)| a[0].abs_diff(b[0]) > 2).count();
+    assert!(differ > 50, "without its dielectric layer the box renders otherwise: {differ} pixels differ");
 }

@@ -47,10 +47,22 @@ fn core(m: &gltf::Material<'_>) -> Material {
             .occlusion_texture()
             .map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.strength())),
         normal_texture: m.normal_texture().map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.scale())),
-        specular: 1.0,
+        specular: specular_factor(m),
         casts_shadows: true,
         unlit: m.unlit(),
     }
+}
+
+/// `KHR_materials_specular`'s `specularFactor` (1 without it): the extension scales the dielectric layer's
+/// Fresnel at normal and at grazing incidence alike, so it is that layer's weight, what vvgen's `specular` is.
+/// Blender 4.5 exports a Principled BSDF's Specular IOR Level ℓ as the factor 2ℓ (a matte material, ℓ = 0, as
+/// 0; the default 0.5 writes nothing) and imports it back as ℓ; Cycles then scales reflection at normal
+/// incidence only, so the two agree at 0 and 1 and differ between at grazing angles. Its texture and colour are
+/// not read.
+fn specular_factor(m: &gltf::Material<'_>) -> f32 {
+    let ext = m.extensions().and_then(|e| e.get("KHR_materials_specular"));
+    let factor = ext.map(|s| s.get("specularFactor").and_then(|f| f.as_f64()).unwrap_or(1.0));
+    factor.filter(|f| f.is_finite()).map_or(1.0, |f| f.clamp(0.0, 1.0) as f32)
 }
 
 /// Material extensions that change a surface's look far past what vvgen draws without them (glass, coats,
