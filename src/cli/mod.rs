@@ -155,8 +155,8 @@ pub enum Command {
         #[arg(long)]
         cache: Option<PathBuf>,
     },
-    /// Write a commented manifest to start from, for a glTF, PLY or OBJ file or a folder of PLY or OBJ frames:
-    /// clips, frame count and up axis read off the asset, the NeRF-synthetic recipe for the rest.
+    /// Write a commented manifest to start from, for a glTF, FBX, .blend, PLY or OBJ file or a folder of PLY or
+    /// OBJ frames: clips, frame count and up axis read off the asset, the NeRF-synthetic recipe for the rest.
     #[command(
         after_help = "Examples:\n  vvgen new CesiumMan.glb\n  vvgen new frames/ --writer nerfstudio -o scan.toml"
     )]
