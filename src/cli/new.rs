@@ -132,8 +132,8 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
     match ext(asset).as_str() {
         "gltf" | "glb" => {
             let a = scene::gltf::load(asset, None)?;
-            if !a.draws_anything() {
-                bail!("{}", scene::source::nothing_drawn(asset, a.holds()));
+            if let Some(why) = scene::source::nothing_drawn(asset, a.holds()) {
+                bail!("{why}");
             }
             let clips: Vec<(String, f32)> = a
                 .animations
@@ -156,8 +156,8 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         }
         "fbx" => {
             let a = scene::fbx::load(asset)?;
-            if !a.draws_anything() {
-                bail!("{}", scene::source::nothing_drawn(asset, a.holds()));
+            if let Some(why) = scene::source::nothing_drawn(asset, a.holds()) {
+                bail!("{why}");
             }
             let takes: Vec<(String, f32)> = a.takes.iter().map(|t| (t.name.clone(), t.duration() as f32)).collect();
             let mut rest = scene::PosedScene::default();

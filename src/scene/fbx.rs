@@ -81,14 +81,11 @@ pub struct FbxAsset {
 }
 
 impl FbxAsset {
-    /// Whether some mesh has a triangle. An animation-only export (a skeleton and its takes) has none.
-    pub fn draws_anything(&self) -> bool {
-        self.parts.iter().any(|p| !p.indices.is_empty())
-    }
-
-    /// What the file holds, for the error when it draws nothing.
+    /// What the file holds: whether it draws anything (some mesh has a triangle; an animation-only export, a
+    /// skeleton and its takes, has none) and, for the error when it does not, what it has instead.
     pub fn holds(&self) -> super::source::Holds {
         super::source::Holds {
+            draws: self.parts.iter().any(|p| !p.indices.is_empty()),
             // ufbx lists the scene's root as a node.
             nodes: self.scene.nodes.len().saturating_sub(1),
             meshes: !self.scene.meshes.is_empty(),

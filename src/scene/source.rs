@@ -71,8 +71,7 @@ impl LoadedSource {
             }
             SourceFile::Gltf { path, scene } => {
                 let asset = super::gltf::load(path, *scene)?;
-                if !asset.draws_anything() {
-                    let message = nothing_drawn(path, asset.holds());
+                if let Some(message) = nothing_drawn(path, asset.holds()) {
                     return Err(Error::Source { name, message });
                 }
                 let clips = select_clips(&asset, &req.clips).map_err(|message| Error::Clip { name: name.clone(), message })?;
@@ -82,8 +81,7 @@ impl LoadedSource {
             }
             SourceFile::Fbx(path) => {
                 let asset = super::fbx::load(path)?;
-                if !asset.draws_anything() {
-                    let message = nothing_drawn(path, asset.holds());
+                if let Some(message) = nothing_drawn(path, asset.holds()) {
                     return Err(Error::Source { name, message });
                 }
                 warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", path.display())));
@@ -107,8 +105,8 @@ impl LoadedSource {
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
             SourceFile::Mesh { path, scene } => {
                 let asset = super::gltf::load(path, *scene)?;
-                if !asset.draws_anything() {
-                    return Err(Error::Source { name, message: nothing_drawn(path, asset.holds()) });
+                if let Some(message) = nothing_drawn(path, asset.holds()) {
+                    return Err(Error::Source { name, message });
                 }
                 SourceData::Static(at_rest(&asset))
             }
@@ -178,9 +176,12 @@ impl LoadedSource {
     }
 }
 
-/// What a glTF or FBX file that draws nothing holds, for the error that refuses it ([`nothing_drawn`]).
+/// What a glTF or FBX file holds: whether it draws anything, and what it has instead for the error that refuses
+/// it when it does not ([`nothing_drawn`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Holds {
+    /// Whether it has something to draw (or, in glTF, a light).
+    pub draws: bool,
     /// Its nodes.
     pub nodes: usize,
     /// Whether some node has a mesh (of lines, or empty: nothing vvgen draws).
@@ -191,12 +192,15 @@ pub struct Holds {
     pub clip: &'static str,
 }
 
-/// Why a glTF or FBX file with nothing to draw (nor, in glTF, a light) cannot be a source, and the way out. A
-/// file without any mesh is most often an animation-only export, a skeleton and its clips: Mixamo's "Without
-/// Skin" download, or an exporter asked for the animation alone.
-pub fn nothing_drawn(path: &std::path::Path, h: Holds) -> String {
+/// Why a glTF or FBX file with nothing to draw (nor, in glTF, a light) cannot be a source, and the way out;
+/// `None` when it draws something. A file without any mesh is most often an animation-only export, a skeleton
+/// and its clips: Mixamo's "Without Skin" download, or an exporter asked for the animation alone.
+pub fn nothing_drawn(path: &std::path::Path, h: Holds) -> Option<String> {
+    if h.draws {
+        return None;
+    }
     let file = path.file_name().map_or_else(|| path.display().to_string(), |f| f.to_string_lossy().into_owned());
-    match h {
+    Some(match h {
         Holds { meshes: true, .. } => {
             format!("`{file}`: nothing to render: no triangles or points (vvgen draws neither lines nor empty meshes)")
         }
@@ -208,7 +212,7 @@ pub fn nothing_drawn(path: &std::path::Path, h: Holds) -> String {
              and its motion, as Mixamo's \"Without Skin\" download); download or export the character with its mesh \
              (Mixamo: \"With Skin\"), or in Blender apply the motion to the character and name the .blend"
         ),
-    }
+    })
 }
 
 fn select_clips(asset: &GltfAsset, sel: &Clips) -> Result<Vec<usize>, String> {

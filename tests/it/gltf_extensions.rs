@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use serde_json::json;
+use serde_json::{json, Value};
 
 use crate::common::{data, glb_join as join, glb_split as split};
 
@@ -25,13 +25,28 @@ fn render(dir: &Path) -> image::RgbaImage {
 fn render_with(dir: &Path, transform: &str, shading: &str) -> image::RgbaImage {
     let manifest = format!(
         "[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n\
-         {transform}[render]\nresolution = [64, 64]\nshading = \"{shading}\"\n\
-         [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n"
+         {transform}[render]\nresolution = [64, 64]\nshading = \"{shading}\"\n{TWO_VIEWS}"
     );
+    first_image(dir, &manifest)
+}
+
+/// A manifest's tail: two hemisphere views, a D-NeRF output.
+const TWO_VIEWS: &str =
+    "[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n";
+
+/// Builds `manifest` as `m.toml` in `dir` and returns its first training image's RGBA.
+fn first_image(dir: &Path, manifest: &str) -> image::RgbaImage {
     std::fs::write(dir.join("m.toml"), manifest).unwrap();
     let (code, err) = vvgen(dir, &["-q", "build", "m.toml"]);
     assert_eq!(code, 0, "{err}");
     image::open(dir.join("out/s_dnerf/train/r_0000.png")).unwrap().to_rgba8()
+}
+
+/// A folder holding `model.glb` of `json` and `bin`.
+fn model(json: &Value, bin: &[u8]) -> tempfile::TempDir {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("model.glb"), join(json, bin)).unwrap();
+    d
 }
 
 /// BoxTextured with its material in the specular-glossiness model, as a dielectric (specular 0.04): the
@@ -40,8 +55,7 @@ fn render_with(dir: &Path, transform: &str, shading: &str) -> image::RgbaImage {
 #[test]
 fn a_specular_glossiness_dielectric_renders_as_its_metallic_roughness_twin() {
     let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
-    let twin = tempfile::tempdir().unwrap();
-    std::fs::write(twin.path().join("model.glb"), join(&json, &bin)).unwrap();
+    let twin = model(&json, &bin);
     let want = render(twin.path());
 
     let mut sg = json.clone();
@@ -52,8 +66,7 @@ fn a_specular_glossiness_dielectric_renders_as_its_metallic_roughness_twin() {
         "diffuseTexture": texture, "specularFactor": [0.04, 0.04, 0.04], "glossinessFactor": 0.5}});
     sg["extensionsUsed"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
     sg["extensionsRequired"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
-    let tmp = tempfile::tempdir().unwrap();
-    std::fs::write(tmp.path().join("model.glb"), join(&sg, &bin)).unwrap();
+    let tmp = model(&sg, &bin);
     let got = render(tmp.path());
     assert!(want.pixels().filter(|p| p[3] == 255).count() > 500, "the box is in view");
     let worst = want.pixels().zip(got.pixels()).flat_map(|(a, b)| (0..4).map(|c| a[c].abs_diff(b[c]))).max();
@@ -62,8 +75,7 @@ fn a_specular_glossiness_dielectric_renders_as_its_metallic_roughness_twin() {
     // The same texture read as a coloured metal's specular instead: no longer the twin.
     sg["materials"][0]["extensions"] = json!({"KHR_materials_pbrSpecularGlossiness": {
         "diffuseFactor": [0, 0, 0, 1], "specularGlossinessTexture": texture, "specularFactor": [1, 1, 1]}});
-    let metal = tempfile::tempdir().unwrap();
-    std::fs::write(metal.path().join("model.glb"), join(&sg, &bin)).unwrap();
+    let metal = model(&sg, &bin);
     let got = render(metal.path());
     let differ = want.pixels().zip(got.pixels()).filter(|(a, b)| a[0].abs_diff(b[0]) > 8).count();
     assert!(differ == 0, "unlit, a metal's base colour is its specular colour: {differ} pixels differ");
@@ -84,9 +96,8 @@ fn a_required_extension_vvgen_does_not_read_is_refused_with_the_way_out() {
     for (ext, way_out) in cases {
         json["extensionsUsed"] = json!([ext]);
         json["extensionsRequired"] = json!([ext]);
-        let tmp = tempfile::tempdir().unwrap();
+        let tmp = model(&json, &bin);
         let d = tmp.path();
-        std::fs::write(d.join("model.glb"), join(&json, &bin)).unwrap();
         let (code, err) = vvgen(d, &["new", "model.glb"]);
         assert_eq!(code, 2, "{err}");
         let named = format!("`{ext}`");
@@ -159,9 +170,7 @@ fn a_quantized_mesh_renders_as_its_float_twin() {
     qj["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
     qj["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
     for shading in ["unlit", "pbr"] {
-        let (twin, quantized) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-        std::fs::write(twin.path().join("model.glb"), join(&json, &bin)).unwrap();
-        std::fs::write(quantized.path().join("model.glb"), join(&qj, &q)).unwrap();
+        let (twin, quantized) = (model(&json, &bin), model(&qj, &q));
         let (want, got) = (render_with(twin.path(), "", shading), render_with(quantized.path(), "", shading));
         let covered = want.pixels().filter(|p| p[3] == 255).count();
         assert!((200..2000).contains(&covered), "the 1 m box is in view at its size: {covered} pixels");
@@ -202,9 +211,7 @@ fn a_webp_texture_renders_as_its_png_twin() {
     wj["buffers"][0]["byteLength"] = json!(w.len());
     wj["extensionsUsed"] = json!(["EXT_texture_webp"]);
     wj["extensionsRequired"] = json!(["EXT_texture_webp"]);
-    let (twin, webp_dir) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    std::fs::write(twin.path().join("model.glb"), join(&json, &bin)).unwrap();
-    std::fs::write(webp_dir.path().join("model.glb"), join(&wj, &w)).unwrap();
+    let (twin, webp_dir) = (model(&json, &bin), model(&wj, &w));
     let (want, got) = (render(twin.path()), render(webp_dir.path()));
     let shades: std::collections::BTreeSet<_> = want.pixels().filter(|p| p[3] == 255).map(|p| p.0).collect();
     assert!(shades.len() > 20, "the texture shows: {} shades", shades.len());
@@ -212,23 +219,19 @@ fn a_webp_texture_renders_as_its_png_twin() {
     assert!(worst <= Some(1), "the WebP box's image differs from the PNG one's by {worst:?} levels");
 }
 
-/// Builds `model.glb` (no fit), beside a ground plane when `floor`, lit by an oblique sun and the studio map, two
+/// Builds `model.glb` when `subject` (no fit), beside a ground plane when `floor`, lit by an oblique sun and the studio map, two
 /// views at 64², and returns the first image's RGBA.
-fn render_lit(dir: &Path, floor: bool, model: bool) -> image::RgbaImage {
+fn render_lit(dir: &Path, floor: bool, subject: bool) -> image::RgbaImage {
     let mut m = String::from("[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n");
-    if model {
+    if subject {
         m += "[source.s]\ngltf = \"model.glb\"\n";
     }
     if floor {
         m += "[source.floor]\nplane = { size = [6, 6], z = -0.5 }\n";
     }
     m += "[render]\nresolution = [64, 64]\nshading = \"pbr\"\n\
-          [light.sun]\nkind = \"sun\"\ndirection = [0.5, 0.3, -0.8]\nintensity = 2\n\
-          [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n";
-    std::fs::write(dir.join("m.toml"), m).unwrap();
-    let (code, err) = vvgen(dir, &["-q", "build", "m.toml"]);
-    assert_eq!(code, 0, "{err}");
-    image::open(dir.join("out/s_dnerf/train/r_0000.png")).unwrap().to_rgba8()
+          [light.sun]\nkind = \"sun\"\ndirection = [0.5, 0.3, -0.8]\nintensity = 2\n";
+    first_image(dir, &(m + TWO_VIEWS))
 }
 
 /// `KHR_materials_unlit`, as Blender's importer builds it (an Emission of the base colour seen by camera rays
@@ -241,12 +244,7 @@ fn a_shadeless_material_shows_its_colour_and_casts_no_shadow() {
     let mut unlit = json.clone();
     unlit["materials"][0]["extensions"] = json!({"KHR_materials_unlit": {}});
     unlit["extensionsUsed"] = json!(["KHR_materials_unlit"]);
-    let write = |j: &serde_json::Value| {
-        let d = tempfile::tempdir().unwrap();
-        std::fs::write(d.path().join("model.glb"), join(j, &bin)).unwrap();
-        d
-    };
-    let (plain_dir, unlit_dir) = (write(&json), write(&unlit));
+    let (plain_dir, unlit_dir) = (model(&json, &bin), model(&unlit, &bin));
     let albedo = render_with(plain_dir.path(), "", "unlit");
     let differ = |a: &image::RgbaImage, b: &image::RgbaImage, at: &dyn Fn(usize) -> bool| {
         a.pixels()
@@ -274,7 +272,7 @@ fn a_shadeless_material_shows_its_colour_and_casts_no_shadow() {
     for (shadeless, lit) in [(false, true), (true, false)] {
         let mut j = if shadeless { unlit.clone() } else { json.clone() };
         j["materials"][0]["pbrMetallicRoughness"].as_object_mut().unwrap().remove("baseColorTexture");
-        let d = write(&j);
+        let d = model(&j, &bin);
         let (code, err) = vvgen(d.path(), &["new", "model.glb", "-o", "n.toml"]);
         assert_eq!(code, 0, "{err}");
         let text = std::fs::read_to_string(d.path().join("n.toml")).unwrap();
@@ -290,8 +288,7 @@ fn a_material_extension_vvgen_does_not_draw_is_warned_of() {
     json["materials"][0]["name"] = json!("Glass");
     json["materials"][0]["extensions"] = json!({"KHR_materials_transmission": {"transmissionFactor": 1.0}});
     json["extensionsUsed"] = json!(["KHR_materials_transmission"]);
-    let tmp = tempfile::tempdir().unwrap();
-    std::fs::write(tmp.path().join("model.glb"), join(&json, &bin)).unwrap();
+    let tmp = model(&json, &bin);
     render(tmp.path());
     let (code, err) = vvgen(tmp.path(), &["check", "m.toml"]);
     assert_eq!(code, 0, "{err}");
@@ -312,8 +309,7 @@ fn a_specular_factor_weighs_the_dielectric_layer() {
             j["materials"][0]["extensions"] = json!({"KHR_materials_specular": {"specularFactor": f}});
             j["extensionsUsed"] = json!(["KHR_materials_specular"]);
         }
-        let d = tempfile::tempdir().unwrap();
-        std::fs::write(d.path().join("model.glb"), join(&j, &bin)).unwrap();
+        let d = model(&j, &bin);
         let asset = vvgen::scene::gltf::load(&d.path().join("model.glb"), None).unwrap();
         let lit = render_with(d.path(), "[transform]\nfit = \"frame\"\n", "pbr");
         (asset.materials[0].specular, lit)

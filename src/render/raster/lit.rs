@@ -158,17 +158,6 @@ fn shade_lobe(
 ) -> (Vec3, Option<f32>) {
     let Sample { at, bary: k, z, footprint } = s;
     let mat = scene.material(tri.material);
-    if mat.unlit {
-        // Shadeless: what Blender's Emission of the base colour shows the camera, through the film's exposure.
-        let mut albedo = albedo;
-        if mat.alpha_mode == AlphaMode::Opaque {
-            if let Some((r, t)) = mat.base_color_texture.and_then(|r| scene.textures.get(r.texture as usize).map(|t| (r, t))) {
-                let (uv, dx, dy) = tri.uv_footprint(k, z, footprint);
-                albedo *= t.sample_footprint_rgb(&r, uv, dx, dy);
-            }
-        }
-        return (l.light.exposed(albedo), None);
-    }
     // Back to the world: the point's view-space position at depth z.
     let (sx, sy) = ((at.x - proj.f[2]) / proj.f[0], (at.y - proj.f[3]) / proj.f[1]);
     let p = l.c2w.transform_point3(Vec3::new(sx * z, -sy * z, -z));
@@ -190,6 +179,10 @@ fn shade_lobe(
         if let Some(t) = sample(base) {
             albedo *= t;
         }
+    }
+    if mat.unlit {
+        // Shadeless: what Blender's Emission of the base colour shows the camera, through the film's exposure.
+        return (l.light.exposed(albedo), None);
     }
     let mut surface =
         Surface { base: albedo, metallic: mat.metallic, roughness: mat.roughness, specular: mat.specular };

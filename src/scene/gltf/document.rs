@@ -22,14 +22,15 @@ const SUPPORTED_REQUIRED: &[&str] = &[
 /// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
 /// references.
 pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
-    let json: std::borrow::Cow<'_, [u8]> = if bytes.starts_with(b"glTF") {
-        gltf::Glb::from_slice(bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?.json
+    let (json, bin): (std::borrow::Cow<'_, [u8]>, _) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?;
+        (glb.json, glb.bin)
     } else if bytes.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
         return Err("neither a GLB (it does not start with `glTF`) nor glTF JSON (it does not start with `{`); \
                     a .bin is a glTF's side-car buffer: name the .gltf"
             .into());
     } else {
-        bytes.into()
+        (bytes.into(), None)
     };
     let mut doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
     required_extensions(&doc)?;
@@ -40,7 +41,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
         if !webp {
             return if validate { gltf::Gltf::from_slice(bytes) } else { gltf::Gltf::from_slice_without_validation(bytes) };
         }
-        let blob = if bytes.starts_with(b"glTF") { gltf::Glb::from_slice(bytes)?.bin.map(|b| b.into_owned()) } else { None };
+        let blob = bin.as_deref().map(<[u8]>::to_vec);
         let root: gltf::json::Root = serde_json::from_value(doc.clone()).map_err(gltf::Error::Deserialize)?;
         let document =
             if validate { gltf::Document::from_json(root)? } else { gltf::Document::from_json_without_validation(root) };

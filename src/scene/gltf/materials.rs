@@ -20,7 +20,8 @@ fn core(m: &gltf::Material<'_>) -> Material {
     let [r, g, b, a] = pbr.base_color_factor();
     // An unlit material shows its base colour alone (the extension's other properties are ignored, as Blender's
     // importer ignores them).
-    let strength = if m.unlit() { 0.0 } else { m.emissive_strength().unwrap_or(1.0) };
+    let unlit = m.unlit();
+    let strength = if unlit { 0.0 } else { m.emissive_strength().unwrap_or(1.0) };
     Material {
         base_color: Vec4::new(r, g, b, a),
         base_color_texture: pbr
@@ -36,7 +37,7 @@ fn core(m: &gltf::Material<'_>) -> Material {
         emissive: Vec3::from(m.emissive_factor()) * strength,
         emissive_texture: m
             .emissive_texture()
-            .filter(|_| !m.unlit())
+            .filter(|_| !unlit)
             .map(|i| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform())),
         metallic: pbr.metallic_factor(),
         roughness: pbr.roughness_factor(),
@@ -49,7 +50,7 @@ fn core(m: &gltf::Material<'_>) -> Material {
         normal_texture: m.normal_texture().map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.scale())),
         specular: specular_factor(m),
         casts_shadows: true,
-        unlit: m.unlit(),
+        unlit,
     }
 }
 

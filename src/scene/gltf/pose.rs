@@ -45,19 +45,16 @@ pub fn tangent(m: &Mat4, t: Vec4) -> Vec4 {
 }
 
 impl GltfAsset {
-    /// Whether the selected scene holds something to draw or light: a node with a mesh of triangles or points,
-    /// or a light. An animation-only export (a skeleton and its clips) holds neither.
-    pub fn draws_anything(&self) -> bool {
-        let drawn = |m: usize| self.meshes.get(m).is_some_and(|ps| ps.iter().any(|p| !p.positions.is_empty()));
-        self.order.iter().any(|&(n, _)| {
-            let node = &self.nodes[n];
-            node.mesh.is_some_and(drawn) || node.light.is_some()
-        })
-    }
-
-    /// What the file holds, for the error when it draws nothing.
+    /// What the selected scene holds: whether it has something to draw or light (a node with a mesh of
+    /// triangles or points, or a light; an animation-only export, a skeleton and its clips, has neither) and, for
+    /// the error when it does not, what it has instead.
     pub fn holds(&self) -> crate::scene::source::Holds {
+        let drawn = |m: usize| self.meshes.get(m).is_some_and(|ps| ps.iter().any(|p| !p.positions.is_empty()));
         crate::scene::source::Holds {
+            draws: self.order.iter().any(|&(n, _)| {
+                let node = &self.nodes[n];
+                node.mesh.is_some_and(drawn) || node.light.is_some()
+            }),
             nodes: self.nodes.len(),
             meshes: self.order.iter().any(|&(n, _)| self.nodes[n].mesh.is_some()),
             clips: self.animations.len(),
