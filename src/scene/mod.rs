@@ -13,6 +13,7 @@ pub mod obj;
 pub mod ply;
 pub mod posed;
 pub mod source;
+pub mod spacing;
 pub mod texture;
 pub mod transform;
 
@@ -136,6 +137,10 @@ pub struct Scene {
     /// unless `[render] gltf_lights = false`. When not, posed frames carry no lights, so nothing keys or
     /// shades them.
     pub file_lights: bool,
+    /// One voxel of the first point-cloud sequence, in its source units, the default splat size ([`spacing`]):
+    /// 1 where its first frame's coordinates are whole numbers (8i, vsense), else the distance within which nine
+    /// of its points in ten have a neighbour; `None` without a sequence, or when its points give no such distance.
+    pub voxel: Option<f32>,
 }
 
 /// Reusable buffers for posing a scene; posing a single-source scene after its first frame allocates nothing.
@@ -152,6 +157,21 @@ impl Poser {
     pub fn first_primitive_of(&self, i: usize) -> usize {
         self.parts.iter().take(i).map(|p| p.primitives.len()).sum()
     }
+}
+
+/// [`Scene::voxel`] of `sources`: their first point-cloud sequence's first frame, read once more. (A cloud in
+/// metres took one unit for its voxel before, and its splats, each the subject's size many times over, were all
+/// dropped at the near plane: empty images.)
+fn first_voxel(sources: &[LoadedSource]) -> Result<Option<f32>, Error> {
+    let Some((src, first)) = sources.iter().find_map(|s| match &s.data {
+        SourceData::Sequence(frames) => frames.first().map(|f| (s, f)),
+        _ => None,
+    }) else {
+        return Ok(None);
+    };
+    let frame = source::ply_scene_at(&first.path, src.origin)?;
+    let points = frame.primitives.first().map_or(&[][..], |p| &p.positions[..]);
+    Ok(if spacing::on_whole_grid(points) { Some(1.0) } else { spacing::typical(points) })
 }
 
 impl Scene {
@@ -230,7 +250,8 @@ impl Scene {
             .map_err(|source| Error::Transform { table: "[transform]".into(), source })?;
         let frames = sources.iter().map(LoadedSource::frame_count).max().unwrap_or(0);
         let file_lights = req.file_lights;
-        let mut scene = Scene { sources, locals, global, frames, warnings, file_lights };
+        let voxel = first_voxel(&sources)?;
+        let mut scene = Scene { sources, locals, global, frames, warnings, file_lights, voxel };
         scene.place_ground(&mut scratch, &mut posed)?;
         Ok(scene)
     }
@@ -291,11 +312,10 @@ impl Scene {
         self.global * self.locals[i]
     }
 
-    /// World size of one source unit of the first point-cloud sequence: one voxel for 8i / vsense style
-    /// integer-coordinate frames, the default splat size.
+    /// World size of one voxel of the first point-cloud sequence ([`Scene::voxel`]), the default splat size.
     pub fn voxel_size(&self) -> Option<f32> {
         let i = self.sources.iter().position(|s| matches!(s.data, SourceData::Sequence(_)))?;
-        Some(self.world_from_source(i).x_axis.truncate().length())
+        Some(self.voxel? * self.world_from_source(i).x_axis.truncate().length())
     }
 
     /// Whether some source reads a file per frame (PLY or mesh sequences): posing a frame then costs a read,

@@ -113,6 +113,18 @@ impl LoadedSource {
             SourceFile::PlySequence(frames) => SourceData::Sequence(frames.clone()),
             SourceFile::MeshSequence(frames) => SourceData::MeshSequence(frames.clone()),
         };
+        // A 3D Gaussian splatting file (found from its first frame's header, as `check` sees it) is drawn as
+        // points: say what of it is not.
+        let first_ply = match &req.file {
+            SourceFile::Mesh { path, .. } if is_ply(path) => Some(path),
+            SourceFile::PlySequence(frames) | SourceFile::MeshSequence(frames) => {
+                frames.first().map(|f| &f.path).filter(|p| is_ply(p))
+            }
+            _ => None,
+        };
+        if let Some(path) = first_ply {
+            warnings.extend(splats_note(path)?);
+        }
         // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
         // .blend in Blender's (exported +Z up). A ground plane is placed in world units.
         let default_up = match &req.file {
@@ -361,6 +373,24 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
         });
     }
     Ok(Some(tex))
+}
+
+/// What a user should know when the PLY at `path` holds 3D Gaussians ([`ply::gaussian_splats`]): vvgen draws
+/// them as points.
+fn splats_note(path: &std::path::Path) -> Result<Option<String>, Error> {
+    let header = checked_ply(path)?;
+    let points = if header.elements.iter().any(|e| e.name == "vertex") { "vertex" } else { "point" };
+    let splats = header.elements.iter().find(|e| e.name == points).is_some_and(ply::gaussian_splats);
+    Ok(splats.then(|| {
+        format!(
+            "{}: holds 3D Gaussians (3D Gaussian splatting's layout): vvgen draws each as a point at its centre in \
+             its base colour (spherical-harmonic band 0, as 3DGS's tools colour a cloud), not as a splat: the \
+             Gaussians' sizes, orientations, view-dependent colour and translucency are not drawn, and those too \
+             faint to show anywhere (opacity under 1/255) are left out. For images as a splatting viewer shows them, \
+             render the Gaussians there; vvgen's points suit the cloud's geometry and colour",
+            path.display()
+        )
+    }))
 }
 
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.

@@ -4,6 +4,7 @@
 
 mod blend;
 mod build;
+mod clouds;
 mod common;
 mod compare;
 mod consumers;

@@ -5,7 +5,7 @@
 //! ([`read_file`](super::read_file)).
 
 use super::header::{Element, Format, Scalar};
-use super::read::{slot, NO_SLOT, SLOT_A, SLOT_NX, SLOT_R, SLOT_U, SLOT_X};
+use super::read::{slot, NO_SLOT, SLOT_A, SLOT_DC, SLOT_NX, SLOT_R, SLOT_U, SLOT_X};
 use super::PlyData;
 
 /// Where the groups sit in a row of a fast-path element.
@@ -24,7 +24,8 @@ pub(super) struct Layout {
 }
 
 impl Layout {
-    /// The element's layout, when it is binary, has no lists, texture coordinates or alpha, and its position,
+    /// The element's layout, when it is binary, has no lists, texture coordinates, alpha or Gaussians' colours
+    /// (`f_dc_*`: see [`gaussian_splats`](super::read::gaussian_splats)), and its position,
     /// normal and colour properties (those it has) are each three adjacent properties of one type: f32 for
     /// positions and normals, u8 for colours. Anything else takes the general path.
     pub fn of(el: &Element, format: Format) -> Option<Layout> {
@@ -47,7 +48,7 @@ impl Layout {
             let (a, b, c) = (at(first)?, at(first + 1)?, at(first + 2)?);
             (a.1 == ty && b.1 == ty && c.1 == ty && b.0 == a.0 + ty.size() && c.0 == b.0 + ty.size()).then_some(a.0)
         };
-        if has(SLOT_U) && has(SLOT_U + 1) || has(SLOT_A) {
+        if has(SLOT_U) && has(SLOT_U + 1) || has(SLOT_A) || has(SLOT_DC) {
             return None;
         }
         let xyz = group(SLOT_X, Scalar::F32)?;

@@ -13,7 +13,8 @@ pub struct PlyData {
     pub positions: Vec<[f32; 3]>,
     /// Vertex normals, when the file has nx/ny/nz.
     pub normals: Option<Vec<[f32; 3]>>,
-    /// Vertex colours as sRGB bytes (float colours in 0..1 are converted), when the file has them.
+    /// Vertex colours as sRGB bytes (float colours in 0..1 are converted), when the file has them; a 3D Gaussian
+    /// splatting file's are its Gaussians' base colours ([`gaussian_splats`]).
     pub colors: Option<Vec<[u8; 4]>>,
     /// Per-vertex texture coordinates (`texture_u`/`texture_v`, `s`/`t` or `u`/`v`; v up), when the file has them.
     pub uvs: Option<Vec<[f32; 2]>>,
@@ -28,6 +29,10 @@ pub(super) const SLOT_NX: usize = 3;
 pub(super) const SLOT_R: usize = 6;
 pub(super) const SLOT_A: usize = 9;
 pub(super) const SLOT_U: usize = 10;
+/// A 3D Gaussian's colour at band 0 of its spherical harmonics (`f_dc_0`, `_1`, `_2`), and its opacity's logit.
+pub(super) const SLOT_DC: usize = 12;
+pub(super) const SLOT_OPACITY: usize = 15;
+const SLOTS: usize = 16;
 pub(super) const NO_SLOT: usize = usize::MAX;
 
 /// Where a vertex property's value goes (`SLOT_*`), or [`NO_SLOT`] for one vvgen does not read.
@@ -45,8 +50,43 @@ pub(super) fn slot(name: &str) -> usize {
         "alpha" | "a" | "diffuse_alpha" => 9,
         "texture_u" | "s" | "u" => 10,
         "texture_v" | "t" | "v" => 11,
+        "f_dc_0" => 12,
+        "f_dc_1" => 13,
+        "f_dc_2" => 14,
+        "opacity" => 15,
         _ => NO_SLOT,
     }
+}
+
+/// Whether a vertex element holds 3D Gaussians as 3D Gaussian splatting writes them (graphdeco-inria's
+/// `save_ply`, and the trainers and editors that share its layout): a colour at band 0 of spherical harmonics
+/// (`f_dc_0`, `f_dc_1`, `f_dc_2`) and an `opacity`, and no `red`, `green`, `blue` (a file with both keeps its
+/// colours). vvgen reads each Gaussian as a point at its centre: its colour the band-0 colour as 3DGS's own
+/// conversion gives it (`0.5 + C0 · f_dc`, clamped to 0..1, times 255 rounded down: what its tools write as a
+/// cloud's colours), and a Gaussian whose opacity never reaches 1/255 (the least alpha 3DGS's rasterizer blends) is
+/// left out, since nothing of it shows in any view. Its size, orientation, view-dependent colour (`f_rest_*`) and
+/// translucency are not read.
+pub fn gaussian_splats(el: &Element) -> bool {
+    let has = |s: usize| el.props.iter().any(|p| p.list.is_none() && slot(&p.name) == s);
+    (SLOT_DC..SLOT_DC + 3).all(has) && has(SLOT_OPACITY) && !(SLOT_R..SLOT_R + 3).all(has)
+}
+
+/// The constant of band 0 of the real spherical harmonics, 1 / (2 √π), as 3DGS writes it.
+const SH_C0: f64 = 0.28209479177387814;
+
+/// A Gaussian's sRGB colour bytes from its band-0 coefficients (`v[SLOT_DC..]`): 3DGS's `SH2RGB`, clamped, as its
+/// tools turn a Gaussian file into a coloured cloud.
+#[inline]
+fn splat_rgba8(v: &[f64; SLOTS]) -> [u8; 4] {
+    let q = |c: f64| ((0.5 + SH_C0 * c).clamp(0.0, 1.0) * 255.0).floor() as u8;
+    [q(v[SLOT_DC]), q(v[SLOT_DC + 1]), q(v[SLOT_DC + 2]), 255]
+}
+
+/// Whether a Gaussian of opacity logit `o` shows anywhere: its peak alpha, sigmoid(o), reaches 1/255 (3DGS's
+/// rasterizer skips any smaller contribution). A NaN is kept: the positions' check names bad rows, not this.
+#[inline]
+fn splat_shows(o: f64) -> bool {
+    o.is_nan() || 1.0 / (1.0 + (-o).exp()) >= 1.0 / 255.0
 }
 
 /// Reads a PLY from memory.
@@ -277,6 +317,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     let has_n = has(SLOT_NX) && has(SLOT_NX + 1) && has(SLOT_NX + 2);
     let has_c = has(SLOT_R) && has(SLOT_R + 1) && has(SLOT_R + 2);
     let has_uv = has(SLOT_U) && has(SLOT_U + 1);
+    let splats = gaussian_splats(el);
     // Float colours are 0..1; integer colours scale by their type's maximum.
     let color_scale = el
         .props
@@ -291,7 +332,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
         .unwrap_or(1.0);
     out.positions = Vec::with_capacity(n);
     let mut normals = Vec::with_capacity(if has_n { n } else { 0 });
-    let mut colors = Vec::with_capacity(if has_c { n } else { 0 });
+    let mut colors = Vec::with_capacity(if has_c || splats { n } else { 0 });
     let mut uvs = Vec::with_capacity(if has_uv { n } else { 0 });
     let fixed: Option<Vec<usize>> =
         (c.format != Format::Ascii && el.props.iter().all(|p| p.list.is_none())).then(|| {
@@ -305,16 +346,21 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
                 })
                 .collect()
         });
-    let mut v = [0f64; 12];
+    let mut v = [0f64; SLOTS];
     v[SLOT_A] = 255.0;
     // One row's values (by slot) onto the columns the element has.
-    let mut push = |v: &[f64; 12]| {
+    let mut push = |v: &[f64; SLOTS]| {
+        if splats && !splat_shows(v[SLOT_OPACITY]) {
+            return;
+        }
         out.positions.push([(v[0] - origin[0]) as f32, (v[1] - origin[1]) as f32, (v[2] - origin[2]) as f32]);
         if has_n {
             normals.push([v[3] as f32, v[4] as f32, v[5] as f32]);
         }
         if has_c {
             colors.push(to_rgba8(v, color_scale));
+        } else if splats {
+            colors.push(splat_rgba8(v));
         }
         if has_uv {
             uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
@@ -368,12 +414,12 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     }
     out.normals = has_n.then_some(normals);
     out.uvs = has_uv.then_some(uvs);
-    out.colors = has_c.then_some(colors);
+    out.colors = (has_c || splats).then_some(colors);
     Ok(false)
 }
 
 #[inline]
-fn to_rgba8(v: &[f64; 12], scale: f64) -> [u8; 4] {
+fn to_rgba8(v: &[f64; SLOTS], scale: f64) -> [u8; 4] {
     let q = |x: f64| (x * scale).round().clamp(0.0, 255.0) as u8;
     [q(v[6]), q(v[7]), q(v[8]), q(v[9])]
 }

@@ -1,0 +1,138 @@
+//! Point clouds from outside 8i's integer grid: 3D Gaussian splatting files (their Gaussians' base colours, checked
+//! against the coloured cloud their authors made, and a warning of what is not drawn), and sequences in metres,
+//! whose splats took one unit (the subject's size many times over) and rendered empty images.
+
+use std::path::Path;
+use std::process::Command;
+
+use vvgen::scene::ply;
+
+/// The rows of a binary little-endian PLY body of `width` f32 properties.
+fn rows(path: &Path, width: usize) -> Vec<Vec<f32>> {
+    let bytes = std::fs::read(path).unwrap();
+    let start = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let floats: Vec<f32> = bytes[start..].chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
+    floats.chunks_exact(width).map(<[f32]>::to_vec).collect()
+}
+
+/// A Mip-Splatting donut's Gaussians read as the coloured cloud its authors made of them, byte for byte, less
+/// the Gaussians no view can show (peak alpha under 1/255, which 3DGS's rasterizer never blends); the streamed
+/// file read and the in-memory read agree, and a degree-3 file with (zero) normals reads too.
+#[test]
+fn a_gaussian_splatting_file_reads_as_its_gaussians_base_colours() {
+    let gaussians = crate::common::data("splats/donut_2000.ply");
+    let theirs = ply::read_file(&crate::common::data("splats/donut_2000_color.ply")).unwrap();
+    let ours = ply::read_file(&gaussians).unwrap();
+    assert_eq!(ours, ply::read(&std::fs::read(&gaussians).unwrap()).unwrap());
+    // x y z, f_dc_0..2, opacity (logit), scale_0..2, rot_0..3.
+    let shows: Vec<bool> =
+        rows(&gaussians, 14).iter().map(|r| 1.0 / (1.0 + (-(r[6] as f64)).exp()) >= 1.0 / 255.0).collect();
+    let faint = shows.iter().filter(|s| !**s).count();
+    assert!((5..200).contains(&faint), "{faint} of 2000 never show");
+    let kept = |v: &[[u8; 4]]| -> Vec<[u8; 4]> { v.to_vec() };
+    let their_colours = theirs.colors.as_deref().unwrap();
+    let expected_colours: Vec<[u8; 4]> =
+        their_colours.iter().zip(&shows).filter(|(_, s)| **s).map(|(c, _)| *c).collect();
+    let expected_positions: Vec<[f32; 3]> =
+        theirs.positions.iter().zip(&shows).filter(|(_, s)| **s).map(|(p, _)| *p).collect();
+    assert_eq!(ours.positions, expected_positions);
+    assert_eq!(kept(ours.colors.as_deref().unwrap()), expected_colours, "the base colours, as their cloud has them");
+    assert!(their_colours.iter().map(|c| c[0]).collect::<std::collections::BTreeSet<_>>().len() > 100);
+
+    let train = ply::read_file(&crate::common::data("splats/train_200.ply")).unwrap();
+    let train_rows = rows(&crate::common::data("splats/train_200.ply"), 62);
+    let n = train_rows.iter().filter(|r| 1.0 / (1.0 + (-(r[54] as f64)).exp()) >= 1.0 / 255.0).count();
+    assert_eq!((train.positions.len(), train.colors.as_ref().map(Vec::len)), (n, Some(n)));
+    assert_eq!(train.positions[0], [train_rows[0][0], train_rows[0][1], train_rows[0][2]]);
+    assert!(train.normals.unwrap().iter().all(|n| *n == [0.0; 3]), "3DGS writes zero normals");
+}
+
+/// A newcomer's 3DGS file, as `vvgen new` takes it from its own folder: `check` and `build` say what of the
+/// Gaussians vvgen draws and what not, and the images show the donut's colours.
+#[test]
+fn a_gaussian_splatting_file_is_drawn_as_points_and_says_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::copy(crate::common::data("splats/donut_2000.ply"), d.join("point_cloud.ply")).unwrap();
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    assert_eq!(run(&["new", "point_cloud.ply"]).0, Some(0));
+    let text = std::fs::read_to_string(d.join("point-cloud.toml")).unwrap();
+    let small = text
+        .replace("views = 100", "views = 2")
+        .replace("views = 10", "views = 1")
+        .replace("views    = 20", "views = 1");
+    std::fs::write(d.join("point-cloud.toml"), small.replace("[400, 400]", "[96, 96]")).unwrap();
+    for cmd in ["check", "build"] {
+        let (code, err) = run(&[cmd, "point-cloud.toml"]);
+        assert_eq!(code, Some(0), "{cmd}: {err}");
+        for says in ["point_cloud.ply: holds 3D Gaussians", "base colour", "not as a splat", "opacity under 1/255"] {
+            assert!(err.contains(says), "{cmd}: `{says}` not in {err}");
+        }
+    }
+    let img = image::open(d.join("out/point-cloud/point-cloud_dnerf/train/r_0000.png")).unwrap().into_rgba8();
+    let shown: Vec<&image::Rgba<u8>> = img.pixels().filter(|p| p[3] == 255).collect();
+    assert!(shown.len() > 200, "{} opaque pixels", shown.len());
+    // The icing is pink and the sprinkles blue: not the white of a cloud without colours.
+    let pinkish = shown.iter().filter(|p| p[0] as i32 > p[1] as i32 + 30).count();
+    assert!(pinkish * 4 > shown.len(), "{pinkish} of {} pixels pink", shown.len());
+}
+
+/// A voxelized sphere shell (every voxel within half a voxel of radius 20: each point has a neighbour one voxel
+/// away) moved off the integer grid into metres (every coordinate times 2⁻¹⁰, exactly): the same images, byte for
+/// byte, as the integer frames, where before every splat was a unit cube (the sphere 25 times over) and the
+/// images were empty; the voxel is measured from the points (`inspect` says so).
+#[test]
+fn a_sequence_in_metres_renders_as_its_integer_twin() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let mut grid = Vec::new();
+    for z in -21i32..=21 {
+        for y in -21i32..=21 {
+            for x in -21i32..=21 {
+                let r = ((x * x + y * y + z * z) as f32).sqrt();
+                if (r - 20.0).abs() < 0.5 {
+                    grid.push([x as f32, y as f32, z as f32]);
+                }
+            }
+        }
+    }
+    let colours: Vec<[u8; 3]> = grid.iter().map(|p| p.map(|c| (128.0 + 6.0 * c) as u8)).collect();
+    for f in 0..2 {
+        // The second frame a voxel higher.
+        let at = |scale: f32| -> Vec<[f32; 3]> {
+            grid.iter().map(|p| [p[0], p[1], p[2] + f as f32].map(|c| c * scale)).collect()
+        };
+        for (name, scale) in [("grid", 1.0), ("metres", 1.0 / 1024.0)] {
+            let positions = at(scale);
+            let out = ply::PlyOut { positions: &positions, colors: Some(&colours), ..Default::default() };
+            std::fs::write(d.join(format!("{name}_{f}.ply")), ply::write(&out)).unwrap();
+        }
+    }
+    for name in ["grid", "metres"] {
+        let text = format!(
+            "[dataset]\nname = \"{name}\"\nout = \"out\"\npreview = false\n\
+             [source.shell]\nply_sequence = \"{name}_{{frame}}.ply\"\nframes = {{ start = 0, end = 1 }}\n\
+             [transform]\nfit = \"frame\"\ncenter = \"bbox\"\n\
+             [render]\nresolution = [120, 120]\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n\
+             [output.d]\nwriter = \"dnerf\"\n"
+        );
+        std::fs::write(d.join(format!("{name}.toml")), text).unwrap();
+        let m = crate::common::load(&d.join(format!("{name}.toml")));
+        vvgen::build::build(&m, &d.join("cache"), Default::default(), &vvgen::build::Silent).unwrap();
+    }
+    let mut covered = 0;
+    for v in 0..2 {
+        let read = |name: &str| std::fs::read(d.join(format!("out/{name}_dnerf/train/r_{v:04}.png"))).unwrap();
+        assert!(read("grid") == read("metres"), "view {v}");
+        let img = image::load_from_memory(&read("metres")).unwrap().into_rgba8();
+        covered += img.pixels().filter(|p| p[3] == 255).count();
+    }
+    assert!(covered > 4000, "{covered} pixels covered");
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["inspect", "metres.toml"]).output().unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains("voxel: 0.0009765625 source units (9 points in 10"), "{said}");
+}
