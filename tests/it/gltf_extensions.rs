@@ -1,7 +1,7 @@
 //! glTF files that require an extension: `KHR_materials_pbrSpecularGlossiness` (many downloads of 2017–2021)
 //! loads and renders its diffuse colour, `KHR_mesh_quantization` (gltfpack's and glTF-Transform's output) and
-//! `EXT_texture_webp` render as their float and PNG twins, and a required extension vvgen does not read is
-//! refused with the way out.
+//! `EXT_texture_webp` render as their float and PNG twins, `EXT_mesh_gpu_instancing` copies as the nodes they
+//! stand for, and a required extension vvgen does not read is refused with the way out.
 
 use std::path::Path;
 use std::process::Command;
@@ -322,4 +322,111 @@ fn a_specular_factor_weighs_the_dielectric_layer() {
     assert!(plain_lit == one_lit, "the factor 1 is the material without the extension");
     let differ = plain_lit.pixels().zip(matte_lit.pixels()).filter(|(a, b)| a[0].abs_diff(b[0]) > 2).count();
     assert!(differ > 50, "without its dielectric layer the box renders otherwise: {differ} pixels differ");
+}
+
+/// BoxTextured drawn six times by one node's `EXT_mesh_gpu_instancing` (as gltfpack `-mi` writes it: required;
+/// translations and scales as floats, rotations as normalized shorts) renders as six nodes placed by the same
+/// numbers, byte for byte, unlit and lit; instances that cannot be read or would pose too many vertices are
+/// refused, naming the node.
+#[test]
+fn instanced_copies_render_as_the_nodes_they_stand_for() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let mesh_node = (0..json["nodes"].as_array().unwrap().len()).find(|&i| json["nodes"][i]["mesh"] == 0).unwrap();
+    let placements: Vec<([f32; 3], [i16; 4], [f32; 3])> = (0..6)
+        .map(|i| {
+            let a = i as f32 * 0.7;
+            let (s, c) = (a.sin(), a.cos());
+            let q = [s * 0.6, c * 0.6, 0.0, 0.8].map(|v| (v * 32767.0).round() as i16);
+            ([i as f32 * 1.5 - 3.75, (i % 2) as f32, -(i as f32) * 0.25], q, [1.0, 0.5 + 0.1 * i as f32, 1.0])
+        })
+        .collect();
+    // What the decoder makes of a normalized short, done the same way.
+    let unit = |v: i16| (v as f32 / 32767.0).max(-1.0);
+
+    // Six nodes.
+    let mut nodes = json.clone();
+    nodes["nodes"][mesh_node].as_object_mut().unwrap().remove("mesh");
+    let first = nodes["nodes"].as_array().unwrap().len();
+    for (t, q, s) in &placements {
+        nodes["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"mesh": 0, "translation": t, "rotation": q.map(unit), "scale": s}));
+    }
+    nodes["nodes"][mesh_node]["children"] = json!((first..first + 6).collect::<Vec<_>>());
+
+    // One node, six instances.
+    let (mut inst, mut ibin) = (json.clone(), bin.clone());
+    let mut view = |bytes: Vec<u8>, inst: &mut Value| -> usize {
+        let at = ibin.len();
+        ibin.extend(&bytes);
+        ibin.resize(ibin.len().next_multiple_of(4), 0);
+        let views = inst["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({"buffer": 0, "byteOffset": at, "byteLength": bytes.len()}));
+        views.len() - 1
+    };
+    let f32s = |v: Vec<f32>| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let t = view(f32s(placements.iter().flat_map(|p| p.0).collect()), &mut inst);
+    let r = view(placements.iter().flat_map(|p| p.1).flat_map(i16::to_le_bytes).collect(), &mut inst);
+    let s = view(f32s(placements.iter().flat_map(|p| p.2).collect()), &mut inst);
+    let accessors = inst["accessors"].as_array_mut().unwrap();
+    let base = accessors.len();
+    accessors.push(json!({"bufferView": t, "componentType": 5126, "count": 6, "type": "VEC3"}));
+    accessors.push(json!({"bufferView": r, "componentType": 5122, "normalized": true, "count": 6, "type": "VEC4"}));
+    accessors.push(json!({"bufferView": s, "componentType": 5126, "count": 6, "type": "VEC3"}));
+    let attributes = json!({"TRANSLATION": base, "ROTATION": base + 1, "SCALE": base + 2});
+    inst["nodes"][mesh_node]["extensions"] = json!({"EXT_mesh_gpu_instancing": {"attributes": attributes}});
+    inst["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+    inst["extensionsRequired"] = json!(["EXT_mesh_gpu_instancing"]);
+    inst["buffers"][0]["byteLength"] = json!(ibin.len());
+
+    let one = render(model(&json, &bin).path()).pixels().filter(|p| p[3] == 255).count();
+    for shading in ["unlit", "pbr"] {
+        let fit = "[transform]\nfit = \"frame\"\n";
+        let (six, copies) = (model(&nodes, &bin), model(&inst, &ibin));
+        let (want, got) = (render_with(six.path(), fit, shading), render_with(copies.path(), fit, shading));
+        let covered = want.pixels().filter(|p| p[3] == 255).count();
+        assert!(covered > 0 && covered < one, "six boxes fitted cover less than one: {covered} against {one}");
+        assert!(want == got, "{shading}: the instanced copies' image is not the six nodes'");
+    }
+
+    // What cannot be read is refused, naming the node and what is wrong.
+    let refused = |edit: &dyn Fn(&mut Value), says: &[&str]| {
+        let mut bad = inst.clone();
+        edit(&mut bad);
+        let tmp = model(&bad, &ibin);
+        let (code, err) = vvgen(tmp.path(), &["new", "model.glb"]);
+        assert_eq!(code, 2, "{err}");
+        let node = format!("node {mesh_node}");
+        for s in says.iter().chain([&"model.glb", &node.as_str()]) {
+            assert!(err.contains(s), "`{s}` not in: {err}");
+        }
+    };
+    let ext = format!("/nodes/{mesh_node}/extensions/EXT_mesh_gpu_instancing/attributes");
+    refused(&|j| *j.pointer_mut(&format!("{ext}/SCALE")).unwrap() = json!(999), &["SCALE names no accessor"]);
+    refused(&|j| j["accessors"][base + 2]["count"] = json!(5), &["count different instances"]);
+    refused(&|j| j["accessors"][base + 1]["type"] = json!("VEC3"), &["ROTATION", "not a VEC4"]);
+    // A zero rotation: no bufferView reads as zeros.
+    refused(
+        &|j| j["accessors"][base + 1].as_object_mut().unwrap().retain(|k, _| k != "bufferView"),
+        &["instance 0 is not a transform"],
+    );
+    // Fifty copies of a three-million-vertex mesh (zeros, no bufferView): refused before any is posed.
+    refused(
+        &|j| {
+            let big = j["accessors"].as_array().unwrap().len();
+            j["accessors"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!({"componentType": 5126, "count": 3_000_000, "type": "VEC3",
+                "min": [0, 0, 0], "max": [0, 0, 0]}));
+            j["meshes"][0]["primitives"][0] = json!({"attributes": {"POSITION": big}});
+            j["accessors"][base]["count"] = json!(50);
+            j["accessors"].as_array_mut().unwrap()[base].as_object_mut().unwrap().remove("bufferView");
+            let e = j.pointer_mut(&ext).unwrap().as_object_mut().unwrap();
+            e.remove("ROTATION");
+            e.remove("SCALE");
+        },
+        &["3000000 vertices 50 times", "keep fewer instances"],
+    );
 }

@@ -14,11 +14,13 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     // WebP images (glTF-Transform's `webp`; image-to-3D generators' output, TRELLIS 2's among them): `parse`
     // points the texture at its WebP image and the image decoder reads it.
     "EXT_texture_webp",
+    // A mesh drawn many times (gltfpack's `-mi` requires it): every copy is posed (`super::instancing`).
+    "EXT_mesh_gpu_instancing",
 ];
 
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
 /// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required
-/// `KHR_mesh_quantization` or `EXT_texture_webp` (which gltf 1.4 calls unsupported). vvgen's own reference check
+/// `KHR_mesh_quantization`, `EXT_texture_webp` or `EXT_mesh_gpu_instancing` (which gltf 1.4 calls unsupported). vvgen's own reference check
 /// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
 /// references.
 pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
@@ -54,7 +56,9 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
                 let no_view = p.starts_with("accessors[") && p.ends_with("].bufferView");
                 // gltf 1.4 has no feature for these; vvgen reads quantized attributes and WebP images.
                 let read_here = p.starts_with("extensionsRequired[")
-                    && ["\"KHR_mesh_quantization\"", "\"EXT_texture_webp\""].iter().any(|x| p.ends_with(x));
+                    && ["\"KHR_mesh_quantization\"", "\"EXT_texture_webp\"", "\"EXT_mesh_gpu_instancing\""]
+                        .iter()
+                        .any(|x| p.ends_with(x));
                 use gltf::json::validation::Error::{Missing, Unsupported};
                 (no_view && matches!(e, Missing)) || (read_here && matches!(e, Unsupported))
             }) =>

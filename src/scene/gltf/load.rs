@@ -9,6 +9,7 @@ use gltf::mesh::Mode;
 
 use super::accessor::{read_f32, read_u32};
 use super::anim::{Animation, Channel, Interp, Sampler, Target};
+use super::instancing;
 use super::materials::{linear_data_textures, material, unread_looks};
 use super::uri::fetch_uri;
 use crate::scene::light::{FileLight, GltfLightKind};
@@ -115,6 +116,9 @@ pub struct Node {
     pub weights: Vec<f32>,
     /// `KHR_lights_punctual` light index.
     pub light: Option<usize>,
+    /// `EXT_mesh_gpu_instancing`: where each copy of the mesh lies, relative to the node (empty: one copy, at the
+    /// node). A skinned mesh is drawn once (see [`super::instancing`]).
+    pub instances: Vec<Mat4>,
 }
 
 /// A skin.
@@ -222,6 +226,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
         meshes.push(prims);
     }
 
+    let mut instanced = 0u64;
     let nodes: Vec<Node> = doc
         .nodes()
         .map(|n| {
@@ -241,7 +246,22 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
                 .or_else(|| n.mesh().and_then(|m| m.weights().map(<[f32]>::to_vec)))
                 .unwrap_or_default();
             weights.resize(n_targets, 0.0);
-            Node {
+            let vertices = n.mesh().and_then(|m| meshes.get(m.index())).map_or(0, |ps: &Vec<Primitive>| {
+                ps.iter().map(|p| p.positions.len() as u64).sum::<u64>()
+            });
+            let instances = match n.mesh() {
+                Some(_) => instancing::instances(&n, doc, &buffers, vertices, &mut instanced)
+                    .map_err(|e| err(path, format!("node {}: {e}", n.index())))?,
+                None => Vec::new(),
+            };
+            if !instances.is_empty() && n.skin().is_some() {
+                warnings.push(format!(
+                    "node {}: a skinned mesh's EXT_mesh_gpu_instancing copies are drawn once (the extension does \
+                     not say where a skin's copies go)",
+                    n.index()
+                ));
+            }
+            Ok(Node {
                 name: n.name().map(str::to_string),
                 children: n.children().map(|c| c.index()).collect(),
                 translation: t,
@@ -252,9 +272,10 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
                 skin: n.skin().map(|s| s.index()),
                 weights,
                 light: n.light().map(|l| l.index()),
-            }
+                instances,
+            })
         })
-        .collect();
+        .collect::<Result<_, crate::scene::Error>>()?;
 
     let mut skins = Vec::new();
     for s in doc.skins() {

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use glam::{Mat3, Mat4, Quat, Vec3, Vec4};
 
 use super::anim::Target;
-use super::load::GltfAsset;
+use super::load::{GltfAsset, Primitive};
 use crate::scene::posed::{PosedPrimitive, PosedScene};
 
 /// Reusable per-pose state.
@@ -141,72 +141,84 @@ impl GltfAsset {
                 s.joints.clear();
                 s.joints.extend(skin.joints.iter().zip(&skin.inverse_bind).map(|(&j, ibm)| post * s.world[j] * *ibm));
             }
-            let model = post * s.world[n];
-            let nmat = normal_matrix(&model);
-            for prim in &self.meshes[mesh] {
-                if slot == out.primitives.len() {
-                    out.primitives.push(PosedPrimitive {
-                        kind: prim.kind,
-                        positions: Vec::with_capacity(prim.positions.len()),
-                        normals: Vec::with_capacity(prim.positions.len()),
-                        tangents: Vec::with_capacity(prim.tangents.len()),
-                        uvs: Arc::new(prim.uvs.clone()),
-                        colors: Arc::new(prim.colors.clone()),
-                        indices: Arc::new(prim.indices.clone()),
-                        material: prim.material,
-                        object: object as u32,
-                    });
-                }
-                let o = &mut out.primitives[slot];
-                slot += 1;
-                o.positions.clear();
-                o.normals.clear();
-                o.tangents.clear();
-                let tangents = !prim.tangents.is_empty();
-                let w = &s.weights[n];
-                let morphing = w.iter().any(|&x| x != 0.0) && !prim.morph_positions.is_empty();
-                for v in 0..prim.positions.len() {
-                    let (mut p, mut nr) = (prim.positions[v], prim.normals[v]);
-                    if morphing {
-                        for (k, &wk) in w.iter().enumerate() {
-                            if wk == 0.0 {
-                                continue;
-                            }
-                            if let Some(d) = prim.morph_positions.get(k).and_then(|d| d.get(v)) {
-                                p += *d * wk;
-                            }
-                            if let Some(d) = prim.morph_normals.get(k).and_then(|d| d.get(v)) {
-                                nr += *d * wk;
-                            }
-                        }
+            // One copy at the node, or one per `EXT_mesh_gpu_instancing` instance (a skinned mesh: once).
+            let copies = if node.instances.is_empty() || skin.is_some() { 1 } else { node.instances.len() };
+            for copy in 0..copies {
+                let model = match node.instances.get(copy) {
+                    Some(inst) if skin.is_none() => post * s.world[n] * *inst,
+                    _ => post * s.world[n],
+                };
+                let joints = skin.map(|_| &s.joints[..]);
+                for prim in &self.meshes[mesh] {
+                    if slot == out.primitives.len() {
+                        out.primitives.push(PosedPrimitive {
+                            kind: prim.kind,
+                            positions: Vec::with_capacity(prim.positions.len()),
+                            normals: Vec::with_capacity(prim.positions.len()),
+                            tangents: Vec::with_capacity(prim.tangents.len()),
+                            uvs: Arc::new(prim.uvs.clone()),
+                            colors: Arc::new(prim.colors.clone()),
+                            indices: Arc::new(prim.indices.clone()),
+                            material: prim.material,
+                            object: object as u32,
+                        });
                     }
-                    match (skin, prim.influences) {
-                        (Some(_), k) if k > 0 => {
-                            let js = &prim.joints[v * k..(v + 1) * k];
-                            let ws = &prim.weights[v * k..(v + 1) * k];
-                            let mut m = Mat4::ZERO;
-                            for (&j, &wj) in js.iter().zip(ws) {
-                                if wj != 0.0 {
-                                    m += s.joints[j as usize] * wj;
-                                }
-                            }
-                            o.positions.push(m.transform_point3(p));
-                            o.normals.push((normal_matrix(&m) * nr).normalize_or_zero());
-                            if tangents {
-                                o.tangents.push(tangent(&m, prim.tangents[v]));
-                            }
-                        }
-                        _ => {
-                            o.positions.push(model.transform_point3(p));
-                            o.normals.push((nmat * nr).normalize_or_zero());
-                            if tangents {
-                                o.tangents.push(tangent(&model, prim.tangents[v]));
-                            }
-                        }
-                    }
+                    pose_primitive(prim, &s.weights[n], joints, &model, &mut out.primitives[slot]);
+                    slot += 1;
                 }
             }
         }
         out.primitives.truncate(slot);
+    }
+}
+
+/// Writes `prim` posed into `o`: its morph targets blended by `w`, then skinned by `joints` (the skin's joint
+/// matrices, when the node has a skin and the primitive influences) or placed by `model`.
+fn pose_primitive(prim: &Primitive, w: &[f32], joints: Option<&[Mat4]>, model: &Mat4, o: &mut PosedPrimitive) {
+    let nmat = normal_matrix(model);
+    o.positions.clear();
+    o.normals.clear();
+    o.tangents.clear();
+    let tangents = !prim.tangents.is_empty();
+    let morphing = w.iter().any(|&x| x != 0.0) && !prim.morph_positions.is_empty();
+    for v in 0..prim.positions.len() {
+        let (mut p, mut nr) = (prim.positions[v], prim.normals[v]);
+        if morphing {
+            for (k, &wk) in w.iter().enumerate() {
+                if wk == 0.0 {
+                    continue;
+                }
+                if let Some(d) = prim.morph_positions.get(k).and_then(|d| d.get(v)) {
+                    p += *d * wk;
+                }
+                if let Some(d) = prim.morph_normals.get(k).and_then(|d| d.get(v)) {
+                    nr += *d * wk;
+                }
+            }
+        }
+        match (joints, prim.influences) {
+            (Some(joints), k) if k > 0 => {
+                let js = &prim.joints[v * k..(v + 1) * k];
+                let ws = &prim.weights[v * k..(v + 1) * k];
+                let mut m = Mat4::ZERO;
+                for (&j, &wj) in js.iter().zip(ws) {
+                    if wj != 0.0 {
+                        m += joints[j as usize] * wj;
+                    }
+                }
+                o.positions.push(m.transform_point3(p));
+                o.normals.push((normal_matrix(&m) * nr).normalize_or_zero());
+                if tangents {
+                    o.tangents.push(tangent(&m, prim.tangents[v]));
+                }
+            }
+            _ => {
+                o.positions.push(model.transform_point3(p));
+                o.normals.push((nmat * nr).normalize_or_zero());
+                if tangents {
+                    o.tangents.push(tangent(model, prim.tangents[v]));
+                }
+            }
+        }
     }
 }
