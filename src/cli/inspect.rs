@@ -107,17 +107,12 @@ pub fn run(
                 let digest = s.content_digest(frame, &frames[0].path)?;
                 let shown = frames[frame.min(frames.len() - 1)].path.display();
                 let _ = writeln!(out, "  frame {frame}: {shown} (blake3 {digest})");
-                // The first sequence's voxel sizes the splats unless `[render] splat` says otherwise.
-                let first_sequence = scene.sources.iter().position(|s| matches!(s.data, SourceData::Sequence(_)));
-                if let (Some(v), true) = (scene.voxel, first_sequence == Some(i)) {
-                    let how = if v == 1.0 {
-                        "the frames' whole-number grid"
-                    } else {
-                        "9 points in 10 have a neighbour within it"
-                    };
-                    let _ = writeln!(out, "  voxel: {v} source units ({how}); splats default to it");
-                }
             }
+        }
+        // The first cloud's voxel sizes the splats unless `[render] splat` says otherwise.
+        if let Some((_, v)) = scene.voxel.filter(|(k, _)| *k == i) {
+            let how = if v == 1.0 { "its whole-number grid" } else { "9 points in 10 have a neighbour within it" };
+            let _ = writeln!(out, "  voxel: {v} source units ({how}); splats default to it");
         }
         let m4 = scene.world_from_source(i).transpose().to_cols_array_2d();
         let _ = writeln!(out, "  source → world (rows):");

@@ -260,12 +260,20 @@ fn obj_up() -> (&'static str, String) {
     ("y", "up \"y\": OBJ files are +Y up by convention (Blender's exporter and most others)".into())
 }
 
-/// The up axis of a scan: its tallest extent (a standing subject), said with the extents.
+/// The up axis of a scan, said with the extents: the thin one of y and z of a flat subject (a terrain, a pond, a
+/// table top: under half of each other extent), which lies on the ground; else the taller of y and z (a standing
+/// subject). (The taller alone stood flat terrain up as a wall.)
 fn tallest(s: &scene::PosedScene, path: &Path) -> (&'static str, String) {
     let e = s.bounds().map_or(glam::Vec3::ZERO, |(lo, hi)| hi - lo);
-    let up = if e.y >= e.z && e.y >= e.x { "y" } else { "z" };
     let name = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
-    (up, format!("up \"{up}\" guessed: the taller of y and z in {name} (extent {:.3} × {:.3} × {:.3})", e.x, e.y, e.z))
+    let extent = format!("(extent {:.3} × {:.3} × {:.3})", e.x, e.y, e.z);
+    let thin = |a: f32, b: f32, c: f32| a < 0.5 * b && a < 0.5 * c;
+    if thin(e.y, e.x, e.z) || thin(e.z, e.x, e.y) {
+        let up = if thin(e.y, e.x, e.z) { "y" } else { "z" };
+        return (up, format!("up \"{up}\" guessed: {name} is flat along {up} {extent}, lying as terrain lies"));
+    }
+    let up = if e.y >= e.z && e.y >= e.x { "y" } else { "z" };
+    (up, format!("up \"{up}\" guessed: the taller of y and z in {name} {extent}"))
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -20,7 +20,7 @@ pub mod transform;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use glam::Mat4;
+use glam::{Mat4, Vec3};
 
 pub use posed::{PosedPrimitive, PosedScene, PrimKind};
 pub use source::{LoadedSource, SourceData};
@@ -137,10 +137,11 @@ pub struct Scene {
     /// unless `[render] gltf_lights = false`. When not, posed frames carry no lights, so nothing keys or
     /// shades them.
     pub file_lights: bool,
-    /// One voxel of the first point-cloud sequence, in its source units, the default splat size ([`spacing`]):
-    /// 1 where its first frame's coordinates are whole numbers (8i, vsense), else the distance within which nine
-    /// of its points in ten have a neighbour; `None` without a sequence, or when its points give no such distance.
-    pub voxel: Option<f32>,
+    /// The first point cloud (a sequence, or a source of points only) and one voxel of it in its source units,
+    /// the default splat size ([`spacing`]): 1 where its (first frame's) coordinates are whole numbers (8i,
+    /// vsense), else the distance within which nine of its points in ten have a neighbour; `None` without a
+    /// cloud, or when its points give no such distance.
+    pub voxel: Option<(usize, f32)>,
 }
 
 /// Reusable buffers for posing a scene; posing a single-source scene after its first frame allocates nothing.
@@ -159,19 +160,32 @@ impl Poser {
     }
 }
 
-/// [`Scene::voxel`] of `sources`: their first point-cloud sequence's first frame, read once more. (A cloud in
-/// metres took one unit for its voxel before, and its splats, each the subject's size many times over, were all
-/// dropped at the near plane: empty images.)
-fn first_voxel(sources: &[LoadedSource]) -> Result<Option<f32>, Error> {
-    let Some((src, first)) = sources.iter().find_map(|s| match &s.data {
-        SourceData::Sequence(frames) => frames.first().map(|f| (s, f)),
-        _ => None,
-    }) else {
-        return Ok(None);
-    };
-    let frame = source::ply_scene_at(&first.path, src.origin)?;
-    let points = frame.primitives.first().map_or(&[][..], |p| &p.positions[..]);
-    Ok(if spacing::on_whole_grid(points) { Some(1.0) } else { spacing::typical(points) })
+/// [`Scene::voxel`] of `sources`: their first point cloud's, a sequence's first frame (read once more) or a
+/// static cloud (a source of points only). (A sequence in metres took one unit for its voxel before, and its
+/// splats, each the subject's size many times over, were all dropped at the near plane: empty images; a static
+/// cloud took 1.5 pixels, holes between the points of any cloud not dense for the image.)
+fn first_voxel(sources: &[LoadedSource]) -> Result<Option<(usize, f32)>, Error> {
+    for (i, src) in sources.iter().enumerate() {
+        let measure = |points: &[Vec3]| {
+            let v = if spacing::on_whole_grid(points) { Some(1.0) } else { spacing::typical(points) };
+            v.map(|v| (i, v))
+        };
+        match &src.data {
+            SourceData::Sequence(frames) => {
+                let Some(first) = frames.first() else { continue };
+                let frame = source::ply_scene_at(&first.path, src.origin)?;
+                return Ok(measure(frame.primitives.first().map_or(&[][..], |p| &p.positions[..])));
+            }
+            SourceData::Static(rest)
+                if !rest.primitives.is_empty() && rest.primitives.iter().all(|p| p.kind == PrimKind::Points) =>
+            {
+                let points: Vec<Vec3> = rest.primitives.iter().flat_map(|p| p.positions.iter().copied()).collect();
+                return Ok(measure(&points));
+            }
+            _ => {}
+        }
+    }
+    Ok(None)
 }
 
 impl Scene {
@@ -312,10 +326,10 @@ impl Scene {
         self.global * self.locals[i]
     }
 
-    /// World size of one voxel of the first point-cloud sequence ([`Scene::voxel`]), the default splat size.
+    /// World size of one voxel of the first point cloud ([`Scene::voxel`]), the default splat size.
     pub fn voxel_size(&self) -> Option<f32> {
-        let i = self.sources.iter().position(|s| matches!(s.data, SourceData::Sequence(_)))?;
-        Some(self.voxel? * self.world_from_source(i).x_axis.truncate().length())
+        let (i, v) = self.voxel?;
+        Some(v * self.world_from_source(i).x_axis.truncate().length())
     }
 
     /// Whether some source reads a file per frame (PLY or mesh sequences): posing a frame then costs a read,

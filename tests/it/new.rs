@@ -31,7 +31,19 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
          0 0 0\n1 0 0\n0.5 0.3 3\n0.5 1 0\n3 0 1 2\n3 1 3 2\n",
     )
     .unwrap();
-    let cases: [(&str, String, &str, &str); 6] = [
+    // Flat terrain lies on its thin axis, y or z, whichever other extent is larger (the tallest of y and z stood
+    // it up as a wall).
+    let terrain = |file: &str, [x, y, z]: [f32; 3]| {
+        let text = format!(
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+             0 0 0\n{x} 0 0\n{x} {y} {z}\n0 {y} {z}\n3 0 1 2\n3 0 2 3\n"
+        );
+        std::fs::write(d.join(file), text).unwrap();
+    };
+    terrain("pond.ply", [3.5, 0.5, 3.1]);
+    terrain("field.ply", [2.0, 3.0, 0.2]);
+    let cases: [(&str, String, &str, &str); 8] = [
         (
             "animated glTF",
             data("gltf/CesiumMan/CesiumMan.glb").display().to_string(),
@@ -43,6 +55,8 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
         ("PLY frames as points", data("seq").display().to_string(), "ply-sequence", "points = 200000"),
         ("OBJ frames", d.join("objs").display().to_string(), "dnerf", "mesh_sequence = \"objs/*.obj\""),
         ("a PLY mesh", d.join("tall.ply").display().to_string(), "dnerf", "up     = \"z\""),
+        ("flat along y", d.join("pond.ply").display().to_string(), "dnerf", "up     = \"y\""),
+        ("flat along z", d.join("field.ply").display().to_string(), "dnerf", "up     = \"z\""),
     ];
     for (i, (what, asset, writer, says)) in cases.iter().enumerate() {
         let name = format!("m{i}.toml");
