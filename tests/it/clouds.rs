@@ -83,7 +83,8 @@ fn a_gaussian_splatting_file_is_drawn_as_points_and_says_so() {
 /// A voxelized sphere shell (every voxel within half a voxel of radius 20: each point has a neighbour one voxel
 /// away) moved off the integer grid into metres (every coordinate times 2⁻¹⁰, exactly): the same images, byte for
 /// byte, as the integer frames, where before every splat was a unit cube (the sphere 25 times over) and the
-/// images were empty; the voxel is measured from the points (`inspect` says so).
+/// images were empty; the voxel is measured from the points (`inspect` says so). As static clouds the same (they
+/// took 1.5-pixel squares, whatever their spacing).
 #[test]
 fn a_sequence_in_metres_renders_as_its_integer_twin() {
     let tmp = tempfile::tempdir().unwrap();
@@ -111,10 +112,17 @@ fn a_sequence_in_metres_renders_as_its_integer_twin() {
             std::fs::write(d.join(format!("{name}_{f}.ply")), ply::write(&out)).unwrap();
         }
     }
-    for name in ["grid", "metres"] {
+    // As sequences, and as static clouds (the first frame alone).
+    let sources = [
+        ("grid", "ply_sequence = \"grid_{frame}.ply\"\nframes = { start = 0, end = 1 }"),
+        ("metres", "ply_sequence = \"metres_{frame}.ply\"\nframes = { start = 0, end = 1 }"),
+        ("grid-static", "mesh = \"grid_0.ply\""),
+        ("metres-static", "mesh = \"metres_0.ply\""),
+    ];
+    for (name, source) in sources {
         let text = format!(
             "[dataset]\nname = \"{name}\"\nout = \"out\"\npreview = false\n\
-             [source.shell]\nply_sequence = \"{name}_{{frame}}.ply\"\nframes = {{ start = 0, end = 1 }}\n\
+             [source.shell]\n{source}\n\
              [transform]\nfit = \"frame\"\ncenter = \"bbox\"\n\
              [render]\nresolution = [120, 120]\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n\
              [output.d]\nwriter = \"dnerf\"\n"
@@ -127,6 +135,13 @@ fn a_sequence_in_metres_renders_as_its_integer_twin() {
     for v in 0..2 {
         let read = |name: &str| std::fs::read(d.join(format!("out/{name}_dnerf/train/r_{v:04}.png"))).unwrap();
         assert!(read("grid") == read("metres"), "view {v}");
+        assert!(read("grid-static") == read("metres-static"), "view {v} of the static clouds");
+        // Closed as the sequence's are: 1.5-pixel squares covered a third less.
+        let solid = |name: &str| {
+            image::load_from_memory(&read(name)).unwrap().into_rgba8().pixels().filter(|p| p[3] == 255).count() as f64
+        };
+        let (sequence, single) = (solid("metres"), solid("metres-static"));
+        assert!((single / sequence - 1.0).abs() < 0.1, "view {v}: {single} pixels covered against {sequence}");
         let img = image::load_from_memory(&read("metres")).unwrap().into_rgba8();
         covered += img.pixels().filter(|p| p[3] == 255).count();
     }
