@@ -203,7 +203,10 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             let kind = Asset::Sequence { key: "mesh_sequence", glob, frames: 1 };
             Ok(Described { kind, up, note: why, rest: s, origin: None })
         }
-        _ => bail!("{}: not a glTF, FBX, .blend, PLY or OBJ file, nor a folder of frames", asset.display()),
+        _ => match scene::source::way_out_of(asset) {
+            Some(way_out) => bail!("{way_out}"),
+            None => bail!("{}: not a glTF, FBX, .blend, PLY or OBJ file, nor a folder of frames", asset.display()),
+        },
     }
 }
 

@@ -104,6 +104,9 @@ impl LoadedSource {
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
             SourceFile::Mesh { path, scene } => {
+                if let Some(message) = way_out_of(path) {
+                    return Err(Error::Source { name, message });
+                }
                 let asset = super::gltf::load(path, *scene)?;
                 if let Some(message) = nothing_drawn(path, asset.holds()) {
                     return Err(Error::Source { name, message });
@@ -257,6 +260,27 @@ fn is_ply(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
 }
 
+/// What to do with a file in a format vvgen does not read but a newcomer brings (by its extension): the tool
+/// that turns it into one vvgen reads. `None` for any other name.
+pub fn way_out_of(path: &std::path::Path) -> Option<String> {
+    let name = path.file_name()?.to_string_lossy().into_owned();
+    let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
+    let stem = name.strip_suffix(&format!(".{ext}")).unwrap_or(&name).trim_end_matches(".compressed");
+    Some(match ext.as_str() {
+        // Gaussian splatting's packed and web forms: PlayCanvas's converter reads them all.
+        "splat" | "ksplat" | "spz" | "sog" => format!(
+            "{name}: Gaussian splats in the .{ext} form, which vvgen does not read: `npx @playcanvas/splat-transform \
+             \"{name}\" \"{stem}.ply\"` writes them in 3D Gaussian splatting's PLY layout, which vvgen reads"
+        ),
+        "abc" | "usd" | "usda" | "usdc" | "usdz" | "dae" | "stl" | "3ds" | "x3d" | "wrl" => format!(
+            "{name}: vvgen does not read .{ext} files: import it in Blender (File → Import; a blender.org build reads \
+             Alembic and USD), save it as a .blend and name that (`vvgen new \"{stem}.blend\"`): Blender then \
+             evaluates every frame for vvgen"
+        ),
+        _ => return None,
+    })
+}
+
 /// The times (seconds from the clip's start) of an animated source's frames: `frames`, else the clip's whole
 /// `duration` at its rate.
 fn frame_times(f: &FrameRange, duration: f64) -> Vec<f32> {
@@ -284,7 +308,10 @@ fn mesh_frame_at(path: &std::path::Path, origin: [f64; 3]) -> Result<PosedScene,
     match ext.as_str() {
         "obj" => super::obj::scene(path),
         "ply" => ply_scene_at(path, origin),
-        _ => gltf_at_rest(path, None),
+        _ => match way_out_of(path) {
+            Some(message) => Err(Error::Mesh { path: path.to_path_buf(), line: None, message }),
+            None => gltf_at_rest(path, None),
+        },
     }
 }
 

@@ -151,3 +151,42 @@ fn a_sequence_in_metres_renders_as_its_integer_twin() {
     let said = String::from_utf8_lossy(&out.stdout);
     assert!(said.contains("voxel: 0.0009765625 source units (9 points in 10"), "{said}");
 }
+
+/// Formats a newcomer brings that vvgen does not read are refused by `new` and by `check` with the tool that turns
+/// them into one it reads: Gaussian splats packed by SuperSplat (`.compressed.ply`) or in web forms (`.spz`,
+/// `.splat`), Alembic and USD (through Blender, as a `.blend`).
+#[test]
+fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    // SuperSplat's compressed layout: a chunk element, then vertices of packed words.
+    let mut packed = b"ply\nformat binary_little_endian 1.0\nelement chunk 1\nproperty float min_x\n\
+        element vertex 2\nproperty uint packed_position\nproperty uint packed_color\nend_header\n"
+        .to_vec();
+    packed.extend([0u8; 4 + 16]);
+    std::fs::write(d.join("scan.compressed.ply"), packed).unwrap();
+    std::fs::write(d.join("scan.spz"), [0x1f, 0x8b, 8, 0]).unwrap();
+    std::fs::write(d.join("shot.usdz"), b"PK").unwrap();
+    let cases = [
+        ("scan.compressed.ply", "splat-transform in.compressed.ply out.ply"),
+        ("scan.spz", "splat-transform \"scan.spz\" \"scan.ply\""),
+        ("shot.usdz", "save it as a .blend"),
+    ];
+    for (file, says) in cases {
+        let (code, err) = run(&["new", file]);
+        assert_eq!(code, Some(2), "{file}: {err}");
+        assert!(err.contains(says) && err.contains(file.split('.').next().unwrap()), "{file}: `{says}` not in {err}");
+        let manifest = format!(
+            "[dataset]\nname = \"m\"\nout = \"out\"\n[source.s]\nmesh = \"{file}\"\n[render]\nresolution = [8, 8]\n\
+             [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 1\n[output.d]\nwriter = \"nerfstudio\"\n"
+        );
+        std::fs::write(d.join("m.toml"), manifest).unwrap();
+        let (code, err) = run(&["check", "m.toml"]);
+        assert_eq!(code, Some(2), "{file}: {err}");
+        assert!(err.contains(says), "check {file}: `{says}` not in {err}");
+    }
+}

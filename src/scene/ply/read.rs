@@ -177,6 +177,15 @@ pub(super) fn points_element(header: &super::Header) -> &'static str {
 pub(super) fn require_xyz(el: &Element) -> Result<(), PlyError> {
     let has = |s: usize| el.props.iter().any(|p| p.list.is_none() && slot(&p.name) == s);
     if !(has(SLOT_X) && has(SLOT_X + 1) && has(SLOT_X + 2)) {
+        if el.props.iter().any(|p| p.name == "packed_position") {
+            // SuperSplat's and PlayCanvas's compressed layout: positions quantized within chunks.
+            return Err(PlyError::Unusable(
+                "a compressed Gaussian splatting PLY (SuperSplat's `packed_position` layout), which vvgen does not \
+                 read: `npx @playcanvas/splat-transform in.compressed.ply out.ply` writes the plain 3DGS layout, \
+                 which vvgen reads"
+                    .into(),
+            ));
+        }
         return Err(PlyError::Unusable("the vertex element has no x, y, z".into()));
     }
     Ok(())
