@@ -1,4 +1,6 @@
-//! Scene benchmarks: PLY read/write (1M points, binary and ascii; an 800k-point 8i-style ascii frame) and glTF
+//! Scene benchmarks: PLY read/write (1M points, binary and ascii; an 800k-point 8i-style ascii frame; 1M 3D
+//! Gaussians read as points, and the spacing that sizes their splats; `benches/splat_peer.py` times plyfile on the
+//! same file) and glTF
 //! frame evaluation (CesiumMan). Run: `cargo bench --bench scene [-- OUT_DIR]`. The PLY files are left in
 //! OUT_DIR (default `target/bench-data`) so peers (plyfile, Open3D) can time the same bytes in the same run.
 
@@ -77,6 +79,30 @@ fn main() {
         ply::write(&PlyOut { positions: &vox, colors: Some(&col[..800_000]), ascii: true, ..Default::default() });
     std::fs::write(out.join("vox10_800k_ascii.ply"), &vox_txt).unwrap();
     println!("  read  8i-style ascii frame, 800k points   {}", ms(time(5, || ply::read(&vox_txt).unwrap())));
+
+    // 1M 3D Gaussians in the layout Mip-Splatting writes (SH band 0: x y z, f_dc_0..2, opacity, scale_0..2,
+    // rot_0..3, all float): read as points of their base colours, the faint ones left out.
+    let props = ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2"];
+    let props: Vec<&str> = props.into_iter().chain(["rot_0", "rot_1", "rot_2", "rot_3"]).collect();
+    let mut gs = format!("ply\nformat binary_little_endian 1.0\nelement vertex {n}\n").into_bytes();
+    props.iter().for_each(|p| gs.extend(format!("property float {p}\n").bytes()));
+    gs.extend(b"end_header\n");
+    for p in &pos {
+        let row = [p[0], p[1], p[2], rnd() * 4.0 - 2.0, rnd() * 4.0 - 2.0, rnd() * 4.0 - 2.0, rnd() * 12.0 - 6.0];
+        let rest = [-5.0, -5.0, -6.0, 1.0, 0.0, 0.0, 0.0];
+        row.iter().chain(&rest).for_each(|v| gs.extend(v.to_le_bytes()));
+    }
+    let gs_file = out.join("gaussians_1m.ply");
+    std::fs::write(&gs_file, &gs).unwrap();
+    println!("3D Gaussian splatting PLY, 1M Gaussians (SH band 0, 56 bytes each):");
+    println!("  read  file as points            {}", ms(time(5, || ply::read_file(&gs_file).unwrap())));
+    let centres: Vec<glam::Vec3> =
+        ply::read_file(&gs_file).unwrap().positions.iter().map(|p| glam::Vec3::from(*p)).collect();
+    println!(
+        "  their spacing (the default voxel, {} points)  {}",
+        centres.len(),
+        ms(time(5, || vvgen::scene::spacing::typical(&centres)))
+    );
 
     let man = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/CesiumMan/CesiumMan.glb");
     let asset = gltf::load(&man, None).unwrap();
