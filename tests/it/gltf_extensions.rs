@@ -411,7 +411,7 @@ fn instanced_copies_render_as_the_nodes_they_stand_for() {
         &|j| j["accessors"][base + 1].as_object_mut().unwrap().retain(|k, _| k != "bufferView"),
         &["instance 0 is not a transform"],
     );
-    // Fifty copies of a three-million-vertex mesh (zeros, no bufferView): refused before any is posed.
+    // Twelve copies of a three-million-vertex mesh (zeros, no bufferView): refused before any is posed.
     refused(
         &|j| {
             let big = j["accessors"].as_array().unwrap().len();
@@ -421,12 +421,23 @@ fn instanced_copies_render_as_the_nodes_they_stand_for() {
                 .push(json!({"componentType": 5126, "count": 3_000_000, "type": "VEC3",
                 "min": [0, 0, 0], "max": [0, 0, 0]}));
             j["meshes"][0]["primitives"][0] = json!({"attributes": {"POSITION": big}});
-            j["accessors"][base]["count"] = json!(50);
+            j["accessors"][base]["count"] = json!(12);
             j["accessors"].as_array_mut().unwrap()[base].as_object_mut().unwrap().remove("bufferView");
             let e = j.pointer_mut(&ext).unwrap().as_object_mut().unwrap();
             e.remove("ROTATION");
             e.remove("SCALE");
         },
-        &["3000000 vertices 50 times", "keep fewer instances"],
+        &["3000000 vertices 12 times", "keep fewer instances"],
+    );
+    // Two million copies of the box, asked for in a few bytes (an accessor without data).
+    refused(
+        &|j| {
+            j["accessors"][base]["count"] = json!(2_000_000);
+            j["accessors"].as_array_mut().unwrap()[base].as_object_mut().unwrap().remove("bufferView");
+            let e = j.pointer_mut(&ext).unwrap().as_object_mut().unwrap();
+            e.remove("ROTATION");
+            e.remove("SCALE");
+        },
+        &["2000000 times", "1048576 copies"],
     );
 }

@@ -9,22 +9,39 @@ use glam::{Mat4, Quat, Vec3};
 
 use super::accessor::read_f32;
 
-/// The most vertices a file's instanced nodes may pose in all (every copy of every primitive), about 6 GB of
-/// posed positions, normals and indices: past it the file is refused, not allocated for.
-pub(super) const MAX_INSTANCED_VERTICES: u64 = 1 << 27;
+/// The most vertices a file's instanced nodes may pose in all (every copy of every primitive: 33 M, a forest of
+/// ten thousand 3 000-vertex trees; about 1.5 GB posed), and the most copies: past either the file is refused,
+/// not allocated for (a few bytes of JSON can ask for millions of copies of accessors without data).
+pub(super) const MAX_INSTANCED_VERTICES: u64 = 1 << 25;
+pub(super) const MAX_INSTANCES: u64 = 1 << 20;
 
 /// The transforms (relative to the node) of `node`'s instances, empty when it has none; `vertices` is its mesh's
-/// vertex count, `posed` the instanced vertices counted so far in the file (raised by this node's). An error
-/// names the accessor or the count that is wrong.
+/// vertex count, `so_far` the file's instances and instanced vertices counted so far (raised by this node's). An
+/// error names the accessor or the count that is wrong.
 pub(super) fn instances(
     node: &gltf::Node<'_>,
     doc: &gltf::Document,
     buffers: &[Vec<u8>],
     vertices: u64,
-    posed: &mut u64,
+    so_far: &mut (u64, u64),
 ) -> Result<Vec<Mat4>, String> {
     let Some(ext) = node.extensions().and_then(|e| e.get("EXT_mesh_gpu_instancing")) else { return Ok(Vec::new()) };
     let attributes = ext.get("attributes").and_then(|a| a.as_object());
+    // The counts first: an accessor without data reads as zeros and can be millions long.
+    let count = |name: &str| {
+        let index = attributes.and_then(|a| a.get(name))?.as_u64()?;
+        doc.accessors().nth(index as usize).map(|a| a.count() as u64)
+    };
+    let most = ["TRANSLATION", "ROTATION", "SCALE"].iter().filter_map(|n| count(n)).max().unwrap_or(0);
+    so_far.0 = so_far.0.saturating_add(most);
+    so_far.1 = so_far.1.saturating_add(most.saturating_mul(vertices));
+    if so_far.0 > MAX_INSTANCES || so_far.1 > MAX_INSTANCED_VERTICES {
+        return Err(format!(
+            "EXT_mesh_gpu_instancing draws its mesh of {vertices} vertices {most} times: with the file's other \
+             instances, more than the {MAX_INSTANCES} copies or {MAX_INSTANCED_VERTICES} vertices vvgen poses (it \
+             draws every copy); keep fewer instances in the tool that wrote the file"
+        ));
+    }
     let read = |name: &str, width: usize| -> Result<Option<Vec<f32>>, String> {
         let Some(index) = attributes.and_then(|a| a.get(name)) else { return Ok(None) };
         let acc = index
@@ -43,14 +60,6 @@ pub(super) fn instances(
     };
     if counts.iter().any(|&c| c != n) {
         return Err(format!("EXT_mesh_gpu_instancing's attributes count different instances ({counts:?})"));
-    }
-    *posed = posed.saturating_add((n as u64).saturating_mul(vertices));
-    if *posed > MAX_INSTANCED_VERTICES {
-        return Err(format!(
-            "EXT_mesh_gpu_instancing draws its mesh of {vertices} vertices {n} times: with the file's other \
-             instances, more than the {MAX_INSTANCED_VERTICES} vertices vvgen poses (it draws every copy); keep \
-             fewer instances in the tool that wrote the file"
-        ));
     }
     (0..n)
         .map(|i| {

@@ -226,7 +226,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
         meshes.push(prims);
     }
 
-    let mut instanced = 0u64;
+    let mut instanced = (0u64, 0u64);
     let nodes: Vec<Node> = doc
         .nodes()
         .map(|n| {
