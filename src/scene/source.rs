@@ -405,10 +405,7 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
 /// What a user should know when the PLY at `path` holds 3D Gaussians ([`ply::gaussian_splats`]): vvgen draws
 /// them as points.
 fn splats_note(path: &std::path::Path) -> Result<Option<String>, Error> {
-    let header = checked_ply(path)?;
-    let points = if header.elements.iter().any(|e| e.name == "vertex") { "vertex" } else { "point" };
-    let splats = header.elements.iter().find(|e| e.name == points).is_some_and(ply::gaussian_splats);
-    Ok(splats.then(|| {
+    Ok(ply::holds_gaussian_splats(&checked_ply(path)?).then(|| {
         format!(
             "{}: holds 3D Gaussians (3D Gaussian splatting's layout): vvgen draws each as a point at its centre in \
              its base colour (spherical-harmonic band 0, as 3DGS's tools colour a cloud), not as a splat: the \

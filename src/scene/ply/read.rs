@@ -71,6 +71,12 @@ pub fn gaussian_splats(el: &Element) -> bool {
     (SLOT_DC..SLOT_DC + 3).all(has) && has(SLOT_OPACITY) && !(SLOT_R..SLOT_R + 3).all(has)
 }
 
+/// Whether the points of the file with `header` are 3D Gaussians ([`gaussian_splats`]).
+pub fn holds_gaussian_splats(header: &super::Header) -> bool {
+    let points = points_element(header);
+    header.elements.iter().find(|e| e.name == points).is_some_and(gaussian_splats)
+}
+
 /// The constant of band 0 of the real spherical harmonics, 1 / (2 √π), as 3DGS writes it.
 const SH_C0: f64 = 0.28209479177387814;
 
