@@ -271,8 +271,8 @@ fn tallest(s: &scene::PosedScene, path: &Path) -> (&'static str, String) {
     let name = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
     let extent = format!("(extent {:.3} × {:.3} × {:.3})", e.x, e.y, e.z);
     let thin = |a: f32, b: f32, c: f32| a < 0.5 * b && a < 0.5 * c;
-    if thin(e.y, e.x, e.z) || thin(e.z, e.x, e.y) {
-        let up = if thin(e.y, e.x, e.z) { "y" } else { "z" };
+    let flat = [("y", thin(e.y, e.x, e.z)), ("z", thin(e.z, e.x, e.y))].into_iter().find(|f| f.1);
+    if let Some((up, _)) = flat {
         return (up, format!("up \"{up}\" guessed: {name} is flat along {up} {extent}, lying as terrain lies"));
     }
     let up = if e.y >= e.z && e.y >= e.x { "y" } else { "z" };

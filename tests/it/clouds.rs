@@ -7,6 +7,19 @@ use std::process::Command;
 
 use vvgen::scene::ply;
 
+/// Runs the `vvgen` binary in `dir`: its exit code, stdout and stderr.
+fn vvgen_out(dir: &Path, args: &[&str]) -> (Option<i32>, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(dir).args(args).output().unwrap();
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+    (out.status.code(), text(&out.stdout), text(&out.stderr))
+}
+
+/// [`vvgen_out`]'s exit code and stderr.
+fn vvgen(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let (code, _, err) = vvgen_out(dir, args);
+    (code, err)
+}
+
 /// The rows of a binary little-endian PLY body of `width` f32 properties.
 fn rows(path: &Path, width: usize) -> Vec<Vec<f32>> {
     let bytes = std::fs::read(path).unwrap();
@@ -54,11 +67,7 @@ fn a_gaussian_splatting_file_is_drawn_as_points_and_says_so() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     std::fs::copy(crate::common::data("splats/donut_2000.ply"), d.join("point_cloud.ply")).unwrap();
-    let run = |args: &[&str]| {
-        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
-        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
-    };
-    assert_eq!(run(&["new", "point_cloud.ply"]).0, Some(0));
+    assert_eq!(vvgen(d, &["new", "point_cloud.ply"]).0, Some(0));
     let text = std::fs::read_to_string(d.join("point-cloud.toml")).unwrap();
     let small = text
         .replace("views = 100", "views = 2")
@@ -66,7 +75,7 @@ fn a_gaussian_splatting_file_is_drawn_as_points_and_says_so() {
         .replace("views    = 20", "views = 1");
     std::fs::write(d.join("point-cloud.toml"), small.replace("[400, 400]", "[96, 96]")).unwrap();
     for cmd in ["check", "build"] {
-        let (code, err) = run(&[cmd, "point-cloud.toml"]);
+        let (code, err) = vvgen(d, &[cmd, "point-cloud.toml"]);
         assert_eq!(code, Some(0), "{cmd}: {err}");
         for says in ["point_cloud.ply: holds 3D Gaussians", "base colour", "not as a splat", "opacity under 1/255"] {
             assert!(err.contains(says), "{cmd}: `{says}` not in {err}");
@@ -146,9 +155,7 @@ fn a_sequence_in_metres_renders_as_its_integer_twin() {
         covered += img.pixels().filter(|p| p[3] == 255).count();
     }
     assert!(covered > 4000, "{covered} pixels covered");
-    let out =
-        Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["inspect", "metres.toml"]).output().unwrap();
-    let said = String::from_utf8_lossy(&out.stdout);
+    let (_, said, _) = vvgen_out(d, &["inspect", "metres.toml"]);
     assert!(said.contains("voxel: 0.0009765625 source units (9 points in 10"), "{said}");
 }
 
@@ -159,10 +166,6 @@ fn a_sequence_in_metres_renders_as_its_integer_twin() {
 fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let run = |args: &[&str]| {
-        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
-        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
-    };
     // SuperSplat's compressed layout: a chunk element, then vertices of packed words.
     let mut packed = b"ply\nformat binary_little_endian 1.0\nelement chunk 1\nproperty float min_x\n\
         element vertex 2\nproperty uint packed_position\nproperty uint packed_color\nend_header\n"
@@ -177,7 +180,7 @@ fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
         ("shot.usdz", "save it as a .blend"),
     ];
     for (file, says) in cases {
-        let (code, err) = run(&["new", file]);
+        let (code, err) = vvgen(d, &["new", file]);
         assert_eq!(code, Some(2), "{file}: {err}");
         assert!(err.contains(says) && err.contains(file.split('.').next().unwrap()), "{file}: `{says}` not in {err}");
         let manifest = format!(
@@ -185,7 +188,7 @@ fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
              [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 1\n[output.d]\nwriter = \"nerfstudio\"\n"
         );
         std::fs::write(d.join("m.toml"), manifest).unwrap();
-        let (code, err) = run(&["check", "m.toml"]);
+        let (code, err) = vvgen(d, &["check", "m.toml"]);
         assert_eq!(code, Some(2), "{file}: {err}");
         assert!(err.contains(says), "check {file}: `{says}` not in {err}");
     }

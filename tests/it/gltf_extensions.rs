@@ -403,6 +403,14 @@ fn instanced_copies_render_as_the_nodes_they_stand_for() {
         }
     };
     let ext = format!("/nodes/{mesh_node}/extensions/EXT_mesh_gpu_instancing/attributes");
+    // `count` instances placed by translations alone, read from an accessor without data (zeros).
+    let zeros = |j: &mut Value, count: usize| {
+        j["accessors"][base]["count"] = json!(count);
+        j["accessors"][base].as_object_mut().unwrap().remove("bufferView");
+        let e = j.pointer_mut(&ext).unwrap().as_object_mut().unwrap();
+        e.remove("ROTATION");
+        e.remove("SCALE");
+    };
     refused(&|j| *j.pointer_mut(&format!("{ext}/SCALE")).unwrap() = json!(999), &["SCALE names no accessor"]);
     refused(&|j| j["accessors"][base + 2]["count"] = json!(5), &["count different instances"]);
     refused(&|j| j["accessors"][base + 1]["type"] = json!("VEC3"), &["ROTATION", "not a VEC4"]);
@@ -421,22 +429,14 @@ fn instanced_copies_render_as_the_nodes_they_stand_for() {
                 .push(json!({"componentType": 5126, "count": 3_000_000, "type": "VEC3",
                 "min": [0, 0, 0], "max": [0, 0, 0]}));
             j["meshes"][0]["primitives"][0] = json!({"attributes": {"POSITION": big}});
-            j["accessors"][base]["count"] = json!(12);
-            j["accessors"].as_array_mut().unwrap()[base].as_object_mut().unwrap().remove("bufferView");
-            let e = j.pointer_mut(&ext).unwrap().as_object_mut().unwrap();
-            e.remove("ROTATION");
-            e.remove("SCALE");
+            zeros(j, 12);
         },
         &["3000000 vertices 12 times", "keep fewer instances"],
     );
     // Two million copies of the box, asked for in a few bytes (an accessor without data).
     refused(
         &|j| {
-            j["accessors"][base]["count"] = json!(2_000_000);
-            j["accessors"].as_array_mut().unwrap()[base].as_object_mut().unwrap().remove("bufferView");
-            let e = j.pointer_mut(&ext).unwrap().as_object_mut().unwrap();
-            e.remove("ROTATION");
-            e.remove("SCALE");
+            zeros(j, 2_000_000);
         },
         &["2000000 times", "1048576 copies"],
     );

@@ -27,22 +27,7 @@ pub(super) fn instances(
 ) -> Result<Vec<Mat4>, String> {
     let Some(ext) = node.extensions().and_then(|e| e.get("EXT_mesh_gpu_instancing")) else { return Ok(Vec::new()) };
     let attributes = ext.get("attributes").and_then(|a| a.as_object());
-    // The counts first: an accessor without data reads as zeros and can be millions long.
-    let count = |name: &str| {
-        let index = attributes.and_then(|a| a.get(name))?.as_u64()?;
-        doc.accessors().nth(index as usize).map(|a| a.count() as u64)
-    };
-    let most = ["TRANSLATION", "ROTATION", "SCALE"].iter().filter_map(|n| count(n)).max().unwrap_or(0);
-    so_far.0 = so_far.0.saturating_add(most);
-    so_far.1 = so_far.1.saturating_add(most.saturating_mul(vertices));
-    if so_far.0 > MAX_INSTANCES || so_far.1 > MAX_INSTANCED_VERTICES {
-        return Err(format!(
-            "EXT_mesh_gpu_instancing draws its mesh of {vertices} vertices {most} times: with the file's other \
-             instances, more than the {MAX_INSTANCES} copies or {MAX_INSTANCED_VERTICES} vertices vvgen poses (it \
-             draws every copy); keep fewer instances in the tool that wrote the file"
-        ));
-    }
-    let read = |name: &str, width: usize| -> Result<Option<Vec<f32>>, String> {
+    let accessor = |name: &str, width: usize| -> Result<Option<gltf::Accessor<'_>>, String> {
         let Some(index) = attributes.and_then(|a| a.get(name)) else { return Ok(None) };
         let acc = index
             .as_u64()
@@ -51,16 +36,30 @@ pub(super) fn instances(
         if acc.dimensions().multiplicity() != width {
             return Err(format!("EXT_mesh_gpu_instancing's {name} (accessor {}) is not a VEC{width}", acc.index()));
         }
-        Ok(Some(read_f32(&acc, buffers).map_err(|e| format!("EXT_mesh_gpu_instancing's {name}: {e}"))?))
+        Ok(Some(acc))
     };
-    let (t, r, s) = (read("TRANSLATION", 3)?, read("ROTATION", 4)?, read("SCALE", 3)?);
-    let counts: Vec<usize> = [(&t, 3), (&r, 4), (&s, 3)].iter().filter_map(|(v, w)| v.as_ref().map(|v| v.len() / w)).collect();
+    let (t, r, s) = (accessor("TRANSLATION", 3)?, accessor("ROTATION", 4)?, accessor("SCALE", 3)?);
+    let counts: Vec<usize> = [&t, &r, &s].into_iter().flatten().map(|a| a.count()).collect();
     let Some(&n) = counts.first() else {
         return Err("EXT_mesh_gpu_instancing has none of TRANSLATION, ROTATION and SCALE".into());
     };
     if counts.iter().any(|&c| c != n) {
         return Err(format!("EXT_mesh_gpu_instancing's attributes count different instances ({counts:?})"));
     }
+    // Counted before anything is read: an accessor without data reads as zeros and can be millions long.
+    so_far.0 = so_far.0.saturating_add(n as u64);
+    so_far.1 = so_far.1.saturating_add((n as u64).saturating_mul(vertices));
+    if so_far.0 > MAX_INSTANCES || so_far.1 > MAX_INSTANCED_VERTICES {
+        return Err(format!(
+            "EXT_mesh_gpu_instancing draws its mesh of {vertices} vertices {n} times: with the file's other \
+             instances, more than the {MAX_INSTANCES} copies or {MAX_INSTANCED_VERTICES} vertices vvgen poses (it \
+             draws every copy); keep fewer instances in the tool that wrote the file"
+        ));
+    }
+    let read = |acc: Option<gltf::Accessor<'_>>, name: &str| {
+        acc.map(|a| read_f32(&a, buffers).map_err(|e| format!("EXT_mesh_gpu_instancing's {name}: {e}"))).transpose()
+    };
+    let (t, r, s) = (read(t, "TRANSLATION")?, read(r, "ROTATION")?, read(s, "SCALE")?);
     (0..n)
         .map(|i| {
             let translation = t.as_ref().map_or(Vec3::ZERO, |t| Vec3::from_slice(&t[3 * i..]));

@@ -117,7 +117,7 @@ pub struct Node {
     /// `KHR_lights_punctual` light index.
     pub light: Option<usize>,
     /// `EXT_mesh_gpu_instancing`: where each copy of the mesh lies, relative to the node (empty: one copy, at the
-    /// node). A skinned mesh is drawn once (see [`super::instancing`]).
+    /// node; always empty for a skinned mesh, drawn once). See [`super::instancing`].
     pub instances: Vec<Mat4>,
 }
 
@@ -249,18 +249,20 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
             let vertices = n.mesh().and_then(|m| meshes.get(m.index())).map_or(0, |ps: &Vec<Primitive>| {
                 ps.iter().map(|p| p.positions.len() as u64).sum::<u64>()
             });
-            let instances = match n.mesh() {
-                Some(_) => instancing::instances(&n, doc, &buffers, vertices, &mut instanced)
+            // A skinned mesh is drawn once: the extension does not say where a skin's copies go.
+            let instances = match (n.mesh(), n.skin()) {
+                (Some(_), None) => instancing::instances(&n, doc, &buffers, vertices, &mut instanced)
                     .map_err(|e| err(path, format!("node {}: {e}", n.index())))?,
-                None => Vec::new(),
+                (Some(_), Some(_)) if n.extensions().is_some_and(|e| e.contains_key("EXT_mesh_gpu_instancing")) => {
+                    warnings.push(format!(
+                        "node {}: a skinned mesh's EXT_mesh_gpu_instancing copies are drawn once (the extension does \
+                         not say where a skin's copies go)",
+                        n.index()
+                    ));
+                    Vec::new()
+                }
+                _ => Vec::new(),
             };
-            if !instances.is_empty() && n.skin().is_some() {
-                warnings.push(format!(
-                    "node {}: a skinned mesh's EXT_mesh_gpu_instancing copies are drawn once (the extension does \
-                     not say where a skin's copies go)",
-                    n.index()
-                ));
-            }
             Ok(Node {
                 name: n.name().map(str::to_string),
                 children: n.children().map(|c| c.index()).collect(),

@@ -141,12 +141,11 @@ impl GltfAsset {
                 s.joints.clear();
                 s.joints.extend(skin.joints.iter().zip(&skin.inverse_bind).map(|(&j, ibm)| post * s.world[j] * *ibm));
             }
-            // One copy at the node, or one per `EXT_mesh_gpu_instancing` instance (a skinned mesh: once).
-            let copies = if node.instances.is_empty() || skin.is_some() { 1 } else { node.instances.len() };
-            for copy in 0..copies {
+            // One copy at the node, or one per `EXT_mesh_gpu_instancing` instance.
+            for copy in 0..node.instances.len().max(1) {
                 let model = match node.instances.get(copy) {
-                    Some(inst) if skin.is_none() => post * s.world[n] * *inst,
-                    _ => post * s.world[n],
+                    Some(inst) => post * s.world[n] * *inst,
+                    None => post * s.world[n],
                 };
                 let joints = skin.map(|_| &s.joints[..]);
                 for prim in &self.meshes[mesh] {
