@@ -14,6 +14,7 @@ use glam::Vec3;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
+use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
@@ -63,11 +64,10 @@ impl Casters {
         Casters { tris, corners, hole, holes, textures: scene.textures.clone() }
     }
 
-    /// Where ray `r` meets triangle `i` (ours), as [`Triangle::intersect`] answers; a miss (∞) where a
-    /// cut-out's alpha leaves a hole there.
+    /// Where ray `r` meets triangle `i` (ours), given where it meets its plane inside its edges, `t` (∞ for a
+    /// miss, as [`Triangle::intersect`] answers); a miss (∞) where a cut-out's alpha leaves a hole there.
     #[inline]
-    fn meet(&self, i: usize, r: &Ray) -> f32 {
-        let t = self.tris[i].intersect(r);
+    fn meet(&self, t: f32, i: usize, r: &Ray) -> f32 {
         if t == f32::INFINITY || self.holes.is_empty() {
             return t;
         }
@@ -91,6 +91,10 @@ impl Casters {
 pub(super) struct Tracer {
     pub(super) casters: Casters,
     bvh: CwBvh,
+    /// The casters' triangles in the tree's leaf order, with their edges and normal worked out once (the
+    /// intersection a ray walk makes at each leaf it reaches, the same arithmetic as [`Triangle::intersect`]'s,
+    /// so the same distances), read where the walk reads them instead of through the tree's index.
+    leaves: Vec<RtTriangle>,
     /// How far off a surface its rays start: a hair, scaled to the casters.
     pub(super) eps: f32,
 }
@@ -109,8 +113,9 @@ impl Tracer {
         if casters.tris.is_empty() {
             return None;
         }
-        let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::fast_build(), &mut Default::default());
-        Some(Tracer { casters, bvh, eps: 1e-4 * (hi - lo).length().max(1e-6) })
+        let bvh = build_cwbvh_from_tris(&casters.tris, BvhBuildParams::slow_build(), &mut Default::default());
+        let leaves = bvh.primitive_indices.iter().map(|&i| RtTriangle::from(&casters.tris[i as usize])).collect();
+        Some(Tracer { casters, bvh, leaves, eps: 1e-4 * (hi - lo).length().max(1e-6) })
     }
 
     /// The nearest caster along the ray from `o` along unit `d` (past [`Tracer::eps`]): its triangle (an index
@@ -121,7 +126,8 @@ impl Tracer {
         let mut hit = RayHit::none();
         // The tree numbers its leaves' triangles in its own order: `primitive_indices` maps them back to ours.
         let ours = |id: usize| bvh.primitive_indices[id] as usize;
-        if !bvh.ray_traverse(ray, &mut hit, |r, id| casters.meet(ours(id), r)) {
+        let leaves = &self.leaves;
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| casters.meet(leaves[id].intersect(r), ours(id), r)) {
             return None;
         }
         Some((ours(hit.primitive_id as usize), hit.t))
@@ -134,10 +140,10 @@ impl Tracer {
         if !self.casters.holes.is_empty() {
             return self.nearest(o, d).is_none();
         }
-        let (casters, bvh) = (&self.casters, &self.bvh);
+        let bvh = &self.bvh;
         let ray = Ray::new(o.into(), d.into(), self.eps, f32::INFINITY);
-        let ours = |id: usize| bvh.primitive_indices[id] as usize;
-        bvh.ray_traverse_miss(ray, |r, id| casters.tris[ours(id)].intersect(r))
+        let leaves = &self.leaves;
+        bvh.ray_traverse_miss(ray, |r, id| leaves[id].intersect(r))
     }
 
     /// The share of a GGX lobe (α = `a`, about unit normal `n`, seen from unit `v`) that reaches past the
