@@ -8,6 +8,22 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::texture::{Texture, TextureRef};
 
+/// A dielectric's reflectance at normal incidence at glTF's default index of refraction, 1.5.
+pub const DIELECTRIC_F0: f32 = 0.04;
+
+/// The reflectance at normal incidence of a dielectric of index of refraction `ior` (in air): ((ior − 1) /
+/// (ior + 1))², [`DIELECTRIC_F0`] exactly at 1.5 (so a file that states glTF's default renders as one that does
+/// not), and 1 at glTF's special value 0. `None` for an index no material has (negative, or not finite).
+pub fn dielectric_f0(ior: f32) -> Option<f32> {
+    if !(ior.is_finite() && ior >= 0.0) {
+        return None;
+    }
+    if ior == 1.5 {
+        return Some(DIELECTRIC_F0);
+    }
+    Some(((ior - 1.0) / (ior + 1.0)).powi(2))
+}
+
 /// How alpha is used.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum AlphaMode {
@@ -49,6 +65,15 @@ pub struct Material {
     /// Scale of the dielectric specular layer: 1 is glTF's (F0 = 0.04), 0 a purely diffuse (Lambertian)
     /// surface such as the built-in ground plane.
     pub specular: f32,
+    /// The dielectric layer's reflectance at normal incidence, per channel, before `specular` scales it:
+    /// ((ior − 1) / (ior + 1))² for glTF's `KHR_materials_ior` (1.5 when absent: 0.04) times
+    /// `KHR_materials_specular`'s colour, at most 1, as Blender's importer sets the Principled BSDF's IOR and
+    /// Specular Tint.
+    pub specular_f0: Vec3,
+    /// `KHR_materials_specular`'s strength texture (linear, its alpha multiplying `specular`).
+    pub specular_texture: Option<TextureRef>,
+    /// `KHR_materials_specular`'s colour texture (sRGB, multiplying `specular_f0`).
+    pub specular_color_texture: Option<TextureRef>,
     /// Whether the surface casts shadows (the ground plane receives only).
     pub casts_shadows: bool,
     /// Shadeless (glTF's `KHR_materials_unlit`, as Blender's importer builds it): lit or not, it shows its
@@ -76,6 +101,9 @@ impl Default for Material {
             occlusion_texture: None,
             normal_texture: None,
             specular: 1.0,
+            specular_f0: Vec3::splat(DIELECTRIC_F0),
+            specular_texture: None,
+            specular_color_texture: None,
             casts_shadows: true,
             unlit: false,
         }
@@ -183,6 +211,8 @@ impl Material {
             (self.metallic_roughness_texture.as_mut(), false),
             (occlusion, false),
             (normal, false),
+            (self.specular_texture.as_mut(), false),
+            (self.specular_color_texture.as_mut(), true),
         ]
         .into_iter()
         .filter_map(|(r, srgb)| r.map(|r| (r, srgb)))
@@ -216,6 +246,17 @@ impl Material {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_dielectric_reflects_at_normal_incidence_as_its_ior_gives() {
+        assert_eq!(dielectric_f0(1.5), Some(DIELECTRIC_F0));
+        assert_eq!(dielectric_f0(1.0), Some(0.0));
+        assert_eq!(dielectric_f0(0.0), Some(1.0), "glTF's special value: a mirror");
+        assert!((dielectric_f0(1.45).unwrap() - 0.033_735).abs() < 1e-6, "Blender 3.x's default IOR");
+        for bad in [-1.0, f32::NAN, f32::INFINITY] {
+            assert_eq!(dielectric_f0(bad), None, "{bad}");
+        }
+    }
 
     #[test]
     fn srgb8_encoding_is_the_exact_nearest_code() {

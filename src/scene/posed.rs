@@ -247,7 +247,7 @@ mod canonical {
     use glam::Vec3;
 
     use crate::scene::light::{Light, LightKind};
-    use crate::scene::material::Material;
+    use crate::scene::material::{Material, DIELECTRIC_F0};
     use crate::scene::texture::TextureRef;
 
     fn f32s(out: &mut Vec<u8>, v: &[f32]) {
@@ -303,6 +303,9 @@ mod canonical {
             occlusion_texture,
             normal_texture,
             specular,
+            specular_f0,
+            specular_texture,
+            specular_color_texture,
             casts_shadows,
             unlit,
         } = m;
@@ -320,6 +323,15 @@ mod canonical {
         f32s(out, &[*specular]);
         // One byte for both flags: a material that is not unlit keeps the bytes (and cached images) it had.
         out.push(*casts_shadows as u8 | (*unlit as u8) << 1);
+        // The same for a specular layer at glTF's defaults (no `KHR_materials_ior` or `KHR_materials_specular`
+        // colour, no textures): nothing follows; any other ends the material with a 1 and the three.
+        let plain = *specular_f0 == Vec3::splat(DIELECTRIC_F0);
+        if !plain || specular_texture.is_some() || specular_color_texture.is_some() {
+            out.push(1);
+            vec3(out, *specular_f0);
+            texture(out, specular_texture);
+            texture(out, specular_color_texture);
+        }
     }
 
     pub(super) fn light(l: &Light, out: &mut Vec<u8>) {
@@ -389,6 +401,10 @@ mod canonical {
                 Material { normal_texture: Some((t, 1.0)), ..base.clone() },
                 Material { normal_texture: Some((t, 0.5)), ..base.clone() },
                 Material { specular: 0.0, ..base.clone() },
+                Material { specular_f0: Vec3::splat(0.03), ..base.clone() },
+                Material { specular_f0: Vec3::new(0.04, 0.04, 0.03), ..base.clone() },
+                Material { specular_texture: Some(t), ..base.clone() },
+                Material { specular_color_texture: Some(t), ..base.clone() },
                 Material { casts_shadows: false, ..base.clone() },
                 Material { unlit: true, ..base.clone() },
                 Material { casts_shadows: false, unlit: true, ..base.clone() },

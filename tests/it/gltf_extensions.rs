@@ -1,7 +1,9 @@
 //! glTF files that require an extension: `KHR_materials_pbrSpecularGlossiness` (many downloads of 2017–2021)
 //! loads and renders its diffuse colour, `KHR_mesh_quantization` (gltfpack's and glTF-Transform's output) and
 //! `EXT_texture_webp` render as their float and PNG twins, `EXT_mesh_gpu_instancing` copies as the nodes they
-//! stand for, and a required extension vvgen does not read is refused with the way out.
+//! stand for, and a required extension vvgen does not read is refused with the way out; the material extensions
+//! that change how a surface reflects (`KHR_materials_unlit`, `KHR_materials_specular`, `KHR_materials_ior`)
+//! render as Blender's importer builds them.
 
 use std::path::Path;
 use std::process::Command;
@@ -322,6 +324,76 @@ fn a_specular_factor_weighs_the_dielectric_layer() {
     assert!(plain_lit == one_lit, "the factor 1 is the material without the extension");
     let differ = plain_lit.pixels().zip(matte_lit.pixels()).filter(|(a, b)| a[0].abs_diff(b[0]) > 2).count();
     assert!(differ > 50, "without its dielectric layer the box renders otherwise: {differ} pixels differ");
+}
+
+/// `KHR_materials_ior` and `KHR_materials_specular`'s colour set the dielectric layer's reflectance at normal
+/// incidence, as Blender's importer sets the Principled BSDF's IOR and Specular Tint. On a black box, where that
+/// layer is all that shows: glTF's default IOR (1.5) is the file without the extension byte for byte, water's
+/// (1.33) reflects less and 2 more; a colour tints the reflection; and the extension's textures (the colour's
+/// sRGB, the strength's alpha, here one image for both) act as the factors they hold do.
+#[test]
+fn an_ior_and_a_specular_colour_set_the_dielectric_reflection() {
+    let (mut json, mut bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    json["materials"][0]["pbrMetallicRoughness"] =
+        json!({"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.3});
+    // A 4 × 4 image of one texel: colour sRGB (255, 137, 137), linear (1, 0.2502, 0.2502); alpha 128/255.
+    let texel = image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 137, 137, 128]));
+    let mut png = std::io::Cursor::new(Vec::new());
+    texel.write_to(&mut png, image::ImageFormat::Png).unwrap();
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let offset = bin.len();
+    bin.extend(png.get_ref());
+    json["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"buffer": 0, "byteOffset": offset, "byteLength": png.get_ref().len()}));
+    json["images"] =
+        json!([{"bufferView": json["bufferViews"].as_array().unwrap().len() - 1, "mimeType": "image/png"}]);
+    json["buffers"][0]["byteLength"] = json!(bin.len());
+    let with = |ext: Value| {
+        let mut j = json.clone();
+        if ext != json!({}) {
+            j["extensionsUsed"] = json!(ext.as_object().unwrap().keys().collect::<Vec<_>>());
+            j["materials"][0]["extensions"] = ext;
+        }
+        let d = model(&j, &bin);
+        let asset = vvgen::scene::gltf::load(&d.path().join("model.glb"), None).unwrap();
+        let lit = render_with(d.path(), "[transform]\nfit = \"frame\"\n", "pbr");
+        (asset.materials[0].specular_f0, lit)
+    };
+    // Mean red, green and blue over the box.
+    let mean = |im: &image::RgbaImage| {
+        let on: Vec<_> = im.pixels().filter(|p| p[3] == 255).collect();
+        assert!(on.len() > 200, "the box is in view");
+        [0, 1, 2].map(|c| on.iter().map(|p| p[c] as f64).sum::<f64>() / on.len() as f64)
+    };
+    let (plain_f0, plain) = with(json!({}));
+    let (default_f0, default) = with(json!({"KHR_materials_ior": {"ior": 1.5}}));
+    let (water_f0, water) = with(json!({"KHR_materials_ior": {"ior": 1.33}}));
+    let (dense_f0, dense) = with(json!({"KHR_materials_ior": {"ior": 2.0}}));
+    assert_eq!((plain_f0.x, default_f0.x), (0.04, 0.04));
+    assert!((water_f0.x - 0.0201).abs() < 1e-4 && (dense_f0.x - 1.0 / 9.0).abs() < 1e-6, "{water_f0} {dense_f0}");
+    assert!(default == plain, "glTF's default IOR is the file without the extension");
+    let [w, p, d] = [&water, &plain, &dense].map(|im| mean(im)[1]);
+    assert!(w + 1.0 < p && p + 2.0 < d, "reflection grows with the IOR: {w:.1} < {p:.1} < {d:.1}");
+    // A reddish colour: red stays as it was, green and blue fall.
+    let factors = json!({"KHR_materials_specular": {"specularColorFactor": [1.0, 0.2502, 0.2502], "specularFactor": 128.0 / 255.0}});
+    let (tint_f0, tinted) = with(factors);
+    assert!((tint_f0 - glam::Vec3::new(0.04, 0.01001, 0.01001)).abs().max_element() < 1e-5, "{tint_f0}");
+    let [r, g, b] = mean(&tinted);
+    assert!(r > g + 2.0 && g == b, "the reflection is tinted: {r:.1} {g:.1} {b:.1}");
+    let textured =
+        json!({"KHR_materials_specular": {"specularColorTexture": {"index": 0}, "specularTexture": {"index": 0}}});
+    let (_, from_textures) = with(textured);
+    let worst =
+        tinted.pixels().zip(from_textures.pixels()).flat_map(|(a, b)| (0..4).map(|c| a[c].abs_diff(b[c]))).max();
+    assert!(worst <= Some(1), "the textures act as their factors: {worst:?} levels apart");
+    // A texture index past the file's textures is refused, naming it.
+    let mut bad = json.clone();
+    bad["materials"][0]["extensions"] = json!({"KHR_materials_specular": {"specularTexture": {"index": 7}}});
+    let d = model(&bad, &bin);
+    let err = vvgen::scene::gltf::load(&d.path().join("model.glb"), None).unwrap_err().to_string();
+    assert!(err.contains("KHR_materials_specular.specularTexture.index = 7"), "{err}");
 }
 
 /// BoxTextured drawn six times by one node's `EXT_mesh_gpu_instancing` (as gltfpack `-mi` writes it: required;

@@ -6,6 +6,9 @@ use std::sync::LazyLock;
 
 use glam::{Vec2, Vec3};
 
+/// A dielectric's reflectance at normal incidence at glTF's default index of refraction, for every channel.
+pub const DIELECTRIC: Vec3 = Vec3::splat(crate::scene::material::DIELECTRIC_F0);
+
 /// Smallest roughness shaded: a perfect mirror's lobe is a delta no punctual light can hit.
 pub const MIN_ROUGHNESS: f32 = 0.03;
 
@@ -18,15 +21,17 @@ pub struct Surface {
     pub metallic: f32,
     /// Perceptual roughness 0..1.
     pub roughness: f32,
-    /// Dielectric specular scale (1: F0 = 0.04; 0: Lambertian).
+    /// Dielectric specular scale (1: the layer as `f0` gives it; 0: Lambertian).
     pub specular: f32,
+    /// A dielectric's reflectance at normal incidence, per channel (0.04 at glTF's default IOR, 1.5).
+    pub f0: Vec3,
 }
 
 impl Surface {
     /// Normal-incidence reflectance.
     #[inline]
     pub fn f0(&self) -> Vec3 {
-        Vec3::splat(0.04).lerp(self.base, self.metallic)
+        self.f0.lerp(self.base, self.metallic)
     }
 
     /// The diffuse colour: metals have none.
@@ -182,8 +187,8 @@ mod tests {
     fn a_white_rough_metal_keeps_its_energy_and_a_dielectric_gains_little() {
         // Single scattering loses what bounces between microfacets: a white metal of roughness 1 reflects well
         // under all of a uniform environment; with the light that bounces back it reflects all of it.
-        let metal = Surface { base: Vec3::ONE, metallic: 1.0, roughness: 1.0, specular: 0.5 };
-        let plastic = Surface { base: Vec3::ONE, metallic: 0.0, roughness: 1.0, specular: 1.0 };
+        let metal = Surface { base: Vec3::ONE, metallic: 1.0, roughness: 1.0, specular: 0.5, f0: DIELECTRIC };
+        let plastic = Surface { base: Vec3::ONE, metallic: 0.0, roughness: 1.0, specular: 1.0, f0: DIELECTRIC };
         for nv in [0.1, 0.5, 1.0] {
             let ab = dfg(nv, 1.0);
             assert!(ab.x + ab.y < 0.9, "{nv}: single scattering keeps {}", ab.x + ab.y);
@@ -212,9 +217,9 @@ mod tests {
     fn the_brdf_is_reciprocal() {
         let n = Vec3::Z;
         for s in [
-            Surface { base: Vec3::new(0.8, 0.5, 0.2), metallic: 0.0, roughness: 0.4, specular: 1.0 },
-            Surface { base: Vec3::new(0.9, 0.7, 0.3), metallic: 1.0, roughness: 0.2, specular: 1.0 },
-            Surface { base: Vec3::ONE, metallic: 0.3, roughness: 0.9, specular: 1.0 },
+            Surface { base: Vec3::new(0.8, 0.5, 0.2), metallic: 0.0, roughness: 0.4, specular: 1.0, f0: DIELECTRIC },
+            Surface { base: Vec3::new(0.9, 0.7, 0.3), metallic: 1.0, roughness: 0.2, specular: 1.0, f0: DIELECTRIC },
+            Surface { base: Vec3::ONE, metallic: 0.3, roughness: 0.9, specular: 1.0, f0: DIELECTRIC },
         ] {
             for v in dirs() {
                 for l in dirs().iter().rev().take(10) {
@@ -232,9 +237,9 @@ mod tests {
         // Directional albedo ∫ f·n·l dω ≤ 1 for the whitest surfaces, by a dense quadrature over the hemisphere.
         let n = Vec3::Z;
         for s in [
-            Surface { base: Vec3::ONE, metallic: 0.0, roughness: 0.5, specular: 1.0 },
-            Surface { base: Vec3::ONE, metallic: 1.0, roughness: 0.3, specular: 1.0 },
-            Surface { base: Vec3::ONE, metallic: 0.0, roughness: 1.0, specular: 0.0 },
+            Surface { base: Vec3::ONE, metallic: 0.0, roughness: 0.5, specular: 1.0, f0: DIELECTRIC },
+            Surface { base: Vec3::ONE, metallic: 1.0, roughness: 0.3, specular: 1.0, f0: DIELECTRIC },
+            Surface { base: Vec3::ONE, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC },
         ] {
             for v in [Vec3::Z, Vec3::new(0.6, 0.0, 0.8)] {
                 let (nt, np) = (256, 512);
@@ -254,7 +259,7 @@ mod tests {
             }
         }
         // A Lambertian white surface reflects everything.
-        let lambert = Surface { base: Vec3::ONE, metallic: 0.0, roughness: 1.0, specular: 0.0 };
+        let lambert = Surface { base: Vec3::ONE, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
         assert!((lambert.eval(n, Vec3::Z, Vec3::Z).x - 1.0 / PI).abs() < 1e-6);
     }
 

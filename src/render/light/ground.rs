@@ -300,7 +300,7 @@ impl FrameLight {
 
 #[cfg(test)]
 mod tests {
-    use super::super::Surface;
+    use super::super::{Surface, DIELECTRIC};
     use super::*;
 
     /// A 4 m ground plane of colour (0.7, 0.6, 0.5) at z = 0 under a 0.6 m square caster at z = 1, lit by
@@ -430,7 +430,7 @@ mod tests {
         let (scene, frame) = square_over_ground(&lights);
         let ground = scene.primitives[0].material;
         let albedo = Vec3::new(0.7, 0.6, 0.5);
-        let lambert = Surface { base: albedo, metallic: 0.0, roughness: 0.5, specular: 0.0 };
+        let lambert = Surface { base: albedo, metallic: 0.0, roughness: 0.5, specular: 0.0, f0: DIELECTRIC };
         let (mut shadowed, mut open) = (0, 0);
         // A grid over the whole plane, and two lines a millimetre apart across the shadow's edges (the square's
         // shadow is the square moved by (0.3, 0.2): x in 0..0.6, y in −0.1..0.5), through its penumbra.

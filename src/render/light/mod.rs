@@ -30,6 +30,7 @@ use rayon::prelude::*;
 pub use crate::scene::light::{Light, LightKind};
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
+use brdf::DIELECTRIC;
 pub use environment::{EnvMap, Prefiltered};
 pub use gathered::{Gathered, GatheredError};
 use ground::{ground_planes, Ground};
@@ -310,7 +311,7 @@ impl FrameLight {
         if n == Vec3::ZERO {
             return albedo + emission;
         }
-        let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
+        let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
         let c = self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission);
         self.view.light(c)
     }
@@ -349,7 +350,7 @@ impl FrameLight {
             Some(v) if n != Vec3::ZERO => {
                 // A plane's visibility is its grid's, as its pixels read it (its underside here).
                 let vis = material.and_then(|m| self.plane_visibility_at(m, p)).unwrap_or(Visibility::blend(&v, k));
-                let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0 };
+                let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
                 self.view.light(self.exposed(self.shade(p, n, n, &s, 1.0, vis, false) + emission))
             }
             _ => self.bake(p, n, albedo, emission),
@@ -549,7 +550,7 @@ const GLOSSY_RAYS: (f32, f32) = (0.5, 0.8);
 fn may_be_glossy(scene: &PosedScene) -> bool {
     scene.primitives.iter().filter(|p| p.kind == PrimKind::Triangles).any(|p| {
         let m = scene.material(p.material);
-        let surface = Surface { base: Vec3::ONE, metallic: m.metallic, roughness: m.roughness, specular: m.specular };
+        let surface = Surface { base: Vec3::ONE, metallic: m.metallic, roughness: m.roughness, specular: m.specular, f0: m.specular_f0 };
         surface.specular_weight() > 0.0 && (m.roughness < GLOSSY_RAYS.1 || m.metallic_roughness_texture.is_some())
     })
 }
@@ -618,7 +619,7 @@ mod tests {
                     shadows: true,
                 };
                 let frame = FrameLight::prepare(&scene, &[sun], crate::render::Environment::default().studio());
-                let metal = Surface { base: Vec3::ONE, metallic: 1.0, roughness: 0.5, specular: 0.5 };
+                let metal = Surface { base: Vec3::ONE, metallic: 1.0, roughness: 0.5, specular: 0.5, f0: DIELECTRIC };
                 // Facing +X, seen from the direction whose mirror image is (x, 0, z): the lobe's centre.
                 let n = Vec3::X;
                 let r = Vec3::new((1.0 - z * z).sqrt(), 0.0, z);

@@ -184,11 +184,22 @@ fn shade_lobe(
         // Shadeless: what Blender's Emission of the base colour shows the camera, through the film's exposure.
         return (l.light.exposed(albedo), None);
     }
-    let mut surface =
-        Surface { base: albedo, metallic: mat.metallic, roughness: mat.roughness, specular: mat.specular };
+    let mut surface = Surface {
+        base: albedo,
+        metallic: mat.metallic,
+        roughness: mat.roughness,
+        specular: mat.specular,
+        f0: mat.specular_f0,
+    };
     if let Some(mr) = sample(m.metallic_roughness) {
         surface.roughness *= mr.y;
         surface.metallic *= mr.z;
+    }
+    if let Some((r, t)) = m.specular {
+        surface.specular *= t.sample_footprint(&r, uv, dx, dy).w;
+    }
+    if let Some(c) = sample(m.specular_color) {
+        surface.f0 = (surface.f0 * c).min(Vec3::ONE);
     }
     let ao =
         m.occlusion.map_or(1.0, |(r, t, strength)| 1.0 + strength * (t.sample_footprint_rgb(&r, uv, dx, dy).x - 1.0));
@@ -224,6 +235,9 @@ fn plain(m: &Material) -> bool {
 /// A material's textures that lit shading reads, resolved once per triangle.
 struct LitMaterial<'t> {
     metallic_roughness: Option<(TextureRef, &'t Texture)>,
+    /// `KHR_materials_specular`'s strength (alpha) and colour.
+    specular: Option<(TextureRef, &'t Texture)>,
+    specular_color: Option<(TextureRef, &'t Texture)>,
     /// With its strength.
     occlusion: Option<(TextureRef, &'t Texture, f32)>,
     emissive: Option<(TextureRef, &'t Texture)>,
@@ -236,6 +250,8 @@ impl<'t> LitMaterial<'t> {
         let get = |r: Option<TextureRef>| r.and_then(|r| textures.get(r.texture as usize).map(|t| (r, t)));
         LitMaterial {
             metallic_roughness: get(m.metallic_roughness_texture),
+            specular: get(m.specular_texture),
+            specular_color: get(m.specular_color_texture),
             occlusion: m.occlusion_texture.and_then(|(r, k)| get(Some(r)).map(|(r, t)| (r, t, k))),
             emissive: get(m.emissive_texture),
             normal: m.normal_texture.and_then(|(r, k)| get(Some(r)).map(|(r, t)| (r, t, k))),

@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use super::spec_gloss::SpecGloss;
-use crate::scene::material::{AlphaMode, Material};
+use crate::scene::material::{dielectric_f0, AlphaMode, Material, DIELECTRIC_F0};
 use crate::scene::texture::{Texture, TextureRef, Wrap};
 
 /// The material, and its specular-glossiness parameters when it has `KHR_materials_pbrSpecularGlossiness`
@@ -22,6 +22,7 @@ fn core(m: &gltf::Material<'_>) -> Material {
     // importer ignores them).
     let unlit = m.unlit();
     let strength = if unlit { 0.0 } else { m.emissive_strength().unwrap_or(1.0) };
+    let (specular, specular_f0, specular_texture, specular_color_texture) = specular(m);
     Material {
         base_color: Vec4::new(r, g, b, a),
         base_color_texture: pbr
@@ -48,28 +49,45 @@ fn core(m: &gltf::Material<'_>) -> Material {
             .occlusion_texture()
             .map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.strength())),
         normal_texture: m.normal_texture().map(|i| (texture_ref(&i.texture(), i.tex_coord(), None), i.scale())),
-        specular: specular_factor(m),
+        specular,
+        specular_f0,
+        specular_texture,
+        specular_color_texture,
         casts_shadows: true,
         unlit,
     }
 }
 
-/// `KHR_materials_specular`'s `specularFactor` (1 without it): the extension scales the dielectric layer's
-/// Fresnel at normal and at grazing incidence alike, so it is that layer's weight, what vvgen's `specular` is.
-/// Blender 4.5 exports a Principled BSDF's Specular IOR Level ℓ as the factor 2ℓ (a matte material, ℓ = 0, as
-/// 0; the default 0.5 writes nothing) and imports it back as ℓ; Cycles then scales reflection at normal
-/// incidence only, so the two agree at 0 and 1 and differ between at grazing angles. Its texture and colour are
-/// not read.
-fn specular_factor(m: &gltf::Material<'_>) -> f32 {
-    let ext = m.extensions().and_then(|e| e.get("KHR_materials_specular"));
-    let factor = ext.map(|s| s.get("specularFactor").and_then(|f| f.as_f64()).unwrap_or(1.0));
-    factor.filter(|f| f.is_finite()).map_or(1.0, |f| f.clamp(0.0, 1.0) as f32)
+/// The dielectric specular layer of glTF's `KHR_materials_specular` and `KHR_materials_ior`, as vvgen keeps it:
+/// its weight (`specularFactor`, 1 without it), its reflectance at normal incidence (the IOR's, 1.5 without it,
+/// times `specularColorFactor`, at most 1) and the textures that multiply each.
+///
+/// The factor scales the layer's Fresnel at normal and at grazing incidence alike, as the extension specifies,
+/// so it is that layer's weight, what vvgen's `specular` is. Blender 4.5 exports a Principled BSDF's Specular
+/// IOR Level ℓ as the factor 2ℓ (a matte material, ℓ = 0, as 0; the default 0.5 writes nothing) and imports it
+/// back as ℓ; Cycles then scales reflection at normal incidence only, so the two agree at 0 and 1 and differ
+/// between at grazing angles. Its importer sets the IOR and the colour as the Principled BSDF's IOR and
+/// Specular Tint, which tint reflection at normal incidence, as the extension's colour does. An IOR no material
+/// has (negative) reads as glTF's default.
+fn specular(m: &gltf::Material<'_>) -> (f32, Vec3, Option<TextureRef>, Option<TextureRef>) {
+    let f0 = m.ior().and_then(dielectric_f0).unwrap_or(DIELECTRIC_F0);
+    let Some(s) = m.specular() else {
+        return (1.0, Vec3::splat(f0), None, None);
+    };
+    let unit = |f: f32| if f.is_finite() { f.clamp(0.0, 1.0) } else { 1.0 };
+    let colour = Vec3::from(s.specular_color_factor().map(|c| if c.is_finite() { c.max(0.0) } else { 1.0 }));
+    let texture = |i: gltf::texture::Info<'_>| texture_ref(&i.texture(), i.tex_coord(), i.texture_transform());
+    (
+        unit(s.specular_factor()),
+        (colour * f0).min(Vec3::ONE),
+        s.specular_texture().map(texture),
+        s.specular_color_texture().map(texture),
+    )
 }
 
 /// Material extensions that change a surface's look far past what vvgen draws without them (glass, coats,
 /// cloth, thin films): a file that uses one is warned of, naming the materials, since its images will not look
-/// as Blender's do. Subtler ones (`KHR_materials_specular`, `KHR_materials_ior`, which Blender's exporter writes
-/// for most materials) are not named.
+/// as Blender's do.
 const UNREAD_LOOKS: &[(&str, &str)] = &[
     ("KHR_materials_transmission", "renders opaque, where Blender renders glass"),
     ("KHR_materials_volume", "renders without its absorption"),
@@ -143,7 +161,7 @@ fn texture_ref(
     }
 }
 
-/// Gives every data texture (metallic-roughness, occlusion) a linear copy of its image: textures are decoded as
+/// Gives every data texture (metallic-roughness, occlusion, normal, specular strength) a linear copy of its image: textures are decoded as
 /// sRGB colour, and a data texture read through the sRGB curve would be wrong. An image used both ways is copied.
 pub(super) fn linear_data_textures(materials: &mut [Material], textures: &mut Vec<Texture>) {
     let mut linear: std::collections::BTreeMap<u32, u32> = std::collections::BTreeMap::new();

@@ -191,12 +191,29 @@ impl<'a> Checker<'a> {
             let p = format!("materials[{i}]");
             self.one_of(m, "alphaMode", &p, &strs(&["OPAQUE", "MASK", "BLEND"]));
             let pbr = m.get("pbrMetallicRoughness");
+            let ext = |name: &str, key: &str| m.get("extensions").and_then(|e| e.get(name)).and_then(|x| x.get(key));
             let infos = [
                 (pbr.and_then(|x| x.get("baseColorTexture")), "pbrMetallicRoughness.baseColorTexture"),
                 (pbr.and_then(|x| x.get("metallicRoughnessTexture")), "pbrMetallicRoughness.metallicRoughnessTexture"),
                 (m.get("normalTexture"), "normalTexture"),
                 (m.get("occlusionTexture"), "occlusionTexture"),
                 (m.get("emissiveTexture"), "emissiveTexture"),
+                (
+                    ext("KHR_materials_specular", "specularTexture"),
+                    "extensions.KHR_materials_specular.specularTexture",
+                ),
+                (
+                    ext("KHR_materials_specular", "specularColorTexture"),
+                    "extensions.KHR_materials_specular.specularColorTexture",
+                ),
+                (
+                    ext("KHR_materials_pbrSpecularGlossiness", "diffuseTexture"),
+                    "extensions.KHR_materials_pbrSpecularGlossiness.diffuseTexture",
+                ),
+                (
+                    ext("KHR_materials_pbrSpecularGlossiness", "specularGlossinessTexture"),
+                    "extensions.KHR_materials_pbrSpecularGlossiness.specularGlossinessTexture",
+                ),
             ];
             for (info, name) in infos {
                 if let Some(info) = info {
