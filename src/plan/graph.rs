@@ -66,6 +66,7 @@ impl<'a> Graph<'a> {
             frame_keys: &frame_keys.content,
             frame_lights: &frame_keys.lights,
             frame_lit: &frame_keys.lit,
+            frame_shadeless_points: &frame_keys.shadeless_points,
             render: {
                 let mut r = crate::settings::renderer(&m.render, scene.voxel_size());
                 if !scene.has_points() {

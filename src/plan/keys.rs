@@ -6,7 +6,7 @@
 use super::Error;
 use crate::cache::{key, Digest, StatCache};
 use crate::manifest::Manifest;
-use crate::scene::{Poser, Scene, SourceData};
+use crate::scene::{Poser, PrimKind, Scene, SourceData};
 
 /// The keys of every scene frame.
 #[derive(Debug, Clone, Default)]
@@ -22,6 +22,10 @@ pub struct FrameKeys {
     /// Apart from `content` so that switching shading re-runs only what shading shapes (the lit `rgba` pass, lit
     /// point colours), not depth, bounds or samples.
     pub lit: Vec<Option<Digest>>,
+    /// Whether frame `f` has points of a point primitive with a shadeless (`KHR_materials_unlit`) material: lit
+    /// point colours keep their albedo there since "bake 4" baked them lit, so those frames' lit point colours
+    /// are keyed apart and re-run; every other frame keeps its keys.
+    pub shadeless_points: Vec<bool>,
 }
 
 /// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
@@ -29,6 +33,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
     let mut per_source: Vec<Vec<Digest>> = Vec::new();
     let mut lights_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
     let mut lit_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
+    let mut shadeless_per_source: Vec<Vec<bool>> = Vec::new();
     let mut poser = Poser::default();
     for (i, src) in scene.sources.iter().enumerate() {
         let world = scene.world_from_source(i).to_cols_array();
@@ -68,8 +73,10 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 let mut lit_materials = None;
                 let mut lights = Vec::new();
                 let mut lit_keys = Vec::new();
+                let mut shadeless = Vec::new();
                 for f in 0..n {
                     let posed = scene.pose_source(i, f, &mut poser)?;
+                    shadeless.push(posed.primitives.iter().any(|p| p.kind == PrimKind::Points && posed.material(p.material).unlit));
                     let m = *materials.get_or_insert_with(|| posed.material_digest());
                     let geometry = posed.geometry_digest();
                     let mut parts: Vec<&[u8]> = vec![geometry.as_bytes(), m.as_bytes()];
@@ -99,6 +106,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 }
                 lights_per_source.push(lights);
                 lit_per_source.push(lit_keys);
+                shadeless_per_source.push(shadeless);
                 keys
             }
         };
@@ -124,7 +132,9 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
     };
     let lights = gather(&lights_per_source, "frame lights");
     let lit = gather(&lit_per_source, "frame lit");
-    Ok(FrameKeys { content, lights, lit })
+    let shadeless_points =
+        (0..scene.frames).map(|f| shadeless_per_source.iter().any(|s| s.get(f.min(s.len().max(1) - 1)) == Some(&true))).collect();
+    Ok(FrameKeys { content, lights, lit, shadeless_points })
 }
 
 /// The content key of `m`'s `[environment] map`, when it names one.

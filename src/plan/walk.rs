@@ -28,6 +28,8 @@ pub struct Keying<'a> {
     pub frame_lights: &'a [Option<Digest>],
     /// What only lit shading reads of every frame besides its content ([`super::keys::FrameKeys::lit`]).
     pub frame_lit: &'a [Option<Digest>],
+    /// Whether every frame has shadeless point primitives ([`super::keys::FrameKeys::shadeless_points`]).
+    pub frame_shadeless_points: &'a [bool],
     /// The renderer's settings.
     pub render: RenderSettings,
     /// How passes are encoded.
@@ -412,6 +414,9 @@ fn samples(w: &mut dyn KeyWriter, cx: &Keying, s: &PointSettings, f: usize, deps
         lighting_fields(w, &cx.render.lighting);
         if let Some(lit) = &cx.frame_lit[f] {
             w.digest("lit materials", lit);
+        }
+        if cx.frame_shadeless_points.get(f) == Some(&true) {
+            w.str("shadeless points", "keep their colour");
         }
         if let Some(lights) = &cx.frame_lights[f] {
             w.digest("file lights", lights);

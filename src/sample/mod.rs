@@ -222,6 +222,8 @@ pub struct Site {
     /// On a triangle: its primitive (index into the scene's), its corners' vertex indices and the point's
     /// barycentric weights, so that what its vertices hold can be read there. `None` for a point primitive's.
     pub triangle: Option<(usize, [u32; 3], [f32; 3])>,
+    /// Its material is shadeless (`KHR_materials_unlit`): lit or not, it keeps its albedo.
+    pub shadeless: bool,
 }
 
 /// Evaluates `draws` on `scene` (the frame they were drawn on, or another frame of the same meshes).
@@ -284,7 +286,8 @@ fn push_point(
     let c = m.albedo(&scene.textures, uv, p.colors.get(i).copied()).truncate();
     let c = match shader {
         Some(shade) => {
-            shade(&Site { pos, normal: n, albedo: c, emission: m.emission(&scene.textures, uv), triangle: None })
+            let emission = m.emission(&scene.textures, uv);
+            shade(&Site { pos, normal: n, albedo: c, emission, triangle: None, shadeless: m.unlit })
         }
         None => c,
     };
@@ -368,6 +371,7 @@ fn surface_point(scene: &PosedScene, d: &Draw, shader: Option<Shader>) -> ([f32;
             albedo: c,
             emission: m.emission(&scene.textures, uv),
             triangle: Some((d.prim as usize, idx.map(|i| i as u32), b)),
+            shadeless: m.unlit,
         }),
         None => c,
     };

@@ -459,6 +459,61 @@ fn lit_point_colours_bake_the_lighting_and_its_shadows_and_are_keyed_by_it() {
     assert_eq!(moved.ran(Kind::RenderPass), 4);
 }
 
+/// A glTF point primitive (a grid of points facing up, with normals) whose material is shadeless
+/// (`KHR_materials_unlit`) keeps its colour in lit point colours, as a shadeless triangle's points do; the same
+/// points with an ordinary material are lit.
+#[test]
+fn a_shadeless_point_primitive_keeps_its_colour_in_lit_point_colours() {
+    use vvgen::plan::actions::Kind;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_hdr(&d.join("sky.hdr"), 64, 32);
+    let mut bin: Vec<u8> = Vec::new();
+    for i in 0..100 {
+        for v in [(i % 10) as f32 * 0.1, (i / 10) as f32 * 0.1, 0.0] {
+            bin.extend(v.to_le_bytes());
+        }
+    }
+    for _ in 0..100 {
+        for v in [0.0f32, 0.0, 1.0] {
+            bin.extend(v.to_le_bytes());
+        }
+    }
+    std::fs::write(d.join("grid.bin"), &bin).unwrap();
+    let gltf = |unlit: bool| {
+        let ext = if unlit { r#","extensions":{"KHR_materials_unlit":{}}"# } else { "" };
+        let used = if unlit { r#""extensionsUsed":["KHR_materials_unlit"],"# } else { "" };
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},{used}"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"mode":0,"material":0}}]}}],
+            "materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[0.5,0.2,0.1,1]}}{ext}}}],
+            "buffers":[{{"uri":"grid.bin","byteLength":2400}}],
+            "bufferViews":[{{"buffer":0,"byteLength":1200}},{{"buffer":0,"byteOffset":1200,"byteLength":1200}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":100,"type":"VEC3","min":[0,0,0],"max":[0.9,0.9,0]}},
+            {{"bufferView":1,"componentType":5126,"count":100,"type":"VEC3"}}]}}"#
+        )
+    };
+    let manifest = "[dataset]\nname = \"m\"\nout = \"out\"\npreview = false\n[source.grid]\ngltf = \"grid.gltf\"\n\
+                    [render]\nresolution = [32, 32]\nshading = \"pbr\"\n[environment]\nmap = \"sky.hdr\"\n\
+                    [light.sun]\nkind = \"sun\"\ndirection = [0.3, 0.2, -1]\nintensity = 3.0\n\
+                    [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 1\n[output.d]\nwriter = \"dnerf\"\n\
+                    [output.flat]\nwriter = \"ply-sequence\"\ndir = \"flat\"\npoints = 1\n\
+                    [output.baked]\nwriter = \"ply-sequence\"\ndir = \"baked\"\npoints = 1\ncolor = \"lit\"\n";
+    let colours = |name: &str| {
+        let p = d.join(format!("out/{name}/m_0000.ply"));
+        vvgen::scene::ply::read(&std::fs::read(&p).unwrap()).unwrap().colors.unwrap()
+    };
+    std::fs::write(d.join("grid.gltf"), gltf(false)).unwrap();
+    build_in(d, manifest);
+    let (flat, lit) = (colours("flat"), colours("baked"));
+    assert_eq!(flat.len(), 100, "every point of the primitive");
+    assert!(flat != lit, "ordinary points are lit");
+    std::fs::write(d.join("grid.gltf"), gltf(true)).unwrap();
+    let report = build_in(d, manifest);
+    assert!(colours("flat") == flat && colours("baked") == flat, "shadeless points keep their colour");
+    assert_eq!(report.ran(Kind::PointFrame), 2, "both clouds of the edited file re-run");
+}
+
 #[test]
 fn lit_point_colours_read_the_environment_map_whatever_the_images_shading() {
     // The same lit cloud under `pbr` images and under unlit ones: both bake the manifest's map (before, unlit

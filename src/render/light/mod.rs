@@ -316,6 +316,12 @@ impl FrameLight {
         self.view.light(c)
     }
 
+    /// The baked colour of a shadeless (`KHR_materials_unlit`) surface of colour `albedo`: as the camera sees it,
+    /// through the film's exposure and the view transform, whatever the lights.
+    pub fn shadeless(&self, albedo: Vec3) -> Vec3 {
+        self.view.light(self.exposed(albedo))
+    }
+
     /// [`FrameLight::bake`] of a point on the triangle of primitive `prim` with corners `corners` (vertex indices),
     /// at barycentric weights `k`, lit as the frame's renders light it: a ground's top face by its grids (as its
     /// pixels are read), any other surface by what its corners gathered, the subject's bounce included rather
@@ -335,8 +341,7 @@ impl FrameLight {
     ) -> Vec3 {
         let material = scene.primitives.get(prim).map(|q| q.material);
         if material.and_then(|m| scene.materials.get(m as usize)).is_some_and(|m| m.unlit) {
-            // Shadeless: its colour as the camera sees it.
-            return self.view.light(self.exposed(albedo));
+            return self.shadeless(albedo);
         }
         let top = n.z > 0.0;
         if let Some(c) = material.filter(|_| top).and_then(|m| self.shade_ground(m, p, albedo)) {
