@@ -300,7 +300,8 @@ impl FrameLight {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Surface, DIELECTRIC};
+    use super::super::brdf::DIELECTRIC;
+    use super::super::Surface;
     use super::*;
 
     /// A 4 m ground plane of colour (0.7, 0.6, 0.5) at z = 0 under a 0.6 m square caster at z = 1, lit by

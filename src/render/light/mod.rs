@@ -7,6 +7,7 @@
 //! the cosine of the angle off its axis, faded over `blend` (Blender 3.x's spot falloff); an environment of
 //! radiance L lights a white Lambertian surface to L.
 
+mod bake;
 mod bounce;
 pub mod brdf;
 mod cutout;
@@ -14,8 +15,10 @@ pub mod environment;
 mod gathered;
 mod ground;
 mod lamp;
+mod occlusion;
 mod pcf;
 mod plane_grid;
+mod pyramid;
 mod penumbra;
 mod rays;
 mod scan;
@@ -30,12 +33,13 @@ use rayon::prelude::*;
 pub use crate::scene::light::{Light, LightKind};
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
-use brdf::DIELECTRIC;
 pub use environment::{EnvMap, Prefiltered};
+pub use bake::BAKE_SALT;
 pub use gathered::{Gathered, GatheredError};
 use ground::{ground_planes, Ground};
 use plane_grid::PlaneVisibility;
 use lamp::{lamps, Lamp};
+use occlusion::occlusion_maps;
 use shadow::ShadowMap;
 
 /// What reaches a surface point of the environment's light: interpolated across a triangle from its vertices,
@@ -79,14 +83,6 @@ impl Visibility {
     }
 }
 
-/// Directions the environment's visibility is sampled in, and the side of each direction's map.
-const ENV_DIRECTIONS: usize = 32;
-/// Each direction stands for a cone of the sphere's 1/32 (half-angle acos(1 − 1/16) ≈ 20.4°): its shadows are
-/// as soft as a light that wide (the tangent of the half-angle), so 32 directions blend into one smooth occlusion
-/// instead of 32 faint copies of the subject's outline.
-const ENV_CONE: f32 = 0.372;
-const ENV_MAP: u32 = 256;
-
 /// The environment as one frame's shading reads it.
 #[derive(Debug, Clone)]
 pub struct EnvLight {
@@ -99,9 +95,6 @@ pub struct EnvLight {
     /// The full-resolution map, when it is the visible background.
     pub background: Option<Arc<EnvMap>>,
 }
-
-/// Version of baked point colours ([`FrameLight::bake`]): part of their keys.
-pub const BAKE_SALT: &str = "bake 4";
 
 /// Everything a frame's lit shading needs besides the camera.
 #[derive(Debug)]
@@ -140,18 +133,6 @@ fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
     let mut it = scene.primitives.iter().filter(|p| is_caster(scene, p)).flat_map(|p| p.positions.iter());
     let first = *it.next()?;
     Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
-}
-
-/// `n` directions spread evenly over the sphere (a Fibonacci lattice).
-fn sphere_directions(n: usize) -> Vec<Vec3> {
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = i as f32 * PI * (3.0 - 5f32.sqrt());
-            Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-        .collect()
 }
 
 impl FrameLight {
@@ -281,85 +262,6 @@ impl FrameLight {
     /// environment past its occlusion `vis` (and the ground's bounce): all but what the subject reflects.
     pub(super) fn direct_irradiance(&self, p: Vec3, n: Vec3, vis: &Visibility) -> Vec3 {
         self.lights.iter().fold(self.irradiance(p, n, vis.below) * vis.env, |e, lamp| e + lamp.irradiance(p, n))
-    }
-
-    /// The fraction of the environment's light (weighted by where it comes from and by the cosine to `n`) that
-    /// reaches `p` past the casters. The hemisphere `n` faces is the one that counts (a double-sided surface seen
-    /// from behind, such as the ground's underside, is shaded with its front's visibility).
-    pub fn environment_visibility(&self, p: Vec3, n: Vec3) -> f32 {
-        let (mut lit, mut all) = (0.0, 0.0);
-        for (d, w, m) in &self.occlusion {
-            let c = n.dot(*d) * w;
-            if c <= 0.0 {
-                continue;
-            }
-            all += c;
-            lit += c * m.visibility(p, n, ENV_CONE);
-        }
-        if all > 0.0 {
-            lit / all
-        } else {
-            1.0
-        }
-    }
-
-    /// A view-independent ("baked") colour at world point `p` with unit normal `n`: the Lambertian surface of
-    /// colour `albedo` under every light, with their shadows, and the environment with its occlusion at `p`,
-    /// plus `emission`. What a `ply-sequence` with `color = "lit"` writes; a point without a normal keeps its
-    /// albedo.
-    pub fn bake(&self, p: Vec3, n: Vec3, albedo: Vec3, emission: Vec3) -> Vec3 {
-        if n == Vec3::ZERO {
-            return albedo + emission;
-        }
-        let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
-        let c = self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission);
-        self.view.light(c)
-    }
-
-    /// The baked colour of a shadeless (`KHR_materials_unlit`) surface of colour `albedo`: as the camera sees it,
-    /// through the film's exposure and the view transform, whatever the lights.
-    pub fn shadeless(&self, albedo: Vec3) -> Vec3 {
-        self.view.light(self.exposed(albedo))
-    }
-
-    /// [`FrameLight::bake`] of a point on the triangle of primitive `prim` with corners `corners` (vertex indices),
-    /// at barycentric weights `k`, lit as the frame's renders light it: a ground's top face by its grids (as its
-    /// pixels are read), any other surface by what its corners gathered, the subject's bounce included rather
-    /// than estimated. For a light read from the frame's light action ([`FrameLight::from_gathered`]); a corner
-    /// it holds nothing for bakes as [`FrameLight::bake`]. A shadeless (`unlit`) surface keeps its albedo.
-    #[allow(clippy::too_many_arguments)]
-    pub fn bake_on(
-        &self,
-        scene: &PosedScene,
-        prim: usize,
-        corners: [u32; 3],
-        k: [f32; 3],
-        p: Vec3,
-        n: Vec3,
-        albedo: Vec3,
-        emission: Vec3,
-    ) -> Vec3 {
-        let material = scene.primitives.get(prim).map(|q| q.material);
-        if material.and_then(|m| scene.materials.get(m as usize)).is_some_and(|m| m.unlit) {
-            return self.shadeless(albedo);
-        }
-        let top = n.z > 0.0;
-        if let Some(c) = material.filter(|_| top).and_then(|m| self.shade_ground(m, p, albedo)) {
-            return self.view.light(self.exposed(c + emission));
-        }
-        let gathered = self.vertex_visibility.get(prim).and_then(|v| {
-            let at = corners.map(|c| v.get(c as usize).copied());
-            Some([at[0]?, at[1]?, at[2]?])
-        });
-        match gathered {
-            Some(v) if n != Vec3::ZERO => {
-                // A plane's visibility is its grid's, as its pixels read it (its underside here).
-                let vis = material.and_then(|m| self.plane_visibility_at(m, p)).unwrap_or(Visibility::blend(&v, k));
-                let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
-                self.view.light(self.exposed(self.shade(p, n, n, &s, 1.0, vis, false) + emission))
-            }
-            _ => self.bake(p, n, albedo, emission),
-        }
     }
 
     /// Outgoing radiance (linear RGB) at world point `p` with unit shading normal `n`, seen from unit direction
@@ -560,20 +462,6 @@ fn may_be_glossy(scene: &PosedScene) -> bool {
     })
 }
 
-/// The environment's occlusion maps: [`ENV_DIRECTIONS`] parallel shadow maps from directions over the sphere,
-/// each weighted by the environment's brightness there (so a bright sky above shadows more than a dark floor).
-fn occlusion_maps(scene: &PosedScene, env: &EnvLight, bounds: (Vec3, Vec3)) -> Vec<(Vec3, f32, ShadowMap)> {
-    let roughest = env.prefiltered.levels.last();
-    sphere_directions(ENV_DIRECTIONS)
-        .par_iter()
-        .map(|&d| {
-            let w =
-                roughest.map_or(1.0, |m| m.radiance(env.rotation * d).dot(Vec3::new(0.2126, 0.7152, 0.0722))).max(1e-6);
-            (d, w, ShadowMap::sun(scene, -d, bounds, ENV_MAP))
-        })
-        .collect()
-}
-
 impl Surface {
     /// How much of the Fresnel-weighted specular layer is present: all of it for metals, `specular` for
     /// dielectrics (0 makes a Lambertian surface).
@@ -585,6 +473,7 @@ impl Surface {
 
 #[cfg(test)]
 mod tests {
+    use super::brdf::DIELECTRIC;
     use super::*;
 
     #[test]

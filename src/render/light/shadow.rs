@@ -15,6 +15,7 @@ use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::pcf::{self, Depths, PcfAxis};
+use super::pyramid;
 use super::scan::{Scan, SCAN_RUN};
 use crate::scene::texture::floor;
 use crate::scene::PosedScene;
@@ -122,9 +123,9 @@ impl ShadowMap {
 
     /// Builds [`ShadowMap::mins`] and [`ShadowMap::maxs`] (sides halving, rounded up, down to one texel).
     fn build_pyramids(&mut self) {
-        (self.mins, self.maxs) = pyramids(&self.depth, self.size as usize);
+        (self.mins, self.maxs) = pyramid::pyramids(&self.depth, self.size as usize);
         if let Some(g) = self.glass.as_mut() {
-            g.mins = pyramids(&g.depth, self.size as usize).0;
+            g.mins = pyramid::pyramids(&g.depth, self.size as usize).0;
         }
     }
 
@@ -153,45 +154,13 @@ impl ShadowMap {
     /// [`ShadowMap::region_min`] of a depth layer `base` and its min pyramid `mins` (the opaque map's, or the
     /// glass layer's).
     fn region_min_of(&self, base: &[f32], mins: &[Vec<f32>], r: [i64; 4]) -> f32 {
-        let n = self.size as i64;
-        let [x0, y0, x1, y1] = r;
-        let (x0, y0, x1, y1) = (x0.max(0), y0.max(0), x1.min(n - 1), y1.min(n - 1));
-        if x0 > x1 || y0 > y1 {
-            return f32::INFINITY;
-        }
-        self.region(base, mins, [x0, y0, x1, y1], f32::INFINITY, f32::min)
+        pyramid::region_min(base, mins, self.size as usize, r)
     }
 
     /// The farthest depth over texels `x0..=x1` × `y0..=y1`, or +∞ when the region leaves the map (where lookups
     /// read +∞, nothing), in at most four reads of [`ShadowMap::maxs`].
     fn region_max(&self, x0: i64, y0: i64, x1: i64, y1: i64) -> f32 {
-        let n = self.size as i64;
-        if x0 < 0 || y0 < 0 || x1 >= n || y1 >= n || x0 > x1 || y0 > y1 {
-            return f32::INFINITY;
-        }
-        self.region(&self.depth, &self.maxs, [x0, y0, x1, y1], f32::NEG_INFINITY, f32::max)
-    }
-
-    /// `fold` of a pyramid's blocks covering the region `[x0, y0, x1, y1]` (inside the map): those of the level
-    /// whose blocks are at least as wide as the region, so at most 2 × 2 of them; a single texel is read from the
-    /// layer `base` the pyramid was built from.
-    fn region(&self, base: &[f32], levels: &[Vec<f32>], r: [i64; 4], init: f32, fold: fn(f32, f32) -> f32) -> f32 {
-        let [x0, y0, x1, y1] = r;
-        let span = (x1 - x0).max(y1 - y0) + 1;
-        let level = (64 - (span as u64 - 1).leading_zeros()) as usize;
-        if level == 0 {
-            return base[(y0 * self.size as i64 + x0) as usize];
-        }
-        let Some(m) = levels.get(level - 1) else { return levels.last().map_or(init, |m| m[0]) };
-        let side = (self.size as usize).div_ceil(1 << level) as i64;
-        let (bx0, by0, bx1, by1) = (x0 >> level, y0 >> level, x1 >> level, y1 >> level);
-        let mut v = init;
-        for by in by0..=by1.min(side - 1) {
-            for bx in bx0..=bx1.min(side - 1) {
-                v = fold(v, m[(by * side + bx) as usize]);
-            }
-        }
-        v
+        pyramid::region_max(&self.depth, &self.maxs, self.size as usize, [x0, y0, x1, y1])
     }
 
     /// Light space of world point `p`: texel x, texel y, depth (distance along the light's axis).
@@ -482,47 +451,6 @@ impl ShadowMap {
     }
 }
 
-/// The min and max pyramids over the `side`² depths `base` (never NaN): each level halves the side (rounded up)
-/// and folds each 2 × 2 block of the level below (an odd last row or column alone), down to one value.
-fn pyramids(base: &[f32], side: usize) -> (Vec<Vec<f32>>, Vec<Vec<f32>>) {
-    let (mut side, mut mins, mut maxs) = (side, Vec::<Vec<f32>>::new(), Vec::<Vec<f32>>::new());
-    while side > 1 {
-        let (lo, hi) = (mins.last().map_or(base, |l| l), maxs.last().map_or(base, |l| l));
-        let (m, n) = fold(lo, hi, side);
-        mins.push(m);
-        maxs.push(n);
-        side = side.div_ceil(2);
-    }
-    (mins, maxs)
-}
-
-/// One level of [`pyramids`]: the min of `lo`'s and the max of `hi`'s 2 × 2 blocks (`side`² each), rows of
-/// blocks side by side (a sun's 2048² map and its pyramids were folded on one thread, twice a frame). Each block
-/// is folded in the same order whatever the threads (its rows, then its columns; the first of equal values
-/// kept), so the same bits.
-fn fold(lo: &[f32], hi: &[f32], side: usize) -> (Vec<f32>, Vec<f32>) {
-    let next = side.div_ceil(2);
-    let (mut m, mut n) = (vec![0.0f32; next * next], vec![0.0f32; next * next]);
-    let row = |y: usize, (mins, maxs): (&mut [f32], &mut [f32])| {
-        let (r0, r1) = (2 * y, (2 * y + 1).min(side - 1));
-        let (a0, a1) = (&lo[r0 * side..(r0 + 1) * side], &lo[r1 * side..(r1 + 1) * side]);
-        let (b0, b1) = (&hi[r0 * side..(r0 + 1) * side], &hi[r1 * side..(r1 + 1) * side]);
-        for (x, (min, max)) in mins.iter_mut().zip(maxs.iter_mut()).enumerate() {
-            let (c0, c1) = (2 * x, (2 * x + 1).min(side - 1));
-            let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
-            for u in [a0[c0], a0[c1], a1[c0], a1[c1]] {
-                a = if u < a { u } else { a };
-            }
-            for v in [b0[c0], b0[c1], b1[c0], b1[c1]] {
-                b = if v > b { v } else { b };
-            }
-            (*min, *max) = (a, b);
-        }
-    };
-    m.par_chunks_mut(next).zip(n.par_chunks_mut(next)).enumerate().with_min_len(32).for_each(|(y, rows)| row(y, rows));
-    (m, n)
-}
-
 /// One axis of an N × N grid of offsets spanning ±`radius` texels: the blocker search's and the soft filter's
 /// taps are the grid's points (x from this, y from this).
 fn axis<const N: usize>(radius: f32) -> [f32; N] {
@@ -692,27 +620,6 @@ pub(super) mod tests {
             assert_eq!(x.is_finite(), y.is_finite(), "texel {i}");
             if y.is_finite() {
                 assert!((x - y).abs() < 1e-4, "texel {i}: {x} against {y}");
-            }
-        }
-    }
-
-    #[test]
-    fn each_pyramid_level_folds_the_blocks_below_odd_sides_included() {
-        let side = 5;
-        let base: Vec<f32> = (0..side * side).map(|i| ((i * 7919) % 23) as f32).collect();
-        let (mins, maxs) = pyramids(&base, side);
-        assert_eq!(mins.iter().map(Vec::len).collect::<Vec<_>>(), [9, 4, 1]);
-        // Level l's block (bx, by) folds the base texels (x, y) with x >> l == bx and y >> l == by.
-        for (l, (m, n)) in mins.iter().zip(&maxs).enumerate() {
-            let next = (side as f32 / (2 << l) as f32).ceil() as usize;
-            for b in 0..m.len() {
-                let (bx, by) = (b % next, b / next);
-                let block: Vec<f32> = (0..side * side)
-                    .filter(|i| (i % side) >> (l + 1) == bx && (i / side) >> (l + 1) == by)
-                    .map(|i| base[i])
-                    .collect();
-                assert_eq!(m[b], block.iter().copied().fold(f32::INFINITY, f32::min), "level {} block {b}", l + 1);
-                assert_eq!(n[b], block.iter().copied().fold(f32::NEG_INFINITY, f32::max), "level {} block {b}", l + 1);
             }
         }
     }
