@@ -56,14 +56,22 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
         .filter(|p| !p.is_empty())
         .map_or_else(|| crate::manifest::folder_of(&out).join("cache"), PathBuf::from);
     let Described { kind, up, mut note, rest, origin } = describe(asset, &cache, ui)?;
-    let flat = one_colour(&rest);
+    let flat = flat_colours(&rest);
     if let Some(o) = origin {
         let _ = write!(note, "; its coordinates are far from zero for its size: read relative to {o:?} (`origin`)");
     }
-    if flat {
-        note.push_str(
+    match flat {
+        Some(0) => note.push_str(
             "; no texture or vertex colours: lit (`shading = \"pbr\"`), since unlit every view is one flat colour",
-        );
+        ),
+        Some(n) => {
+            let _ = write!(
+                note,
+                "; its colours are a palette of {n}, flat patches without shading: lit (`shading = \"pbr\"`), since \
+                 unlit every view shows one flat patch per part"
+            );
+        }
+        None => {}
     }
     if out.exists() {
         bail!("{} exists: choose another with -o", out.display());
@@ -148,8 +156,9 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             let mut rest = scene::PosedScene::default();
             a.pose(&[], 0.0, glam::Mat4::IDENTITY, &mut Default::default(), &mut rest);
             drawable(&rest, asset)?;
-            // Posing fills geometry only; the source layer brings the materials.
+            // Posing fills geometry only; the source layer brings the materials and their textures.
             rest.materials = std::sync::Arc::new(a.materials.clone());
+            rest.textures = a.textures.clone();
             let kind = if clips.is_empty() { Asset::Mesh } else { Asset::Gltf { clips } };
             let note = format!("{what}; up \"y\": glTF is +Y up by its specification");
             Ok(Described { kind, up: "y", note, rest, origin: None })
@@ -221,22 +230,55 @@ fn drawable(s: &scene::PosedScene, path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Whether the subject is surfaces of one colour each: triangles only, none with a base colour texture or
-/// vertex colours that vary. Unlit, every view of such a subject is a silhouette filled with one colour, from
-/// which no NeRF learns a shape; lit, its shading shows the shape (the built-in studio light when the manifest
-/// names none). Points are left as they are: a cloud without colours has no normals to light either; so are
-/// shadeless (`unlit`) surfaces.
-fn one_colour(s: &scene::PosedScene) -> bool {
+/// At most this many distinct colours (8-bit RGB) over a subject's vertex colours and base colour textures make
+/// a palette: a low-poly model painted by part (three.js' Flamingo has 4 vertex colours, a Poly Pizza alpaca 6,
+/// a swatch-atlas texture a few dozen, BoxTextured's flat logo 59 with its antialiased edges), whose unlit views
+/// are flat patches, one per part, with nothing of the shape inside them. Scans and painted textures carry their
+/// shading in thousands (CesiumMan's texture: 16 762).
+const PALETTE: usize = 64;
+
+/// How a subject's surfaces are coloured when no light shows their shape: `Some(n)` when it is triangles only,
+/// coloured by their materials and by `n` distinct colours at most [`PALETTE`] among their vertex colours and
+/// base colour textures (0: none). Unlit, every view of such a subject is a silhouette filled with flat patches,
+/// from which no NeRF learns a shape; lit, its shading shows the shape (the built-in studio light when the
+/// manifest names none). `None` when its colours carry shading (a scan's, a painted texture's). Points are left
+/// as they are: a cloud without colours has no normals to light either; so are shadeless (`unlit`) surfaces.
+fn flat_colours(s: &scene::PosedScene) -> Option<usize> {
     let triangles = |p: &&scene::PosedPrimitive| p.kind == scene::PrimKind::Triangles && !p.indices.is_empty();
     // A shadeless surface shows its colour lit or not: light cannot give it a shape.
     let shaded = |p: &&scene::PosedPrimitive| s.materials.get(p.material as usize).is_none_or(|m| !m.unlit);
-    s.primitives.iter().filter(shaded).any(|p| triangles(&p))
-        && s.primitives.iter().filter(shaded).all(|p| {
-            let textured = !p.uvs.is_empty()
-                && s.materials.get(p.material as usize).is_some_and(|m| m.base_color_texture.is_some());
-            let varying = p.colors.first().is_some_and(|c| p.colors.iter().any(|d| d != c));
-            triangles(&p) && !textured && !varying
-        })
+    if !s.primitives.iter().filter(shaded).any(|p| triangles(&p))
+        || !s.primitives.iter().filter(shaded).all(|p| triangles(&p))
+    {
+        return None;
+    }
+    let mut colours: std::collections::HashSet<[u8; 3]> = std::collections::HashSet::new();
+    let mut textures = std::collections::BTreeSet::new();
+    for p in s.primitives.iter().filter(shaded) {
+        let texture = s.materials.get(p.material as usize).and_then(|m| m.base_color_texture);
+        if let Some(t) = texture.filter(|_| !p.uvs.is_empty()) {
+            textures.insert(t.texture);
+        }
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        for c in p.colors.iter() {
+            colours.insert([q(c.x), q(c.y), q(c.z)]);
+            if colours.len() > PALETTE {
+                return None;
+            }
+        }
+    }
+    for &t in &textures {
+        // A texture not at hand is taken to carry shading, as every texture was before palettes were told apart.
+        let t = s.textures.get(t as usize).filter(|t| !t.rgba.is_empty())?;
+        for texel in t.rgba.chunks_exact(4) {
+            colours.insert([texel[0], texel[1], texel[2]]);
+            if colours.len() > PALETTE {
+                return None;
+            }
+        }
+    }
+    // One vertex colour alone is the material's colour over again.
+    Some(if colours.len() == 1 && textures.is_empty() { 0 } else { colours.len() })
 }
 
 /// The point to read a PLY's coordinates relative to (`origin`), when they lie so far from zero for the
@@ -251,8 +293,8 @@ fn far_origin(s: &scene::PosedScene) -> Option<[f64; 3]> {
 
 /// What `new` read off the asset for its manifest besides its kind and axes.
 struct Look {
-    /// One colour: written lit ([`one_colour`]).
-    flat: bool,
+    /// Flat colours, and how many ([`flat_colours`]): written lit.
+    flat: Option<usize>,
     /// The PLY's `origin`, when its coordinates are far from zero ([`far_origin`]).
     origin: Option<[f64; 3]>,
 }
@@ -385,10 +427,14 @@ fn manifest(
          camera_angle_x = 0.6911112070083618   # Blender's 50 mm lens on a 36 mm sensor\n\
          samples        = 4\npasses         = [\"rgba\", \"depth\"]"
     );
-    if look.flat {
+    if let Some(n) = look.flat {
+        let why = match n {
+            0 => "no texture or vertex colours: unlit, every view would be one flat colour".to_string(),
+            n => format!("a palette of {n} flat colours: unlit, every view would be flat patches"),
+        };
         let _ = writeln!(
             w,
-            "shading        = \"pbr\"   # no texture or vertex colours: unlit, every view would be one flat colour;\n\
+            "shading        = \"pbr\"   # {why};\n\
              \x20                          # lit by the built-in studio environment ([environment], [light.*] to change)"
         );
     }

@@ -119,10 +119,58 @@ fn a_subject_of_one_colour_is_written_lit_and_its_views_show_its_shape() {
     let unlit = shades(&quick.replace("shading        = \"pbr\"", "shading        = \"unlit\""), "unlit.toml");
     assert!(unlit <= 2, "unlit, the pyramid is one colour: {unlit} shades");
     assert!(lit >= 20, "lit, its faces differ: {lit} shades");
-    // A textured subject is written unlit.
+    // A subject whose texture carries its shading is written unlit; a flat logo's is a palette, written lit.
+    let (code, err) = vvgen(d, &["new", &data("gltf/CesiumMan/CesiumMan.glb").display().to_string()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!std::fs::read_to_string(d.join("CesiumMan.toml")).unwrap().contains("shading"));
     let (code, err) = vvgen(d, &["new", &data("gltf/BoxTextured/BoxTextured.glb").display().to_string()]);
     assert_eq!(code, 0, "{err}");
-    assert!(!std::fs::read_to_string(d.join("BoxTextured.toml")).unwrap().contains("shading"));
+    assert!(err.contains("a palette of 59"), "{err}");
+}
+
+/// A subject painted by part with a few vertex colours (a low-poly model's palette: three.js' Flamingo has 4)
+/// shows flat patches unlit, so `new` writes it lit and says why; one whose vertex colours carry shading (a
+/// scan's: here a grid of 100 distinct colours) stays unlit.
+#[test]
+fn a_subject_painted_with_a_palette_is_written_lit_and_a_scan_unlit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // The pyramid again, its base red and its apex white: two colours.
+    std::fs::write(
+        d.join("painted.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\n\
+         element face 6\nproperty list uchar int vertex_indices\nend_header\n\
+         -1 -1 0 200 30 30\n1 -1 0 200 30 30\n1 1 0 200 30 30\n-1 1 0 200 30 30\n0 0 1.2 250 250 250\n\
+         3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n3 0 2 1\n3 0 3 2\n",
+    )
+    .unwrap();
+    let (code, err) = vvgen(d, &["new", "painted.ply"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("a palette of 2"), "{err}");
+    let text = std::fs::read_to_string(d.join("painted.toml")).unwrap();
+    assert!(text.contains("shading        = \"pbr\"   # a palette of 2 flat colours"), "{text}");
+    // A 10 × 10 grid of a gentle bump, every vertex its own colour.
+    let mut ply = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float y\nproperty float z\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 162\n\
+         property list uchar int vertex_indices\nend_header\n",
+    );
+    for i in 0..100 {
+        let (x, y) = ((i % 10) as f32 * 0.2, (i / 10) as f32 * 0.2);
+        ply += &format!("{x} {y} {} {} {} 90\n", 0.3 - (x - 0.9).powi(2) * 0.2, 100 + i, 200 - i);
+    }
+    for y in 0..9 {
+        for x in 0..9 {
+            let a = y * 10 + x;
+            ply += &format!("3 {a} {} {}\n3 {a} {} {}\n", a + 1, a + 11, a + 11, a + 10);
+        }
+    }
+    std::fs::write(d.join("scan.ply"), ply).unwrap();
+    let (code, err) = vvgen(d, &["new", "scan.ply"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("palette") && !err.contains("lit ("), "{err}");
+    assert!(!std::fs::read_to_string(d.join("scan.toml")).unwrap().contains("shading"));
 }
 
 /// An animation-only export (a skeleton and its clips, no mesh: Mixamo's "Without Skin") is refused by `new`,
