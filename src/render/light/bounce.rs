@@ -15,7 +15,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::brdf::{basis, hammersley};
-use super::rays::Tracer;
+use super::rays::{Rays, Tracer};
 use super::{caster_bounds, is_caster, FrameLight, Visibility};
 use crate::scene::PosedScene;
 
@@ -82,7 +82,7 @@ impl Subject {
         if vertices.is_empty() {
             return None;
         }
-        let tracer = Arc::new(Tracer::of(scene)?);
+        let tracer = Arc::new(Tracer::of(scene, Rays::Many)?);
         let sphere = ((lo + hi) * 0.5, 0.5 * (hi - lo).length());
         Some(Subject { tracer, sphere, vertices, first })
     }

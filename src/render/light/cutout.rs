@@ -101,7 +101,7 @@ mod tests {
     use std::sync::Arc;
 
     use super::*;
-    use crate::render::light::rays::Tracer;
+    use crate::render::light::rays::{Rays, Tracer};
     use crate::render::light::shadow::ShadowMap;
     use crate::scene::material::Material;
     use crate::scene::PrimKind;
@@ -139,7 +139,7 @@ mod tests {
             let scene = square(mode);
             let bounds = (Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, 1.0, 1.0));
             let map = ShadowMap::sun(&scene, -Vec3::Z, bounds, 256);
-            let tracer = Tracer::of(&scene).expect("a caster");
+            let tracer = Tracer::of(&scene, Rays::Few).expect("a caster");
             let (lit, shaded) = (map.visibility(clear, Vec3::Z, 0.0), map.visibility(solid, Vec3::Z, 0.0));
             let (open, shut) = (tracer.open(clear, Vec3::Z), tracer.open(solid, Vec3::Z));
             assert_eq!(shaded, 0.0, "{mode:?}");

@@ -205,7 +205,7 @@ impl FrameLight {
             return Err(GatheredError::OtherScene);
         }
         let mut light = FrameLight::bare(scene, lights, lamps(scene, lights, caster_bounds(scene)), env);
-        light.tracer = may_be_glossy(scene).then(|| rays::Tracer::of(scene).map(Arc::new)).flatten();
+        light.tracer = may_be_glossy(scene).then(|| rays::Tracer::of(scene, rays::Rays::Few).map(Arc::new)).flatten();
         light.vertex_visibility = g.vertices;
         light.planes = ground_planes(scene)
             .zip(g.planes)
