@@ -67,6 +67,7 @@ impl<'a> Graph<'a> {
             frame_lights: &frame_keys.lights,
             frame_lit: &frame_keys.lit,
             frame_shadeless_points: &frame_keys.shadeless_points,
+            frame_glossy_glass: &frame_keys.glossy_glass,
             render: {
                 let mut r = crate::settings::renderer(&m.render, scene.voxel_size());
                 if !scene.has_points() {

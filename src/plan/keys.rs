@@ -6,6 +6,8 @@
 use super::Error;
 use crate::cache::{key, Digest, StatCache};
 use crate::manifest::Manifest;
+use crate::render::light::glossy;
+use crate::scene::material::AlphaMode;
 use crate::scene::{Poser, PrimKind, Scene, SourceData};
 
 /// The keys of every scene frame.
@@ -26,6 +28,11 @@ pub struct FrameKeys {
     /// point colours keep their albedo there since "bake 4" baked them lit, so those frames' lit point colours
     /// are keyed apart and re-run; every other frame keeps its keys.
     pub shadeless_points: Vec<bool>,
+    /// Whether frame `f` has a transparent (`BLEND`) surface glossy enough for rays
+    /// ([`crate::render::light::glossy`]): its lit `rgba` pass reads its lobes' occlusion from the hemisphere since
+    /// "render 7" cast rays per sample and per layer, so those frames' lit passes are keyed apart and re-run;
+    /// every other frame keeps its keys.
+    pub glossy_glass: Vec<bool>,
 }
 
 /// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
@@ -34,6 +41,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
     let mut lights_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
     let mut lit_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
     let mut shadeless_per_source: Vec<Vec<bool>> = Vec::new();
+    let mut glass_per_source: Vec<Vec<bool>> = Vec::new();
     let mut poser = Poser::default();
     for (i, src) in scene.sources.iter().enumerate() {
         let world = scene.world_from_source(i).to_cols_array();
@@ -74,8 +82,13 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 let mut lights = Vec::new();
                 let mut lit_keys = Vec::new();
                 let mut shadeless = Vec::new();
+                let mut glass = Vec::new();
                 for f in 0..n {
                     let posed = scene.pose_source(i, f, &mut poser)?;
+                    glass.push(posed.primitives.iter().any(|p| {
+                        let m = posed.material(p.material);
+                        p.kind == PrimKind::Triangles && m.alpha_mode == AlphaMode::Blend && !m.unlit && glossy(m)
+                    }));
                     shadeless.push(posed.primitives.iter().any(|p| p.kind == PrimKind::Points && posed.material(p.material).unlit));
                     let m = *materials.get_or_insert_with(|| posed.material_digest());
                     let geometry = posed.geometry_digest();
@@ -107,6 +120,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 lights_per_source.push(lights);
                 lit_per_source.push(lit_keys);
                 shadeless_per_source.push(shadeless);
+                glass_per_source.push(glass);
                 keys
             }
         };
@@ -132,9 +146,12 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
     };
     let lights = gather(&lights_per_source, "frame lights");
     let lit = gather(&lit_per_source, "frame lit");
-    let shadeless_points =
-        (0..scene.frames).map(|f| shadeless_per_source.iter().any(|s| s.get(f.min(s.len().max(1) - 1)) == Some(&true))).collect();
-    Ok(FrameKeys { content, lights, lit, shadeless_points })
+    // Per frame, whether any source's frame (shorter sources hold their last) has it.
+    let any = |per: &[Vec<bool>]| -> Vec<bool> {
+        (0..scene.frames).map(|f| per.iter().any(|s| s.get(f.min(s.len().max(1) - 1)) == Some(&true))).collect()
+    };
+    let (shadeless_points, glossy_glass) = (any(&shadeless_per_source), any(&glass_per_source));
+    Ok(FrameKeys { content, lights, lit, shadeless_points, glossy_glass })
 }
 
 /// The content key of `m`'s `[environment] map`, when it names one.

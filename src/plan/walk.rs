@@ -30,6 +30,8 @@ pub struct Keying<'a> {
     pub frame_lit: &'a [Option<Digest>],
     /// Whether every frame has shadeless point primitives ([`super::keys::FrameKeys::shadeless_points`]).
     pub frame_shadeless_points: &'a [bool],
+    /// Whether every frame has glossy transparent surfaces ([`super::keys::FrameKeys::glossy_glass`]).
+    pub frame_glossy_glass: &'a [bool],
     /// The renderer's settings.
     pub render: RenderSettings,
     /// How passes are encoded.
@@ -85,6 +87,9 @@ impl Action {
                 if *pass == Pass::Rgba && cx.render.shading == Shading::Pbr {
                     if let Some(lit) = &cx.frame_lit[img.frame] {
                         w.digest("lit materials", lit);
+                    }
+                    if cx.frame_glossy_glass.get(img.frame) == Some(&true) {
+                        w.str("glass lobes", "hemisphere");
                     }
                     if let Some(lights) = &cx.frame_lights[img.frame] {
                         w.digest("file lights", lights);

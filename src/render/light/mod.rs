@@ -31,6 +31,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 pub use crate::scene::light::{Light, LightKind};
+use crate::scene::material::Material;
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
@@ -120,6 +121,21 @@ pub struct FrameLight {
     /// gather's ([`FrameLight::with_bounce`]). A light only prepared has none (it bakes points, which have no
     /// specular layer).
     tracer: Option<Arc<rays::Tracer>>,
+}
+
+/// How a glossy lobe's occlusion is found ([`FrameLight::shade_lobe`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Lobe {
+    /// By the lobe's own rays ([`rays::Tracer::lobe_visibility`]), where the frame has a ray tree and the lobe
+    /// is glossy enough.
+    Rays,
+    /// As rays found it already: the share of the lobe open to the environment (agreeing neighbours', see
+    /// `raster::lit`), so no ray is cast.
+    Found(f32),
+    /// By the hemisphere's occlusion alone, as a rough lobe is: a transparent (`BLEND`) surface's, shaded per
+    /// sample and per layer. A glass of 32 nested shells cast 8 rays per sample per layer, and its renders took
+    /// twelve times as long.
+    Hemisphere,
 }
 
 /// Whether primitive `p` casts shadows, and so occludes and reflects light onto others: triangles whose material
@@ -272,12 +288,11 @@ impl FrameLight {
     /// casters are mostly its own parts, of colours like its own.
     #[allow(clippy::too_many_arguments)]
     pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, vis: Visibility, estimate_bounce: bool) -> Vec3 {
-        self.shade_lobe(p, n, v, s, ao, vis, estimate_bounce, None).0
+        self.shade_lobe(p, n, v, s, ao, vis, estimate_bounce, Lobe::Rays).0
     }
 
     /// [`FrameLight::shade`], and what the glossy lobe's rays found ([`rays::Tracer::lobe_visibility`]: the share of
-    /// the lobe open to the environment) when it cast them. `lobe`: that share when it is known already (a
-    /// neighbouring pixels' that agree; see `raster::lit`), so no ray is cast.
+    /// the lobe open to the environment) when it cast them; `lobe`: how that share is found ([`Lobe`]).
     #[allow(clippy::too_many_arguments)]
     pub fn shade_lobe(
         &self,
@@ -288,7 +303,7 @@ impl FrameLight {
         ao: f32,
         vis: Visibility,
         estimate_bounce: bool,
-        lobe: Option<f32>,
+        lobe: Lobe,
     ) -> (Vec3, Option<f32>) {
         let mut out = Vec3::ZERO;
         for lamp in &self.lights {
@@ -366,14 +381,17 @@ impl FrameLight {
     /// bakes the same geometry's occlusion they meet (FlightHelmet's, multiplied in, was 2 % dark against Cycles,
     /// which Blender's importer does not give the texture to).
     #[inline]
-    fn lobe_occlusion(&self, p: Vec3, n: Vec3, v: Vec3, roughness: f32, occlusion: f32, given: Option<f32>) -> (f32, Option<f32>) {
+    fn lobe_occlusion(&self, p: Vec3, n: Vec3, v: Vec3, roughness: f32, occlusion: f32, lobe: Lobe) -> (f32, Option<f32>) {
         let hemisphere = specular_occlusion(n.dot(v), occlusion, roughness);
         let rays = 1.0 - environment::smoothstep(GLOSSY_RAYS.0, GLOSSY_RAYS.1, roughness);
-        let Some(tracer) = self.tracer.as_ref().filter(|_| rays > 0.0) else {
+        let Some(tracer) = self.tracer.as_ref().filter(|_| rays > 0.0 && lobe != Lobe::Hemisphere) else {
             return (hemisphere, None);
         };
         let a = roughness.max(brdf::MIN_ROUGHNESS).powi(2);
-        let open = given.or_else(|| tracer.lobe_visibility(p, n, v, a));
+        let open = match lobe {
+            Lobe::Found(open) => Some(open),
+            _ => tracer.lobe_visibility(p, n, v, a),
+        };
         (open.map_or(hemisphere, |open| hemisphere + (open - hemisphere) * rays), open)
     }
 
@@ -455,11 +473,14 @@ const GLOSSY_RAYS: (f32, f32) = (0.5, 0.8);
 /// roughness below the rough end, or a roughness texture (which scales the roughness down). CesiumMan's
 /// (roughness 1, untextured) has none, and its frames build no ray-tracing tree for it.
 fn may_be_glossy(scene: &PosedScene) -> bool {
-    scene.primitives.iter().filter(|p| p.kind == PrimKind::Triangles).any(|p| {
-        let m = scene.material(p.material);
-        let surface = Surface { base: Vec3::ONE, metallic: m.metallic, roughness: m.roughness, specular: m.specular, f0: m.specular_f0 };
-        surface.specular_weight() > 0.0 && (m.roughness < GLOSSY_RAYS.1 || m.metallic_roughness_texture.is_some())
-    })
+    scene.primitives.iter().filter(|p| p.kind == PrimKind::Triangles).any(|p| glossy(scene.material(p.material)))
+}
+
+/// Whether material `m` may have a lobe glossy enough for rays ([`may_be_glossy`]).
+pub fn glossy(m: &Material) -> bool {
+    let surface =
+        Surface { base: Vec3::ONE, metallic: m.metallic, roughness: m.roughness, specular: m.specular, f0: m.specular_f0 };
+    surface.specular_weight() > 0.0 && (m.roughness < GLOSSY_RAYS.1 || m.metallic_roughness_texture.is_some())
 }
 
 impl Surface {
@@ -567,15 +588,17 @@ mod tests {
         let studio = || crate::render::Environment::default().studio();
         let glossy = FrameLight::prepare(&scene_of(0.2), &[], studio()).with_bounce(&scene_of(0.2));
         assert!(glossy.tracer.is_some());
-        let lobe = |light: &FrameLight, v: Vec3, roughness: f32| light.lobe_occlusion(p, n, v, roughness, hemisphere, None);
+        let lobe = |light: &FrameLight, v: Vec3, roughness: f32| light.lobe_occlusion(p, n, v, roughness, hemisphere, Lobe::Rays);
         let ((up, found_up), (down, found_down)) = (lobe(&glossy, below, 0.2), lobe(&glossy, above, 0.2));
         assert!(up < 0.05 && down > 0.95, "mirroring the roof {up}, the open space {down}");
         // What the rays found comes back with the answer; given, it stands for them (no ray is cast).
         assert_eq!((found_up, found_down), (Some(up), Some(down)));
-        assert_eq!(glossy.lobe_occlusion(p, n, below, 0.2, hemisphere, Some(down)), (down, Some(down)));
+        assert_eq!(glossy.lobe_occlusion(p, n, below, 0.2, hemisphere, Lobe::Found(down)), (down, Some(down)));
         // The hemisphere's occlusion alone cannot tell the two apart.
         let (a, b) = (specular_occlusion(n.dot(below), hemisphere, 0.2), specular_occlusion(n.dot(above), hemisphere, 0.2));
         assert!((a - b).abs() < 1e-6 && a > 0.3 && a < 0.9, "{a} {b}");
+        // A transparent layer's lobe reads the hemisphere's, with the tree at hand: no ray is cast.
+        assert_eq!(glossy.lobe_occlusion(p, n, below, 0.2, hemisphere, Lobe::Hemisphere), (a, None));
         // A rough lobe, about the whole hemisphere, reads the hemisphere's occlusion, without rays.
         for v in [below, above] {
             assert_eq!(lobe(&glossy, v, 0.9), (specular_occlusion(n.dot(v), hemisphere, 0.9), None));

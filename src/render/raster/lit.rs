@@ -15,7 +15,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::deferred::{for_each_share, Pixels, Share};
 use super::{Lit, Projection, Rect, SampleTile, Tri, Tris};
-use crate::render::light::{Surface, Visibility};
+use crate::render::light::{Lobe, Surface, Visibility};
 use crate::scene::material::{AlphaMode, Material};
 use crate::scene::texture::{Texture, TextureRef};
 use crate::scene::PosedScene;
@@ -56,7 +56,7 @@ pub(super) fn shade_tile(
     if !l.light.casts_rays() {
         // No glossy lobe casts rays (CesiumMan's frames): one pass, no anchors.
         for_each_share(t, rect.x0, rect.y0, k, Pixels::All, |s, t| {
-            let c = shade_sample(scene, tris.get(s.id), l, proj, sample(s), albedo(s, t));
+            let c = shade_sample(scene, tris.get(s.id), l, proj, sample(s), albedo(s, t), Lobe::Rays);
             fill(t, s, c);
         });
         return;
@@ -67,7 +67,7 @@ pub(super) fn shade_tile(
     anchors.resize(aw * ((t.h / k) as usize).div_ceil(2), None);
     for_each_share(t, rect.x0, rect.y0, k, Pixels::Even, |s, t| {
         let tri = tris.get(s.id);
-        let (c, open) = shade_lobe(scene, tri, l, proj, sample(s), albedo(s, t), None);
+        let (c, open) = shade_lobe(scene, tri, l, proj, sample(s), albedo(s, t), Lobe::Rays);
         let slot = &mut anchors[(s.py / 2) as usize * aw + (s.px / 2) as usize];
         if let Some(open) = open.filter(|_| slot.is_none_or(|a| a.samples < s.n)) {
             let (normal, inv_z) = (tri.normal_at(s.bary), 1.0 / s.z);
@@ -78,7 +78,8 @@ pub(super) fn shade_tile(
     for_each_share(t, rect.x0, rect.y0, k, Pixels::NotEven, |s, t| {
         let tri = tris.get(s.id);
         let given = agreed(tri, s, &anchors, aw);
-        let (c, _) = shade_lobe(scene, tri, l, proj, sample(s), albedo(s, t), given);
+        let lobe = given.map_or(Lobe::Rays, Lobe::Found);
+        let (c, _) = shade_lobe(scene, tri, l, proj, sample(s), albedo(s, t), lobe);
         fill(t, s, c);
     });
     t.anchors = anchors;
@@ -140,13 +141,22 @@ pub(super) struct Sample {
     pub footprint: f32,
 }
 
-/// Lit radiance of triangle `tri` of albedo `albedo` at sample `s`.
-pub(super) fn shade_sample(scene: &PosedScene, tri: &Tri, l: &Lit, proj: &Projection, s: Sample, albedo: Vec3) -> Vec3 {
-    shade_lobe(scene, tri, l, proj, s, albedo, None).0
+/// Lit radiance of triangle `tri` of albedo `albedo` at sample `s`, its glossy lobe's occlusion found as `lobe`
+/// says.
+pub(super) fn shade_sample(
+    scene: &PosedScene,
+    tri: &Tri,
+    l: &Lit,
+    proj: &Projection,
+    s: Sample,
+    albedo: Vec3,
+    lobe: Lobe,
+) -> Vec3 {
+    shade_lobe(scene, tri, l, proj, s, albedo, lobe).0
 }
 
-/// [`shade_sample`], and what the glossy lobe's rays found, when it cast them; `lobe`: their answer when it is
-/// known already ([`crate::render::light::FrameLight::shade_lobe`]).
+/// [`shade_sample`], and what the glossy lobe's rays found, when it cast them
+/// ([`crate::render::light::FrameLight::shade_lobe`]).
 fn shade_lobe(
     scene: &PosedScene,
     tri: &Tri,
@@ -154,7 +164,7 @@ fn shade_lobe(
     proj: &Projection,
     s: Sample,
     albedo: Vec3,
-    lobe: Option<f32>,
+    lobe: Lobe,
 ) -> (Vec3, Option<f32>) {
     let Sample { at, bary: k, z, footprint } = s;
     let mat = scene.material(tri.material);
@@ -339,7 +349,7 @@ mod tests {
             for_each_share(&mut traced, rect.x0, rect.y0, k, Pixels::All, |s, t| {
                 let tri = tris.get(s.id);
                 let at = Sample { at: s.at, bary: s.bary, z: s.z, footprint: k as f32 };
-                let (c, found) = shade_lobe(&scene, tri, &lit, &proj, at, albedo(s, t), None);
+                let (c, found) = shade_lobe(&scene, tri, &lit, &proj, at, albedo(s, t), Lobe::Rays);
                 match found {
                     Some(v) if v > 0.99 => open += 1,
                     Some(v) if v < 0.01 => blocked += 1,

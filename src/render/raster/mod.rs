@@ -16,7 +16,7 @@ use walk::Walk;
 
 use super::bin::Binned;
 use super::splat::{Layer, Splats};
-use crate::render::light::Visibility;
+use crate::render::light::{Lobe, Visibility};
 use crate::scene::material::AlphaMode;
 use crate::scene::PosedScene;
 
@@ -478,7 +478,8 @@ fn draw_triangles(
                     Some(l) => {
                         let at = Vec2::new(sx as f32 + 0.5, sy as f32 + 0.5);
                         let s = lit::Sample { at, bary: k, z, footprint: 1.0 };
-                        lit::shade_sample(scene, tri, l, proj, s, albedo.truncate())
+                        // Shaded per sample and per layer: its lobe's occlusion is the hemisphere's, no rays.
+                        lit::shade_sample(scene, tri, l, proj, s, albedo.truncate(), Lobe::Hemisphere)
                     }
                     None => shade_unlit(shade, mat.unlit, albedo.truncate(), nrm) + mat.emissive,
                 };
