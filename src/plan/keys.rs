@@ -31,7 +31,8 @@ pub struct FrameKeys {
     /// Whether frame `f` has a transparent (`BLEND`) surface glossy enough for rays
     /// ([`crate::render::light::glossy`]): its lit `rgba` pass reads its lobes' occlusion from the hemisphere since
     /// "render 7" cast rays per sample and per layer, so those frames' lit passes are keyed apart and re-run;
-    /// every other frame keeps its keys.
+    /// every other frame keeps its keys. A mesh sequence's frames, keyed by their files and not posed to plan,
+    /// count as having it.
     pub glossy_glass: Vec<bool>,
 }
 
@@ -59,7 +60,11 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     Ok(key("frame ply", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?,
-            SourceData::MeshSequence(files) => files
+            SourceData::MeshSequence(files) => {
+                // Its frames are not posed to plan: whether one holds glossy glass is not known, so each counts as
+                // holding it (an OBJ's or a `.blend`'s transparent materials may be glossy).
+                glass_per_source.push(vec![true; files.len()]);
+                files
                 .iter()
                 .map(|f| {
                     // The frame's file and what it reads besides (MTL files, textures), each by content.
@@ -73,7 +78,8 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))
                 })
-                .collect::<Result<Vec<_>, Error>>()?,
+                .collect::<Result<Vec<_>, Error>>()?
+            }
             SourceData::Gltf { .. } | SourceData::Fbx { .. } | SourceData::Static(_) => {
                 let n = src.frame_count();
                 let mut keys = Vec::with_capacity(n);
