@@ -254,12 +254,12 @@ fn flat_colours(s: &scene::PosedScene) -> Option<usize> {
     }
     let mut colours: std::collections::HashSet<[u8; 3]> = std::collections::HashSet::new();
     let mut textures = std::collections::BTreeSet::new();
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
     for p in s.primitives.iter().filter(shaded) {
         let texture = s.materials.get(p.material as usize).and_then(|m| m.base_color_texture);
         if let Some(t) = texture.filter(|_| !p.uvs.is_empty()) {
             textures.insert(t.texture);
         }
-        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
         for c in p.colors.iter() {
             colours.insert([q(c.x), q(c.y), q(c.z)]);
             if colours.len() > PALETTE {

@@ -215,7 +215,7 @@ fn samples(
                 l.bake_on(whole, first + prim, corners, k, site.pos, site.normal, site.albedo, site.emission)
             }
             // A shadeless point primitive's points keep their colour, as a shadeless triangle's do.
-            None if site.shadeless => l.shadeless(site.albedo),
+            None if site.shadeless => l.displayed(site.albedo),
             None => apart.as_ref().unwrap_or(l).bake(site.pos, site.normal, site.albedo, site.emission),
         }
     });

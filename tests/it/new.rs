@@ -80,6 +80,26 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
     assert_eq!(code, 2, "{err}");
 }
 
+/// An ASCII PLY pyramid: four sloped faces over a square base, its base corners and apex of the `(base, apex)`
+/// colours when given, else without colours.
+fn pyramid(colours: Option<([u8; 3], [u8; 3])>) -> String {
+    let mut ply =
+        String::from("ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n");
+    if colours.is_some() {
+        ply += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    }
+    ply += "element face 6\nproperty list uchar int vertex_indices\nend_header\n";
+    let corners = ["-1 -1 0", "1 -1 0", "1 1 0", "-1 1 0", "0 0 1.2"];
+    for (i, at) in corners.iter().enumerate() {
+        let colour = colours.map_or(String::new(), |(base, apex)| {
+            let [r, g, b] = if i == 4 { apex } else { base };
+            format!(" {r} {g} {b}")
+        });
+        ply += &format!("{at}{colour}\n");
+    }
+    ply + "3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n3 0 2 1\n3 0 3 2\n"
+}
+
 /// A subject of one colour (a scan without colours, a mesh without materials) unlit is a filled silhouette in
 /// every view: `new` writes it lit, and its views show its shape (many shades where unlit has one). A textured
 /// subject stays unlit, as the NeRF-synthetic recipe renders it.
@@ -88,13 +108,7 @@ fn a_subject_of_one_colour_is_written_lit_and_its_views_show_its_shape() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     // A pyramid: four sloped faces and a base, no colours.
-    std::fs::write(
-        d.join("pyramid.ply"),
-        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
-         element face 6\nproperty list uchar int vertex_indices\nend_header\n\
-         -1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n0 0 1.2\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n3 0 2 1\n3 0 3 2\n",
-    )
-    .unwrap();
+    std::fs::write(d.join("pyramid.ply"), pyramid(None)).unwrap();
     let (code, err) = vvgen(d, &["new", "pyramid.ply"]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("no texture or vertex colours"), "{err}");
@@ -136,15 +150,7 @@ fn a_subject_painted_with_a_palette_is_written_lit_and_a_scan_unlit() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     // The pyramid again, its base red and its apex white: two colours.
-    std::fs::write(
-        d.join("painted.ply"),
-        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
-         property uchar red\nproperty uchar green\nproperty uchar blue\n\
-         element face 6\nproperty list uchar int vertex_indices\nend_header\n\
-         -1 -1 0 200 30 30\n1 -1 0 200 30 30\n1 1 0 200 30 30\n-1 1 0 200 30 30\n0 0 1.2 250 250 250\n\
-         3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n3 0 2 1\n3 0 3 2\n",
-    )
-    .unwrap();
+    std::fs::write(d.join("painted.ply"), pyramid(Some(([200, 30, 30], [250, 250, 250])))).unwrap();
     let (code, err) = vvgen(d, &["new", "painted.ply"]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("a palette of 2"), "{err}");

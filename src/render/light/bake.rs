@@ -21,14 +21,13 @@ impl FrameLight {
             return albedo + emission;
         }
         let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
-        let c = self.exposed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission);
-        self.view.light(c)
+        self.displayed(self.shade(p, n, n, &s, 1.0, self.visibility(p, n), true) + emission)
     }
 
-    /// The baked colour of a shadeless (`KHR_materials_unlit`) surface of colour `albedo`: as the camera sees it,
-    /// through the film's exposure and the view transform, whatever the lights.
-    pub fn shadeless(&self, albedo: Vec3) -> Vec3 {
-        self.view.light(self.exposed(albedo))
+    /// Radiance `c` as a baked colour shows it: through the film's exposure and the view transform. A shadeless
+    /// (`KHR_materials_unlit`) surface bakes as its albedo displayed so, whatever the lights.
+    pub fn displayed(&self, c: Vec3) -> Vec3 {
+        self.view.light(self.exposed(c))
     }
 
     /// [`FrameLight::bake`] of a point on the triangle of primitive `prim` with corners `corners` (vertex indices),
@@ -50,11 +49,11 @@ impl FrameLight {
     ) -> Vec3 {
         let material = scene.primitives.get(prim).map(|q| q.material);
         if material.and_then(|m| scene.materials.get(m as usize)).is_some_and(|m| m.unlit) {
-            return self.shadeless(albedo);
+            return self.displayed(albedo);
         }
         let top = n.z > 0.0;
         if let Some(c) = material.filter(|_| top).and_then(|m| self.shade_ground(m, p, albedo)) {
-            return self.view.light(self.exposed(c + emission));
+            return self.displayed(c + emission);
         }
         let gathered = self.vertex_visibility.get(prim).and_then(|v| {
             let at = corners.map(|c| v.get(c as usize).copied());
@@ -65,7 +64,7 @@ impl FrameLight {
                 // A plane's visibility is its grid's, as its pixels read it (its underside here).
                 let vis = material.and_then(|m| self.plane_visibility_at(m, p)).unwrap_or(Visibility::blend(&v, k));
                 let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
-                self.view.light(self.exposed(self.shade(p, n, n, &s, 1.0, vis, false) + emission))
+                self.displayed(self.shade(p, n, n, &s, 1.0, vis, false) + emission)
             }
             _ => self.bake(p, n, albedo, emission),
         }

@@ -56,7 +56,7 @@ pub(super) fn shade_tile(
     if !l.light.casts_rays() {
         // No glossy lobe casts rays (CesiumMan's frames): one pass, no anchors.
         for_each_share(t, rect.x0, rect.y0, k, Pixels::All, |s, t| {
-            let c = shade_sample(scene, tris.get(s.id), l, proj, sample(s), albedo(s, t), Lobe::Rays);
+            let (c, _) = shade_lobe(scene, tris.get(s.id), l, proj, sample(s), albedo(s, t), Lobe::Rays);
             fill(t, s, c);
         });
         return;
@@ -142,22 +142,8 @@ pub(super) struct Sample {
 }
 
 /// Lit radiance of triangle `tri` of albedo `albedo` at sample `s`, its glossy lobe's occlusion found as `lobe`
-/// says.
-pub(super) fn shade_sample(
-    scene: &PosedScene,
-    tri: &Tri,
-    l: &Lit,
-    proj: &Projection,
-    s: Sample,
-    albedo: Vec3,
-    lobe: Lobe,
-) -> Vec3 {
-    shade_lobe(scene, tri, l, proj, s, albedo, lobe).0
-}
-
-/// [`shade_sample`], and what the glossy lobe's rays found, when it cast them
-/// ([`crate::render::light::FrameLight::shade_lobe`]).
-fn shade_lobe(
+/// says, and what the lobe's rays found, when it cast them ([`crate::render::light::FrameLight::shade_lobe`]).
+pub(super) fn shade_lobe(
     scene: &PosedScene,
     tri: &Tri,
     l: &Lit,

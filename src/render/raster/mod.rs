@@ -479,7 +479,7 @@ fn draw_triangles(
                         let at = Vec2::new(sx as f32 + 0.5, sy as f32 + 0.5);
                         let s = lit::Sample { at, bary: k, z, footprint: 1.0 };
                         // Shaded per sample and per layer: its lobe's occlusion is the hemisphere's, no rays.
-                        lit::shade_sample(scene, tri, l, proj, s, albedo.truncate(), Lobe::Hemisphere)
+                        lit::shade_lobe(scene, tri, l, proj, s, albedo.truncate(), Lobe::Hemisphere).0
                     }
                     None => shade_unlit(shade, mat.unlit, albedo.truncate(), nrm) + mat.emissive,
                 };
