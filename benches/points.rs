@@ -63,6 +63,7 @@ fn torus_100k() -> PosedScene {
             indices: Arc::new(indices),
             material: 0,
             object: 0,
+            gaussians: None,
         }],
         materials: Arc::new(vec![material]),
         textures: Arc::new(vec![texture]),

@@ -50,6 +50,9 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
         // A sequence's frames are keyed by their files' bytes: the `origin` subtracted as they are read shapes
         // the positions too (a source without one keeps its keys).
         let origin: Option<&[u8]> = (src.origin != [0.0; 3]).then(|| bytemuck::cast_slice(&src.origin));
+        // Files of 3D Gaussians were drawn as points before "gaussians 1" drew them as splats: a sequence of them
+        // re-renders (posed sources' Gaussians are in their geometry digest); other sequences keep their keys.
+        let splats: Option<&[u8]> = src.splats.then_some(b"gaussians 1".as_slice());
         let keys = match &src.data {
             SourceData::Sequence(files) => files
                 .iter()
@@ -57,6 +60,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
                     let mut bytes: Vec<&[u8]> = vec![world, &d.0];
                     bytes.extend(origin);
+                    bytes.extend(splats);
                     Ok(key("frame ply", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?,
@@ -75,6 +79,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     }
                     let mut bytes: Vec<&[u8]> = vec![world];
                     bytes.extend(origin);
+                    bytes.extend(splats);
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))
                 })

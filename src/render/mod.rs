@@ -7,6 +7,7 @@ pub mod agx;
 pub mod bin;
 pub mod encode;
 pub mod filter;
+mod gaussians;
 pub mod light;
 pub mod raster;
 pub mod splat;
@@ -283,7 +284,9 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
         per_side: k,
     };
     let n = (w * h) as usize;
-    let b = s.buffers;
+    // Gaussians are drawn last and stop at the depth of what was drawn before them.
+    let gaussians = gaussians::any(scene);
+    let b = Buffers { depth: s.buffers.depth || gaussians, ..s.buffers };
     let mut f = Frame {
         width: cam.width,
         height: cam.height,
@@ -363,6 +366,12 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
     });
     if let Some(kernel) = kernel {
         filter::apply(&kernel, &mut linear, w as usize, h as usize, &mut f.rgba);
+    }
+    if gaussians {
+        gaussians::draw(scene, cam, s.depth, &mut f);
+        if !s.buffers.depth {
+            f.depth = Vec::new();
+        }
     }
     f
 }

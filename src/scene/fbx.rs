@@ -439,6 +439,7 @@ impl FbxAsset {
             indices: Arc::default(),
             material: 0,
             object: 0,
+            gaussians: None,
         });
         let normal_post = glam::Mat3::from_mat4(post).inverse().transpose();
         // One mesh node may hold several parts (one per material): pose its vertices once.

@@ -5,6 +5,7 @@
 pub mod blend;
 pub mod fbx;
 mod fbx_layers;
+pub mod gaussians;
 pub mod gltf;
 pub mod input;
 pub mod light;

@@ -218,6 +218,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
             indices: Arc::new(indices),
             material,
             object: object as u32,
+            gaussians: None,
         });
     }
     Ok(PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures), lights: Vec::new() })

@@ -40,6 +40,9 @@ pub struct PosedPrimitive {
     pub material: u32,
     /// Object id (for instance masks): one per source node instance.
     pub object: u32,
+    /// For points read from a 3D Gaussian splatting file: the Gaussian each point is the centre of, drawn as
+    /// splatting draws it in images (point outputs take the centres).
+    pub gaussians: Option<super::gaussians::Gaussians>,
 }
 
 /// Everything drawn at one frame.
@@ -76,6 +79,7 @@ impl PosedScene {
                 indices: Arc::new(indices),
                 material: 0,
                 object: 0,
+                gaussians: None,
             }],
             materials: Arc::new(vec![material]),
             textures: Arc::new(Vec::new()),
@@ -196,6 +200,11 @@ impl PosedScene {
             }
             h.update(&p.material.to_le_bytes());
             h.update(&p.object.to_le_bytes());
+            // Only Gaussians add bytes: every other frame keeps its digest.
+            if let Some(g) = &p.gaussians {
+                g.data.hash_into(&mut h);
+                h.update(bytemuck::cast_slice(&g.to_world.to_cols_array()));
+            }
         }
         h.finalize()
     }

@@ -57,6 +57,9 @@ pub struct LoadedSource {
     pub warnings: Vec<String>,
     /// Subtracted from its PLY files' coordinates as they are read, in double precision.
     pub origin: [f64; 3],
+    /// Whether its PLY files hold 3D Gaussians with their shapes, drawn as splatting draws them (found from the
+    /// first frame's header, as `check` sees it).
+    pub splats: bool,
 }
 
 impl LoadedSource {
@@ -117,7 +120,7 @@ impl LoadedSource {
             SourceFile::MeshSequence(frames) => SourceData::MeshSequence(frames.clone()),
         };
         // A 3D Gaussian splatting file (found from its first frame's header, as `check` sees it) is drawn as
-        // points: say what of it is not.
+        // splatting draws it; one without the Gaussians' shapes as points, which is said.
         let first_ply = match &req.file {
             SourceFile::Mesh { path, .. } if is_ply(path) => Some(path),
             SourceFile::PlySequence(frames) | SourceFile::MeshSequence(frames) => {
@@ -125,8 +128,11 @@ impl LoadedSource {
             }
             _ => None,
         };
+        let mut splats = false;
         if let Some(path) = first_ply {
-            warnings.extend(splats_note(path)?);
+            let (splatted, note) = splats_of(path)?;
+            splats = splatted;
+            warnings.extend(note);
         }
         // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
         // .blend in Blender's (exported +Z up). A ground plane is placed in world units.
@@ -136,7 +142,7 @@ impl LoadedSource {
             SourceFile::Gltf { .. } | SourceFile::Mesh { .. } | SourceFile::MeshSequence(_) => UpAxis::Y,
             _ => UpAxis::Z,
         };
-        Ok(LoadedSource { name, data, default_up, ground, warnings, origin: req.origin })
+        Ok(LoadedSource { name, data, default_up, ground, warnings, origin: req.origin, splats })
     }
 
     /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
@@ -402,19 +408,21 @@ fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<Pa
     Ok(Some(tex))
 }
 
-/// What a user should know when the PLY at `path` holds 3D Gaussians ([`ply::gaussian_splats`]): vvgen draws
-/// them as points.
-fn splats_note(path: &std::path::Path) -> Result<Option<String>, Error> {
-    Ok(ply::holds_gaussian_splats(&checked_ply(path)?).then(|| {
+/// Whether the PLY at `path` holds 3D Gaussians drawn as splats (with their scales and rotations), and what a
+/// user should know when it holds Gaussians without their shapes: those are drawn as points.
+fn splats_of(path: &std::path::Path) -> Result<(bool, Option<String>), Error> {
+    let header = checked_ply(path)?;
+    let splatted = ply::holds_gaussian_shapes(&header);
+    let note = (ply::holds_gaussian_splats(&header) && !splatted).then(|| {
         format!(
-            "{}: holds 3D Gaussians (3D Gaussian splatting's layout): vvgen draws each as a point at its centre in \
-             its base colour (spherical-harmonic band 0, as 3DGS's tools colour a cloud), not as a splat: the \
-             Gaussians' sizes, orientations, view-dependent colour and translucency are not drawn, and those too \
-             faint to show anywhere (opacity under 1/255) are left out. For images as a splatting viewer shows them, \
-             render the Gaussians there; vvgen's points suit the cloud's geometry and colour",
+            "{}: holds 3D Gaussians' colours and opacities (3D Gaussian splatting's `f_dc_*`, `opacity`) but not \
+             their shapes (`scale_0..2`, `rot_0..3`): vvgen draws each as a point at its centre in its base colour \
+             (spherical-harmonic band 0, as 3DGS's tools colour a cloud), and leaves out those too faint to show \
+             anywhere (opacity under 1/255). A file with its scales and rotations is drawn as splatting draws it",
             path.display()
         )
-    }))
+    });
+    Ok((splatted, note))
 }
 
 /// A PLY file as a posed scene in source space: triangles if it has faces, else points.
@@ -448,7 +456,7 @@ pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScen
 
 /// A decoded PLY as a posed scene in source space; `path` finds its texture and names it in errors.
 fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Error> {
-    let ply::PlyData { positions, normals, colors, uvs, triangles, comments } = d;
+    let ply::PlyData { positions, normals, colors, uvs, triangles, comments, gaussians } = d;
     let kind = if triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
     // In place: `[f32; 3]` and `Vec3` have one size and alignment, so the collect reuses the allocation.
     let positions: Vec<Vec3> = positions.into_iter().map(Vec3::from).collect();
@@ -482,6 +490,10 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
     // Scans rarely have consistent winding: draw both sides.
     let mut material = Material { double_sided: true, ..base };
     let mut scene = PosedScene::single(kind, positions, normals, colors, triangles, material.clone());
+    if kind == PrimKind::Points {
+        let g = gaussians.as_ref().map(super::gaussians::GaussianData::from_columns);
+        scene.primitives[0].gaussians = g.map(super::gaussians::Gaussians::new);
+    }
     if let (Some(tex), Some(uvs)) = (texture, &uvs) {
         material.base_color_texture = Some(super::texture::TextureRef::new(0));
         scene.materials = Arc::new(vec![material]);
@@ -516,6 +528,7 @@ fn transform_into(rest: &PosedScene, m: Mat4, out: &mut PosedScene) {
         o.indices = p.indices.clone();
         o.material = p.material;
         o.object = p.object;
+        o.gaussians = p.gaussians.as_ref().map(|g| g.transformed(t.linear()));
         o.positions.clear();
         o.positions.extend(p.positions.iter().map(|&v| t.point(v)));
         o.normals.clear();
@@ -535,6 +548,7 @@ fn transformed(mut scene: PosedScene, m: Mat4) -> PosedScene {
         p.positions.iter_mut().for_each(|v| *v = t.point(*v));
         p.normals.iter_mut().for_each(|n| *n = t.normal(*n));
         p.tangents.iter_mut().for_each(|v| *v = t.tangent(*v));
+        p.gaussians = p.gaussians.take().map(|g| g.transformed(t.linear()));
     }
     scene
 }
@@ -555,6 +569,11 @@ impl VertexTransform {
     #[inline]
     fn point(&self, v: Vec3) -> Vec3 {
         self.m.transform_point3(v)
+    }
+
+    /// The linear part, which carries a Gaussian's covariance.
+    fn linear(&self) -> glam::Mat3 {
+        glam::Mat3::from_mat4(self.m)
     }
 
     #[inline]

@@ -122,6 +122,7 @@ fn textured_quad() -> (PosedScene, Vec<u8>) {
             indices: Arc::new(vec![0, 1, 2, 0, 2, 3]),
             material: 0,
             object: 0,
+            gaussians: None,
         }],
         materials: Arc::new(vec![Material {
             base_color: Vec4::new(1.0, 0.5, 1.0, 1.0),

@@ -214,7 +214,8 @@ pub fn setup<'a>(scene: &'a PosedScene, p: &Projection, s: &SplatSettings, k: f3
     // Each sample row's band, looked up (dividing, twice per splat in each of the sort's passes, was a tenth of
     // the setup), once per splat, from the rows that made it visible.
     let band_of: Vec<u32> = (0..size.1).map(|y| (y / band_rows) as u32).collect();
-    for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points) {
+    // Gaussians are drawn as splatting draws them (`render::gaussians`), not as points.
+    for prim in scene.primitives.iter().filter(|q| q.kind == PrimKind::Points && q.gaussians.is_none()) {
         let base = scene.materials.get(prim.material as usize).map_or(Vec4::ONE, |m| m.base_color);
         out.sources.push(Source { first, prim, base });
         let bins: Vec<(Binned<Flat>, Binned<Solid>)> = prim

@@ -160,6 +160,7 @@ impl GltfAsset {
                             indices: Arc::new(prim.indices.clone()),
                             material: prim.material,
                             object: object as u32,
+                            gaussians: None,
                         });
                     }
                     pose_primitive(prim, &s.weights[n], joints, &model, &mut out.primitives[slot]);

@@ -18,7 +18,9 @@ mod write;
 
 pub use file::{check_file, read_file, read_file_at, FileError};
 pub use header::{parse_header, Element, Format, Header, Property, Scalar};
-pub use read::{gaussian_splats, holds_gaussian_splats, read, read_at, PlyData};
+pub use read::{
+    gaussian_splats, holds_gaussian_shapes, holds_gaussian_splats, read, read_at, GaussianColumns, PlyData,
+};
 pub use write::{write, PlyOut};
 
 use thiserror::Error;

@@ -22,6 +22,28 @@ pub struct PlyData {
     pub triangles: Vec<u32>,
     /// Header comments.
     pub comments: Vec<String>,
+    /// A 3D Gaussian splatting file's Gaussians beside their centres (`positions`), as the file stores them, when
+    /// it has their shapes ([`GaussianColumns`]).
+    pub gaussians: Option<GaussianColumns>,
+}
+
+/// 3D Gaussians as graphdeco-inria's `save_ply` writes them, one row per point kept in [`PlyData::positions`]:
+/// the raw stored values, before the activations (`exp` of the scales, the sigmoid of the opacity, the
+/// quaternion's normalization) that [`crate::scene::gaussians`] applies.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GaussianColumns {
+    /// `scale_0..2`: log standard deviations along the Gaussian's own axes.
+    pub scales: Vec<[f32; 3]>,
+    /// `rot_0..3`: its rotation as a quaternion (w, x, y, z), not necessarily of unit length.
+    pub rotations: Vec<[f32; 4]>,
+    /// `opacity`: the logit of its peak opacity.
+    pub opacities: Vec<f32>,
+    /// Spherical-harmonic degree: 0 to 3, from how many `f_rest_*` the file has (0, 9, 24 or 45).
+    pub degree: usize,
+    /// Per Gaussian, its `(degree + 1)²` colour coefficients, band 0 (`f_dc_*`) first, each an (r, g, b).
+    /// The file stores the higher bands channel by channel (`f_rest_k` is red's coefficient `k + 1` for k below
+    /// `(degree + 1)² − 1`, then green's, then blue's); this is them regrouped per coefficient.
+    pub sh: Vec<[f32; 3]>,
 }
 
 pub(super) const SLOT_X: usize = 0;
@@ -32,7 +54,13 @@ pub(super) const SLOT_U: usize = 10;
 /// A 3D Gaussian's colour at band 0 of its spherical harmonics (`f_dc_0`, `_1`, `_2`), and its opacity's logit.
 pub(super) const SLOT_DC: usize = 12;
 pub(super) const SLOT_OPACITY: usize = 15;
-const SLOTS: usize = 16;
+/// Its log scales (`scale_0..2`), rotation (`rot_0..3`) and higher spherical-harmonic bands (`f_rest_0..44`).
+const SLOT_SCALE: usize = 16;
+const SLOT_ROT: usize = 19;
+const SLOT_REST: usize = 23;
+/// The most `f_rest_*` a file can hold: degree 3, 15 coefficients per channel.
+const REST: usize = 45;
+const SLOTS: usize = SLOT_REST + REST;
 pub(super) const NO_SLOT: usize = usize::MAX;
 
 /// Where a vertex property's value goes (`SLOT_*`), or [`NO_SLOT`] for one vvgen does not read.
@@ -54,8 +82,39 @@ pub(super) fn slot(name: &str) -> usize {
         "f_dc_1" => 13,
         "f_dc_2" => 14,
         "opacity" => 15,
-        _ => NO_SLOT,
+        "scale_0" => SLOT_SCALE,
+        "scale_1" => SLOT_SCALE + 1,
+        "scale_2" => SLOT_SCALE + 2,
+        "rot_0" => SLOT_ROT,
+        "rot_1" => SLOT_ROT + 1,
+        "rot_2" => SLOT_ROT + 2,
+        "rot_3" => SLOT_ROT + 3,
+        _ => match name.strip_prefix("f_rest_").and_then(|k| k.parse::<usize>().ok()) {
+            // `f_rest_7`, not `f_rest_07`: only the names 3DGS writes.
+            Some(k) if k < REST && name == format!("f_rest_{k}") => SLOT_REST + k,
+            _ => NO_SLOT,
+        },
     }
+}
+
+/// The spherical-harmonic degree of a Gaussian element: the highest whose `f_rest_*` it has in full (3DGS
+/// writes none, 9, 24 or 45 of them).
+fn sh_degree(has: impl Fn(usize) -> bool) -> usize {
+    let mut degree = 0;
+    for d in 1..=3 {
+        let n = 3 * ((d + 1) * (d + 1) - 1);
+        if (0..n).all(|k| has(SLOT_REST + k)) {
+            degree = d;
+        }
+    }
+    degree
+}
+
+/// Whether a Gaussian element also has its shape: `scale_0..2` and `rot_0..3`, beside what
+/// [`gaussian_splats`] asks. Without them (a cloud of coloured centres) it is read as points.
+fn gaussian_shapes(el: &Element) -> bool {
+    let has = |s: usize| el.props.iter().any(|p| p.list.is_none() && slot(&p.name) == s);
+    gaussian_splats(el) && (SLOT_SCALE..SLOT_ROT + 4).all(has)
 }
 
 /// Whether a vertex element holds 3D Gaussians as 3D Gaussian splatting writes them (graphdeco-inria's
@@ -75,6 +134,13 @@ pub fn gaussian_splats(el: &Element) -> bool {
 pub fn holds_gaussian_splats(header: &super::Header) -> bool {
     let points = points_element(header);
     header.elements.iter().find(|e| e.name == points).is_some_and(gaussian_splats)
+}
+
+/// Whether the points of the file with `header` are 3D Gaussians with their shapes (scales and rotations), which
+/// [`read`] gives in [`PlyData::gaussians`].
+pub fn holds_gaussian_shapes(header: &super::Header) -> bool {
+    let points = points_element(header);
+    header.elements.iter().find(|e| e.name == points).is_some_and(gaussian_shapes)
 }
 
 /// The constant of band 0 of the real spherical harmonics, 1 / (2 √π), as 3DGS writes it.
@@ -333,6 +399,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     let has_c = has(SLOT_R) && has(SLOT_R + 1) && has(SLOT_R + 2);
     let has_uv = has(SLOT_U) && has(SLOT_U + 1);
     let splats = gaussian_splats(el);
+    let mut gaussians = gaussian_shapes(el).then(|| GaussianColumns { degree: sh_degree(has), ..Default::default() });
     // Float colours are 0..1; integer colours scale by their type's maximum.
     let color_scale = el
         .props
@@ -379,6 +446,16 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
         }
         if has_uv {
             uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
+        }
+        if let Some(g) = &mut gaussians {
+            g.scales.push([0, 1, 2].map(|k| v[SLOT_SCALE + k] as f32));
+            g.rotations.push([0, 1, 2, 3].map(|k| v[SLOT_ROT + k] as f32));
+            g.opacities.push(v[SLOT_OPACITY] as f32);
+            g.sh.push([0, 1, 2].map(|c| v[SLOT_DC + c] as f32));
+            let per = (g.degree + 1) * (g.degree + 1) - 1;
+            for k in 0..per {
+                g.sh.push([0, 1, 2].map(|c| v[SLOT_REST + c * per + k] as f32));
+            }
         }
     };
     if let Some(offsets) = fixed {
@@ -430,6 +507,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     out.normals = has_n.then_some(normals);
     out.uvs = has_uv.then_some(uvs);
     out.colors = (has_c || splats).then_some(colors);
+    out.gaussians = gaussians;
     Ok(false)
 }
 
