@@ -53,6 +53,8 @@ struct Projected {
     /// margin for rounding): most of a tile's pixels are far in a Gaussian's tail, where `exp` would underflow
     /// slowly to give what this test tells at once. Powers above it are tested exactly.
     cut: f32,
+    /// Half the sides of the box around `mean` where the power can reach `cut`, a pixel wider.
+    extent: Vec2,
     /// Display colour along the view direction.
     color: Vec3,
     /// Planar depth of its centre.
@@ -153,7 +155,11 @@ impl View {
         let color = sh_color(g.data.degree, &g.data.sh[i * per..(i + 1) * per], dir.normalize_or_zero());
         let opacity = g.data.opacities[i];
         let cut = (MIN_ALPHA / opacity).ln() - 1e-3;
-        Some(Projected { mean, conic, opacity, cut, color, depth: z, object: object + 1, tiles })
+        // The power −dᵀ·Σ⁻¹·d / 2 is at least `cut` inside the ellipse dᵀ·Σ⁻¹·d ≤ −2·cut, whose box has half
+        // sides √(−2·cut·Σₓₓ) and √(−2·cut·Σᵧᵧ).
+        let reach = (-2.0 * cut).max(0.0);
+        let extent = Vec2::new((reach * a).sqrt(), (reach * c).sqrt()) + Vec2::ONE;
+        Some(Projected { mean, conic, opacity, cut, extent, color, depth: z, object: object + 1, tiles })
     }
 }
 
@@ -264,83 +270,130 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
         .map(|(c, a)| (c, a, dep.next().unwrap_or_default(), nor.next().unwrap_or_default(), obj.next().unwrap_or_default()))
         .collect();
     let ray = depth_kind == DepthKind::Ray;
-    bands.into_par_iter().enumerate().for_each_init(Vec::new, |local, (ty, (rgba, cov, depth, normal, object))| {
-        let h = cov.len() / w;
-        for tx in 0..tw as usize {
-          // The tile's Gaussians copied together, front to back, as the GPU's shared memory holds them.
-          let tile = ty * tw as usize + tx;
-          local.clear();
-          local.extend(lists[start[tile] as usize..start[tile + 1] as usize].iter().map(|&k| gs[k as usize]));
-          for ly in 0..h {
-            let y = ty * TILE as usize + ly;
-            for x in tx * TILE as usize..((tx + 1) * TILE as usize).min(w) {
-                let i = ly * w + x;
-                let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                // The depth buffer's value as a planar depth: a ray distance shrinks by the ray's length.
-                let stretch = if ray {
-                    Vec2::new((centre.x - view.cx) / view.fx, (centre.y - view.cy) / view.fy).extend(1.0).length()
-                } else {
-                    1.0
-                };
-                let stop = depth.get(i).copied().filter(|&d| d > 0.0).map_or(f32::INFINITY, |d| d / stretch);
-                let mut t = 1.0f32;
-                let mut c = Vec3::ZERO;
-                let mut half: Option<&Projected> = None;
-                for q in local.iter() {
-                    if q.depth >= stop {
-                        break;
+    bands.into_par_iter().enumerate().for_each_init(
+        || (Vec::new(), Vec::new()),
+        |(local, pixels), (ty, (rgba, cov, depth, normal, object))| {
+            let h = cov.len() / w;
+            for tx in 0..tw as usize {
+                // The tile's Gaussians copied together, front to back, as the GPU's shared memory holds them.
+                let tile = ty * tw as usize + tx;
+                local.clear();
+                local.extend(lists[start[tile] as usize..start[tile + 1] as usize].iter().map(|&k| gs[k as usize]));
+                let (x0, x1) = (tx * TILE as usize, ((tx + 1) * TILE as usize).min(w));
+                pixels.clear();
+                for ly in 0..h {
+                    for x in x0..x1 {
+                        let centre = Vec2::new(x as f32 + 0.5, (ty * TILE as usize + ly) as f32 + 0.5);
+                        // The depth buffer's value as a planar depth: a ray distance shrinks by the ray's length.
+                        let stretch = if ray {
+                            Vec2::new((centre.x - view.cx) / view.fx, (centre.y - view.cy) / view.fy).extend(1.0).length()
+                        } else {
+                            1.0
+                        };
+                        let stop = depth.get(ly * w + x).filter(|&&d| d > 0.0).map_or(f32::INFINITY, |d| d / stretch);
+                        pixels.push(Blend { centre, stretch, stop, t: 1.0, c: Vec3::ZERO, done: false, half: None });
                     }
-                    let d = q.mean - centre;
-                    let [ca, cb, cc] = q.conic;
-                    let power = -0.5 * (ca * d.x * d.x + cc * d.y * d.y) - cb * d.x * d.y;
-                    if power > 0.0 || power < q.cut {
+                }
+                blend(local, pixels, (x0, x1 - x0), (ty * TILE as usize, h));
+                for (k, p) in pixels.iter().enumerate() {
+                    if p.t == 1.0 {
                         continue;
                     }
-                    let alpha = (q.opacity * power.exp()).min(MAX_ALPHA);
-                    if alpha < MIN_ALPHA {
-                        continue;
+                    let i = (k / (x1 - x0)) * w + x0 + k % (x1 - x0);
+                    // Over what was drawn there, as 3DGS blends over its background: in display values.
+                    let px = &mut rgba[i * 4..i * 4 + 4];
+                    let under = px[3] as f32 / 255.0;
+                    let premul = p.c + Vec3::new(px[0] as f32, px[1] as f32, px[2] as f32) * (p.t * under / 255.0);
+                    let a = (1.0 - p.t) + p.t * under;
+                    let straight = premul / a;
+                    for (o, v) in px.iter_mut().zip(straight.to_array()) {
+                        *o = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
                     }
-                    let next = t * (1.0 - alpha);
-                    if next < MIN_TRANSMITTANCE {
-                        break;
-                    }
-                    c += q.color * (alpha * t);
-                    t = next;
-                    if half.is_none() && t <= 0.5 {
-                        half = Some(q);
-                    }
-                }
-                if t == 1.0 {
-                    continue;
-                }
-                // Over what was drawn there, as 3DGS blends over its background: in display values.
-                let px = &mut rgba[i * 4..i * 4 + 4];
-                let under = px[3] as f32 / 255.0;
-                let premul = c + Vec3::new(px[0] as f32, px[1] as f32, px[2] as f32) * (t * under / 255.0);
-                let a = (1.0 - t) + t * under;
-                let straight = premul / a;
-                for (o, v) in px.iter_mut().zip(straight.to_array()) {
-                    *o = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-                }
-                px[3] = (a.clamp(0.0, 1.0) * 255.0).round() as u8;
-                cov[i] = px[3];
-                // Where the Gaussians reach half opacity in front of the surface, they are what the pixel shows:
-                // the depth there (their median depth), their object, and no normal.
-                if let Some(q) = half {
-                    if let Some(d) = depth.get_mut(i) {
-                        *d = q.depth * stretch;
-                    }
-                    if let Some(o) = object.get_mut(i) {
-                        *o = q.object;
-                    }
-                    if let Some(n) = normal.get_mut(i) {
-                        *n = Vec3::ZERO;
+                    px[3] = (a.clamp(0.0, 1.0) * 255.0).round() as u8;
+                    cov[i] = px[3];
+                    // Where the Gaussians reach half opacity in front of the surface, they are what the pixel
+                    // shows: the depth there (their median depth), their object, and no normal.
+                    if let Some(q) = p.half.map(|k| &local[k as usize]) {
+                        if let Some(d) = depth.get_mut(i) {
+                            *d = q.depth * p.stretch;
+                        }
+                        if let Some(o) = object.get_mut(i) {
+                            *o = q.object;
+                        }
+                        if let Some(n) = normal.get_mut(i) {
+                            *n = Vec3::ZERO;
+                        }
                     }
                 }
             }
-          }
+        },
+    );
+}
+
+/// One pixel's blend so far.
+struct Blend {
+    centre: Vec2,
+    /// A ray distance over the planar depth along this pixel's ray (1 for planar depth buffers).
+    stretch: f32,
+    /// The planar depth of the surface drawn here, where Gaussians stop (infinite where nothing is).
+    stop: f32,
+    /// Transmittance and premultiplied colour.
+    t: f32,
+    c: Vec3,
+    /// Whether transmittance ran out.
+    done: bool,
+    /// The Gaussian (in the tile's list) at which transmittance fell to one half.
+    half: Option<u32>,
+}
+
+/// Blends a tile's Gaussians, front to back, into its `pixels` (`cols` = (first column, width), `rows` = (first
+/// row, height)). The result is each pixel's own front-to-back loop over the whole list, as 3DGS runs it: a
+/// Gaussian is looked at only over the pixels where its contribution can reach [`MIN_ALPHA`] (the box of the
+/// ellipse its `cut` bounds, a pixel wider), which are the only pixels that loop would not skip it at; a pixel
+/// whose surface is nearer skips it as that loop stops there (later Gaussians are no nearer).
+fn blend(list: &[Projected], pixels: &mut [Blend], cols: (usize, usize), rows: (usize, usize)) {
+    let mut live = pixels.len();
+    for (k, q) in list.iter().enumerate() {
+        let span = |m: f32, e: f32, (first, n): (usize, usize)| {
+            let lo = ((m - 0.5 - e).floor() as i64).max(first as i64);
+            let hi = ((m - 0.5 + e).ceil() as i64).min((first + n) as i64 - 1);
+            (lo - first as i64, hi - first as i64)
+        };
+        let (xl, xh) = span(q.mean.x, q.extent.x, cols);
+        let (yl, yh) = span(q.mean.y, q.extent.y, rows);
+        for y in yl.max(0)..=yh {
+            for x in xl.max(0)..=xh {
+                let p = &mut pixels[y as usize * cols.1 + x as usize];
+                if p.done || q.depth >= p.stop {
+                    continue;
+                }
+                let d = q.mean - p.centre;
+                let [ca, cb, cc] = q.conic;
+                let power = -0.5 * (ca * d.x * d.x + cc * d.y * d.y) - cb * d.x * d.y;
+                if power > 0.0 || power < q.cut {
+                    continue;
+                }
+                let alpha = (q.opacity * power.exp()).min(MAX_ALPHA);
+                if alpha < MIN_ALPHA {
+                    continue;
+                }
+                let next = p.t * (1.0 - alpha);
+                if next < MIN_TRANSMITTANCE {
+                    p.done = true;
+                    live -= 1;
+                    continue;
+                }
+                p.c += q.color * (alpha * p.t);
+                p.t = next;
+                if p.half.is_none() && p.t <= 0.5 {
+                    p.half = Some(k as u32);
+                }
+            }
         }
-    });
+        if live == 0 {
+            break;
+        }
+    }
 }
 
 #[cfg(test)]
