@@ -256,3 +256,65 @@ fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
         assert!(err.contains(says), "check {file}: `{says}` not in {err}");
     }
 }
+
+/// Hostile Gaussians: a NaN scale is an error naming the file and the row (exit 2, from `check` as from `build`);
+/// scales whose exponent overflows, a zero quaternion and Gaussians far larger than the image draw without a
+/// panic.
+#[test]
+fn gaussians_that_are_not_numbers_are_refused_and_huge_ones_draw() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let source = crate::common::data("splats/donut_2000.ply");
+    let bytes = std::fs::read(&source).unwrap();
+    let body = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    // x y z, f_dc_0..2, opacity, scale_0..2, rot_0..3: 14 floats a row.
+    let with = |edit: &dyn Fn(usize, &mut [f32])| -> Vec<u8> {
+        let mut rows = rows(&source, 14);
+        for (i, r) in rows.iter_mut().enumerate() {
+            edit(i, r);
+        }
+        let mut out = bytes[..body].to_vec();
+        out.extend(rows.iter().flatten().flat_map(|v| v.to_le_bytes()));
+        out
+    };
+    let manifest = |name: &str| {
+        format!(
+            "[dataset]\nname = \"{name}\"\nout = \"out\"\npreview = false\n[source.s]\nmesh = \"{name}.ply\"\n\
+             [transform]\nfit = \"frame\"\ncenter = \"bbox\"\n[render]\nresolution = [64, 64]\npasses = [\"rgba\", \"depth\"]\n\
+             [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n"
+        )
+    };
+    std::fs::write(
+        d.join("nan.ply"),
+        with(&|i, r| {
+            if i == 7 {
+                r[8] = f32::NAN
+            }
+        }),
+    )
+    .unwrap();
+    std::fs::write(d.join("nan.toml"), manifest("nan")).unwrap();
+    for cmd in ["check", "build"] {
+        let (code, err) = vvgen(d, &[cmd, "nan.toml"]);
+        assert_eq!(code, Some(2), "{cmd}: {err}");
+        for says in ["nan.ply", "row 7", "not a finite number"] {
+            assert!(err.contains(says), "{cmd}: `{says}` not in {err}");
+        }
+    }
+    // Every other Gaussian a thousand times wider than the subject (exp(90) overflows f32 for one in ten), the
+    // third a zero quaternion.
+    let huge = with(&|i, r| {
+        if i % 2 == 0 {
+            r[7..10].copy_from_slice(&[if i % 10 == 0 { 90.0 } else { 3.0 }; 3]);
+        }
+        if i == 3 {
+            r[10..14].copy_from_slice(&[0.0; 4]);
+        }
+    });
+    std::fs::write(d.join("huge.ply"), huge).unwrap();
+    std::fs::write(d.join("huge.toml"), manifest("huge")).unwrap();
+    let (code, err) = vvgen(d, &["build", "huge.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+    let img = image::open(d.join("out/huge_dnerf/train/r_0000.png")).unwrap().into_rgba8();
+    assert!(img.pixels().any(|p| p[3] > 0), "something is drawn");
+}

@@ -431,7 +431,10 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     let mut v = [0f64; SLOTS];
     v[SLOT_A] = 255.0;
     // One row's values (by slot) onto the columns the element has.
+    // The file's row being read, and the first Gaussian whose shape, opacity or colour is not a number.
+    let (mut row, mut not_finite) = (0usize, None);
     let mut push = |v: &[f64; SLOTS]| {
+        row += 1;
         if splats && !splat_shows(v[SLOT_OPACITY]) {
             return;
         }
@@ -448,11 +451,15 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
             uvs.push([v[SLOT_U] as f32, v[SLOT_U + 1] as f32]);
         }
         if let Some(g) = &mut gaussians {
+            let per = (g.degree + 1) * (g.degree + 1) - 1;
+            let read = [SLOT_DC..SLOT_OPACITY + 1, SLOT_SCALE..SLOT_ROT + 4, SLOT_REST..SLOT_REST + 3 * per];
+            if not_finite.is_none() && !read.into_iter().flatten().all(|s| v[s].is_finite()) {
+                not_finite = Some(row - 1);
+            }
             g.scales.push([0, 1, 2].map(|k| v[SLOT_SCALE + k] as f32));
             g.rotations.push([0, 1, 2, 3].map(|k| v[SLOT_ROT + k] as f32));
             g.opacities.push(v[SLOT_OPACITY] as f32);
             g.sh.push([0, 1, 2].map(|c| v[SLOT_DC + c] as f32));
-            let per = (g.degree + 1) * (g.degree + 1) - 1;
             for k in 0..per {
                 g.sh.push([0, 1, 2].map(|c| v[SLOT_REST + c * per + k] as f32));
             }
@@ -507,6 +514,12 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     out.normals = has_n.then_some(normals);
     out.uvs = has_uv.then_some(uvs);
     out.colors = (has_c || splats).then_some(colors);
+    if let Some(row) = not_finite {
+        let msg = "a Gaussian's opacity, scale, rotation or colour (`opacity`, `scale_*`, `rot_*`, `f_dc_*`, `f_rest_*`) \
+                   is not a finite number"
+            .into();
+        return Err(PlyError::Body { element: el.name.clone(), row, msg });
+    }
     out.gaussians = gaussians;
     Ok(false)
 }
