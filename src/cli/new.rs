@@ -201,7 +201,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         "ply" => {
             let (s, origin) = ply_at_rest(asset)?;
             drawable(&s, asset)?;
-            let (up, note) = tallest(&s, asset);
+            let (up, note) = cameras_up(&s, asset).unwrap_or_else(|| tallest(&s, asset));
             Ok(Described { kind: Asset::Mesh, up, note, rest: s, origin })
         }
         "obj" => {
@@ -303,6 +303,62 @@ struct Look {
 /// wide subject (a car, a plate) would get wrong.
 fn obj_up() -> (&'static str, String) {
     ("y", "up \"y\": OBJ files are +Y up by convention (Blender's exporter and most others)".into())
+}
+
+/// The up axis of a 3D Gaussian splatting file, from the cameras it was trained on: graphdeco-inria's trainer
+/// writes them to `cameras.json` in its model folder, two folders above `point_cloud/iteration_N/point_cloud.ply`
+/// (each a camera-to-world `rotation` in OpenCV's axes, +Y down). The axis nearest their mean up, when they agree
+/// on one (the mean at least half a unit long, its largest part at least 0.7 of it): a COLMAP reconstruction of
+/// upright photos is −Y up, which the extents cannot tell from +Y. `None` for other files, or without such cameras.
+fn cameras_up(s: &scene::PosedScene, ply: &Path) -> Option<(&'static str, String)> {
+    if !s.primitives.iter().any(|p| p.gaussians.is_some()) {
+        return None;
+    }
+    let dir = ply.parent()?;
+    let file = dir.ancestors().take(3).map(|d| d.join("cameras.json")).find(|f| f.is_file())?;
+    // A trainer's cameras.json holds one entry per training image: a few MB at most.
+    if std::fs::metadata(&file).ok()?.len() > 64 << 20 {
+        return None;
+    }
+    let cameras: Vec<serde_json::Value> = serde_json::from_slice(&std::fs::read(&file).ok()?).ok()?;
+    let mut up = glam::DVec3::ZERO;
+    for c in &cameras {
+        let r = c.get("rotation")?.as_array()?;
+        let at = |i: usize| r.get(i)?.as_array()?.get(1)?.as_f64();
+        // The second column is the camera's +Y (down in the image): its up is the opposite.
+        up -= glam::DVec3::new(at(0)?, at(1)?, at(2)?);
+    }
+    let mean = up / cameras.len().max(1) as f64;
+    let (k, part) = mean.abs().to_array().into_iter().enumerate().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    if !(mean.length() >= 0.5 && part >= 0.7 * mean.length()) {
+        return None;
+    }
+    let axis = match (k, mean[k] > 0.0) {
+        (0, true) => "x",
+        (0, false) => "-x",
+        (1, true) => "y",
+        (1, false) => "-y",
+        (2, true) => "z",
+        _ => "-z",
+    };
+    let shown = pathdiff(&file, dir);
+    Some((
+        axis,
+        format!(
+            "up \"{axis}\" from the {} cameras in {shown} its splats were trained on (their mean up ({:.2}, {:.2}, {:.2}))",
+            cameras.len(),
+            mean.x,
+            mean.y,
+            mean.z
+        ),
+    ))
+}
+
+/// `file` as seen from `dir`, one of its ancestors' children (`../../cameras.json`), for notes.
+fn pathdiff(file: &Path, dir: &Path) -> String {
+    let up = dir.ancestors().position(|a| file.parent() == Some(a)).unwrap_or(0);
+    let name = file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    format!("{}{name}", "../".repeat(up))
 }
 
 /// The up axis of a scan, said with the extents: the thin one of y and z of a flat subject (a terrain, a pond, a
@@ -493,7 +549,9 @@ fn frames_covering(seconds: f32) -> usize {
 }
 
 fn up_note(note: &str) -> &'static str {
-    if note.contains("guessed") {
+    if note.contains("cameras.json") {
+        "the trained splats' cameras' mean up; the world is +Z up"
+    } else if note.contains("guessed") {
         "guessed from the first frame's extents: check it"
     } else if note.contains("OBJ") {
         "OBJ's usual up axis; the world is +Z up"

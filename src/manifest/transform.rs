@@ -36,12 +36,25 @@ pub struct Transform {
 
 /// Source up axis.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
-#[serde(rename_all = "lowercase")]
 pub enum UpAxis {
     /// +Y up (glTF's convention).
+    #[serde(rename = "y")]
     Y,
     /// +Z up (already the world's).
+    #[serde(rename = "z")]
     Z,
+    /// −Y up (a COLMAP reconstruction of upright photos, and the splatting files trained on one).
+    #[serde(rename = "-y")]
+    NegY,
+    /// −Z up.
+    #[serde(rename = "-z")]
+    NegZ,
+    /// +X up.
+    #[serde(rename = "x")]
+    X,
+    /// −X up.
+    #[serde(rename = "-x")]
+    NegX,
 }
 
 /// `fit = "frame"`, `{ frame = true, margin = … }`, `{ height = … }`, `{ radius = … }` or `{ extent = … }`:

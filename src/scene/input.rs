@@ -196,6 +196,14 @@ pub enum UpAxis {
     Y,
     /// +Z up (the world's).
     Z,
+    /// −Y up (COLMAP's reconstructions of upright photos).
+    NegY,
+    /// −Z up.
+    NegZ,
+    /// +X up.
+    X,
+    /// −X up.
+    NegX,
 }
 
 /// The point a placement moves to the origin.

@@ -98,10 +98,28 @@ impl Stats {
 /// `up · matrix`: the part of the transform that does not depend on bounds.
 pub fn pre(t: &Placement, up: UpAxis) -> DMat4 {
     let m = t.matrix.map_or(DMat4::IDENTITY, |m| DMat4::from_cols_array_2d(&m).transpose());
+    // The rotation taking the source's up to +Z, about X where the up lies in YZ (so x stays x), about Y for ±X;
+    // the new axes exactly (columns: where x, y and z go).
+    let axes = |x: [f64; 3], y: [f64; 3], z: [f64; 3]| {
+        DMat4::from_cols(
+            glam::DVec3::from(x).extend(0.0),
+            glam::DVec3::from(y).extend(0.0),
+            glam::DVec3::from(z).extend(0.0),
+            glam::DVec4::W,
+        )
+    };
     let up_m = match up {
         // +Y up → +Z up: +90° about X maps (x, y, z) to (x, -z, y).
         UpAxis::Y => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
         UpAxis::Z => DMat4::IDENTITY,
+        // (x, y, z) → (x, z, −y).
+        UpAxis::NegY => axes([1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]),
+        // (x, y, z) → (x, −y, −z).
+        UpAxis::NegZ => axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]),
+        // (x, y, z) → (−z, y, x).
+        UpAxis::X => axes([0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]),
+        // (x, y, z) → (z, y, −x).
+        UpAxis::NegX => axes([0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
     };
     up_m * m
 }
@@ -224,6 +242,23 @@ fn pick(bit: usize, lo: f64, hi: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_up_axis_turns_to_z_and_keeps_handedness() {
+        let t = Placement::default();
+        for (up, axis) in [
+            (UpAxis::Y, glam::DVec3::Y),
+            (UpAxis::Z, glam::DVec3::Z),
+            (UpAxis::NegY, -glam::DVec3::Y),
+            (UpAxis::NegZ, -glam::DVec3::Z),
+            (UpAxis::X, glam::DVec3::X),
+            (UpAxis::NegX, -glam::DVec3::X),
+        ] {
+            let m = pre(&t, up);
+            assert!((m.transform_vector3(axis) - glam::DVec3::Z).length() < 1e-12, "{up:?}");
+            assert!((glam::DMat3::from_mat4(m).determinant() - 1.0).abs() < 1e-12, "{up:?}: a rotation");
+        }
+    }
 
     #[test]
     fn y_up_becomes_z_up_and_fits() {

@@ -106,6 +106,10 @@ fn placement(t: &Transform, outer: &Transform) -> Placement {
         up: t.up.or(outer.up).map(|u| match u {
             mt::UpAxis::Y => UpAxis::Y,
             mt::UpAxis::Z => UpAxis::Z,
+            mt::UpAxis::NegY => UpAxis::NegY,
+            mt::UpAxis::NegZ => UpAxis::NegZ,
+            mt::UpAxis::X => UpAxis::X,
+            mt::UpAxis::NegX => UpAxis::NegX,
         }),
         matrix: t.matrix(),
         center: t.center.map(|c| match c {

@@ -224,3 +224,51 @@ fn an_animation_only_export_is_refused_with_the_way_out() {
         assert!(!d.join("out").exists(), "a refused build wrote its output");
     }
 }
+
+/// A 3D Gaussian splatting model folder as graphdeco-inria's trainer writes it (`cameras.json` beside
+/// `point_cloud/iteration_N/point_cloud.ply`), used from its own folder: `new` takes the up axis from the
+/// training cameras, −Y for upright photos reconstructed by COLMAP (OpenCV's +Y down in every image), which the
+/// extents cannot tell from +Y; the manifest builds. Without the cameras, the extents' guess as before.
+#[test]
+fn a_splatting_model_folder_takes_its_up_from_its_training_cameras() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let iteration = d.join("point_cloud/iteration_30000");
+    std::fs::create_dir_all(&iteration).unwrap();
+    std::fs::copy(data("splats/donut_2000.ply"), iteration.join("point_cloud.ply")).unwrap();
+    // Cameras on a ring about the Y axis, each level (its image's +Y along the world's +Y, so its up is −Y),
+    // looking inwards: camera-to-world rotations, rows, as camera_to_JSON writes them.
+    let cameras: Vec<String> = (0..8)
+        .map(|i| {
+            let a = i as f64 * std::f64::consts::TAU / 8.0;
+            let (s, c) = a.sin_cos();
+            // Columns: right (c, 0, −s), down (0, 1, 0), forward (s, 0, c).
+            format!(
+                "{{\"id\": {i}, \"img_name\": \"{i:05}\", \"width\": 800, \"height\": 600, \"position\": [{}, 0.0, {}], \
+                 \"rotation\": [[{c}, 0.0, {s}], [0.0, 1.0, 0.0], [{}, 0.0, {c}]], \"fy\": 700.0, \"fx\": 700.0}}",
+                -3.0 * s,
+                -3.0 * c,
+                -s
+            )
+        })
+        .collect();
+    std::fs::write(d.join("cameras.json"), format!("[{}]", cameras.join(", "))).unwrap();
+    let (code, err) = vvgen(d, &["new", "point_cloud/iteration_30000/point_cloud.ply"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("up \"-y\" from the 8 cameras in ../../cameras.json"), "{err}");
+    let text = std::fs::read_to_string(d.join("point-cloud.toml")).unwrap();
+    assert!(text.contains("up     = \"-y\""), "{text}");
+    let small = text
+        .replace("views = 100", "views = 1")
+        .replace("views = 10", "views = 1")
+        .replace("views    = 20", "views = 1");
+    std::fs::write(d.join("point-cloud.toml"), small.replace("[400, 400]", "[48, 48]")).unwrap();
+    let (code, err) = vvgen(d, &["build", "point-cloud.toml"]);
+    assert_eq!(code, 0, "{err}");
+    // Without the cameras: the extents' guess (the donut lies flat along z).
+    std::fs::remove_file(d.join("cameras.json")).unwrap();
+    std::fs::remove_file(d.join("point-cloud.toml")).unwrap();
+    let (code, err) = vvgen(d, &["new", "point_cloud/iteration_30000/point_cloud.ply"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("up \"z\" guessed"), "{err}");
+}
