@@ -56,8 +56,8 @@ pub enum Error {
         /// The largest read.
         max: u64,
     },
-    /// The camera file is not a transforms.json.
-    #[error("{}: not a transforms.json", path.display())]
+    /// The camera file is not a transforms.json or a splatting trainer's cameras.json.
+    #[error("{}: neither a transforms.json nor a splatting trainer's cameras.json", path.display())]
     NotTransforms {
         /// The file.
         path: PathBuf,
@@ -85,7 +85,7 @@ pub enum Error {
     #[error("a path needs `keyframes`, `file` or `trace`")]
     PathEmpty,
     /// A frame's matrix is malformed.
-    #[error("{}: frame {frame}: transform_matrix is not a finite 3×4 or 4×4 matrix", path.display())]
+    #[error("{}: frame {frame}: its pose (transform_matrix, or rotation and position) is not a finite 3×4 or 4×4 matrix", path.display())]
     BadMatrix {
         /// The file.
         path: PathBuf,

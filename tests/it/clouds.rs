@@ -6,6 +6,7 @@
 use std::path::Path;
 use std::process::Command;
 
+use glam::DVec3;
 use vvgen::scene::ply;
 
 /// Runs the `vvgen` binary in `dir`: its exit code, stdout and stderr.
@@ -317,4 +318,87 @@ fn gaussians_that_are_not_numbers_are_refused_and_huge_ones_draw() {
     assert_eq!(code, Some(0), "{err}");
     let img = image::open(d.join("out/huge_dnerf/train/r_0000.png")).unwrap().into_rgba8();
     assert!(img.pixels().any(|p| p[3] > 0), "something is drawn");
+}
+
+/// A splatting model's own cameras (`cameras.json`, as graphdeco-inria's trainer writes them: camera-to-world
+/// rotations in OpenCV's axes, rows, and centres) as a `from-file` rig, tested by reprojection: three small round
+/// Gaussians, in a world left as the file's (`up = "z"`, no fit), land at the pixels OpenCV's pinhole puts them
+/// at from those cameras, with `[render]`'s focal length and a centred principal point, to a twentieth of a pixel.
+#[test]
+fn a_splatting_models_cameras_json_is_a_rig_that_reprojects() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let centres = [[0.0f32, 0.0, 0.0], [0.5, 0.2, 0.1], [-0.4, -0.3, 0.2]];
+    let mut bytes = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", centres.len()).into_bytes();
+    let props = ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2"];
+    for p in props.iter().chain(&["rot_0", "rot_1", "rot_2", "rot_3"]) {
+        bytes.extend(format!("property float {p}\n").bytes());
+    }
+    bytes.extend(b"end_header\n");
+    for c in centres {
+        // White, opaque, σ = 0.01, unrotated.
+        let row = [c[0], c[1], c[2], 1.8, 1.8, 1.8, 6.0, -4.6, -4.6, -4.6, 1.0, 0.0, 0.0, 0.0];
+        bytes.extend(row.iter().flat_map(|v| v.to_le_bytes()));
+    }
+    std::fs::write(d.join("point_cloud.ply"), bytes).unwrap();
+    // Two cameras aimed near the origin with a roll: columns right, down, forward (x = y × z).
+    let cameras: Vec<(DVec3, glam::DMat3)> = [(DVec3::new(0.3, -0.2, -4.0), 0.3), (DVec3::new(-3.0, 1.0, 2.0), -0.5)]
+        .into_iter()
+        .map(|(eye, roll): (DVec3, f64)| {
+            let z = (DVec3::new(0.05, 0.02, 0.0) - eye).normalize();
+            let down = DVec3::new(roll.sin(), roll.cos(), 0.2);
+            let y = (down - z * down.dot(z)).normalize();
+            (eye, glam::DMat3::from_cols(y.cross(z), y, z))
+        })
+        .collect();
+    let json: Vec<String> = cameras
+        .iter()
+        .enumerate()
+        .map(|(i, (eye, r))| {
+            let rows: Vec<String> =
+                (0..3).map(|k| format!("[{}, {}, {}]", r.row(k).x, r.row(k).y, r.row(k).z)).collect();
+            format!(
+                "{{\"id\": {i}, \"img_name\": \"{i}\", \"width\": 100, \"height\": 100, \"position\": [{}, {}, {}], \
+                 \"rotation\": [{}], \"fy\": 1.0, \"fx\": 1.0}}",
+                eye.x,
+                eye.y,
+                eye.z,
+                rows.join(", ")
+            )
+        })
+        .collect();
+    std::fs::write(d.join("cameras.json"), format!("[{}]", json.join(", "))).unwrap();
+    let angle = 0.7f64;
+    let text = format!(
+        "[dataset]\nname = \"c\"\nout = \"out\"\npreview = false\n[source.s]\nmesh = \"point_cloud.ply\"\n\
+         [transform]\nup = \"z\"\n[render]\nresolution = [160, 120]\ncamera_angle_x = {angle}\n\
+         [rig.trained]\nkind = \"from-file\"\nfile = \"cameras.json\"\n[split.train]\nrig = \"trained\"\n\
+         [output.d]\nwriter = \"dnerf\"\n"
+    );
+    std::fs::write(d.join("m.toml"), text).unwrap();
+    let (code, err) = vvgen(d, &["build", "m.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+    let f = 0.5 * 160.0 / (0.5 * angle).tan();
+    for (v, (eye, r)) in cameras.iter().enumerate() {
+        let img = image::open(d.join(format!("out/c_dnerf/train/r_{v:04}.png"))).unwrap().into_rgba8();
+        for c in centres {
+            let p = r.transpose() * (DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) - *eye);
+            let (u, w) = (f * p.x / p.z + 80.0, f * p.y / p.z + 60.0);
+            // The alpha-weighted centroid of the blob around the expected pixel (pixel centres at +0.5).
+            let (mut sum, mut at) = (0.0, DVec3::ZERO);
+            for y in (w as i64 - 8).max(0)..(w as i64 + 9).min(120) {
+                for x in (u as i64 - 8).max(0)..(u as i64 + 9).min(160) {
+                    let a = img.get_pixel(x as u32, y as u32)[3] as f64;
+                    sum += a;
+                    at += DVec3::new(x as f64 + 0.5, y as f64 + 0.5, 0.0) * a;
+                }
+            }
+            assert!(sum > 255.0, "view {v}: nothing at ({u:.2}, {w:.2})");
+            let got = at / sum;
+            assert!(
+                (got.x - u).abs() < 0.05 && (got.y - w).abs() < 0.05,
+                "view {v}: at {got:?}, OpenCV says ({u}, {w})"
+            );
+        }
+    }
 }
