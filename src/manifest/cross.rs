@@ -93,7 +93,41 @@ fn point_output_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<D
 }
 
 /// Checks that span tables: references, counts that depend on the rig, writer/render contradictions.
+/// Whether `path` holds a splatting trainer's cameras.json (a JSON list, where a transforms.json is an object).
+fn holds_splat_cameras(path: &Path) -> bool {
+    use std::io::Read as _;
+    let mut head = [0u8; 64];
+    let n = std::fs::File::open(path).and_then(|mut f| f.read(&mut head)).unwrap_or(0);
+    head[..n].iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'[')
+}
+
+/// A from-file rig reading a splatting model's cameras.json, whose cameras are in the splat file's coordinates,
+/// where a `[transform]` moves the sources off them: the cameras would not see the scene as they did in training.
+fn splat_camera_checks(m: &Manifest, diags: &mut Vec<Diagnostic>) {
+    let moved = std::iter::once(("[transform]".to_string(), &m.transform))
+        .chain(m.sources.iter().filter_map(|(n, s)| s.transform.as_ref().map(|t| (format!("[source.{n}.transform]"), t))))
+        .find_map(|(table, t)| t.moves().map(|key| (table, key)));
+    let Some((table, key)) = moved else { return };
+    for (name, rig) in &m.rigs {
+        let file = rig.file().filter(|_| *rig.kind.get_ref() == RigKind::FromFile);
+        if file.is_some_and(|f| holds_splat_cameras(&m.resolve(f))) {
+            diags.push(
+                Diagnostic::warning(
+                    format!(
+                        "rig `{name}` reads a splatting model's cameras.json, whose cameras are in the splat file's \
+                         coordinates, and {table}'s `{key}` moves the scene off them: they will not see it as they did \
+                         in training"
+                    ),
+                    Some(rig.kind.span()),
+                )
+                .with_help("leave the world as the file's: up = \"z\", and no fit, center, matrix or other move"),
+            );
+        }
+    }
+}
+
 pub(super) fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
+    splat_camera_checks(m, diags);
     for (name, split) in &m.splits {
         let rig_name = split.rig.get_ref();
         match m.rigs.get(rig_name) {

@@ -34,6 +34,26 @@ pub struct Transform {
     pub over: Option<Over>,
 }
 
+impl Transform {
+    /// What of this table moves coordinates off the file's own (`None` when it leaves them as they are, reading
+    /// an unset `up` as `"z"`, a PLY's default): a camera set in the file's coordinates no longer matches.
+    pub fn moves(&self) -> Option<&'static str> {
+        let turned = !matches!(self.up, None | Some(UpAxis::Z));
+        [
+            (turned, "up"),
+            (self.fit.is_some(), "fit"),
+            (!matches!(self.center, None | Some(Center::None)), "center"),
+            (self.rotate_deg.is_some_and(|r| r != [0.0; 3]), "rotate_deg"),
+            (self.translate.is_some_and(|t| t != [0.0; 3]), "translate"),
+            (self.scale.is_some(), "scale"),
+            (self.matrix.is_some(), "matrix"),
+        ]
+        .into_iter()
+        .find(|(moved, _)| *moved)
+        .map(|(_, key)| key)
+    }
+}
+
 /// Source up axis.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 pub enum UpAxis {

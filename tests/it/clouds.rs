@@ -324,6 +324,7 @@ fn gaussians_that_are_not_numbers_are_refused_and_huge_ones_draw() {
 /// rotations in OpenCV's axes, rows, and centres) as a `from-file` rig, tested by reprojection: three small round
 /// Gaussians, in a world left as the file's (`up = "z"`, no fit), land at the pixels OpenCV's pinhole puts them
 /// at from those cameras, with `[render]`'s focal length and a centred principal point, to a twentieth of a pixel.
+/// A `[transform]` that moves the scene off the file's coordinates is warned of.
 #[test]
 fn a_splatting_models_cameras_json_is_a_rig_that_reprojects() {
     let tmp = tempfile::tempdir().unwrap();
@@ -400,5 +401,16 @@ fn a_splatting_models_cameras_json_is_a_rig_that_reprojects() {
                 "view {v}: at {got:?}, OpenCV says ({u}, {w})"
             );
         }
+    }
+    // Moved off the file's coordinates, the cameras would miss the scene: `check` says so and what moved it.
+    let (code, err) = vvgen(d, &["check", "m.toml"]);
+    assert!(code == Some(0) && !err.contains("cameras.json"), "{err}");
+    let moved =
+        std::fs::read_to_string(d.join("m.toml")).unwrap().replace("up = \"z\"", "up = \"z\"\ncenter = \"bbox\"");
+    std::fs::write(d.join("m.toml"), moved).unwrap();
+    let (code, err) = vvgen(d, &["check", "m.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+    for says in ["rig `trained` reads a splatting model's cameras.json", "`center` moves the scene", "up = \"z\""] {
+        assert!(err.contains(says), "`{says}` not in {err}");
     }
 }
