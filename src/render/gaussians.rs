@@ -107,7 +107,8 @@ impl View {
 
     /// Gaussian `i` of `g` centred at world `p`, as this view sees it; `None` where 3DGS draws nothing of it
     /// (behind the near plane, degenerate, or reaching no tile).
-    fn project(&self, g: &Gaussians, i: usize, p: Vec3, object: u32) -> Option<Projected> {
+    /// `to_file` is `g.to_world`'s inverse, found once per primitive.
+    fn project(&self, g: &Gaussians, to_file: &Mat3, i: usize, p: Vec3, object: u32) -> Option<Projected> {
         let t = self.rot * p + self.trans;
         if !(t.z > self.near && t.z < self.far) {
             return None;
@@ -150,7 +151,7 @@ impl View {
             return None;
         }
         // Its colour along the view direction, taken back into the file's axes where it was fitted.
-        let dir = g.to_world.inverse() * (p - self.eye);
+        let dir = *to_file * (p - self.eye);
         let per = g.data.per_gaussian();
         let color = sh_color(g.data.degree, &g.data.sh[i * per..(i + 1) * per], dir.normalize_or_zero());
         let opacity = g.data.opacities[i];
@@ -209,6 +210,7 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
     let mut first = 0u32;
     for p in &scene.primitives {
         let Some(g) = &p.gaussians else { continue };
+        let to_file = g.to_world.inverse();
         let n = p.positions.len().min(g.data.opacities.len());
         let chunks: Vec<Vec<(u32, u32, Projected)>> = p.positions[..n]
             .par_chunks(CHUNK)
@@ -218,7 +220,7 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
                     .enumerate()
                     .filter_map(|(k, &pos)| {
                         let i = c * CHUNK + k;
-                        let q = view.project(g, i, pos, p.object)?;
+                        let q = view.project(g, &to_file, i, pos, p.object)?;
                         // Positive depths order as their bits do.
                         Some((q.depth.to_bits(), first + i as u32, q))
                     })
