@@ -151,6 +151,14 @@ pub fn run(
         posed.point_count(),
         posed.digest()
     );
+    // A splatting file's points are Gaussians: say so, and how their colour varies with the view.
+    for g in posed.primitives.iter().filter_map(|p| p.gaussians.as_ref().map(|g| (p.positions.len(), g.data.degree))) {
+        let _ = writeln!(
+            out,
+            "frame {frame}: {} of the points are 3D Gaussians (spherical harmonics of degree {}), drawn as splatting draws them",
+            g.0, g.1
+        );
+    }
     if !ui.quiet {
         print!("{out}");
     }
