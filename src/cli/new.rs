@@ -80,7 +80,8 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     std::fs::create_dir_all(folder).with_context(|| format!("creating the folder {}", folder.display()))?;
     let manifest_dir = absolute(folder)?;
     let rel = |p: &Path| -> anyhow::Result<String> { Ok(relative(&manifest_dir, &absolute(p)?)) };
-    let text = manifest(&name, asset, &kind, up, &note, Look { flat, origin }, writer, &rel)?;
+    let cameras = training_cameras(&rest, asset).map(|c| rel(&c)).transpose()?;
+    let text = manifest(&name, asset, &kind, up, &note, Look { flat, origin, cameras }, writer, &rel)?;
     std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
     if !ui.quiet {
         eprintln!("wrote {}: {note}", out.display());
@@ -297,6 +298,9 @@ struct Look {
     flat: Option<usize>,
     /// The PLY's `origin`, when its coordinates are far from zero ([`far_origin`]).
     origin: Option<[f64; 3]>,
+    /// A splatting model's training cameras ([`training_cameras`]), relative to the manifest: offered, commented,
+    /// as a rig.
+    cameras: Option<String>,
 }
 
 /// OBJ's up axis: +Y, the convention of Blender's and most exporters. Not guessed from the extents, which a
@@ -311,11 +315,8 @@ fn obj_up() -> (&'static str, String) {
 /// on one (the mean at least half a unit long, its largest part at least 0.7 of it): a COLMAP reconstruction of
 /// upright photos is −Y up, which the extents cannot tell from +Y. `None` for other files, or without such cameras.
 fn cameras_up(s: &scene::PosedScene, ply: &Path) -> Option<(&'static str, String)> {
-    if !s.primitives.iter().any(|p| p.gaussians.is_some()) {
-        return None;
-    }
+    let file = training_cameras(s, ply)?;
     let dir = ply.parent()?;
-    let file = dir.ancestors().take(3).map(|d| d.join("cameras.json")).find(|f| f.is_file())?;
     // A trainer's cameras.json holds one entry per training image: a few MB at most.
     if std::fs::metadata(&file).ok()?.len() > 64 << 20 {
         return None;
@@ -345,13 +346,22 @@ fn cameras_up(s: &scene::PosedScene, ply: &Path) -> Option<(&'static str, String
     Some((
         axis,
         format!(
-            "up \"{axis}\" from the {} cameras in {shown} its splats were trained on (their mean up ({:.2}, {:.2}, {:.2}))",
-            cameras.len(),
+            "up \"{axis}\" from the {} in {shown} its splats were trained on (their mean up ({:.2}, {:.2}, {:.2}))",
+            if cameras.len() == 1 { "camera".to_string() } else { format!("{} cameras", cameras.len()) },
             mean.x,
             mean.y,
             mean.z
         ),
     ))
+}
+
+/// The `cameras.json` a splatting trainer wrote beside the model folder of `ply` (in its folder or up to two
+/// above), when `s`, read from it, holds 3D Gaussians.
+fn training_cameras(s: &scene::PosedScene, ply: &Path) -> Option<PathBuf> {
+    if !s.primitives.iter().any(|p| p.gaussians.is_some()) {
+        return None;
+    }
+    ply.parent()?.ancestors().take(3).map(|d| d.join("cameras.json")).find(|f| f.is_file())
 }
 
 /// `file` as seen from `dir`, one of its ancestors' children (`../../cameras.json`), for notes.
@@ -531,6 +541,15 @@ fn manifest(
                  [split.val]\nrig   = \"hemi\"\n{val}\nseed  = 3\n\n\
                  [split.test]\nrig      = \"ring\"\n{test}\n"
             );
+            if let Some(file) = &look.cameras {
+                let _ = writeln!(
+                    w,
+                    "# The cameras the splats were trained on, to render them as trained (poses only): they are in the\n\
+                     # file's coordinates, so then leave the world as the file's (up = \"z\", no fit or center) and give\n\
+                     # [render] their size and lens.\n\
+                     # [rig.trained]\n# kind = \"from-file\"\n# file = \"{file}\"\n"
+                );
+            }
         }
     }
     let _ = writeln!(w, "[output.{}]\nwriter = \"{writer}\"", key_name(writer));

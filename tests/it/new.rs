@@ -258,6 +258,8 @@ fn a_splatting_model_folder_takes_its_up_from_its_training_cameras() {
     assert!(err.contains("up \"-y\" from the 8 cameras in ../../cameras.json"), "{err}");
     let text = std::fs::read_to_string(d.join("point-cloud.toml")).unwrap();
     assert!(text.contains("up     = \"-y\""), "{text}");
+    // The training cameras are offered as a rig, commented.
+    assert!(text.contains("# [rig.trained]\n# kind = \"from-file\"\n# file = \"cameras.json\""), "{text}");
     let small = text
         .replace("views = 100", "views = 1")
         .replace("views = 10", "views = 1")
