@@ -258,7 +258,7 @@ fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
     }
 }
 
-/// Hostile Gaussians: a NaN scale is an error naming the file and the row (exit 2, from `check` as from `build`);
+/// Hostile Gaussians: a NaN colour is an error naming the file and the row (exit 2, from `check` as from `build`);
 /// scales whose exponent overflows, a zero quaternion and Gaussians far larger than the image draw without a
 /// panic.
 #[test]
@@ -303,8 +303,12 @@ fn gaussians_that_are_not_numbers_are_refused_and_huge_ones_draw() {
         }
     }
     // Every other Gaussian a thousand times wider than the subject (exp(90) overflows f32 for one in ten), the
-    // third a zero quaternion.
+    // third a zero quaternion, every fifth an infinite opacity logit (splat-transform writes one for an opacity
+    // quantized to 1: 3DGS's sigmoid makes it 1).
     let huge = with(&|i, r| {
+        if i % 5 == 1 {
+            r[6] = f32::INFINITY;
+        }
         if i % 2 == 0 {
             r[7..10].copy_from_slice(&[if i % 10 == 0 { 90.0 } else { 3.0 }; 3]);
         }

@@ -452,8 +452,11 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
         }
         if let Some(g) = &mut gaussians {
             let per = (g.degree + 1) * (g.degree + 1) - 1;
-            let read = [SLOT_DC..SLOT_OPACITY + 1, SLOT_SCALE..SLOT_ROT + 4, SLOT_REST..SLOT_REST + 3 * per];
-            if not_finite.is_none() && !read.into_iter().flatten().all(|s| v[s].is_finite()) {
+            // An infinite opacity logit is a peak opacity of exactly 1 (or 0): what splat-transform writes for
+            // quantized opacities at the ends, and what 3DGS's sigmoid makes of it. Anything else must be finite.
+            let read = [SLOT_DC..SLOT_DC + 3, SLOT_SCALE..SLOT_ROT + 4, SLOT_REST..SLOT_REST + 3 * per];
+            let finite = read.into_iter().flatten().all(|s| v[s].is_finite()) && !v[SLOT_OPACITY].is_nan();
+            if not_finite.is_none() && !finite {
                 not_finite = Some(row - 1);
             }
             g.scales.push([0, 1, 2].map(|k| v[SLOT_SCALE + k] as f32));
@@ -516,7 +519,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     out.colors = (has_c || splats).then_some(colors);
     if let Some(row) = not_finite {
         let msg = "a Gaussian's opacity, scale, rotation or colour (`opacity`, `scale_*`, `rot_*`, `f_dc_*`, `f_rest_*`) \
-                   is not a finite number"
+                   is not a finite number (an opacity may be infinite: a peak opacity of 1 or 0)"
             .into();
         return Err(PlyError::Body { element: el.name.clone(), row, msg });
     }
