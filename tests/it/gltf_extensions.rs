@@ -513,3 +513,41 @@ fn instanced_copies_render_as_the_nodes_they_stand_for() {
         &["2000000 times", "1048576 copies"],
     );
 }
+
+/// 3D Gaussians in glTF (`KHR_gaussian_splatting`, as splat-transform writes a `.glb`: a POINTS primitive with
+/// `KHR_gaussian_splatting:ROTATION`, `:SCALE`, `:OPACITY` … attributes) are refused by `check` and `build` with
+/// the way out, where gltf's validation said only "invalid semantic name".
+#[test]
+fn gaussians_in_gltf_are_refused_with_the_way_out() {
+    let points: Vec<u8> = [0.0f32, 0.0, 0.0, 0.1, 0.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let json = json!({
+        "asset": { "version": "2.0", "generator": "splat-transform" },
+        "extensionsUsed": ["KHR_gaussian_splatting"],
+        "buffers": [{ "byteLength": points.len() }],
+        "bufferViews": [{ "buffer": 0, "byteLength": points.len() }],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [0.1, 0.0, 0.0] },
+            { "bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3" }
+        ],
+        "meshes": [{ "primitives": [{
+            "attributes": { "POSITION": 0, "KHR_gaussian_splatting:SCALE": 1 },
+            "mode": 0,
+            "extensions": { "KHR_gaussian_splatting": { "kernel": "ellipse" } }
+        }] }],
+        "nodes": [{ "mesh": 0 }],
+        "scenes": [{ "nodes": [0] }],
+        "scene": 0
+    });
+    let d = model(&json, &points);
+    let manifest = format!(
+        "[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n{TWO_VIEWS}"
+    );
+    std::fs::write(d.path().join("m.toml"), manifest).unwrap();
+    for cmd in ["check", "build"] {
+        let (code, err) = vvgen(d.path(), &[cmd, "m.toml"]);
+        assert_eq!(code, 2, "{cmd}: {err}");
+        for says in ["model.glb", "KHR_gaussian_splatting", "3D Gaussian splatting PLY", "mesh = "] {
+            assert!(err.contains(says), "{cmd}: `{says}` not in {err}");
+        }
+    }
+}
