@@ -12,6 +12,7 @@ pub mod light;
 pub mod material;
 pub mod obj;
 pub mod ply;
+mod ply_scene;
 pub mod posed;
 pub mod source;
 pub mod spacing;
