@@ -317,19 +317,9 @@ fn obj_up() -> (&'static str, String) {
 fn cameras_up(s: &scene::PosedScene, ply: &Path) -> Option<(&'static str, String)> {
     let file = training_cameras(s, ply)?;
     let dir = ply.parent()?;
-    // A trainer's cameras.json holds one entry per training image: a few MB at most.
-    if std::fs::metadata(&file).ok()?.len() > 64 << 20 {
-        return None;
-    }
-    let cameras: Vec<serde_json::Value> = serde_json::from_slice(&std::fs::read(&file).ok()?).ok()?;
-    let mut up = glam::DVec3::ZERO;
-    for c in &cameras {
-        let r = c.get("rotation")?.as_array()?;
-        let at = |i: usize| r.get(i)?.as_array()?.get(1)?.as_f64();
-        // The second column is the camera's +Y (down in the image): its up is the opposite.
-        up -= glam::DVec3::new(at(0)?, at(1)?, at(2)?);
-    }
-    let mean = up / cameras.len().max(1) as f64;
+    // Read as a from-file rig reads it: camera-to-world in OpenGL's axes, whose +Y is each camera's up.
+    let poses = crate::rig::camera_file(&file).ok()?;
+    let mean = poses.iter().map(|c2w| c2w.y_axis.truncate()).sum::<glam::DVec3>() / poses.len() as f64;
     let (k, part) = mean.abs().to_array().into_iter().enumerate().max_by(|a, b| a.1.total_cmp(&b.1))?;
     if !(mean.length() >= 0.5 && part >= 0.7 * mean.length()) {
         return None;
@@ -347,7 +337,7 @@ fn cameras_up(s: &scene::PosedScene, ply: &Path) -> Option<(&'static str, String
         axis,
         format!(
             "up \"{axis}\" from the {} in {shown} its splats were trained on (their mean up ({:.2}, {:.2}, {:.2}))",
-            if cameras.len() == 1 { "camera".to_string() } else { format!("{} cameras", cameras.len()) },
+            if poses.len() == 1 { "camera".to_string() } else { format!("{} cameras", poses.len()) },
             mean.x,
             mean.y,
             mean.z

@@ -92,7 +92,6 @@ fn point_output_checks(m: &Manifest, name: &str, out: &Output, diags: &mut Vec<D
     }
 }
 
-/// Checks that span tables: references, counts that depend on the rig, writer/render contradictions.
 /// Whether `path` holds a splatting trainer's cameras.json (a JSON list, where a transforms.json is an object).
 fn holds_splat_cameras(path: &Path) -> bool {
     use std::io::Read as _;
@@ -126,6 +125,7 @@ fn splat_camera_checks(m: &Manifest, diags: &mut Vec<Diagnostic>) {
     }
 }
 
+/// Checks that span tables: references, counts that depend on the rig, writer/render contradictions.
 pub(super) fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnostic>) {
     splat_camera_checks(m, diags);
     for (name, split) in &m.splits {

@@ -19,6 +19,7 @@
 use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::bin::Binned;
 use super::{DepthKind, Frame};
 use crate::camera::Camera;
 use crate::scene::gaussians::Gaussians;
@@ -234,28 +235,12 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
         return;
     }
     seen.par_sort_unstable_by_key(|&(d, i, _)| (d, i));
-    // Each band of tile rows' Gaussians, front to back: a count, offsets, then a fill in sorted order. (Per band,
-    // not per tile: a Gaussian is listed once for each band it reaches, at most the image's height in tiles, where
-    // a list per tile would hold a large one the image's area in tiles over.)
-    let (tw, th) = view.tiles;
-    let mut start = vec![0usize; th as usize + 1];
-    for (_, _, q) in &seen {
-        for ty in q.tiles[1]..q.tiles[3] {
-            start[ty as usize + 1] += 1;
-        }
-    }
-    for i in 1..start.len() {
-        start[i] += start[i - 1];
-    }
-    let mut next = start.clone();
-    let mut lists = vec![0u32; start[start.len() - 1]];
-    for (k, (_, _, q)) in seen.iter().enumerate() {
-        for ty in q.tiles[1]..q.tiles[3] {
-            lists[next[ty as usize]] = k as u32;
-            next[ty as usize] += 1;
-        }
-    }
     let gs: Vec<Projected> = seen.into_iter().map(|(_, _, q)| q).collect();
+    // Each band of tile rows' Gaussians, front to back. (Per band, not per tile: a Gaussian is listed once for each
+    // band it reaches, at most the image's height in tiles, where a list per tile would hold a large one the
+    // image's area in tiles over.) The rectangles are inclusive; a Gaussian's tiles are never empty.
+    let (tw, th) = view.tiles;
+    let by_band = Binned::sort(&gs, 1, th as usize, |q| [0, q.tiles[1] as usize, 0, q.tiles[3] as usize - 1], |k, _| k as u32);
     let w = cam.width as usize;
     let rows = TILE as usize * w;
     let Frame { rgba, depth, normal, object, coverage, .. } = f;
@@ -270,36 +255,21 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
         .collect();
     let ray = depth_kind == DepthKind::Ray;
     bands.into_par_iter().enumerate().for_each_init(
-        || (Vec::new(), Vec::new(), Vec::new(), Vec::new()),
-        |(local, pixels, tile_start, tile_lists), (ty, (rgba, cov, depth, normal, object))| {
+        || (Vec::new(), Vec::new()),
+        |(local, pixels), (ty, (rgba, cov, depth, normal, object))| {
             let h = cov.len() / w;
             // The band's list split by tile, as the whole list was split by band.
-            let band = &lists[start[ty]..start[ty + 1]];
-            tile_start.clear();
-            tile_start.resize(tw as usize + 1, 0usize);
-            for &k in band {
-                let q = &gs[k as usize];
-                for tx in q.tiles[0]..q.tiles[2] {
-                    tile_start[tx as usize + 1] += 1;
-                }
-            }
-            for i in 1..tile_start.len() {
-                tile_start[i] += tile_start[i - 1];
-            }
-            tile_lists.clear();
-            tile_lists.resize(tile_start[tw as usize], 0u32);
-            let mut next = tile_start.clone();
-            for &k in band {
-                let q = &gs[k as usize];
-                for tx in q.tiles[0]..q.tiles[2] {
-                    tile_lists[next[tx as usize]] = k;
-                    next[tx as usize] += 1;
-                }
-            }
+            let by_tile = Binned::sort(
+                by_band.cell(ty),
+                tw as usize,
+                tw as usize,
+                |&k| [gs[k as usize].tiles[0] as usize, 0, gs[k as usize].tiles[2] as usize - 1, 0],
+                |_, &k| k,
+            );
             for tx in 0..tw as usize {
                 // The tile's Gaussians copied together, front to back, as the GPU's shared memory holds them.
                 local.clear();
-                local.extend(tile_lists[tile_start[tx]..tile_start[tx + 1]].iter().map(|&k| gs[k as usize]));
+                local.extend(by_tile.cell(tx).iter().map(|&k| gs[k as usize]));
                 let (x0, x1) = (tx * TILE as usize, ((tx + 1) * TILE as usize).min(w));
                 pixels.clear();
                 for ly in 0..h {

@@ -3,6 +3,9 @@
 //! adding views to a split appends poses and leaves the earlier ones bit-identical.
 
 mod from_file;
+/// The camera-to-world poses (OpenGL axes) of a transforms.json or a splatting trainer's cameras.json, as a
+/// `from-file` rig reads them.
+pub(crate) use from_file::read as camera_file;
 pub mod path;
 mod path_files;
 pub mod random;

@@ -50,13 +50,12 @@ impl GaussianData {
     pub fn hash_into(&self, h: &mut blake3::Hasher) {
         h.update(b"gaussians v1");
         h.update(&(self.degree as u64).to_le_bytes());
-        let factors: Vec<f32> = self.factors.iter().flat_map(|m| m.to_cols_array()).collect();
-        for part in [bytemuck::cast_slice::<f32, u8>(&factors), bytemuck::cast_slice(&self.opacities)] {
+        // `Mat3` and `Vec3` are their floats in column order: the bytes of `to_cols_array` and `to_array`.
+        for part in [bytemuck::cast_slice::<Mat3, u8>(&self.factors), bytemuck::cast_slice(&self.opacities)] {
             h.update(&(part.len() as u64).to_le_bytes());
             h.update(part);
         }
-        let sh: Vec<f32> = self.sh.iter().flat_map(|v| v.to_array()).collect();
-        h.update(bytemuck::cast_slice(&sh));
+        h.update(bytemuck::cast_slice::<Vec3, u8>(&self.sh));
     }
 }
 

@@ -430,9 +430,9 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
         });
     let mut v = [0f64; SLOTS];
     v[SLOT_A] = 255.0;
-    // One row's values (by slot) onto the columns the element has.
     // The file's row being read, and the first Gaussian whose shape, opacity or colour is not a number.
     let (mut row, mut not_finite) = (0usize, None);
+    // One row's values (by slot) onto the columns the element has.
     let mut push = |v: &[f64; SLOTS]| {
         row += 1;
         if splats && !splat_shows(v[SLOT_OPACITY]) {
