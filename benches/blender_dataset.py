@@ -13,13 +13,18 @@ if "bool" not in np.__dict__:  # Blender 3.4's glTF importer with numpy ≥ 1.24
 
 
 def import_model(path, meta, fps):
-    """Imports the glTF at `path` into an empty scene at `fps`, placed by the dataset's first non-ground
+    """Imports the glTF (or OBJ) at `path` into an empty scene at `fps`, placed by the dataset's first non-ground
     source's `world_from_source`; returns the scene."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps = int(round(fps))
-    bpy.ops.import_scene.gltf(filepath=path)
-    # glTF (x, y, z) arrives as Blender (x, -z, y); the dataset's matrix maps glTF coordinates to its world.
+    if path.lower().endswith(".obj"):
+        # Blender's OBJ importer at its defaults (forward -Z, up Y), as a user imports one.
+        bpy.ops.wm.obj_import(filepath=path)
+    else:
+        bpy.ops.import_scene.gltf(filepath=path)
+    # glTF (x, y, z) arrives as Blender (x, -z, y), and so does an OBJ at the importer's default axes; the
+    # dataset's matrix maps the file's coordinates to its world.
     to_blender = Matrix(((1, 0, 0, 0), (0, 0, -1, 0), (0, 1, 0, 0), (0, 0, 0, 1)))
     source = next(s for s in meta["sources"] if s["name"] != "ground")
     root = bpy.data.objects.new("vvgen_world", None)

@@ -12,7 +12,8 @@
 # Needs: $BPY, a Python with `bpy==4.5.*` (default /tmp/bpy45/bin/python; BPY=blender runs Debian's Blender 3.4
 # instead), a python with numpy and Pillow as $PYTHON (default python3), FlightHelmet from ../shared/assets (or
 # $FLIGHT_HELMET). SEEDS (default "0 1"), CYCLES_SAMPLES (512), the scene's settings below. About 20 minutes on 2
-# cores, nearly all of it Cycles; REUSE_CYCLES=1 measures a new vvgen against an earlier run's renders; UNDER=1
+# cores, nearly all of it Cycles; MODELS="obj" OBJ=path/to/model.obj measures an OBJ (its MTL materials through
+# Blender's OBJ importer) instead, FIT='"frame"' frames a subject of any shape; REUSE_CYCLES=1 measures a new vvgen against an earlier run's renders; UNDER=1
 # views the subjects from below instead (use another WORK_DIR).
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -65,13 +66,12 @@ out = "out"
 cache = "cache"
 preview = false
 [source.model]
-gltf = "$2"
-frames = { count = 1, fps = 24 }
+$( [[ "$2" == *.obj ]] && echo "mesh = \"$2\"" || printf 'gltf = "%s"\nframes = { count = 1, fps = 24 }' "$2")
 [source.ground]
 plane = { size = [$plane_size, $plane_size], color = [$grey, $grey, $grey], z = $plane_z }
 [transform]
 up = "y"
-fit = { height = 2.0 }
+fit = ${FIT:-{ height = 2.0 \}}
 center = "bbox"
 [render]
 resolution = [400, 400]
@@ -89,10 +89,11 @@ writer = "dnerf"
 TOML
 }
 
-for model in cesium helmet; do
+for model in ${MODELS:-cesium helmet}; do
     case $model in
         cesium) file=$repo/tests/data/gltf/CesiumMan/CesiumMan.glb ;;
         helmet) file=$helmet ;;
+        obj) file=$OBJ ;;
     esac
     for light in sun env; do
         dir=$work/$model-$light

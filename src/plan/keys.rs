@@ -80,6 +80,10 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     let mut bytes: Vec<&[u8]> = vec![world];
                     bytes.extend(origin);
                     bytes.extend(splats);
+                    // An OBJ's MTL materials were read as Kd and map_Kd alone before "mtl 1" read them as Blender
+                    // 4.5's importer does: frames with a material library re-render, others keep their keys.
+                    let obj = f.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+                    bytes.extend((obj && !deps.is_empty()).then_some(b"mtl 1".as_slice()));
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))
                 })

@@ -10,6 +10,7 @@ pub mod gltf;
 pub mod input;
 pub mod light;
 pub mod material;
+mod mtl;
 pub mod obj;
 pub mod ply;
 mod ply_scene;

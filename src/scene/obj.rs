@@ -11,8 +11,9 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::material::{srgb_to_linear, Material};
+use super::mtl;
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
-use super::texture::{Texture, TextureRef};
+use super::texture::Texture;
 use super::Error;
 
 /// Largest texture side accepted (a corrupt header should not allocate gigabytes).
@@ -102,17 +103,45 @@ fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error>
     let dir = crate::scene::input::folder_of(path);
     let mut deps = Vec::new();
     for (line_no, name) in libs {
-        let mtl = dir.join(name);
-        if !mtl.is_file() {
-            return Err(at(path, *line_no, format!("material library `{name}` not found ({})", mtl.display())));
-        }
+        let Some(mtl) = mtl::locate(dir, name) else {
+            let tried = dir.join(name.replace('\\', "/"));
+            let mut message = format!("material library `{name}` not found ({})", tried.display());
+            // Libraries get renamed apart from the OBJ that names them: name the ones beside it.
+            let beside = libraries_in(dir);
+            message += &match beside.as_slice() {
+                [] => format!("; put it there, or delete line {line_no} to render without materials"),
+                found => format!(
+                    "; beside it: {}. Point line {line_no} at one, or delete the line to render without materials",
+                    found.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
+                ),
+            };
+            return Err(at(path, *line_no, message));
+        };
         deps.push(mtl.clone());
         deps.extend(scan_mtl(&mtl)?);
     }
     Ok(deps)
 }
 
-/// The `map_Kd` textures of an MTL file, each checked to exist; and the numbers tobj reads, checked here with
+/// The names of the material libraries (`.mtl`, any case, or a shortened `.mt`) in folder `dir`, sorted; at
+/// most five.
+fn libraries_in(dir: &Path) -> Vec<String> {
+    let mut found: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| {
+            let ext = n.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase());
+            matches!(ext.as_deref(), Some("mtl" | "mt"))
+        })
+        .collect();
+    found.sort();
+    found.truncate(5);
+    found
+}
+
+/// The textures of an MTL file that vvgen reads ([`mtl::MAPS`]), each checked to exist; and the numbers tobj reads, checked here with
 /// their line: tobj panics on a colour with fewer than three numbers and names no line for one it cannot parse,
 /// and a number that is not finite (which it accepts) would reach the images.
 fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
@@ -136,46 +165,49 @@ fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
                 return Err(at(path, i + 1, format!("`{key}` needs {what}: `{}`", line.trim())));
             }
         }
-        if key == Some("map_Kd") {
-            // Options (`-s 1 1 1`, …) come first; the file name is the last word.
-            let Some(name) = words.next_back() else {
-                return Err(at(path, i + 1, "`map_Kd` names no file".into()));
+        if let Some(key) = key.filter(|k| mtl::MAPS.contains(k)) {
+            // Options (`-bm 0.5`, `-s 1 1 1`, …) come first; the rest of the line is the file's name.
+            let Some(map) = mtl::TexMap::parse(&line.trim_start()[key.len()..]) else {
+                return Err(at(path, i + 1, format!("`{key}` names no file")));
             };
-            let tex = dir.join(name);
-            if !tex.is_file() {
-                return Err(at(path, i + 1, format!("texture `{name}` not found ({})", tex.display())));
-            }
+            let Some(tex) = mtl::locate(dir, &map.name) else {
+                let tried = dir.join(map.name.replace('\\', "/"));
+                return Err(at(path, i + 1, format!("texture `{}` not found ({})", map.name, tried.display())));
+            };
             out.push(tex);
         }
     }
     Ok(out)
 }
 
-/// An OBJ frame as a posed scene in source space: one primitive per object, one material per MTL material (base
-/// colour `Kd`, texture `map_Kd`), drawn double-sided (captures rarely wind consistently).
+/// An OBJ frame as a posed scene in source space: one primitive per object, one material per MTL material (as
+/// Blender 4.5's importer builds it: [`mtl`]), drawn double-sided (captures rarely wind consistently).
 pub fn scene(path: &Path) -> Result<PosedScene, Error> {
     scan(path)?;
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
     let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
-    let (models, materials) = tobj::load_obj(path, &options).map_err(|e| fail(e.to_string()))?;
-    let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
     let dir = crate::scene::input::folder_of(path);
-    let mut textures: Vec<Texture> = Vec::new();
+    // Each material's MTL folder, in tobj's order (it appends each library's materials as it loads them): their
+    // textures are named relative to it. Libraries are found as `scan` found them.
+    let folders = std::cell::RefCell::new(Vec::new());
+    let load_library = |name: &Path| {
+        let file = mtl::locate(dir, &name.to_string_lossy()).ok_or(tobj::LoadError::OpenFileFailed)?;
+        let mut reader = std::io::BufReader::new(std::fs::File::open(&file).map_err(|_| tobj::LoadError::OpenFileFailed)?);
+        let loaded = tobj::load_mtl_buf(&mut reader)?;
+        folders.borrow_mut().extend(std::iter::repeat_n(crate::scene::input::folder_of(&file).to_path_buf(), loaded.0.len()));
+        Ok(loaded)
+    };
+    let mut reader =
+        std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?);
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, load_library).map_err(|e| fail(e.to_string()))?;
+    let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
+    let folders = folders.into_inner();
+    let mut images = mtl::Images::default();
     let mut mats: Vec<Material> = Vec::new();
-    for m in &materials {
-        let kd = m.diffuse.unwrap_or([1.0, 1.0, 1.0]);
-        let mut mat = Material {
-            base_color: Vec4::new(kd[0], kd[1], kd[2], m.dissolve.unwrap_or(1.0)),
-            double_sided: true,
-            ..Material::default()
-        };
-        if let Some(name) = &m.diffuse_texture {
-            let name = name.split_whitespace().next_back().unwrap_or(name);
-            textures.push(texture(&dir.join(name))?);
-            mat.base_color_texture = Some(TextureRef::new(textures.len() as u32 - 1));
-        }
-        mats.push(mat);
+    for (k, m) in materials.iter().enumerate() {
+        mats.push(mtl::material(m, folders.get(k).map_or(dir, |d| d.as_path()), &mut images)?);
     }
+    let textures = images.into_textures();
     // Faces without a material: white where the file gives vertex colours, else Blender's grey.
     let plain = mats.len() as u32;
     mats.push(Material { double_sided: true, ..Material::default() });
@@ -208,11 +240,18 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
             Vec::new()
         };
         let material = m.material_id.map_or(plain + u32::from(colors.is_empty()), |i| i as u32);
+        // A normal map needs tangents, MikkTSpace's as Blender's.
+        let normal_map = mats.get(material as usize).is_some_and(|m| m.normal_texture.is_some());
+        let tangents = if normal_map && !uvs.is_empty() && !indices.is_empty() {
+            super::gltf::mikktspace(&positions, &normals, &uvs, &indices)
+        } else {
+            Vec::new()
+        };
         primitives.push(PosedPrimitive {
             kind: if indices.is_empty() { PrimKind::Points } else { PrimKind::Triangles },
             positions,
             normals,
-            tangents: Vec::new(),
+            tangents,
             uvs: Arc::new(uvs),
             colors: Arc::new(colors),
             indices: Arc::new(indices),
@@ -231,6 +270,14 @@ pub fn texture(path: &Path) -> Result<Texture, Error> {
 
 /// [`texture`], and whether the image has an alpha channel (used or not: importers decide by the channel).
 pub fn texture_and_alpha(path: &Path) -> Result<(Texture, bool), Error> {
+    let img = image(path)?;
+    let alpha = img.color().has_alpha();
+    let img = img.into_rgba8();
+    Ok((Texture::new(img.width(), img.height(), img.into_raw(), true), alpha))
+}
+
+/// An image file, decoded within [`MAX_TEXTURE_SIDE`].
+pub(crate) fn image(path: &Path) -> Result<image::DynamicImage, Error> {
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
     let mut reader = image::ImageReader::open(path)
         .map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?
@@ -240,8 +287,5 @@ pub fn texture_and_alpha(path: &Path) -> Result<(Texture, bool), Error> {
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     reader.limits(limits);
-    let img = reader.decode().map_err(|e| fail(format!("cannot decode the texture: {e}")))?;
-    let alpha = img.color().has_alpha();
-    let img = img.into_rgba8();
-    Ok((Texture::new(img.width(), img.height(), img.into_raw(), true), alpha))
+    reader.decode().map_err(|e| fail(format!("cannot decode the texture: {e}")))
 }

@@ -108,6 +108,7 @@ impl LoadedSource {
                 )
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
+            SourceFile::Mesh { path, .. } if is_obj(path) => SourceData::Static(super::obj::scene(path)?),
             SourceFile::Mesh { path, scene } => {
                 if let Some(message) = way_out_of(path) {
                     return Err(Error::Source { name, message });
@@ -266,6 +267,11 @@ fn select_clips(asset: &GltfAsset, sel: &Clips) -> Result<Vec<usize>, String> {
 
 fn is_ply(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
+}
+
+/// Whether a file is an OBJ, by its extension.
+fn is_obj(path: &std::path::Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 
 /// What to do with a file in a format vvgen does not read but a newcomer brings (by its extension): the tool

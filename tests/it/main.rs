@@ -22,6 +22,7 @@ mod layers;
 mod lit;
 mod manifest;
 mod meshseq;
+mod mtl;
 mod new;
 mod normal_maps;
 mod path;

@@ -122,3 +122,39 @@ fn generated_tangents_shade_as_the_files_own_and_scale_zero_is_flat() {
         assert_eq!(centre(&quad(n, 0.0, false), from), centre(&quad(Vec3::Z, 0.0, false), from));
     }
 }
+
+/// A 2 × 2 m quad in the XY plane facing +Z as an OBJ (its v up, so the image's top is +y, as in [`quad_gltf`]),
+/// its MTL's bump map `bump` (a file of a uniform texel `texel`), written to `dir`.
+fn quad_obj(dir: &std::path::Path, texel: [u8; 3], bump: &str) -> PosedScene {
+    image::RgbImage::from_pixel(4, 4, image::Rgb(texel)).save(dir.join("n.png")).unwrap();
+    std::fs::write(dir.join("q.mtl"), format!("newmtl m\nKd 0.8 0.8 0.8\n{bump}\n")).unwrap();
+    let obj = "mtllib q.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n\
+               usemtl m\nf 1/1/1 2/2/1 3/3/1 4/4/1\n";
+    std::fs::write(dir.join("q.obj"), obj).unwrap();
+    vvgen::scene::obj::scene(&dir.join("q.obj")).unwrap()
+}
+
+#[test]
+fn an_objs_bump_map_shades_as_a_normal_map_and_a_grey_one_as_none() {
+    // Blender 4.5's OBJ importer puts `map_Bump` through a Normal Map node of strength `-bm`, in the tangent
+    // frame MikkTSpace gives the OBJ's uvs.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let (east, west, north, south) =
+        (Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0), Vec3::new(0.0, -1.0, 1.0));
+    let texel = |n: Vec3| (n.normalize() * 0.5 + 0.5).to_array().map(|c| (c * 255.0).round() as u8);
+    let none = quad_obj(d, [0, 0, 0], "");
+    let level = centre(&none, east);
+    assert!(level > 40, "{level}");
+    let red = quad_obj(d, texel(Vec3::new(0.5, 0.0, 0.866)), "map_Bump n.png");
+    assert!(centre(&red, east) > level + 10 && centre(&red, west) + 10 < level);
+    let green = quad_obj(d, texel(Vec3::new(0.0, 0.5, 0.866)), "bump -bm 1.0 n.png");
+    assert!(centre(&green, north) > level + 10 && centre(&green, south) + 10 < level);
+    // Strength 0 is the geometric normal.
+    let off = quad_obj(d, texel(Vec3::new(0.5, 0.0, 0.866)), "map_Bump -bm 0 n.png");
+    assert_eq!(centre(&off, east), level);
+    // A grey image is a height map, not drawn: read as a normal map it would lean every normal one way.
+    let grey = quad_obj(d, [180, 180, 180], "map_Bump n.png");
+    assert!(grey.materials[0].normal_texture.is_none());
+    assert_eq!((centre(&grey, east), centre(&grey, north)), (level, centre(&none, north)));
+}

@@ -9,6 +9,7 @@ mod materials;
 pub mod pose;
 mod spec_gloss;
 mod tangents;
+pub(crate) use tangents::mikktspace;
 mod uri;
 
 pub use load::{load, load_slice, GltfAsset};
