@@ -41,7 +41,7 @@ use super::Error;
 
 /// The texture statements vvgen reads (tobj keeps `map_Bump`, `map_bump` and `bump` as one).
 pub(crate) const MAPS: &[&str] =
-    &["map_Kd", "map_d", "map_Bump", "map_bump", "bump", "map_Ke", "map_Pr", "map_Ns", "map_Pm", "map_refl", "refl"];
+    &["map_Kd", "map_d", "map_Bump", "map_bump", "bump", "map_Ke", "map_Pr", "map_Ns", "map_Pm", "map_refl"];
 
 /// Options that take arguments and change nothing vvgen draws (Blender skips them too), with their counts.
 const SKIPPED: &[(&str, usize)] =
@@ -115,7 +115,10 @@ impl TexMap {
 pub(crate) fn locate(dir: &Path, name: &str) -> Option<PathBuf> {
     let slashed = name.replace('\\', "/");
     let base = slashed.rsplit('/').next().unwrap_or(&slashed);
-    [dir.join(&slashed), PathBuf::from(&slashed), dir.join(base)].into_iter().find(|p| p.is_file())
+    // (A relative name is never tried against the working directory: a build reads the same files from any
+    // folder.)
+    let absolute = Some(PathBuf::from(&slashed)).filter(|p| p.is_absolute());
+    [Some(dir.join(&slashed)), absolute, Some(dir.join(base))].into_iter().flatten().find(|p| p.is_file())
 }
 
 /// Decoded images of one OBJ frame, each read once however many materials use it.
@@ -277,7 +280,8 @@ pub(crate) fn material(m: &tobj::Material, dir: &Path, images: &mut Images) -> R
         mat.emissive_texture = Some(TextureRef { transform: map.transform(), ..TextureRef::new(i) });
     }
     let rough = find("map_Pr").or_else(|| find("map_Ns"));
-    let metal = find("map_Pm").or_else(|| find("map_refl")).or_else(|| find("refl"));
+    // (Not `refl`: old files name a sphere-mapped reflection of the surroundings with it.)
+    let metal = find("map_Pm").or_else(|| find("map_refl"));
     if rough.is_some() || metal.is_some() {
         let r = rough.as_ref().map(|(_, p)| images.rgba(p).cloned()).transpose()?;
         let mm = metal.as_ref().map(|(_, p)| images.rgba(p).cloned()).transpose()?;
