@@ -161,8 +161,16 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             rest.materials = std::sync::Arc::new(a.materials.clone());
             rest.textures = a.textures.clone();
             let kind = if clips.is_empty() { Asset::Mesh } else { Asset::Gltf { clips } };
-            let note = format!("{what}; up \"y\": glTF is +Y up by its specification");
-            Ok(Described { kind, up: "y", note, rest, origin: None })
+            // 3D Gaussians keep their trainer's axes through the tools that write them as glTF (splat-transform
+            // only turns them 180° about Z): their up is guessed from their extents, as a scan's is.
+            let splats = !rest.primitives.is_empty() && rest.primitives.iter().all(|p| p.gaussians.is_some());
+            let (up, note) = if splats {
+                let (up, why) = tallest(&rest, asset);
+                (up, format!("{what}; 3D Gaussians, which keep their trainer's axes in glTF: {why}"))
+            } else {
+                ("y", format!("{what}; up \"y\": glTF is +Y up by its specification"))
+            };
+            Ok(Described { kind, up, note, rest, origin: None })
         }
         "fbx" => {
             let a = scene::fbx::load(asset)?;

@@ -82,12 +82,18 @@ fn a_gaussian_splatting_file_reads_as_its_gaussians_base_colours() {
 /// read along directions taken back into its own axes). Nothing about Gaussians is warned of.
 #[test]
 fn a_gaussian_splatting_file_renders_as_the_splatting_reference() {
-    for (name, up) in [("donut_2000", "z"), ("train_200", "y")] {
+    // The PLY, and splat-transform 2.7.1's glTF of it (`KHR_gaussian_splatting`: linear scales, activated
+    // opacities, one attribute per coefficient), which it writes turned 180° about Z: the manifest turns it back.
+    let turned = "[source.s.transform]\nmatrix = [[-1, 0, 0, 0], [0, -1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n";
+    let files = ["ply", "glb"].into_iter().flat_map(|ext| [("donut_2000", "z", ext), ("train_200", "y", ext)]);
+    for (name, up, ext) in files {
         let tmp = tempfile::tempdir().unwrap();
         let d = tmp.path();
-        std::fs::copy(crate::common::data(&format!("splats/{name}.ply")), d.join(format!("{name}.ply"))).unwrap();
+        let file = format!("{name}.{ext}");
+        std::fs::copy(crate::common::data(&format!("splats/{file}")), d.join(&file)).unwrap();
+        let turn = if ext == "glb" { turned } else { "" };
         let text = format!(
-            "[dataset]\nname = \"{name}\"\nout = \"out\"\npreview = false\n\n[source.s]\nmesh = \"{name}.ply\"\n\n\
+            "[dataset]\nname = \"{name}\"\nout = \"out\"\npreview = false\n\n[source.s]\nmesh = \"{file}\"\n\n{turn}\
              [transform]\nup = \"{up}\"\nfit = \"frame\"\ncenter = \"bbox\"\n\n[render]\nresolution = [128, 128]\n\n\
              [rig.h]\nkind = \"hemisphere\"\n\n[split.train]\nrig = \"h\"\nviews = 3\n\n[output.d]\nwriter = \"dnerf\"\n"
         );
@@ -107,10 +113,10 @@ fn a_gaussian_splatting_file_renders_as_the_splatting_reference() {
             for (o, t) in ours.pixels().zip(theirs.pixels()) {
                 shown += (t[3] > 0) as usize;
                 let worst = (0..3).map(|c| (white(o, c) - white(t, c)).abs()).fold(0.0, f32::max);
-                assert!(worst <= 2.0 && o[3].abs_diff(t[3]) <= 2, "{name} view {v}: {o:?} against {t:?}");
+                assert!(worst <= 2.0 && o[3].abs_diff(t[3]) <= 2, "{file} view {v}: {o:?} against {t:?}");
             }
         }
-        assert!(shown > 1000, "{name}: {shown} pixels drawn");
+        assert!(shown > 1000, "{file}: {shown} pixels drawn");
     }
 }
 
@@ -417,4 +423,19 @@ fn a_splatting_models_cameras_json_is_a_rig_that_reprojects() {
     for says in ["rig `trained` reads a splatting model's cameras.json", "`center` moves the scene", "up = \"z\""] {
         assert!(err.contains(says), "`{says}` not in {err}");
     }
+}
+
+/// `vvgen new` on 3D Gaussians in glTF guesses their up axis from their extents, as it does a scan's: the tools
+/// that write them keep the trainer's axes (splat-transform turns them 180° about Z only), so glTF's +Y may lie
+/// on its side (the donut is flat along z).
+#[test]
+fn new_guesses_the_up_axis_of_gaussians_in_gltf_from_their_extents() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::copy(crate::common::data("splats/donut_2000.glb"), d.join("donut.glb")).unwrap();
+    let (code, err) = vvgen(d, &["new", "donut.glb"]);
+    assert_eq!(code, Some(0), "{err}");
+    let text = std::fs::read_to_string(d.join("donut.toml")).unwrap();
+    assert!(text.contains("up     = \"z\""), "{text}");
+    assert!(err.contains("3D Gaussians") && err.contains("flat along z"), "{err}");
 }

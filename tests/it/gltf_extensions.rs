@@ -514,40 +514,91 @@ fn instanced_copies_render_as_the_nodes_they_stand_for() {
     );
 }
 
-/// 3D Gaussians in glTF (`KHR_gaussian_splatting`, as splat-transform writes a `.glb`: a POINTS primitive with
-/// `KHR_gaussian_splatting:ROTATION`, `:SCALE`, `:OPACITY` … attributes) are refused by `check` and `build` with
-/// the way out, where gltf's validation said only "invalid semantic name".
+/// 3D Gaussians in glTF (`KHR_gaussian_splatting`) are drawn (`clouds::a_gaussian_splatting_file_renders_as_the_
+/// splatting_reference`); those vvgen cannot draw as the file means them are refused by `check` and `build`,
+/// naming the file and why: another kernel or colour space, no band-0 colour, a value that is not finite, an
+/// attribute of another length than POSITION.
 #[test]
-fn gaussians_in_gltf_are_refused_with_the_way_out() {
-    let points: Vec<u8> = [0.0f32, 0.0, 0.0, 0.1, 0.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
-    let json = json!({
-        "asset": { "version": "2.0", "generator": "splat-transform" },
-        "extensionsUsed": ["KHR_gaussian_splatting"],
-        "buffers": [{ "byteLength": points.len() }],
-        "bufferViews": [{ "buffer": 0, "byteLength": points.len() }],
-        "accessors": [
-            { "bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [0.1, 0.0, 0.0] },
-            { "bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3" }
-        ],
-        "meshes": [{ "primitives": [{
-            "attributes": { "POSITION": 0, "KHR_gaussian_splatting:SCALE": 1 },
-            "mode": 0,
-            "extensions": { "KHR_gaussian_splatting": { "kernel": "ellipse" } }
-        }] }],
-        "nodes": [{ "mesh": 0 }],
-        "scenes": [{ "nodes": [0] }],
-        "scene": 0
-    });
-    let d = model(&json, &points);
-    let manifest = format!(
-        "[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n{TWO_VIEWS}"
-    );
-    std::fs::write(d.path().join("m.toml"), manifest).unwrap();
-    for cmd in ["check", "build"] {
-        let (code, err) = vvgen(d.path(), &[cmd, "m.toml"]);
-        assert_eq!(code, 2, "{cmd}: {err}");
-        for says in ["model.glb", "KHR_gaussian_splatting", "3D Gaussian splatting PLY", "mesh = "] {
-            assert!(err.contains(says), "{cmd}: `{says}` not in {err}");
+fn gaussians_in_gltf_that_cannot_be_drawn_are_refused_saying_why() {
+    // Two Gaussians: centres, unit quaternions (xyzw), scales, opacities, band-0 colours.
+    let floats: Vec<f32> = [
+        vec![0.0, 0.0, 0.0, 0.1, 0.0, 0.0],
+        vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        vec![0.02; 6],
+        vec![0.9, 0.8],
+        vec![0.5, 0.2, -0.3, 0.1, 0.4, 0.0],
+    ]
+    .concat();
+    let bin: Vec<u8> = floats.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let base = |attributes: Value, ext: Value| {
+        json!({
+            "asset": { "version": "2.0", "generator": "splat-transform" },
+            "extensionsUsed": ["KHR_gaussian_splatting"],
+            "buffers": [{ "byteLength": bin.len() }],
+            "bufferViews": [
+                { "buffer": 0, "byteOffset": 0, "byteLength": 24 }, { "buffer": 0, "byteOffset": 24, "byteLength": 32 },
+                { "buffer": 0, "byteOffset": 56, "byteLength": 24 }, { "buffer": 0, "byteOffset": 80, "byteLength": 8 },
+                { "buffer": 0, "byteOffset": 88, "byteLength": 24 }
+            ],
+            "accessors": [
+                { "bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [0.1, 0.0, 0.0] },
+                { "bufferView": 1, "componentType": 5126, "count": 2, "type": "VEC4" },
+                { "bufferView": 2, "componentType": 5126, "count": 2, "type": "VEC3" },
+                { "bufferView": 3, "componentType": 5126, "count": 2, "type": "SCALAR" },
+                { "bufferView": 4, "componentType": 5126, "count": 2, "type": "VEC3" },
+                { "bufferView": 3, "componentType": 5126, "count": 1, "type": "SCALAR" }
+            ],
+            "meshes": [{ "primitives": [{ "attributes": attributes, "mode": 0, "extensions": { "KHR_gaussian_splatting": ext } }] }],
+            "nodes": [{ "mesh": 0 }],
+            "scenes": [{ "nodes": [0] }],
+            "scene": 0
+        })
+    };
+    let all = json!({ "POSITION": 0, "KHR_gaussian_splatting:ROTATION": 1, "KHR_gaussian_splatting:SCALE": 2,
+                      "KHR_gaussian_splatting:OPACITY": 3, "KHR_gaussian_splatting:SH_DEGREE_0_COEF_0": 4 });
+    let srgb = json!({ "kernel": "ellipse", "colorSpace": "srgb_rec709_display" });
+    let with = |k: &str, v: Value| {
+        let mut a = all.clone();
+        a[k] = v;
+        a
+    };
+    let mut no_colour = all.clone();
+    no_colour.as_object_mut().unwrap().remove("KHR_gaussian_splatting:SH_DEGREE_0_COEF_0");
+    let mut nan = bin.clone();
+    nan[80..84].copy_from_slice(&f32::NAN.to_le_bytes());
+    let cases = [
+        (
+            base(all.clone(), json!({ "kernel": "customShape", "colorSpace": "srgb_rec709_display" })),
+            bin.clone(),
+            "kernel `customShape`",
+        ),
+        (
+            base(all.clone(), json!({ "kernel": "ellipse", "colorSpace": "lin_rec709_display" })),
+            bin.clone(),
+            "colour space `lin_rec709_display`",
+        ),
+        (base(no_colour, srgb.clone()), bin.clone(), "without KHR_gaussian_splatting:SH_DEGREE_0_COEF_0"),
+        (base(all.clone(), srgb.clone()), nan, "Gaussian 0's rotation, scale or opacity is not finite"),
+        (
+            base(with("KHR_gaussian_splatting:OPACITY", json!(5)), srgb.clone()),
+            bin.clone(),
+            "KHR_gaussian_splatting:OPACITY: accessor 5 has 1 elements, POSITION has 2",
+        ),
+    ];
+    for (json, bin, says) in cases {
+        let d = model(&json, &bin);
+        let manifest = format!(
+            "[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n{TWO_VIEWS}"
+        );
+        std::fs::write(d.path().join("m.toml"), manifest).unwrap();
+        for cmd in ["check", "build"] {
+            let (code, err) = vvgen(d.path(), &[cmd, "m.toml"]);
+            assert_eq!(code, 2, "{cmd}: {err}");
+            assert!(err.contains("model.glb") && err.contains(says), "{cmd}: `{says}` not in {err}");
         }
     }
+    // As written, the two draw.
+    let d = model(&base(all, srgb), &bin);
+    let image = first_image(d.path(), &format!("[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n[transform]\nfit = \"frame\"\n{TWO_VIEWS}"));
+    assert!(image.pixels().filter(|p| p[3] > 0).count() > 20);
 }

@@ -36,11 +36,10 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     };
     let mut doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
     required_extensions(&doc)?;
-    if let Some(refusal) = gaussian_splats(&doc) {
-        return Err(refusal.into());
-    }
-    let webp = webp_sources(&mut doc);
     super::validate::check(&doc)?;
+    // After the check, whose messages name the file's own attributes.
+    let splats = super::splats::rename(&mut doc)?;
+    let webp = webp_sources(&mut doc) | splats;
     // The JSON is parsed again from the edited document only when there was something to edit.
     let read = |validate: bool| -> Result<gltf::Gltf, gltf::Error> {
         if !webp {
@@ -86,18 +85,6 @@ fn webp_sources(doc: &mut serde_json::Value) -> bool {
         }
     }
     changed
-}
-
-/// The refusal of 3D Gaussians stored in glTF (`KHR_gaussian_splatting`, which splat-transform and others write,
-/// used or required), saying the way out: gltf's validation would reject their attributes with "invalid semantic
-/// name", and drawing their centres as points would not be what the file shows.
-fn gaussian_splats(doc: &serde_json::Value) -> Option<&'static str> {
-    let names = |key: &str| doc.get(key).and_then(|v| v.as_array()).into_iter().flatten().filter_map(|v| v.as_str());
-    names("extensionsUsed").chain(names("extensionsRequired")).any(|e| e == "KHR_gaussian_splatting").then_some(
-        "holds 3D Gaussians (`KHR_gaussian_splatting`), which vvgen does not read from glTF: write them as a 3D \
-         Gaussian splatting PLY (graphdeco-inria's `point_cloud.ply` layout; in SuperSplat, File → Export → PLY) and \
-         name that (`mesh = \"….ply\"`), which vvgen draws as splatting draws it",
-    )
 }
 
 /// Refuses an extension the file requires and vvgen does not read, saying the way out. Checked on the raw

@@ -8,6 +8,7 @@ pub mod load;
 mod materials;
 pub mod pose;
 mod spec_gloss;
+mod splats;
 mod tangents;
 pub(crate) use tangents::mikktspace;
 mod uri;
