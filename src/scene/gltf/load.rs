@@ -574,28 +574,10 @@ fn primitive(
     };
     if kind == PrimKind::Points {
         if let Some((data, shows)) = super::splats::read(p, buffers, n)? {
-            keep_gaussians(&mut prim, data, &shows);
+            super::splats::keep(&mut prim, data, &shows);
         }
     }
     Ok(Some(prim))
-}
-
-/// Makes `prim` (a point primitive) the Gaussians `data` that `shows` keeps: its points their centres, coloured
-/// by their band-0 colour, neither skinned nor morphed (the extension defines neither).
-fn keep_gaussians(prim: &mut Primitive, mut data: crate::scene::gaussians::GaussianData, shows: &[bool]) {
-    let per = data.per_gaussian();
-    let keep = |i: &usize| shows[*i];
-    let kept: Vec<usize> = (0..shows.len()).filter(keep).collect();
-    prim.positions = kept.iter().map(|&i| prim.positions[i]).collect();
-    prim.normals = vec![Vec3::ZERO; kept.len()];
-    prim.colors = kept.iter().map(|&i| super::splats::point_colour(data.sh[i * per])).collect();
-    prim.uvs.clear();
-    (prim.influences, prim.joints, prim.weights) = (0, Vec::new(), Vec::new());
-    (prim.morph_positions, prim.morph_normals) = (Vec::new(), Vec::new());
-    data.factors = kept.iter().map(|&i| data.factors[i]).collect();
-    data.opacities = kept.iter().map(|&i| data.opacities[i]).collect();
-    data.sh = kept.iter().flat_map(|&i| data.sh[i * per..(i + 1) * per].iter().copied()).collect();
-    prim.gaussians = Some(std::sync::Arc::new(data));
 }
 
 /// Area-weighted vertex normals (cross products are proportional to twice the area). Non-indexed triangles

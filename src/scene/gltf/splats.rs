@@ -8,9 +8,12 @@
 //! gltf 1.4 refuses the attributes' names ("invalid semantic name"), so [`rename`] moves them to application
 //! names (`_KHR_GS_…`) before its validation, and [`read`] reads them back from there.
 
+use std::sync::Arc;
+
 use glam::{Mat3, Quat, Vec3, Vec4};
 
 use super::accessor::read_f32;
+use super::load::Primitive;
 use crate::scene::gaussians::GaussianData;
 use crate::scene::material::srgb_to_linear;
 
@@ -121,6 +124,24 @@ pub(super) fn read(
     let opacities: Vec<f32> = opacity.iter().map(|o| o.clamp(0.0, 1.0)).collect();
     let shows = opacities.iter().map(|&o| o >= 1.0 / 255.0).collect();
     Ok(Some((GaussianData { factors, opacities, degree, sh }, shows)))
+}
+
+/// Makes `prim` (a point primitive) the Gaussians `data` that `shows` keeps: its points their centres, coloured
+/// by their band-0 colour, neither skinned nor morphed (the extension defines neither).
+pub(super) fn keep(prim: &mut Primitive, mut data: GaussianData, shows: &[bool]) {
+    let per = data.per_gaussian();
+    let keep = |i: &usize| shows[*i];
+    let kept: Vec<usize> = (0..shows.len()).filter(keep).collect();
+    prim.positions = kept.iter().map(|&i| prim.positions[i]).collect();
+    prim.normals = vec![Vec3::ZERO; kept.len()];
+    prim.colors = kept.iter().map(|&i| point_colour(data.sh[i * per])).collect();
+    prim.uvs.clear();
+    (prim.influences, prim.joints, prim.weights) = (0, Vec::new(), Vec::new());
+    (prim.morph_positions, prim.morph_normals) = (Vec::new(), Vec::new());
+    data.factors = kept.iter().map(|&i| data.factors[i]).collect();
+    data.opacities = kept.iter().map(|&i| data.opacities[i]).collect();
+    data.sh = kept.iter().flat_map(|&i| data.sh[i * per..(i + 1) * per].iter().copied()).collect();
+    prim.gaussians = Some(Arc::new(data));
 }
 
 /// The colour of a point that stands for a Gaussian of band-0 coefficients `dc`: 3DGS's `SH2RGB`, clamped and
