@@ -86,6 +86,7 @@ fn a_gaussian_splatting_file_renders_as_the_splatting_reference() {
     // opacities, one attribute per coefficient), which it writes turned 180° about Z: the manifest turns it back.
     let turned = "[source.s.transform]\nmatrix = [[-1, 0, 0, 0], [0, -1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n";
     let files = ["ply", "glb"].into_iter().flat_map(|ext| [("donut_2000", "z", ext), ("train_200", "y", ext)]);
+    let mut points = std::collections::HashMap::new();
     for (name, up, ext) in files {
         let tmp = tempfile::tempdir().unwrap();
         let d = tmp.path();
@@ -117,6 +118,12 @@ fn a_gaussian_splatting_file_renders_as_the_splatting_reference() {
             }
         }
         assert!(shown > 1000, "{file}: {shown} pixels drawn");
+        // The points written beside the images (the Gaussians' centres in their base colours) are the PLY's.
+        let cloud = std::fs::read(d.join(format!("out/{name}_dnerf/points3d.ply"))).unwrap();
+        match points.get(name) {
+            None => drop(points.insert(name, cloud)),
+            Some(ply) => assert!(ply == &cloud, "{file}: its points3d.ply differs from the PLY's"),
+        }
     }
 }
 
