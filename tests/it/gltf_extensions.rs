@@ -597,8 +597,24 @@ fn gaussians_in_gltf_that_cannot_be_drawn_are_refused_saying_why() {
             assert!(err.contains("model.glb") && err.contains(says), "{cmd}: `{says}` not in {err}");
         }
     }
-    // As written, the two draw.
-    let d = model(&base(all, srgb), &bin);
+    // Compressed Gaussians (SPZ in glTF) are refused with the uncompressed way out, not Blender's (it reads none).
+    let mut spz = base(all.clone(), srgb.clone());
+    spz["extensionsRequired"] = json!(["KHR_gaussian_splatting", "KHR_gaussian_splatting_compression_spz_2"]);
+    let d = model(&spz, &bin);
+    std::fs::write(
+        d.path().join("m.toml"),
+        format!(
+            "[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n{TWO_VIEWS}"
+        ),
+    )
+    .unwrap();
+    let (code, err) = vvgen(d.path(), &["check", "m.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("compressed") && err.contains("splat-transform") && !err.contains("Blender"), "{err}");
+    // As written, the two draw, the extension required or not.
+    let mut required = base(all, srgb);
+    required["extensionsRequired"] = json!(["KHR_gaussian_splatting"]);
+    let d = model(&required, &bin);
     let image = first_image(d.path(), &format!("[dataset]\nname = \"s\"\nout = \"out\"\npreview = false\n[source.s]\ngltf = \"model.glb\"\n[transform]\nfit = \"frame\"\n{TWO_VIEWS}"));
     assert!(image.pixels().filter(|p| p[3] > 0).count() > 20);
 }

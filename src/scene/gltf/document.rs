@@ -16,11 +16,14 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "EXT_texture_webp",
     // A mesh drawn many times (gltfpack's `-mi` requires it): every copy is posed (`super::instancing`).
     "EXT_mesh_gpu_instancing",
+    // 3D Gaussians (`super::splats`), required by the files that compress them (refused below) or by choice.
+    "KHR_gaussian_splatting",
 ];
 
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
 /// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required
-/// `KHR_mesh_quantization`, `EXT_texture_webp` or `EXT_mesh_gpu_instancing` (which gltf 1.4 calls unsupported). vvgen's own reference check
+/// `KHR_mesh_quantization`, `EXT_texture_webp`, `EXT_mesh_gpu_instancing` or `KHR_gaussian_splatting` (which gltf
+/// 1.4 calls unsupported). vvgen's own reference check
 /// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
 /// references.
 pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
@@ -58,7 +61,12 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
                 let no_view = p.starts_with("accessors[") && p.ends_with("].bufferView");
                 // gltf 1.4 has no feature for these; vvgen reads quantized attributes and WebP images.
                 let read_here = p.starts_with("extensionsRequired[")
-                    && ["\"KHR_mesh_quantization\"", "\"EXT_texture_webp\"", "\"EXT_mesh_gpu_instancing\""]
+                    && [
+                        "\"KHR_mesh_quantization\"",
+                        "\"EXT_texture_webp\"",
+                        "\"EXT_mesh_gpu_instancing\"",
+                        "\"KHR_gaussian_splatting\"",
+                    ]
                         .iter()
                         .any(|x| p.ends_with(x));
                 use gltf::json::validation::Error::{Missing, Unsupported};
@@ -102,6 +110,14 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
                 "requires the extension `{ext}`, which vvgen does not read (its meshes are compressed). Way out: \
                  `npx @gltf-transform/cli copy in.glb plain.glb` writes the file with plain meshes (or quantized \
                  ones, which vvgen reads); name that"
+            ));
+        }
+        if ext.starts_with("KHR_gaussian_splatting_compression") || ext.starts_with("EXT_gaussian_splatting") {
+            // Blender reads no Gaussians: the way out is the uncompressed form, which vvgen reads.
+            return Err(format!(
+                "requires the extension `{ext}`, which vvgen does not read (its 3D Gaussians are compressed). Way \
+                 out: write them uncompressed, as `KHR_gaussian_splatting` alone or as a 3D Gaussian splatting PLY, \
+                 from the file they were made from (`npx @playcanvas/splat-transform in.ply out.glb`), and name that"
             ));
         }
         let what = match ext {
