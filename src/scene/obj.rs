@@ -263,6 +263,36 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
     Ok(PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures), lights: Vec::new() })
 }
 
+/// A warning naming the MTL materials of OBJ `path` that are wholly transparent (`d 0`, no `map_d`): nothing of
+/// them shows, as in Blender, and exporters that write `d` as a transparency (`Tr`'s sense) write it for opaque
+/// surfaces. Reads the OBJ's `mtllib` lines and its libraries, not its geometry.
+pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
+    let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let dir = crate::scene::input::folder_of(path);
+    let mut unseen = Vec::new();
+    for (_, name) in libraries(path, &text)? {
+        let Some(file) = mtl::locate(dir, &name) else { continue };
+        let bytes = std::fs::read(&file).map_err(|e| Error::Io { path: file.clone(), source: e })?;
+        let Ok((materials, _)) = tobj::load_mtl_buf(&mut bytes.as_slice()) else { continue };
+        unseen.extend(
+            materials
+                .iter()
+                .filter(|m| m.dissolve.is_some_and(|d| d <= 0.0) && m.dissolve_texture.is_none())
+                .map(|m| format!("`{}`", m.name)),
+        );
+    }
+    if unseen.is_empty() {
+        return Ok(Vec::new());
+    }
+    let (what, has) = if unseen.len() == 1 { ("material", "has") } else { ("materials", "have") };
+    Ok(vec![format!(
+        "{}: {what} {} {has} `d 0`, wholly transparent: nothing of it shows, as in Blender. If the file means it \
+         opaque (some exporters write `d` as a transparency, `Tr`'s sense), set `d 1` in its MTL",
+        path.display(),
+        unseen.join(", "),
+    )])
+}
+
 /// An image file as an sRGB base-colour texture.
 pub fn texture(path: &Path) -> Result<Texture, Error> {
     texture_and_alpha(path).map(|(t, _)| t)

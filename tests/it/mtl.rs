@@ -104,3 +104,19 @@ fn dissolve_and_an_alpha_map_make_a_surface_translucent() {
     // The colour stays Kd's: the alpha map carries alpha alone.
     assert!(right[2] > 200 && right[0] < 130, "{right:?}");
 }
+
+#[test]
+fn a_wholly_transparent_material_is_warned_of() {
+    // `d 0` shows nothing (in Blender too); some exporters write it meaning opaque.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("model.obj"), OBJ).unwrap();
+    std::fs::write(d.join("model.mtl"), "newmtl skin\nKd 0.8 0.2 0.2\nd 0.000000\nnewmtl lid\nKd 0.2 0.2 0.8\nd 0.5\n")
+        .unwrap();
+    std::fs::write(d.join("m.toml"), manifest()).unwrap();
+    let out =
+        std::process::Command::new(env!("CARGO_BIN_EXE_vvgen")).arg("check").arg(d.join("m.toml")).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("material `skin` has `d 0`") && !err.contains("`lid`") && err.contains("set `d 1`"), "{err}");
+}
