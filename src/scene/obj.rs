@@ -269,8 +269,11 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
 pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
     let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let dir = crate::scene::input::folder_of(path);
+    let libs = libraries(path, &text)?;
+    // Checked first: tobj panics on some malformed numbers, which this names with their line.
+    resolve(path, &libs)?;
     let mut unseen = Vec::new();
-    for (_, name) in libraries(path, &text)? {
+    for (_, name) in libs {
         let Some(file) = mtl::locate(dir, &name) else { continue };
         let bytes = std::fs::read(&file).map_err(|e| Error::Io { path: file.clone(), source: e })?;
         let Ok((materials, _)) = tobj::load_mtl_buf(&mut bytes.as_slice()) else { continue };

@@ -17,15 +17,18 @@ pub(super) fn texture_file(comments: &[String], path: &std::path::Path) -> Resul
     let Some(name) = comments.iter().find_map(|c| c.trim().strip_prefix("TextureFile").map(str::trim)) else {
         return Ok(None);
     };
-    let tex = folder_of(path).join(name);
-    if !tex.is_file() {
-        return Err(Error::Mesh {
+    // Found as an MTL's textures are: Windows-authored names (`\`), absolute ones, or a base name beside it.
+    match super::mtl::locate(folder_of(path), name) {
+        Some(tex) => Ok(Some(tex)),
+        None => Err(Error::Mesh {
             path: path.to_path_buf(),
             line: None,
-            message: format!("`comment TextureFile {name}`: not found ({})", tex.display()),
-        });
+            message: format!(
+                "`comment TextureFile {name}`: not found ({})",
+                folder_of(path).join(name.replace('\\', "/")).display()
+            ),
+        }),
     }
-    Ok(Some(tex))
 }
 
 /// Whether the PLY at `path` holds 3D Gaussians drawn as splats (with their scales and rotations), and what a
