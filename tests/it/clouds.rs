@@ -446,3 +446,45 @@ fn new_guesses_the_up_axis_of_gaussians_in_gltf_from_their_extents() {
     assert!(text.contains("up     = \"z\""), "{text}");
     assert!(err.contains("3D Gaussians") && err.contains("flat along z"), "{err}");
 }
+
+/// Gaussians in glTF are placed by their node's transform, colours included: the degree-3 train subset under a
+/// node turned and scaled renders as the same file turned and scaled by the manifest's `matrix`.
+#[test]
+fn gaussians_in_gltf_follow_their_nodes_transform() {
+    let (mut json, bin) =
+        crate::common::glb_split(&std::fs::read(crate::common::data("splats/train_200.glb")).unwrap());
+    // 60° about X and a uniform scale of 2; the same as a row-major matrix.
+    let (s, c) = (60f64.to_radians().sin(), 60f64.to_radians().cos());
+    json["nodes"][0]["rotation"] =
+        serde_json::json!([(30f64.to_radians()).sin(), 0.0, 0.0, (30f64.to_radians()).cos()]);
+    json["nodes"][0]["scale"] = serde_json::json!([2.0, 2.0, 2.0]);
+    let matrix =
+        format!("[[2, 0, 0, 0], [0, {}, {}, 0], [0, {}, {}, 0], [0, 0, 0, 1]]", 2.0 * c, -2.0 * s, 2.0 * s, 2.0 * c);
+    let image = |glb: Vec<u8>, transform: String| {
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        std::fs::write(d.join("t.glb"), glb).unwrap();
+        let text = format!(
+            "[dataset]\nname = \"t\"\nout = \"out\"\npreview = false\n[source.s]\nmesh = \"t.glb\"\n{transform}\
+             [transform]\nup = \"y\"\nfit = {{ radius = 1.0 }}\n[render]\nresolution = [160, 160]\n\
+             [rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n"
+        );
+        std::fs::write(d.join("m.toml"), text).unwrap();
+        let (code, err) = vvgen(d, &["build", "m.toml"]);
+        assert_eq!(code, Some(0), "{err}");
+        (0..2)
+            .map(|v| image::open(d.join(format!("out/t_dnerf/train/r_{v:04}.png"))).unwrap().into_rgba8())
+            .collect::<Vec<_>>()
+    };
+    let by_node = image(crate::common::glb_join(&json, &bin), String::new());
+    json["nodes"][0] = serde_json::json!({ "mesh": 0 });
+    let by_manifest = image(crate::common::glb_join(&json, &bin), format!("[source.s.transform]\nmatrix = {matrix}\n"));
+    let mut shown = 0;
+    for (a, b) in by_node.iter().zip(&by_manifest) {
+        for (p, q) in a.pixels().zip(b.pixels()) {
+            shown += (p[3] > 0) as usize;
+            assert!(p.0.iter().zip(q.0).all(|(x, y)| x.abs_diff(y) <= 1), "{p:?} vs {q:?}");
+        }
+    }
+    assert!(shown > 300, "{shown} pixels drawn");
+}
