@@ -217,9 +217,8 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             let s = scene::obj::scene(asset)?;
             drawable(&s, asset)?;
             let (up, why) = obj_up();
-            let glob = asset.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
-            let kind = Asset::Sequence { key: "mesh_sequence", glob, frames: 1 };
-            Ok(Described { kind, up, note: why, rest: s, origin: None })
+            // One OBJ is a static mesh (`mesh`), as one PLY is; a folder of them is a sequence.
+            Ok(Described { kind: Asset::Mesh, up, note: why, rest: s, origin: None })
         }
         _ => match scene::source::way_out_of(asset) {
             Some(way_out) => bail!("{way_out}"),

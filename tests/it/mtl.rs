@@ -120,3 +120,19 @@ fn a_wholly_transparent_material_is_warned_of() {
     assert_eq!(out.status.code(), Some(0), "{err}");
     assert!(err.contains("material `skin` has `d 0`") && !err.contains("`lid`") && err.contains("set `d 1`"), "{err}");
 }
+
+#[test]
+fn new_writes_one_obj_as_a_static_mesh() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("model.obj"), OBJ).unwrap();
+    std::fs::write(d.join("model.mtl"), "newmtl skin\nKd 0.8 0.2 0.2\nnewmtl lid\nKd 0.2 0.2 0.8\n").unwrap();
+    let vvgen = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap()
+    };
+    assert!(vvgen(&["new", "model.obj"]).status.success());
+    let text = std::fs::read_to_string(d.join("model.toml")).unwrap();
+    assert!(text.contains("mesh   = \"model.obj\"") && !text.contains("fps"), "{text}");
+    let out = vvgen(&["check", "model.toml"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
