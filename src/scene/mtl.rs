@@ -111,14 +111,16 @@ impl TexMap {
 }
 
 /// Where the file a material statement names (`name`, in an MTL or OBJ in folder `dir`) is: relative to `dir`
-/// with `\` read as a separator, as an absolute path, or by its base name in `dir`; `None` when none is a file.
-pub(crate) fn locate(dir: &Path, name: &str) -> Option<PathBuf> {
+/// with `\` read as a separator, as an absolute path, or by its base name in `dir`. When none is a file, the
+/// error is the first place looked, for the message.
+pub(crate) fn locate(dir: &Path, name: &str) -> Result<PathBuf, PathBuf> {
     let slashed = name.replace('\\', "/");
     let base = slashed.rsplit('/').next().unwrap_or(&slashed);
     // (A relative name is never tried against the working directory: a build reads the same files from any
     // folder.)
     let absolute = Some(PathBuf::from(&slashed)).filter(|p| p.is_absolute());
-    [Some(dir.join(&slashed)), absolute, Some(dir.join(base))].into_iter().flatten().find(|p| p.is_file())
+    let first = dir.join(&slashed);
+    [Some(first.clone()), absolute, Some(dir.join(base))].into_iter().flatten().find(|p| p.is_file()).ok_or(first)
 }
 
 /// Decoded images of one OBJ frame, each read once however many materials use it.
@@ -135,13 +137,18 @@ impl Images {
         self.textures
     }
 
-    /// The image at `path`, as 8-bit RGBA.
-    fn rgba(&mut self, path: &Path) -> Result<&image::RgbaImage, Error> {
+    /// Decodes the image at `path` (as 8-bit RGBA), once.
+    fn load(&mut self, path: &Path) -> Result<(), Error> {
         if !self.rgba.contains_key(path) {
             let img = super::obj::image(path)?.into_rgba8();
             self.rgba.insert(path.to_path_buf(), img);
         }
-        Ok(&self.rgba[path])
+        Ok(())
+    }
+
+    /// The image at `path`, [`Images::load`]ed before.
+    fn get(&self, path: &Path) -> &image::RgbaImage {
+        &self.rgba[path]
     }
 
     /// Adds a texture, returning its index.
@@ -155,7 +162,8 @@ impl Images {
         if let Some(&i) = self.decoded.get(&(path.to_path_buf(), srgb)) {
             return Ok(i);
         }
-        let img = self.rgba(path)?;
+        self.load(path)?;
+        let img = self.get(path);
         let t = Texture::new(img.width(), img.height(), img.as_raw().clone(), srgb);
         let i = self.push(t);
         self.decoded.insert((path.to_path_buf(), srgb), i);
@@ -195,7 +203,7 @@ fn statement(m: &tobj::Material, key: &str, dir: &Path) -> Option<(TexMap, PathB
         k => m.unknown_param.get(k).map(String::as_str),
     }?;
     let map = TexMap::parse(raw)?;
-    let path = locate(dir, &map.name)?;
+    let path = locate(dir, &map.name).ok()?;
     Some((map, path))
 }
 
@@ -241,21 +249,23 @@ pub(crate) fn material(m: &tobj::Material, dir: &Path, images: &mut Images) -> R
     }
     // The base colour texture: `map_Kd`'s colour (or Kd) and, when the surface blends, `map_d`'s alpha (or 1).
     let blended = mat.alpha_mode == AlphaMode::Blend;
+    for (_, path) in kd_map.iter().chain(&d_map) {
+        images.load(path)?;
+    }
+    let opaque = |path: &Path, images: &Images| images.get(path).pixels().all(|p| p.0[3] == 255);
     let base = match (&kd_map, &d_map) {
         (Some((map, kd)), Some((_, d))) if kd == d => Some((images.texture(kd, true)?, map)),
-        (Some((map, kd)), None) if !blended || !images.rgba(kd)?.pixels().any(|p| p.0[3] != 255) => {
-            Some((images.texture(kd, true)?, map))
-        }
+        (Some((map, kd)), None) if !blended || opaque(kd, images) => Some((images.texture(kd, true)?, map)),
         (Some((map, kd)), d) => {
-            let colour = images.rgba(kd)?.clone();
-            let alpha = d.as_ref().map(|(_, d)| images.rgba(d).cloned()).transpose()?;
-            Some((images.push(with_alpha(&colour, alpha.as_ref())), map))
+            let t = with_alpha(images.get(kd), d.as_ref().map(|(_, d)| images.get(d)));
+            Some((images.push(t), map))
         }
         (None, Some((map, d))) => {
-            let alpha = images.rgba(d)?.clone();
+            let alpha = images.get(d);
             let white = image::RgbaImage::from_pixel(alpha.width(), alpha.height(), image::Rgba([255; 4]));
             // The colour is Kd's: the texture carries alpha alone.
-            Some((images.push(with_alpha(&white, Some(&alpha))), map))
+            let t = with_alpha(&white, Some(alpha));
+            Some((images.push(t), map))
         }
         (None, None) => None,
     };
@@ -268,7 +278,8 @@ pub(crate) fn material(m: &tobj::Material, dir: &Path, images: &mut Images) -> R
     if let Some((map, path)) = find("map_Bump") {
         // A grey image is a height map (Crytek's Sponza ships them as `map_bump`), which vvgen does not draw;
         // read as a normal map, as Blender does, it would bend every normal to one side.
-        if images.rgba(&path)?.pixels().any(|p| p.0[0] != p.0[1] || p.0[1] != p.0[2]) {
+        images.load(&path)?;
+        if images.get(&path).pixels().any(|p| p.0[0] != p.0[1] || p.0[1] != p.0[2]) {
             let i = images.texture(&path, false)?;
             let at = TextureRef { transform: map.transform(), ..TextureRef::new(i) };
             mat.normal_texture = Some((at, map.bm.max(0.0)));
@@ -283,15 +294,16 @@ pub(crate) fn material(m: &tobj::Material, dir: &Path, images: &mut Images) -> R
     // (Not `refl`: old files name a sphere-mapped reflection of the surroundings with it.)
     let metal = find("map_Pm").or_else(|| find("map_refl"));
     if rough.is_some() || metal.is_some() {
-        let r = rough.as_ref().map(|(_, p)| images.rgba(p).cloned()).transpose()?;
-        let mm = metal.as_ref().map(|(_, p)| images.rgba(p).cloned()).transpose()?;
+        for (_, path) in rough.iter().chain(&metal) {
+            images.load(path)?;
+        }
         let map = rough.as_ref().or(metal.as_ref()).map(|(m, _)| m).expect("BUG: one of the two is there");
-        let t = metallic_roughness(r.as_ref(), mm.as_ref());
+        let t = metallic_roughness(rough.as_ref().map(|(_, p)| images.get(p)), metal.as_ref().map(|(_, p)| images.get(p)));
         // A linked socket ignores its value: the texture carries it, the factor is 1.
-        if r.is_some() {
+        if rough.is_some() {
             mat.roughness = 1.0;
         }
-        if mm.is_some() {
+        if metal.is_some() {
             mat.metallic = 1.0;
         }
         let i = images.push(t);
@@ -362,9 +374,9 @@ mod tests {
         std::fs::create_dir_all(d.join("textures")).unwrap();
         std::fs::write(d.join("textures/red.png"), b"x").unwrap();
         std::fs::write(d.join("beside.png"), b"x").unwrap();
-        assert_eq!(locate(&d, "textures\\red.png"), Some(d.join("textures/red.png")));
-        assert_eq!(locate(&d, "C:\\Users\\me\\maps\\beside.png"), Some(d.join("beside.png")));
-        assert_eq!(locate(&d, "gone.png"), None);
+        assert_eq!(locate(&d, "textures\\red.png"), Ok(d.join("textures/red.png")));
+        assert_eq!(locate(&d, "C:\\Users\\me\\maps\\beside.png"), Ok(d.join("beside.png")));
+        assert_eq!(locate(&d, "maps\\gone.png"), Err(d.join("maps/gone.png")));
         std::fs::remove_dir_all(&d).unwrap();
     }
 

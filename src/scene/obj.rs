@@ -103,8 +103,9 @@ fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error>
     let dir = crate::scene::input::folder_of(path);
     let mut deps = Vec::new();
     for (line_no, name) in libs {
-        let Some(mtl) = mtl::locate(dir, name) else {
-            let tried = dir.join(name.replace('\\', "/"));
+        let mtl = match mtl::locate(dir, name) {
+            Ok(mtl) => mtl,
+            Err(tried) => {
             let mut message = format!("material library `{name}` not found ({})", tried.display());
             // Libraries get renamed apart from the OBJ that names them: name the ones beside it.
             let beside = libraries_in(dir);
@@ -116,6 +117,7 @@ fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error>
                 ),
             };
             return Err(at(path, *line_no, message));
+            }
         };
         deps.push(mtl.clone());
         deps.extend(scan_mtl(&mtl)?);
@@ -170,11 +172,12 @@ fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
             let Some(map) = mtl::TexMap::parse(&line.trim_start()[key.len()..]) else {
                 return Err(at(path, i + 1, format!("`{key}` names no file")));
             };
-            let Some(tex) = mtl::locate(dir, &map.name) else {
-                let tried = dir.join(map.name.replace('\\', "/"));
-                return Err(at(path, i + 1, format!("texture `{}` not found ({})", map.name, tried.display())));
-            };
-            out.push(tex);
+            match mtl::locate(dir, &map.name) {
+                Ok(tex) => out.push(tex),
+                Err(tried) => {
+                    return Err(at(path, i + 1, format!("texture `{}` not found ({})", map.name, tried.display())))
+                }
+            }
         }
     }
     Ok(out)
@@ -191,7 +194,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
     // textures are named relative to it. Libraries are found as `scan` found them.
     let folders = std::cell::RefCell::new(Vec::new());
     let load_library = |name: &Path| {
-        let file = mtl::locate(dir, &name.to_string_lossy()).ok_or(tobj::LoadError::OpenFileFailed)?;
+        let file = mtl::locate(dir, &name.to_string_lossy()).map_err(|_| tobj::LoadError::OpenFileFailed)?;
         let mut reader = std::io::BufReader::new(std::fs::File::open(&file).map_err(|_| tobj::LoadError::OpenFileFailed)?);
         let loaded = tobj::load_mtl_buf(&mut reader)?;
         folders.borrow_mut().extend(std::iter::repeat_n(crate::scene::input::folder_of(&file).to_path_buf(), loaded.0.len()));
@@ -265,24 +268,47 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
 
 /// A warning naming the MTL materials of OBJ `path` that are wholly transparent (`d 0`, no `map_d`): nothing of
 /// them shows, as in Blender, and exporters that write `d` as a transparency (`Tr`'s sense) write it for opaque
-/// surfaces. Reads the OBJ's `mtllib` lines and its libraries, not its geometry.
+/// surfaces. Reads the libraries the OBJ names before its first vertex, where exporters write them: the head of
+/// the file, not the frame (a build with nothing to do reads no frame in full).
 pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
-    let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    use std::io::BufRead;
+    let io = |p: &Path| {
+        let path = p.to_path_buf();
+        move |e| Error::Io { path, source: e }
+    };
+    let mut head = std::io::BufReader::new(std::fs::File::open(path).map_err(io(path))?);
     let dir = crate::scene::input::folder_of(path);
-    let libs = libraries(path, &text)?;
-    // Checked first: tobj panics on some malformed numbers, which this names with their line.
-    resolve(path, &libs)?;
+    let (mut libs, mut line) = (Vec::new(), Vec::new());
+    loop {
+        line.clear();
+        if head.read_until(b'\n', &mut line).map_err(io(path))? == 0 {
+            break;
+        }
+        let text = String::from_utf8_lossy(&line);
+        match text.split_whitespace().next() {
+            Some("v" | "vt" | "vn" | "f") => break,
+            Some("mtllib") => libs.extend(mtl::locate(dir, text.trim_start()["mtllib".len()..].trim()).ok()),
+            _ => {}
+        }
+    }
     let mut unseen = Vec::new();
-    for (_, name) in libs {
-        let Some(file) = mtl::locate(dir, &name) else { continue };
-        let bytes = std::fs::read(&file).map_err(|e| Error::Io { path: file.clone(), source: e })?;
-        let Ok((materials, _)) = tobj::load_mtl_buf(&mut bytes.as_slice()) else { continue };
-        unseen.extend(
-            materials
-                .iter()
-                .filter(|m| m.dissolve.is_some_and(|d| d <= 0.0) && m.dissolve_texture.is_none())
-                .map(|m| format!("`{}`", m.name)),
-        );
+    for lib in libs {
+        let text = std::fs::read(&lib).map_err(io(&lib))?;
+        // (name, d ≤ 0, map_d) of each material, in one pass over its lines; the `newmtl` added at the end closes
+        // the last one.
+        let mut current: Option<(String, bool, bool)> = None;
+        for line in String::from_utf8_lossy(&text).lines().chain(["newmtl"]) {
+            let mut words = line.split_whitespace();
+            match (words.next(), &mut current) {
+                (Some("newmtl"), _) => {
+                    unseen.extend(current.take().filter(|&(_, zero, map)| zero && !map).map(|(n, ..)| format!("`{n}`")));
+                    current = Some((line.trim_start()["newmtl".len()..].trim().to_string(), false, false));
+                }
+                (Some("d"), Some(m)) => m.1 = words.next().and_then(|w| w.parse::<f32>().ok()).is_some_and(|d| d <= 0.0),
+                (Some("map_d"), Some(m)) => m.2 = true,
+                _ => {}
+            }
+        }
     }
     if unseen.is_empty() {
         return Ok(Vec::new());

@@ -19,14 +19,11 @@ pub(super) fn texture_file(comments: &[String], path: &std::path::Path) -> Resul
     };
     // Found as an MTL's textures are: Windows-authored names (`\`), absolute ones, or a base name beside it.
     match super::mtl::locate(folder_of(path), name) {
-        Some(tex) => Ok(Some(tex)),
-        None => Err(Error::Mesh {
+        Ok(tex) => Ok(Some(tex)),
+        Err(tried) => Err(Error::Mesh {
             path: path.to_path_buf(),
             line: None,
-            message: format!(
-                "`comment TextureFile {name}`: not found ({})",
-                folder_of(path).join(name.replace('\\', "/")).display()
-            ),
+            message: format!("`comment TextureFile {name}`: not found ({})", tried.display()),
         }),
     }
 }

@@ -42,10 +42,10 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     super::validate::check(&doc)?;
     // After the check, whose messages name the file's own attributes.
     let splats = super::splats::rename(&mut doc)?;
-    let webp = webp_sources(&mut doc) | splats;
+    let edited = webp_sources(&mut doc) | splats;
     // The JSON is parsed again from the edited document only when there was something to edit.
     let read = |validate: bool| -> Result<gltf::Gltf, gltf::Error> {
-        if !webp {
+        if !edited {
             return if validate { gltf::Gltf::from_slice(bytes) } else { gltf::Gltf::from_slice_without_validation(bytes) };
         }
         let blob = bin.as_deref().map(<[u8]>::to_vec);

@@ -5,12 +5,11 @@
 
 use std::sync::Arc;
 
-use crate::scene::gaussians::Gaussians;
-
 use glam::{Mat3, Mat4, Quat, Vec3, Vec4};
 
 use super::anim::Target;
 use super::load::{GltfAsset, Primitive};
+use crate::scene::gaussians::Gaussians;
 use crate::scene::posed::{PosedPrimitive, PosedScene};
 
 /// Reusable per-pose state.
