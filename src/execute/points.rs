@@ -14,7 +14,7 @@ use crate::cache::Digest;
 use crate::manifest::output::{ColorAverage, PlyFormat, PointColor};
 use crate::plan::actions::{Action, PointSettings};
 use crate::plan::graph::{ActionId, Graph};
-use crate::render::light::{FrameLight, Gathered, GatheredError};
+use crate::render::light::{FrameLight, Gathered, GatheredError, PointCasters};
 use crate::sample::voxel::{self, Reduction};
 use crate::sample::{self, Draw, Points};
 use crate::scene::material::{linear_to_srgb, srgb_to_linear};
@@ -203,8 +203,9 @@ fn samples(
             // A point primitive's points have no vertices that gathered light: they read the environment's
             // occlusion maps, which the light action does not keep, so they are made here when there are any.
             let points = posed.primitives.iter().any(|p| p.kind == PrimKind::Points);
-            let apart = points.then(|| seen(FrameLight::prepare(&whole, &lights.lights, env.clone())));
-            let light = FrameLight::from_gathered(&whole, &lights.lights, env, gathered).map_err(content)?;
+            let casters = PointCasters::of(&g.keying.render.splat);
+            let apart = points.then(|| seen(FrameLight::prepare(&whole, &lights.lights, env.clone(), casters)));
+            let light = FrameLight::from_gathered(&whole, &lights.lights, env, casters, gathered).map_err(content)?;
             Some((seen(light), apart, whole, first))
         }
         PointColor::Albedo => None,

@@ -14,7 +14,7 @@ use crate::plan::actions::Action;
 use crate::plan::graph::{ActionId, Graph};
 use crate::render::encode::{self, Encoding, NormalSpace};
 use crate::render::light::environment::{self, EnvMap, Prefiltered};
-use crate::render::light::{EnvLight, FrameLight, Gathered, GatheredError};
+use crate::render::light::{EnvLight, FrameLight, Gathered, GatheredError, PointCasters};
 use crate::render::{self, Frame, RenderSettings, Shading};
 use crate::scene::Poser;
 use std::sync::Arc;
@@ -75,7 +75,8 @@ pub(super) fn lights(
             let label = &g.node(id).label;
             let posed = x.scene.pose(frame, poser).map_err(|source| Error::Scene { action: label.clone(), source })?;
             super::check_posed(posed, label)?;
-            let gathered = FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone()).gather(posed);
+            let casters = PointCasters::of(&g.keying.render.splat);
+            let gathered = FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone(), casters).gather(posed);
             let stored = x.store(g, id, &[gathered.encode()])?;
             done();
             Ok((id, stored))
@@ -141,7 +142,8 @@ pub(super) fn passes(
             (Some(env), Some(light_id)) => {
                 let content = |e: GatheredError| Error::Content { action: label.clone(), message: e.to_string() };
                 let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
-                let light = FrameLight::from_gathered(posed, &g.keying.render.lighting.lights, env.clone(), gathered)
+                let casters = PointCasters::of(&g.keying.render.splat);
+                let light = FrameLight::from_gathered(posed, &g.keying.render.lighting.lights, env.clone(), casters, gathered)
                     .map_err(content)?;
                 Some(light.with_exposure(g.keying.render.lighting.exposure))
             }

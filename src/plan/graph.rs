@@ -68,6 +68,7 @@ impl<'a> Graph<'a> {
             frame_lit: &frame_keys.lit,
             frame_shadeless_points: &frame_keys.shadeless_points,
             frame_glossy_glass: &frame_keys.glossy_glass,
+            frame_point_casters: &frame_keys.point_casters,
             render: {
                 let mut r = crate::settings::renderer(&m.render, scene.voxel_size());
                 if !scene.has_points() {

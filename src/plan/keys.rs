@@ -34,6 +34,12 @@ pub struct FrameKeys {
     /// every other frame keeps its keys. A mesh sequence's frames, keyed by their files and not posed to plan,
     /// count as having it.
     pub glossy_glass: Vec<bool>,
+    /// Whether frame `f` has points that may cast shadows (a point primitive, plain or of 3D Gaussians, whose
+    /// material casts): they have cast into shadow maps since "points cast 1" (triangles alone did before), so
+    /// those frames' light is keyed apart, and with it their lit passes and lit point colours; every other frame
+    /// keeps its keys. A PLY sequence's frames, and a mesh sequence's that are not OBJ files, keyed by their files
+    /// and not posed to plan, count as having them.
+    pub point_casters: Vec<bool>,
 }
 
 /// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
@@ -43,6 +49,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
     let mut lit_per_source: Vec<Vec<Option<Digest>>> = Vec::new();
     let mut shadeless_per_source: Vec<Vec<bool>> = Vec::new();
     let mut glass_per_source: Vec<Vec<bool>> = Vec::new();
+    let mut points_per_source: Vec<Vec<bool>> = Vec::new();
     let mut poser = Poser::default();
     for (i, src) in scene.sources.iter().enumerate() {
         let world = scene.world_from_source(i).to_cols_array();
@@ -54,7 +61,9 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
         // re-renders (posed sources' Gaussians are in their geometry digest); other sequences keep their keys.
         let splats: Option<&[u8]> = src.splats.then_some(b"gaussians 1".as_slice());
         let keys = match &src.data {
-            SourceData::Sequence(files) => files
+            SourceData::Sequence(files) => {
+                points_per_source.push(vec![true; files.len()]);
+                files
                 .iter()
                 .map(|f| {
                     let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
@@ -63,11 +72,15 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     bytes.extend(splats);
                     Ok(key("frame ply", &bytes))
                 })
-                .collect::<Result<Vec<_>, Error>>()?,
+                .collect::<Result<Vec<_>, Error>>()?
+            }
             SourceData::MeshSequence(files) => {
                 // Its frames are not posed to plan: whether one holds glossy glass is not known, so each counts as
                 // holding it (an OBJ's or a `.blend`'s transparent materials may be glossy).
                 glass_per_source.push(vec![true; files.len()]);
+                // Nor whether one holds points: an OBJ never does.
+                let obj = |p: &std::path::Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+                points_per_source.push(files.iter().map(|f| !obj(&f.path)).collect());
                 files
                 .iter()
                 .map(|f| {
@@ -98,6 +111,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 let mut lit_keys = Vec::new();
                 let mut shadeless = Vec::new();
                 let mut glass = Vec::new();
+                let mut points = Vec::new();
                 for f in 0..n {
                     let posed = scene.pose_source(i, f, &mut poser)?;
                     glass.push(posed.primitives.iter().any(|p| {
@@ -105,6 +119,10 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         p.kind == PrimKind::Triangles && m.alpha_mode == AlphaMode::Blend && !m.unlit && glossy(m)
                     }));
                     shadeless.push(posed.primitives.iter().any(|p| p.kind == PrimKind::Points && posed.material(p.material).unlit));
+                    points.push(posed.primitives.iter().any(|p| {
+                        let m = posed.material(p.material);
+                        p.kind == PrimKind::Points && m.casts_shadows && !m.unlit
+                    }));
                     let m = *materials.get_or_insert_with(|| posed.material_digest());
                     let geometry = posed.geometry_digest();
                     let mut parts: Vec<&[u8]> = vec![geometry.as_bytes(), m.as_bytes()];
@@ -136,6 +154,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 lit_per_source.push(lit_keys);
                 shadeless_per_source.push(shadeless);
                 glass_per_source.push(glass);
+                points_per_source.push(points);
                 keys
             }
         };
@@ -166,7 +185,8 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
         (0..scene.frames).map(|f| per.iter().any(|s| s.get(f.min(s.len().max(1) - 1)) == Some(&true))).collect()
     };
     let (shadeless_points, glossy_glass) = (any(&shadeless_per_source), any(&glass_per_source));
-    Ok(FrameKeys { content, lights, lit, shadeless_points, glossy_glass })
+    let point_casters = any(&points_per_source);
+    Ok(FrameKeys { content, lights, lit, shadeless_points, glossy_glass, point_casters })
 }
 
 /// The content key of `m`'s `[environment] map`, when it names one.

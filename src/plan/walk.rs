@@ -32,6 +32,8 @@ pub struct Keying<'a> {
     pub frame_shadeless_points: &'a [bool],
     /// Whether every frame has glossy transparent surfaces ([`super::keys::FrameKeys::glossy_glass`]).
     pub frame_glossy_glass: &'a [bool],
+    /// Whether every frame has points that may cast shadows ([`super::keys::FrameKeys::point_casters`]).
+    pub frame_point_casters: &'a [bool],
     /// The renderer's settings.
     pub render: RenderSettings,
     /// How passes are encoded.
@@ -72,6 +74,13 @@ impl Action {
                 }
                 if let Some(lights) = &cx.frame_lights[*frame] {
                     w.digest("file lights", lights);
+                }
+                if cx.frame_point_casters.get(*frame) == Some(&true) {
+                    // Its points cast as the images draw them: the splats' world size and shape.
+                    let p = crate::render::light::PointCasters::of(&cx.render.splat);
+                    w.str("point casters", "points cast 1");
+                    w.f64("point caster size", p.size.map_or(0.0, f64::from));
+                    w.bool("point casters cubes", p.cube);
                 }
                 if let Some(env) = deps.first() {
                     w.digest("prefiltered environment", env);

@@ -238,7 +238,7 @@ pub struct Frame {
 /// `s.lighting`'s lights; a build prepares each frame's lighting once and calls [`render_lit`].
 pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     if s.shading == Shading::Pbr {
-        let light = light::FrameLight::prepare(scene, &s.lighting.lights, s.lighting.environment.studio())
+        let light = light::FrameLight::prepare(scene, &s.lighting.lights, s.lighting.environment.studio(), light::PointCasters::of(&s.splat))
             .with_bounce(scene)
             .with_exposure(s.lighting.exposure);
         return render_lit(scene, cam, s, Some(&light));

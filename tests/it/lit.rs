@@ -66,8 +66,13 @@ fn lit(
     lights: &[Light],
 ) -> vvgen::render::Frame {
     let env = Environment { map: None, strength: 1.0, rotation_deg, visible };
-    let light =
-        FrameLight::prepare(scene, lights, env.with(Arc::new(prefilter(&map)), Some(Arc::new(map)))).with_bounce(scene);
+    let light = FrameLight::prepare(
+        scene,
+        lights,
+        env.with(Arc::new(prefilter(&map)), Some(Arc::new(map))),
+        vvgen::render::light::PointCasters::NONE,
+    )
+    .with_bounce(scene);
     let s = RenderSettings { samples: 4, shading: Shading::Pbr, ..Default::default() };
     render_lit(scene, c, &s, Some(&light))
 }

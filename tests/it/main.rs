@@ -27,6 +27,7 @@ mod new;
 mod normal_maps;
 mod path;
 mod ply;
+mod point_shadows;
 mod points;
 mod preview;
 mod render;

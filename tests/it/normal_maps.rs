@@ -85,7 +85,12 @@ fn centre(scene: &PosedScene, from: Vec3) -> u8 {
     };
     let map = EnvMap { width: 8, height: 4, texels: vec![Vec3::ZERO; 32] };
     let env = Environment { map: None, strength: 1.0, rotation_deg: 0.0, visible: false };
-    let light = FrameLight::prepare(scene, &[sun], env.with(Arc::new(prefilter(&map)), None));
+    let light = FrameLight::prepare(
+        scene,
+        &[sun],
+        env.with(Arc::new(prefilter(&map)), None),
+        vvgen::render::light::PointCasters::NONE,
+    );
     let s = RenderSettings { samples: 1, shading: Shading::Pbr, ..Default::default() };
     render_lit(scene, &c, &s, Some(&light)).rgba[(8 * 17 + 8) * 4]
 }

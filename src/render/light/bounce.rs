@@ -341,6 +341,7 @@ fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 2] {
 
 #[cfg(test)]
 mod tests {
+    use crate::render::light::PointCasters;
     use super::*;
     use crate::scene::material::Material;
     use crate::scene::light::{Light, LightKind};
@@ -383,7 +384,7 @@ mod tests {
         };
         let mut env = crate::render::Environment::default().studio();
         env.strength = 0.0;
-        FrameLight::prepare(scene, &[sun], env).with_bounce(scene)
+        FrameLight::prepare(scene, &[sun], env, PointCasters::NONE).with_bounce(scene)
     }
 
     /// Half the view factor from a point to the rectangle a × b whose corner lies `c` straight above it, in a
@@ -433,7 +434,7 @@ mod tests {
         crate::scene::merge(&[square(2.0, 0.0, Vec3::Z, 20, 0.0), ceiling], &mut scene);
         let mut env = crate::render::Environment::default().studio();
         env.strength = 0.0;
-        let light = FrameLight::prepare(&scene, &[], env).with_bounce(&scene);
+        let light = FrameLight::prepare(&scene, &[], env, PointCasters::NONE).with_bounce(&scene);
         let expected = PI * 1.5 * 4.0 * quadrant(2.0, 2.0, 0.5);
         let middle = 10 * 21 + 10;
         let got = light.vertex_visibility[0][middle].bounce;

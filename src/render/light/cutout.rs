@@ -98,6 +98,7 @@ impl Hole {
 
 #[cfg(test)]
 mod tests {
+    use crate::render::light::PointCasters;
     use std::sync::Arc;
 
     use super::*;
@@ -138,7 +139,7 @@ mod tests {
         for (mode, holes) in [(AlphaMode::Mask, true), (AlphaMode::Opaque, false)] {
             let scene = square(mode);
             let bounds = (Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, 1.0, 1.0));
-            let map = ShadowMap::sun(&scene, -Vec3::Z, bounds, 256);
+            let map = ShadowMap::sun(&scene, -Vec3::Z, bounds, 256, PointCasters::NONE);
             let tracer = Tracer::of(&scene, Rays::Few).expect("a caster");
             let (lit, shaded) = (map.visibility(clear, Vec3::Z, 0.0), map.visibility(solid, Vec3::Z, 0.0));
             let (open, shut) = (tracer.open(clear, Vec3::Z), tracer.open(solid, Vec3::Z));

@@ -300,6 +300,7 @@ impl FrameLight {
 
 #[cfg(test)]
 mod tests {
+    use crate::render::light::PointCasters;
     use super::super::brdf::DIELECTRIC;
     use super::super::Surface;
     use super::*;
@@ -310,7 +311,7 @@ mod tests {
         let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
         let mut scene = PosedScene::default();
         crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0), super::super::shadow::tests::quad(1.0, 0.3)], &mut scene);
-        let frame = FrameLight::prepare(&scene, lights, crate::render::Environment::default().studio());
+        let frame = FrameLight::prepare(&scene, lights, crate::render::Environment::default().studio(), PointCasters::NONE);
         (scene, frame)
     }
 
@@ -413,7 +414,7 @@ mod tests {
         crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0)], &mut scene);
         let mut env = crate::render::Environment::default().studio();
         env.strength = 0.0;
-        let frame = FrameLight::prepare(&scene, std::slice::from_ref(&lamp), env);
+        let frame = FrameLight::prepare(&scene, std::slice::from_ref(&lamp), env, PointCasters::NONE);
         let q = Vec3::new(0.8, -0.6, 0.0);
         let (seen, on) = frame.ground_seen(q + Vec3::Z * 0.5, -Vec3::Z, 0.01).expect("on the plane");
         let expected = Vec3::new(0.7, 0.6, 0.5) * frame.lights[0].irradiance(q, Vec3::Z) / PI;
@@ -490,7 +491,7 @@ mod tests {
             let lamp = Light { kind, color: Vec3::ONE, intensity: 200.0, shadows: true };
             let mut env = crate::render::Environment::default().studio();
             env.strength = 0.0;
-            let frame = FrameLight::prepare(&scene, &[lamp], env);
+            let frame = FrameLight::prepare(&scene, &[lamp], env, PointCasters::NONE);
             let below = frame.below(Vec3::new(0.0, 0.0, 0.01), -Vec3::Z);
             assert!((below.x / radiance(1.0, 1.0) - 1.0).abs() < 0.01, "{kind:?}: {below}");
             let aside = frame.below(Vec3::new(1.5, 0.0, 0.01), -Vec3::Z);

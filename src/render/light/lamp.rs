@@ -7,7 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::environment;
-use super::shadow::{self, ShadowMap};
+use super::shadow::{self, PointCasters, ShadowMap};
 use crate::scene::light::{Light, LightKind};
 use crate::scene::PosedScene;
 
@@ -72,20 +72,20 @@ impl Lamp {
 }
 
 /// The lights (`lights`, the manifest's, then the scene's own) with their shadow maps over the casters within
-/// `bounds`, made side by side.
-pub(super) fn lamps(scene: &PosedScene, lights: &[Light], bounds: Option<(Vec3, Vec3)>) -> Vec<Lamp> {
+/// `bounds` (plain points casting as `points` says), made side by side.
+pub(super) fn lamps(scene: &PosedScene, lights: &[Light], bounds: Option<(Vec3, Vec3)>, points: PointCasters) -> Vec<Lamp> {
     let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
     all.par_iter()
         .map(|l| {
             let maps = match (l.shadows, bounds) {
                 (true, Some(b)) => match l.kind {
-                    LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP)],
+                    LightKind::Sun { direction, .. } => vec![ShadowMap::sun(scene, direction, b, SUN_MAP, points)],
                     LightKind::Spot { position, direction, cone, .. } => {
-                        vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP)]
+                        vec![ShadowMap::perspective(scene, position, direction, cone + 0.05, SPOT_MAP, points)]
                     }
                     LightKind::Point { position, .. } => shadow::CUBE
                         .iter()
-                        .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP))
+                        .map(|&d| ShadowMap::perspective(scene, position, d, PI / 2.0 + 0.02, POINT_MAP, points))
                         .collect(),
                 },
                 _ => Vec::new(),

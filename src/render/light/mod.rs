@@ -41,6 +41,7 @@ use ground::{ground_planes, Ground};
 use plane_grid::PlaneVisibility;
 use lamp::{lamps, Lamp};
 use occlusion::occlusion_maps;
+pub use shadow::PointCasters;
 use shadow::ShadowMap;
 
 /// What reaches a surface point of the environment's light: interpolated across a triangle from its vertices,
@@ -151,18 +152,28 @@ fn caster_bounds(scene: &PosedScene) -> Option<(Vec3, Vec3)> {
     Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
 }
 
+/// Bounds of what casts into shadow maps: [`caster_bounds`] with the casting points' footprints (plain points
+/// casting as `points` says, 3D Gaussians by their cores), which rays do not meet.
+fn shadow_bounds(scene: &PosedScene, points: PointCasters) -> Option<(Vec3, Vec3)> {
+    match (caster_bounds(scene), shadow::point_bounds(scene, points)) {
+        (Some((a, b)), Some((c, d))) => Some((a.min(c), b.max(d))),
+        (a, b) => a.or(b),
+    }
+}
+
 impl FrameLight {
     /// Prepares the lights and environment for one posed frame: shadow maps of every shadowing light (`lights`,
-    /// the manifest's, then the scene's own), and the environment's visibility at every vertex.
-    pub fn prepare(scene: &PosedScene, lights: &[Light], env: EnvLight) -> FrameLight {
-        let bounds = caster_bounds(scene);
+    /// the manifest's, then the scene's own), and the environment's visibility at every vertex. Plain points
+    /// cast shadows as `points` says (as images draw them), 3D Gaussians by their cores.
+    pub fn prepare(scene: &PosedScene, lights: &[Light], env: EnvLight, points: PointCasters) -> FrameLight {
+        let bounds = shadow_bounds(scene, points);
         // The lights' maps and the environment's are made side by side (a single sun's 2048² map would otherwise
         // keep one core busy while the other waits).
         let env_maps = || match bounds {
-            Some(b) => occlusion_maps(scene, &env, b),
+            Some(b) => occlusion_maps(scene, &env, b, points),
             None => Vec::new(),
         };
-        let (lamps, occlusion) = rayon::join(|| lamps(scene, lights, bounds), env_maps);
+        let (lamps, occlusion) = rayon::join(|| lamps(scene, lights, bounds, points), env_maps);
         let mut light = FrameLight::bare(scene, lights, lamps, env);
         light.occlusion = occlusion;
         // The planes first: a vertex's bounce reads them.
@@ -203,12 +214,13 @@ impl FrameLight {
 
     /// The lighting of a frame whose light action found `g` ([`FrameLight::gather`] of the same frame, lights
     /// and environment): only the lights' shadow maps are made again, which pixels read; the environment's
-    /// occlusion, which only the vertices and the ground's grids read, is not. An error names what does not fit
-    /// the frame.
+    /// occlusion, which only the vertices and the ground's grids read, is not. `points` must be what the light
+    /// action cast with. An error names what does not fit the frame.
     pub fn from_gathered(
         scene: &PosedScene,
         lights: &[Light],
         env: EnvLight,
+        points: PointCasters,
         g: Gathered,
     ) -> Result<FrameLight, GatheredError> {
         let fits = scene.primitives.len() == g.vertices.len()
@@ -220,7 +232,7 @@ impl FrameLight {
         if !fits {
             return Err(GatheredError::OtherScene);
         }
-        let mut light = FrameLight::bare(scene, lights, lamps(scene, lights, caster_bounds(scene)), env);
+        let mut light = FrameLight::bare(scene, lights, lamps(scene, lights, shadow_bounds(scene, points), points), env);
         light.tracer = may_be_glossy(scene).then(|| rays::Tracer::of(scene, rays::Rays::Few).map(Arc::new)).flatten();
         light.vertex_visibility = g.vertices;
         light.planes = ground_planes(scene)
@@ -494,6 +506,7 @@ impl Surface {
 
 #[cfg(test)]
 mod tests {
+    use crate::render::light::PointCasters;
     use super::brdf::DIELECTRIC;
     use super::*;
 
@@ -533,7 +546,7 @@ mod tests {
                     intensity: 3.0,
                     shadows: true,
                 };
-                let frame = FrameLight::prepare(&scene, &[sun], crate::render::Environment::default().studio());
+                let frame = FrameLight::prepare(&scene, &[sun], crate::render::Environment::default().studio(), PointCasters::NONE);
                 let metal = Surface { base: Vec3::ONE, metallic: 1.0, roughness: 0.5, specular: 0.5, f0: DIELECTRIC };
                 // Facing +X, seen from the direction whose mirror image is (x, 0, z): the lobe's centre.
                 let n = Vec3::X;
@@ -586,7 +599,7 @@ mod tests {
         let seen_from = |r: Vec3| 2.0 * n.dot(r) * n - r;
         let (below, above) = (seen_from(Vec3::new(1.0, 0.0, 1.0).normalize()), seen_from(Vec3::new(1.0, 0.0, -1.0).normalize()));
         let studio = || crate::render::Environment::default().studio();
-        let glossy = FrameLight::prepare(&scene_of(0.2), &[], studio()).with_bounce(&scene_of(0.2));
+        let glossy = FrameLight::prepare(&scene_of(0.2), &[], studio(), PointCasters::NONE).with_bounce(&scene_of(0.2));
         assert!(glossy.tracer.is_some());
         let lobe = |light: &FrameLight, v: Vec3, roughness: f32| light.lobe_occlusion(p, n, v, roughness, hemisphere, Lobe::Rays);
         let ((up, found_up), (down, found_down)) = (lobe(&glossy, below, 0.2), lobe(&glossy, above, 0.2));
@@ -609,7 +622,7 @@ mod tests {
         assert!(mid > traced.min(rough) && mid < traced.max(rough), "{traced} < {mid} < {rough}");
         // Surfaces that cannot be glossy (roughness 1, no roughness texture: CesiumMan's) make no tree, and keep
         // the hemisphere's occlusion.
-        let rough_scene = FrameLight::prepare(&scene_of(1.0), &[], studio()).with_bounce(&scene_of(1.0));
+        let rough_scene = FrameLight::prepare(&scene_of(1.0), &[], studio(), PointCasters::NONE).with_bounce(&scene_of(1.0));
         assert!(rough_scene.tracer.is_none());
         assert_eq!(lobe(&rough_scene, below, 0.2), (a, None));
     }
@@ -638,8 +651,8 @@ mod tests {
         };
         let lights = std::slice::from_ref(&sun);
         let studio = || crate::render::Environment::default().studio();
-        let fresh = FrameLight::prepare(&scene, lights, studio()).with_bounce(&scene);
-        let g = FrameLight::prepare(&scene, lights, studio()).gather(&scene);
+        let fresh = FrameLight::prepare(&scene, lights, studio(), PointCasters::NONE).with_bounce(&scene);
+        let g = FrameLight::prepare(&scene, lights, studio(), PointCasters::NONE).gather(&scene);
         assert_eq!(g.vertices.iter().map(Vec::len).collect::<Vec<_>>(), [4, 4]);
         assert!(g.planes[0].bounce.iter().any(|v| v.x > 1e-3));
         // The sun's shadow on the ground was sampled where it falls, for every view to read.
@@ -648,7 +661,7 @@ mod tests {
         assert_eq!(Gathered::decode(&bytes).as_ref(), Ok(&g));
         // Read back, it lights the frame exactly as preparing it in place does, without the environment's
         // occlusion maps.
-        let cached = FrameLight::from_gathered(&scene, lights, studio(), g.clone()).expect("the same frame");
+        let cached = FrameLight::from_gathered(&scene, lights, studio(), PointCasters::NONE, g.clone()).expect("the same frame");
         assert!(cached.occlusion.is_empty() && !fresh.occlusion.is_empty());
         assert_eq!(fresh.vertex_visibility, cached.vertex_visibility);
         let ground = scene.primitives[0].material;
@@ -669,7 +682,7 @@ mod tests {
         assert!(Gathered::decode(&nan).unwrap_err().to_string().contains("finite"));
         // Another frame's shape is refused.
         let other = Gathered { vertices: vec![vec![Visibility::OPEN; 3]], planes: Vec::new() };
-        assert!(FrameLight::from_gathered(&scene, lights, studio(), other).is_err());
+        assert!(FrameLight::from_gathered(&scene, lights, studio(), PointCasters::NONE, other).is_err());
     }
 
 }

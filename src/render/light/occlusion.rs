@@ -7,7 +7,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::shadow::ShadowMap;
+use super::shadow::{PointCasters, ShadowMap};
 use super::{EnvLight, FrameLight};
 use crate::scene::PosedScene;
 
@@ -32,15 +32,21 @@ fn sphere_directions(n: usize) -> Vec<Vec3> {
 }
 
 /// The environment's occlusion maps: [`ENV_DIRECTIONS`] parallel shadow maps from directions over the sphere,
-/// each weighted by the environment's brightness there (so a bright sky above shadows more than a dark floor).
-pub(super) fn occlusion_maps(scene: &PosedScene, env: &EnvLight, bounds: (Vec3, Vec3)) -> Vec<(Vec3, f32, ShadowMap)> {
+/// each weighted by the environment's brightness there (so a bright sky above shadows more than a dark floor);
+/// plain points cast as `points` says.
+pub(super) fn occlusion_maps(
+    scene: &PosedScene,
+    env: &EnvLight,
+    bounds: (Vec3, Vec3),
+    points: PointCasters,
+) -> Vec<(Vec3, f32, ShadowMap)> {
     let roughest = env.prefiltered.levels.last();
     sphere_directions(ENV_DIRECTIONS)
         .par_iter()
         .map(|&d| {
             let w =
                 roughest.map_or(1.0, |m| m.radiance(env.rotation * d).dot(Vec3::new(0.2126, 0.7152, 0.0722))).max(1e-6);
-            (d, w, ShadowMap::sun(scene, -d, bounds, ENV_MAP))
+            (d, w, ShadowMap::sun(scene, -d, bounds, ENV_MAP, points))
         })
         .collect()
 }

@@ -118,6 +118,7 @@ impl SunShade {
 
 #[cfg(test)]
 mod tests {
+    use crate::render::light::PointCasters;
     use super::super::shadow::tests::quad;
     use super::*;
 
@@ -125,7 +126,7 @@ mod tests {
     fn caster() -> (ShadowMap, Vec3) {
         let h = 0.5;
         let bounds = (Vec3::new(-h, -h, 0.0), Vec3::new(h, h, 1.0));
-        (ShadowMap::sun(&quad(1.0, h), -Vec3::Z, bounds, 512), Vec3::new(-1.0, -1.0, 0.0))
+        (ShadowMap::sun(&quad(1.0, h), -Vec3::Z, bounds, 512, PointCasters::NONE), Vec3::new(-1.0, -1.0, 0.0))
     }
 
     #[test]

@@ -14,6 +14,11 @@
 use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 
+mod points;
+
+pub use points::PointCasters;
+pub(super) use points::bounds as point_bounds;
+
 use super::pcf::{self, Depths, PcfAxis};
 use super::pyramid;
 use super::scan::{Scan, SCAN_RUN};
@@ -80,8 +85,9 @@ fn look(eye: Vec3, dir: Vec3) -> Mat4 {
 }
 
 impl ShadowMap {
-    /// A map of parallel light travelling along `dir`, fitted around the casters' bounds `(lo, hi)`.
-    pub fn sun(scene: &PosedScene, dir: Vec3, bounds: (Vec3, Vec3), size: u32) -> ShadowMap {
+    /// A map of parallel light travelling along `dir`, fitted around the casters' bounds `(lo, hi)`; plain
+    /// points cast as `points` says.
+    pub fn sun(scene: &PosedScene, dir: Vec3, bounds: (Vec3, Vec3), size: u32, points: PointCasters) -> ShadowMap {
         let (lo, hi) = bounds;
         let centre = (lo + hi) * 0.5;
         let radius = ((hi - lo).length() * 0.5).max(1e-6);
@@ -100,12 +106,14 @@ impl ShadowMap {
             glass: None,
         };
         m.rasterize(scene);
+        m.draw_points(scene, points);
         m.build_pyramids();
         m
     }
 
-    /// A map of light from `eye` along `dir`, `fov` radians wide (a spot's cone, or a cube face's 90°).
-    pub fn perspective(scene: &PosedScene, eye: Vec3, dir: Vec3, fov: f32, size: u32) -> ShadowMap {
+    /// A map of light from `eye` along `dir`, `fov` radians wide (a spot's cone, or a cube face's 90°); plain
+    /// points cast as `points` says.
+    pub fn perspective(scene: &PosedScene, eye: Vec3, dir: Vec3, fov: f32, size: u32, points: PointCasters) -> ShadowMap {
         let focal = 0.5 * size as f32 / (0.5 * fov.min(3.0)).tan();
         let mut m = ShadowMap {
             view: look(eye, dir),
@@ -117,6 +125,7 @@ impl ShadowMap {
             glass: None,
         };
         m.rasterize(scene);
+        m.draw_points(scene, points);
         m.build_pyramids();
         m
     }
@@ -166,7 +175,12 @@ impl ShadowMap {
     /// Light space of world point `p`: texel x, texel y, depth (distance along the light's axis).
     #[inline]
     fn project(&self, p: Vec3) -> Vec3 {
-        let q = self.view.transform_point3(p);
+        self.light_space(self.view.transform_point3(p))
+    }
+
+    /// Light space of view-space point `q` (see [`ShadowMap::project`]).
+    #[inline]
+    fn light_space(&self, q: Vec3) -> Vec3 {
         let d = -q.z;
         match self.projection {
             Projection::Ortho { scale, offset } => Vec3::new((q.x - offset.x) * scale, (q.y - offset.y) * scale, d),
@@ -542,7 +556,7 @@ pub(super) mod tests {
         }
         crate::scene::merge(&[glass(1.0, 0.25), glass(2.0, 0.5), block], &mut scene);
         let bounds = scene.bounds().unwrap();
-        let m = ShadowMap::sun(&scene, -Vec3::Z, bounds, 512);
+        let m = ShadowMap::sun(&scene, -Vec3::Z, bounds, 512, PointCasters::NONE);
         let under = m.visibility(Vec3::new(0.1, -0.2, 0.0), Vec3::Z, 0.0);
         assert!((under - 0.75 * 0.5).abs() < 1e-6, "{under}");
         // On top of the upper pane nothing is in front. (Between the panes the layer counts both: one layer per
@@ -562,7 +576,7 @@ pub(super) mod tests {
         // point of a cell `open_over` calls open is looked up fully lit, and it calls open most of the ground but
         // not the cells at the shadow's edge.
         let scene = quad(1.0, 0.5);
-        let m = ShadowMap::sun(&scene, Vec3::new(0.3, 0.2, -1.0).normalize(), scene.bounds().unwrap(), 512);
+        let m = ShadowMap::sun(&scene, Vec3::new(0.3, 0.2, -1.0).normalize(), scene.bounds().unwrap(), 512, PointCasters::NONE);
         for size in [0.0, 0.02] {
             let (mut open, mut cells) = (0, 0);
             for j in 0..60 {
@@ -588,7 +602,7 @@ pub(super) mod tests {
     fn a_sun_shadow_falls_under_its_caster_and_nowhere_else() {
         let scene = quad(1.0, 0.5);
         let bounds = scene.bounds().unwrap();
-        let m = ShadowMap::sun(&scene, -Vec3::Z, bounds, 512);
+        let m = ShadowMap::sun(&scene, -Vec3::Z, bounds, 512, PointCasters::NONE);
         // Under the caster: dark; beside it and on the caster's own top face: lit (no acne).
         assert_eq!(m.visibility(Vec3::new(0.0, 0.0, 0.0), Vec3::Z, 0.0), 0.0);
         assert_eq!(m.visibility(Vec3::new(0.8, 0.0, 0.0), Vec3::Z, 0.0), 1.0);
@@ -613,7 +627,7 @@ pub(super) mod tests {
         let fine = PosedScene::single(PrimKind::Triangles, p.clone(), vec![Vec3::Z; p.len()], Vec::new(), indices, Material::default());
         let coarse = quad(1.0, half);
         let bounds = coarse.bounds().unwrap();
-        let (a, b) = (ShadowMap::sun(&fine, -Vec3::Z, bounds, 256), ShadowMap::sun(&coarse, -Vec3::Z, bounds, 256));
+        let (a, b) = (ShadowMap::sun(&fine, -Vec3::Z, bounds, 256, PointCasters::NONE), ShadowMap::sun(&coarse, -Vec3::Z, bounds, 256, PointCasters::NONE));
         let covered = b.depth.iter().filter(|d| d.is_finite()).count();
         assert!(covered > 170 * 170, "{covered}");
         for (i, (x, y)) in a.depth.iter().zip(&b.depth).enumerate() {
@@ -627,7 +641,7 @@ pub(super) mod tests {
     #[test]
     fn a_spot_shadow_is_a_projection_from_the_light() {
         let scene = quad(1.0, 0.25);
-        let m = ShadowMap::perspective(&scene, Vec3::new(0.0, 0.0, 2.0), -Vec3::Z, 1.5, 512);
+        let m = ShadowMap::perspective(&scene, Vec3::new(0.0, 0.0, 2.0), -Vec3::Z, 1.5, 512, PointCasters::NONE);
         // The caster (half width 0.25 at 1 m from the light) shades half width 0.5 at 2 m.
         assert_eq!(m.visibility(Vec3::new(0.4, 0.0, 0.0), Vec3::Z, 0.0), 0.0);
         assert_eq!(m.visibility(Vec3::new(0.6, 0.0, 0.0), Vec3::Z, 0.0), 1.0);

@@ -283,6 +283,7 @@ fn normal_mapped(n: Vec3, back: bool, tangent: Vec4, texel: Vec3, scale: f32) ->
 
 #[cfg(test)]
 mod tests {
+    use crate::render::light::PointCasters;
     use super::super::{draw_triangles, raster_tile, setup, Shade, TileWork, Tiles};
     use super::*;
     use crate::render::light::FrameLight;
@@ -303,7 +304,7 @@ mod tests {
         let roof = [Vec3::new(-2.0, -2.0, 0.4), Vec3::new(-2.0, 2.0, 0.4), Vec3::new(0.0, 2.0, 0.4), Vec3::new(0.0, -2.0, 0.4)];
         let mut scene = PosedScene::default();
         crate::scene::merge(&[quad(floor, Vec3::Z), quad(roof, -Vec3::Z)], &mut scene);
-        let light = FrameLight::prepare(&scene, &[], crate::render::Environment::default().studio()).with_bounce(&scene);
+        let light = FrameLight::prepare(&scene, &[], crate::render::Environment::default().studio(), PointCasters::NONE).with_bounce(&scene);
         let (eye, k, side) = (Vec3::new(3.0, 0.3, 2.5), 2i64, 64i64);
         // Camera to world: x right, y up, looking along −z.
         let ahead = (Vec3::new(-0.5, 0.0, 0.0) - eye).normalize();
