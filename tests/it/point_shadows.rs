@@ -6,7 +6,8 @@ use std::path::Path;
 
 use crate::common::{load, tree};
 
-/// A square sheet 0.6 m wide at height 0.5, sampled every centimetre: as plain points (`x y z` and a colour) or
+/// A square sheet 0.6 m wide at height 0.5, sampled every centimetre: as plain points (`x y z`, a normal up and a
+/// colour) or
 /// as flat round Gaussians (3D Gaussian splatting's layout: log scales, an opacity logit, a unit quaternion).
 fn sheet_ply(gaussians: bool) -> String {
     let n = 61;
@@ -15,7 +16,7 @@ fn sheet_ply(gaussians: bool) -> String {
          property float scale_0\nproperty float scale_1\nproperty float scale_2\n\
          property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
     } else {
-        "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+        "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
     };
     let mut out = format!("ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n{props}end_header\n", n * n);
     for j in 0..n {
@@ -26,7 +27,7 @@ fn sheet_ply(gaussians: bool) -> String {
                 let (across, through) = (0.01f32.ln(), 0.0001f32.ln());
                 out.push_str(&format!("{x} {y} 0.5 0.5 0.1 0.1 4.6 {across} {across} {through} 1 0 0 0\n"));
             } else {
-                out.push_str(&format!("{x} {y} 0.5 200 40 40\n"));
+                out.push_str(&format!("{x} {y} 0.5 0 0 1 200 40 40\n"));
             }
         }
     }
@@ -108,4 +109,25 @@ fn the_light_of_frames_with_points_is_keyed_by_the_splats_that_cast() {
     let (_, narrow) = build(d, &text);
     let at = pixel(0.865, 0.0);
     assert!(image[at] + 30 < narrow[at], "{} vs {}", image[at], narrow[at]);
+}
+
+#[test]
+fn a_points_lit_colour_is_not_shadowed_by_its_neighbours() {
+    // The sheet's points face the sun with nothing above them: their baked colours are the same with the sun's
+    // shadows as without. (Drawn into the maps at their centres' depths, a point's neighbours stood in front of
+    // it on a curved or tilted cloud and darkened the sunlit side of a ball by 40 %.)
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("sheet.ply"), sheet_ply(false)).unwrap();
+    let outputs = "[output.baked]\nwriter = \"ply-sequence\"\ndir = \"baked\"\npoints = 3721\ncolor = \"lit\"\n\
+                   source = \"sheet\"\n";
+    let colours = |shadows: bool| {
+        let text = manifest(shadows).replace("[output.d]", &format!("{outputs}[output.d]"));
+        build(d, &text);
+        let cloud = vvgen::scene::ply::read_file(&d.join("out/baked/s_0000.ply")).unwrap();
+        assert_eq!(cloud.positions.len(), 3721);
+        cloud.colors.expect("lit colours")
+    };
+    let (lit, shadowed) = (colours(false), colours(true));
+    assert_eq!(lit, shadowed);
 }

@@ -22,8 +22,8 @@ use crate::render::splat::{Shape, Size, SplatSettings};
 use crate::scene::texture::floor;
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 
-/// How plain points (not 3D Gaussians, which cast their own cores) cast shadows: as the splats images draw
-/// them, at twice their size, when those have a world size.
+/// How a point primitive's points cast shadows: plain points as the splats images draw them, at twice their
+/// size, when those have a world size; 3D Gaussians by their cores.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PointCasters {
     /// The casters' edge (cube) or diameter (square, disk, surfel) in world units, twice the splats'; `None`
@@ -31,19 +31,22 @@ pub struct PointCasters {
     pub size: Option<f32>,
     /// Cubes: their silhouettes. Otherwise disks facing the light.
     pub cube: bool,
+    /// Whether 3D Gaussians cast.
+    pub gaussians: bool,
 }
 
 impl PointCasters {
-    /// Plain points cast nothing (3D Gaussians still do).
-    pub const NONE: PointCasters = PointCasters { size: None, cube: false };
+    /// No point casts: what a point's own baked colour is lit by (its neighbours would stand in front of it,
+    /// their footprints at their centres' depths, and shadow it all over), and what triangle-only tests use.
+    pub const NONE: PointCasters = PointCasters { size: None, cube: false, gaussians: false };
 
-    /// For splats drawn as `s` says: twice their size (see the module's header).
+    /// For splats drawn as `s` says: twice their size (see the module's header); 3D Gaussians cast.
     pub fn of(s: &SplatSettings) -> PointCasters {
         let size = match s.size {
             Size::World(w) if w.is_finite() && w > 0.0 => Some(2.0 * w),
             _ => None,
         };
-        PointCasters { size, cube: s.shape == Shape::Cube }
+        PointCasters { size, cube: s.shape == Shape::Cube, gaussians: true }
     }
 
     /// Half the widest reach of a point's footprint from its centre, in world units: how far past the points
@@ -57,7 +60,7 @@ impl PointCasters {
 /// (`KHR_materials_unlit`) or shadowless material's, as for triangles.
 fn casts(scene: &PosedScene, p: &PosedPrimitive, points: PointCasters) -> bool {
     p.kind == PrimKind::Points
-        && (p.gaussians.is_some() || points.size.is_some())
+        && if p.gaussians.is_some() { points.gaussians } else { points.size.is_some() }
         && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows && !m.unlit)
 }
 
@@ -297,13 +300,14 @@ mod tests {
         // As splats one grid step wide are drawn.
         let splats_of = |shape: Shape| PointCasters::of(&SplatSettings { shape, size: Size::World(step), min_px: 1.0 });
         let (cubes, disks) = (splats_of(Shape::Cube), splats_of(Shape::Disk));
-        assert_eq!(cubes, PointCasters { size: Some(2.0 * step), cube: true });
+        assert_eq!(cubes, PointCasters { size: Some(2.0 * step), cube: true, gaussians: true });
+        let cores = PointCasters::of(&SplatSettings::default());
         for dir in [-Vec3::Z, Vec3::new(0.3, -0.2, -1.0).normalize()] {
             let quad_map = ShadowMap::sun(&quad(1.0, 0.5), dir, bounds, 512, PointCasters::NONE);
             let maps = [
                 ("cubes", ShadowMap::sun(&points, dir, bounds, 512, cubes)),
                 ("disks", ShadowMap::sun(&points, dir, bounds, 512, disks)),
-                ("gaussians", ShadowMap::sun(&splats, dir, bounds, 512, PointCasters::NONE)),
+                ("gaussians", ShadowMap::sun(&splats, dir, bounds, 512, cores)),
             ];
             // Where the sun through the sheet meets the ground: the sheet moved by dir·(1/|dir.z|).
             let shift = (dir / -dir.z).truncate();
@@ -325,10 +329,12 @@ mod tests {
                 assert!(shadowed > 1000 && lit > 1000, "{name}: {shadowed} shadowed, {lit} lit");
             }
         }
-        // Pixel-sized splats cast nothing, and neither do Gaussians under half opaque.
-        let none = ShadowMap::sun(&points, -Vec3::Z, bounds, 512, PointCasters::NONE);
-        let faint = ShadowMap::sun(&gaussians(sheet(1.0, step, 1.0), step, 0.45), -Vec3::Z, bounds, 512, PointCasters::NONE);
-        for m in [none, faint] {
+        // Pixel-sized splats cast nothing, and neither do Gaussians under half opaque, nor any point when none
+        // is to cast.
+        let none = ShadowMap::sun(&points, -Vec3::Z, bounds, 512, cores);
+        let faint = ShadowMap::sun(&gaussians(sheet(1.0, step, 1.0), step, 0.45), -Vec3::Z, bounds, 512, cores);
+        let uncast = ShadowMap::sun(&splats, -Vec3::Z, bounds, 512, PointCasters::NONE);
+        for m in [none, faint, uncast] {
             assert_eq!(m.visibility(Vec3::ZERO, Vec3::Z, 0.0), 1.0);
         }
     }
@@ -339,7 +345,7 @@ mod tests {
         // centre rarely falls inside a point, yet every texel under the sheet holds it.
         let bounds = (Vec3::new(-0.6, -0.6, 0.0), Vec3::new(0.6, 0.6, 1.0));
         let points = cloud(sheet(1.0, 0.005, 1.0));
-        let map = ShadowMap::sun(&points, -Vec3::Z, bounds, 256, PointCasters { size: Some(0.001), cube: true });
+        let map = ShadowMap::sun(&points, -Vec3::Z, bounds, 256, PointCasters { size: Some(0.001), cube: true, gaussians: true });
         for j in 0..40 {
             for i in 0..40 {
                 let p = Vec3::new(-0.45 + i as f32 * 0.0231, -0.45 + j as f32 * 0.0231, 0.0);
@@ -353,7 +359,7 @@ mod tests {
         // One cube 10 cm wide, 1 m and then 0.5 m below a spot looking down: its footprint spans about twice the
         // texels nearer the light (focal / depth).
         let scene = |z: f32| cloud(vec![Vec3::new(0.0, 0.0, z)]);
-        let cubes = PointCasters { size: Some(0.1), cube: true };
+        let cubes = PointCasters { size: Some(0.1), cube: true, gaussians: true };
         let covered = |z: f32| {
             let m = ShadowMap::perspective(&scene(z), Vec3::new(0.0, 0.0, 2.0), -Vec3::Z, 1.5, 512, cubes);
             m.depth.iter().filter(|d| d.is_finite()).count() as f32
