@@ -56,6 +56,11 @@ impl PointCasters {
     }
 }
 
+/// How many times over a map's texels its points' footprints may visit: enough for a cloud of millions drawn a
+/// few texels wide, and a bound on a file of giant Gaussians (a scene capture's background, each covering much of
+/// the map), past which a footprint keeps the texel its centre falls in.
+const COVER_BUDGET: u64 = 64;
+
 /// Whether point primitive `p` casts: plain points drawn at a world size, or 3D Gaussians; not a shadeless
 /// (`KHR_materials_unlit`) or shadowless material's, as for triangles.
 fn casts(scene: &PosedScene, p: &PosedPrimitive, points: PointCasters) -> bool {
@@ -118,6 +123,7 @@ impl ShadowMap {
         // The view's rotation, row by row: world offsets about a point to the light's axes.
         let rot = Mat3::from_mat4(self.view);
         let rows = [rot.row(0), rot.row(1), rot.row(2)];
+        let mut budget = COVER_BUDGET * (self.size as u64) * (self.size as u64);
         for p in scene.primitives.iter().filter(|p| casts(scene, p, points)) {
             // Plain points under parallel light all have one footprint: found once (a cloud of half a million
             // points is drawn into 33 maps a frame).
@@ -128,14 +134,14 @@ impl ShadowMap {
                     let q = self.view.transform_point3(c);
                     let (centre, depth) = (self.light_space(q).truncate(), -q.z);
                     if centre.is_finite() && depth.is_finite() {
-                        self.fill(&Footprint { centre, depth, shape: shape.shape });
+                        self.fill(&Footprint { centre, depth, shape: shape.shape }, &mut budget);
                     }
                 }
                 continue;
             }
             for (i, &c) in p.positions.iter().enumerate() {
                 if let Some(f) = self.footprint(&rows, p, i, c, points) {
-                    self.fill(&f);
+                    self.fill(&f, &mut budget);
                 }
             }
         }
@@ -203,7 +209,10 @@ impl ShadowMap {
 
     /// Writes footprint `f`'s depth where it is nearer, over the texels whose centres it covers, or over the
     /// texel its centre falls in when it covers none.
-    fn fill(&mut self, f: &Footprint) {
+    ///
+    /// `budget` is how many texels the map's points may still visit: a footprint that would visit more keeps the
+    /// texel its centre falls in.
+    fn fill(&mut self, f: &Footprint, budget: &mut u64) {
         let n = self.size as i64;
         let half = match f.shape {
             Footprint2::Box(h) => h,
@@ -217,12 +226,19 @@ impl ShadowMap {
             return;
         }
         // Texel (x, y)'s centre is at (x + 0.5, y + 0.5): the first and last centres within `lo..=hi`.
-        let span = |lo: f32, hi: f32| (-floor(0.5 - lo), floor(hi - 0.5));
+        // Clamped to the map, so that a footprint of any size visits at most its texels.
+        let span = |lo: f32, hi: f32| (floor(0.5 - lo).saturating_neg().max(0), floor(hi - 0.5).min(n - 1));
         let (x0, x1) = span(f.centre.x - half.x, f.centre.x + half.x);
         let (y0, y1) = span(f.centre.y - half.y, f.centre.y + half.y);
+        let area = ((x1 - x0 + 1).max(0) * (y1 - y0 + 1).max(0)) as u64;
+        if area > *budget {
+            self.nearer(floor(f.centre.x), floor(f.centre.y), f.depth);
+            return;
+        }
+        *budget -= area;
         let mut any = false;
-        for y in y0.max(0)..=y1.min(n - 1) {
-            for x in x0.max(0)..=x1.min(n - 1) {
+        for y in y0..=y1 {
+            for x in x0..=x1 {
                 let d = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - f.centre;
                 let inside = match f.shape {
                     Footprint2::Box(_) => true,
@@ -352,6 +368,26 @@ mod tests {
                 assert_eq!(map.visibility(p, Vec3::Z, 0.0), 0.0, "{p}");
             }
         }
+    }
+
+    #[test]
+    fn giant_gaussians_visit_a_bounded_number_of_texels() {
+        // Seventy opaque Gaussians, each wider than the map, stacked 1 cm apart from 1 m up, the highest last,
+        // beside one of σ = 1e30 (its covariance overflows) and one 10³⁰ m away: the first 64 cover the map
+        // (the budget: 64 maps' worth), the rest only the texels their centres fall in, so the map's corner
+        // holds the 64th's depth, not the highest's.
+        let mut centres: Vec<Vec3> = (0..70).map(|i| Vec3::new(0.0, 0.0, 1.0 + 0.01 * i as f32)).collect();
+        centres.extend([Vec3::new(0.1, 0.1, 0.5), Vec3::new(1e30, 0.0, 0.5)]);
+        let mut giants = gaussians(centres, 5.0, 0.99);
+        let data = std::sync::Arc::make_mut(&mut giants.primitives[0].gaussians.as_mut().expect("Gaussians").data);
+        data.factors[70] = Mat3::from_diagonal(Vec3::splat(1e30));
+        let bounds = (Vec3::new(-0.6, -0.6, 0.0), Vec3::new(0.6, 0.6, 2.0));
+        let map = ShadowMap::sun(&giants, -Vec3::Z, bounds, 256, PointCasters::of(&SplatSettings::default()));
+        let at = |p: Vec3| map.project(p).z;
+        assert_eq!(map.depth[0], at(Vec3::new(0.0, 0.0, 1.63)), "the corner");
+        let centre = map.project(Vec3::new(0.0, 0.0, 1.0));
+        let i = (centre.y as usize) * 256 + centre.x as usize;
+        assert_eq!(map.depth[i], at(Vec3::new(0.0, 0.0, 1.69)), "under the stack");
     }
 
     #[test]
