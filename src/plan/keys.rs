@@ -8,6 +8,7 @@ use crate::cache::{key, Digest, StatCache};
 use crate::manifest::Manifest;
 use crate::render::light::glossy;
 use crate::scene::material::AlphaMode;
+use crate::scene::source::is_obj;
 use crate::scene::{Poser, PrimKind, Scene, SourceData};
 
 /// The keys of every scene frame.
@@ -79,8 +80,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 // holding it (an OBJ's or a `.blend`'s transparent materials may be glossy).
                 glass_per_source.push(vec![true; files.len()]);
                 // Nor whether one holds points: an OBJ never does.
-                let obj = |p: &std::path::Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-                points_per_source.push(files.iter().map(|f| !obj(&f.path)).collect());
+                points_per_source.push(files.iter().map(|f| !is_obj(&f.path)).collect());
                 files
                 .iter()
                 .map(|f| {
@@ -95,8 +95,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     bytes.extend(splats);
                     // An OBJ's MTL materials were read as Kd and map_Kd alone before "mtl 1" read them as Blender
                     // 4.5's importer does: frames with a material library re-render, others keep their keys.
-                    let obj = f.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-                    bytes.extend((obj && !deps.is_empty()).then_some(b"mtl 1".as_slice()));
+                    bytes.extend((is_obj(&f.path) && !deps.is_empty()).then_some(b"mtl 1".as_slice()));
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))
                 })

@@ -280,7 +280,7 @@ fn is_ply(path: &std::path::Path) -> bool {
 }
 
 /// Whether a file is an OBJ, by its extension.
-fn is_obj(path: &std::path::Path) -> bool {
+pub(crate) fn is_obj(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 

@@ -9,9 +9,10 @@
 //! splats of an irregular sampling (a voxel of 9 neighbours in 10) close its surface in an image, where the
 //! back layer shows through a gap as the same colour, but not in a 2048² map, where the gaps of both layers let
 //! the sun through as specks all over the shadow (a 45 000-point donut). A disk of twice the size reaches every
-//! point within a voxel of a sample; the silhouette grows by half a splat, under a soft shadow's blur. A 3D Gaussian casts its opaque core, where its alpha, its opacity
-//! times its falloff, reaches one half: inside the ellipse d·Σ⁻¹·d ≤ 2·ln(2·opacity) of its projected
-//! covariance, so one under half opaque casts nothing. Either holds its centre's depth over its footprint, and a
+//! point within a voxel of a sample; the silhouette grows by half a splat, under a soft shadow's blur.
+//!
+//! A 3D Gaussian casts its opaque core, where its alpha, its opacity times its falloff, reaches one half: inside
+//! the ellipse d·Σ⁻¹·d ≤ 2·ln(2·opacity) of its projected covariance, so one under half opaque casts nothing. Either holds its centre's depth over its footprint, and a
 //! footprint that covers no texel's centre covers the texel its centre falls in, as images draw a point too
 //! small for its samples: a dense cloud's shadow has no holes however fine the map.
 
@@ -51,7 +52,7 @@ impl PointCasters {
 
     /// Half the widest reach of a point's footprint from its centre, in world units: how far past the points
     /// a map's bounds must reach (a cube's half diagonal).
-    pub(in crate::render::light) fn reach(&self) -> f32 {
+    fn reach(&self) -> f32 {
         self.size.map_or(0.0, |s| if self.cube { 0.5 * s * 3f32.sqrt() } else { 0.5 * s })
     }
 }
@@ -93,22 +94,23 @@ pub(in crate::render::light) fn bounds(scene: &PosedScene, points: PointCasters)
     out
 }
 
-/// The length of the longest column-combination of `f`: the largest standard deviation of the Gaussian whose
-/// covariance is F·Fᵀ, bounded by the Frobenius norm (cheap, and only a bound is needed).
+/// A bound on the largest standard deviation of the Gaussian whose covariance is F·Fᵀ: F's Frobenius norm
+/// (cheap, and only a bound is needed).
 fn longest_axis(f: Mat3) -> f32 {
     (f.x_axis.length_squared() + f.y_axis.length_squared() + f.z_axis.length_squared()).sqrt()
 }
 
-/// One point's footprint in a map: its centre (texels), depth, and shape there.
+/// One point's footprint in a map: its centre (texels), depth, and outline there.
 #[derive(Debug, Clone, Copy)]
 struct Footprint {
     centre: Vec2,
     depth: f32,
-    shape: Footprint2,
+    shape: Outline,
 }
 
+/// What a point covers of a map about its centre, in texels.
 #[derive(Debug, Clone, Copy)]
-enum Footprint2 {
+enum Outline {
     /// A box of these half sides.
     Box(Vec2),
     /// A disk of this radius.
@@ -117,94 +119,84 @@ enum Footprint2 {
     Ellipse { conic: [f32; 3], half: Vec2 },
 }
 
+/// Point `i` of point primitive `p` as a map sees it, `j0` and `j1` the map's texel axes as rows over world
+/// offsets about the point (the view's rotation through the projection's Jacobian there); `None` where it casts
+/// nothing.
+fn outline(j0: Vec3, j1: Vec3, p: &PosedPrimitive, i: usize, points: PointCasters) -> Option<Outline> {
+    Some(match &p.gaussians {
+        Some(g) => {
+            let opacity = g.data.opacities[i];
+            // (Not finite, or at most half opaque: no core.)
+            if opacity.is_nan() || opacity <= 0.5 {
+                return None;
+            }
+            // The core: α·exp(−m²/2) ≥ ½ ⇔ m² ≤ 2·ln(2α), with m² = d·Σ₂⁻¹·d and Σ₂ = (J·F)(J·F)ᵀ.
+            let f = g.to_world * g.data.factors[i];
+            let (u0, u1) = (f.transpose() * j0, f.transpose() * j1);
+            let (a, b, cc) = (u0.dot(u0), u0.dot(u1), u1.dot(u1));
+            let det = a * cc - b * b;
+            let k2 = 2.0 * (2.0 * opacity).ln();
+            if det.is_nan() || det <= 0.0 || !det.is_finite() {
+                return None;
+            }
+            // d·(Σ₂/k²)⁻¹·d ≤ 1; the box of that ellipse has half sides k·√Σ₂ₓₓ and k·√Σ₂ᵧᵧ.
+            let conic = [cc / (det * k2), -b / (det * k2), a / (det * k2)];
+            Outline::Ellipse { conic, half: Vec2::new((k2 * a).sqrt(), (k2 * cc).sqrt()) }
+        }
+        None => {
+            let s = points.size?;
+            if points.cube {
+                // The box about a world-aligned cube's projection: each axis's half edge through the map.
+                let h = 0.5 * s;
+                let half = |j: Vec3| h * (j.x.abs() + j.y.abs() + j.z.abs());
+                Outline::Box(Vec2::new(half(j0), half(j1)))
+            } else {
+                // A disk facing the light: its radius through the map (the larger of the two axes' scales,
+                // the same for a parallel map).
+                Outline::Disk(0.5 * s * j0.length().max(j1.length()))
+            }
+        }
+    })
+}
+
 impl ShadowMap {
     /// Draws the casting points of `scene` (see the module's header) into the depth map.
     pub(super) fn draw_points(&mut self, scene: &PosedScene, points: PointCasters) {
         // The view's rotation, row by row: world offsets about a point to the light's axes.
         let rot = Mat3::from_mat4(self.view);
-        let rows = [rot.row(0), rot.row(1), rot.row(2)];
+        let (r0, r1, r2) = (rot.row(0), rot.row(1), rot.row(2));
         let mut budget = COVER_BUDGET * (self.size as u64) * (self.size as u64);
         for p in scene.primitives.iter().filter(|p| casts(scene, p, points)) {
-            // Plain points under parallel light all have one footprint: found once (a cloud of half a million
-            // points is drawn into 33 maps a frame).
-            let first = p.positions.iter().position(|c| c.is_finite());
-            let parallel = matches!(self.projection, Projection::Ortho { .. }) && p.gaussians.is_none();
-            if let Some(shape) = first.filter(|_| parallel).and_then(|i| self.footprint(&rows, p, i, p.positions[i], points)) {
-                for &c in &p.positions {
-                    let q = self.view.transform_point3(c);
-                    let (centre, depth) = (self.light_space(q).truncate(), -q.z);
-                    if centre.is_finite() && depth.is_finite() {
-                        self.fill(&Footprint { centre, depth, shape: shape.shape }, &mut budget);
-                    }
+            // Under parallel light a plain point's outline is the same everywhere: found once (a cloud of half a
+            // million points is drawn into 33 maps a frame).
+            let fixed = match self.projection {
+                Projection::Ortho { scale, .. } if p.gaussians.is_none() => {
+                    outline(r0 * scale, r1 * scale, p, 0, points)
                 }
-                continue;
-            }
+                _ => None,
+            };
             for (i, &c) in p.positions.iter().enumerate() {
-                if let Some(f) = self.footprint(&rows, p, i, c, points) {
-                    self.fill(&f, &mut budget);
+                let q = self.view.transform_point3(c);
+                let (centre, depth) = (self.light_space(q).truncate(), -q.z);
+                if !centre.is_finite() || !depth.is_finite() {
+                    continue;
+                }
+                let shape = match (fixed, self.projection) {
+                    (Some(o), _) => Some(o),
+                    (None, Projection::Ortho { scale, .. }) => outline(r0 * scale, r1 * scale, p, i, points),
+                    // The projection's Jacobian at the centre: scaled by the depth, its rows through the depth's
+                    // change too.
+                    (None, Projection::Persp { focal }) if depth >= NEAR => {
+                        let k = focal / depth;
+                        outline(r0 * k + r2 * (k * q.x / depth), -(r1 * k + r2 * (k * q.y / depth)), p, i, points)
+                    }
+                    _ => None,
+                };
+                if let Some(shape) = shape {
+                    self.fill(&Footprint { centre, depth, shape }, &mut budget);
                 }
             }
         }
-    }
-
-    /// Point `i` (centre `c`) of point primitive `p` as this map sees it, `rows` its view's rotation row by row;
-    /// `None` where it casts nothing here.
-    fn footprint(&self, rows: &[Vec3; 3], p: &PosedPrimitive, i: usize, c: Vec3, points: PointCasters) -> Option<Footprint> {
-        if !c.is_finite() {
-            return None;
-        }
-        let q = self.view.transform_point3(c);
-        let depth = -q.z;
-        // The linear map from world offsets about the centre to texel offsets: the view's rotation, then the
-        // projection's Jacobian at the centre (a perspective map's scaled by the depth; its rows through the
-        // depth's change too).
-        let [r0, r1, r2] = *rows;
-        let (j0, j1) = match self.projection {
-            Projection::Ortho { scale, .. } => (r0 * scale, r1 * scale),
-            Projection::Persp { focal } => {
-                if depth < NEAR {
-                    return None;
-                }
-                let k = focal / depth;
-                (r0 * k + r2 * (k * q.x / depth), -(r1 * k + r2 * (k * q.y / depth)))
-            }
-        };
-        let centre = self.light_space(q).truncate();
-        let shape = match &p.gaussians {
-            Some(g) => {
-                let opacity = g.data.opacities[i];
-                // (Not finite, or at most half opaque: no core.)
-                if opacity.is_nan() || opacity <= 0.5 {
-                    return None;
-                }
-                // The core: α·exp(−m²/2) ≥ ½ ⇔ m² ≤ 2·ln(2α), with m² = d·Σ₂⁻¹·d and Σ₂ = (J·F)(J·F)ᵀ.
-                let f = g.to_world * g.data.factors[i];
-                let (u0, u1) = (f.transpose() * j0, f.transpose() * j1);
-                let (a, b, cc) = (u0.dot(u0), u0.dot(u1), u1.dot(u1));
-                let det = a * cc - b * b;
-                let k2 = 2.0 * (2.0 * opacity).ln();
-                if det.is_nan() || det <= 0.0 || !det.is_finite() {
-                    return None;
-                }
-                // d·(Σ₂/k²)⁻¹·d ≤ 1; the box of that ellipse has half sides k·√Σ₂ₓₓ and k·√Σ₂ᵧᵧ.
-                let conic = [cc / (det * k2), -b / (det * k2), a / (det * k2)];
-                Footprint2::Ellipse { conic, half: Vec2::new((k2 * a).sqrt(), (k2 * cc).sqrt()) }
-            }
-            None => {
-                let s = points.size?;
-                if points.cube {
-                    // The box about a world-aligned cube's projection: each axis's half edge through the map.
-                    let h = 0.5 * s;
-                    let half = |j: Vec3| h * (j.x.abs() + j.y.abs() + j.z.abs());
-                    Footprint2::Box(Vec2::new(half(j0), half(j1)))
-                } else {
-                    // A disk facing the light: its radius through the map (the larger of the two axes' scales,
-                    // the same for a parallel map).
-                    Footprint2::Disk(0.5 * s * j0.length().max(j1.length()))
-                }
-            }
-        };
-        (centre.is_finite() && depth.is_finite()).then_some(Footprint { centre, depth, shape })
     }
 
     /// Writes footprint `f`'s depth where it is nearer, over the texels whose centres it covers, or over the
@@ -215,9 +207,9 @@ impl ShadowMap {
     fn fill(&mut self, f: &Footprint, budget: &mut u64) {
         let n = self.size as i64;
         let half = match f.shape {
-            Footprint2::Box(h) => h,
-            Footprint2::Disk(r) => Vec2::splat(r),
-            Footprint2::Ellipse { half, .. } => half,
+            Outline::Box(h) => h,
+            Outline::Disk(r) => Vec2::splat(r),
+            Outline::Ellipse { half, .. } => half,
         };
         if half.x < 0.5 && half.y < 0.5 {
             // Narrower than a texel: the only centre it could cover is that of the texel its centre falls in,
@@ -241,9 +233,9 @@ impl ShadowMap {
             for x in x0..=x1 {
                 let d = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - f.centre;
                 let inside = match f.shape {
-                    Footprint2::Box(_) => true,
-                    Footprint2::Disk(r) => d.length_squared() <= r * r,
-                    Footprint2::Ellipse { conic: [a, b, c], .. } => a * d.x * d.x + 2.0 * b * d.x * d.y + c * d.y * d.y <= 1.0,
+                    Outline::Box(_) => true,
+                    Outline::Disk(r) => d.length_squared() <= r * r,
+                    Outline::Ellipse { conic: [a, b, c], .. } => a * d.x * d.x + 2.0 * b * d.x * d.y + c * d.y * d.y <= 1.0,
                 };
                 if inside {
                     any = true;
