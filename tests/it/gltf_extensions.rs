@@ -109,6 +109,43 @@ fn a_required_extension_vvgen_does_not_read_is_refused_with_the_way_out() {
     }
 }
 
+/// A file may require an extension vvgen reads whether or not it is required: shadeless materials (scans'
+/// exports require `KHR_materials_unlit`), the dielectric layer's IOR and colour, material variants (whose
+/// default look is the primitives' own materials) and animation pointers. Each builds and renders as the same
+/// file that only uses it (all four were refused with "does not read").
+#[test]
+fn a_required_extension_vvgen_reads_renders_as_the_file_that_only_uses_it() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let mut second = json["materials"][0].clone();
+    second["pbrMetallicRoughness"] = json!({"baseColorFactor": [1, 0, 0, 1]});
+    let cases = [
+        ("KHR_materials_unlit", json!({"KHR_materials_unlit": {}})),
+        ("KHR_materials_ior", json!({"KHR_materials_ior": {"ior": 1.33}})),
+        ("KHR_materials_specular", json!({"KHR_materials_specular": {"specularFactor": 0.5}})),
+        ("KHR_animation_pointer", json!({})),
+    ];
+    for (ext, material_ext) in cases {
+        let mut used = json.clone();
+        used["materials"][0]["extensions"] = material_ext;
+        used["extensionsUsed"] = json!([ext]);
+        let want = render_with(model(&used, &bin).path(), "", "pbr");
+        let mut required = used.clone();
+        required["extensionsRequired"] = json!([ext]);
+        let got = render_with(model(&required, &bin).path(), "", "pbr");
+        assert!(want.pixels().filter(|p| p[3] == 255).count() > 500, "{ext}: the box is in view");
+        assert_eq!(want, got, "{ext}: required, the file renders otherwise");
+    }
+    // Variants: a second, red material mapped to variant `red`; the default look is the texture's.
+    let mut variants = json.clone();
+    variants["materials"] = json!([json["materials"][0], second]);
+    variants["extensions"] = json!({"KHR_materials_variants": {"variants": [{"name": "red"}]}});
+    variants["meshes"][0]["primitives"][0]["extensions"] =
+        json!({"KHR_materials_variants": {"mappings": [{"material": 1, "variants": [0]}]}});
+    variants["extensionsUsed"] = json!(["KHR_materials_variants"]);
+    variants["extensionsRequired"] = json!(["KHR_materials_variants"]);
+    assert_eq!(render(model(&json, &bin).path()), render(model(&variants, &bin).path()), "variants: the default look");
+}
+
 /// BoxTextured quantized as gltfpack quantizes (`KHR_mesh_quantization`): positions as unnormalized 16-bit
 /// integers scaled back by their node, normals as normalized bytes, texture coordinates as unnormalized bytes.
 /// Every value dequantizes exactly, so its images are the float file's, unlit and lit; nothing rescales the

@@ -2,6 +2,7 @@
 //! `common` holds the fixtures they share. (The allocation-counting test is its own crate: it installs a global
 //! allocator.)
 
+mod animation_pointer;
 mod blend;
 mod build;
 mod clouds;

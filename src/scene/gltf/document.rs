@@ -8,6 +8,17 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_lights_punctual",
     "KHR_materials_pbrSpecularGlossiness",
+    // Shadeless materials (scans' and photogrammetry's exports use them) and the dielectric layer's IOR and
+    // specular colour: read as Blender's importer reads them (`super::materials`).
+    "KHR_materials_unlit",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    // Material variants (product configurators): the primitives' own materials are the default look, which
+    // viewers and Blender's importer show until a variant is chosen.
+    "KHR_materials_variants",
+    // Animation channels that target a JSON pointer: those at nodes and morph weights are followed, the others
+    // dropped with a warning (`super::pointer`).
+    "KHR_animation_pointer",
     // Integer attributes (gltfpack's and glTF-Transform's `quantize` default): the accessor decoder reads every
     // component type, normalized or not, as the spec allows; the dequantizing scale is the nodes' transform.
     "KHR_mesh_quantization",
@@ -22,11 +33,12 @@ const SUPPORTED_REQUIRED: &[&str] = &[
 
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
 /// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required
-/// `KHR_mesh_quantization`, `EXT_texture_webp`, `EXT_mesh_gpu_instancing` or `KHR_gaussian_splatting` (which gltf
-/// 1.4 calls unsupported). vvgen's own reference check
+/// `KHR_mesh_quantization`, `EXT_texture_webp`, `EXT_mesh_gpu_instancing`, `KHR_gaussian_splatting`,
+/// `KHR_materials_specular`, `KHR_materials_variants` or `KHR_animation_pointer` (which gltf 1.4 calls
+/// unsupported). Returns the document and what reading it set aside (dropped pointer channels). vvgen's own reference check
 /// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
 /// references.
-pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
     let (json, bin): (std::borrow::Cow<'_, [u8]>, _) = if bytes.starts_with(b"glTF") {
         let glb = gltf::Glb::from_slice(bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?;
         (glb.json, glb.bin)
@@ -42,7 +54,8 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
     super::validate::check(&doc)?;
     // After the check, whose messages name the file's own attributes.
     let splats = super::splats::rename(&mut doc)?;
-    let edited = webp_sources(&mut doc) | splats;
+    let followed = super::pointer::follow(&mut doc)?;
+    let edited = webp_sources(&mut doc) | scene_nodes(&mut doc) | splats | followed.changed;
     // The JSON is parsed again from the edited document only when there was something to edit.
     let read = |validate: bool| -> Result<gltf::Gltf, gltf::Error> {
         if !edited {
@@ -66,6 +79,9 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
                         "\"EXT_texture_webp\"",
                         "\"EXT_mesh_gpu_instancing\"",
                         "\"KHR_gaussian_splatting\"",
+                        "\"KHR_materials_specular\"",
+                        "\"KHR_materials_variants\"",
+                        "\"KHR_animation_pointer\"",
                     ]
                         .iter()
                         .any(|x| p.ends_with(x));
@@ -77,7 +93,21 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
         }
         other => other,
     };
-    parsed.map_err(|e| e.to_string())
+    parsed.map(|gltf| (gltf, followed.warnings)).map_err(|e| e.to_string())
+}
+
+/// Gives every scene without `nodes` an empty list: the spec makes the key optional (an empty scene, as
+/// Blender's exporter writes one), gltf 1.4 calls it a missing field. Returns whether anything changed.
+fn scene_nodes(doc: &mut serde_json::Value) -> bool {
+    let Some(scenes) = doc.get_mut("scenes").and_then(|s| s.as_array_mut()) else { return false };
+    let mut changed = false;
+    for scene in scenes.iter_mut().filter_map(|s| s.as_object_mut()) {
+        if !scene.contains_key("nodes") {
+            scene.insert("nodes".into(), serde_json::Value::Array(Vec::new()));
+            changed = true;
+        }
+    }
+    changed
 }
 
 /// Points every texture with an `EXT_texture_webp` image at that image (the extension's intent: a reader that
@@ -131,4 +161,17 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// A scene without `nodes` (Blender's exporter writes an empty scene so) is an empty scene, not an error.
+    #[test]
+    fn a_scene_without_nodes_is_empty() {
+        let json = br#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}, {"name": "Empty"}], "nodes": [{}]}"#;
+        let (gltf, notes) = super::parse(json).unwrap();
+        let counts: Vec<usize> = gltf.document.scenes().map(|s| s.nodes().count()).collect();
+        assert_eq!(counts, [1, 0]);
+        assert!(notes.is_empty());
+    }
 }

@@ -144,7 +144,7 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene
 
 /// [`load`] from the file's bytes; `path` names it in errors and locates its side-car files.
 pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene::Error> {
-    let gltf = super::document::parse(bytes).map_err(|e| err(path, e))?;
+    let (gltf, set_aside) = super::document::parse(bytes).map_err(|e| err(path, e))?;
     let doc = &gltf.document;
     let dir = crate::scene::input::folder_of(path);
     let mut buffers = Vec::new();
@@ -162,7 +162,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
         }
         buffers.push(data);
     }
-    let mut warnings = Vec::new();
+    let mut warnings = set_aside;
 
     // Textures: decode each image once; base colour and emissive use is sRGB.
     let mut images: Vec<Option<image::RgbaImage>> = vec![None; doc.images().len()];

@@ -6,6 +6,7 @@ mod document;
 mod instancing;
 pub mod load;
 mod materials;
+mod pointer;
 pub mod pose;
 mod spec_gloss;
 mod splats;

@@ -243,7 +243,8 @@ impl<'a> Checker<'a> {
                 if let Some(t) = ch.get("target") {
                     let p = format!("{p}.target");
                     self.index(t, "node", &p, "nodes");
-                    self.one_of(t, "path", &p, &strs(&["translation", "rotation", "scale", "weights"]));
+                    // `pointer`: `KHR_animation_pointer`'s, whose pointer `super::pointer` checks and follows.
+                    self.one_of(t, "path", &p, &strs(&["translation", "rotation", "scale", "weights", "pointer"]));
                 }
             }
             for (j, s) in items(a, "samplers").iter().enumerate() {
