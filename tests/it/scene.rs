@@ -651,3 +651,35 @@ fn surfaces_without_a_material_or_colours_are_blenders_grey() {
     let n = rest.materials.len();
     assert!(white(&rest.materials[n - 2]) && grey(&rest.materials[n - 1]));
 }
+
+/// A file without scenes is a library of nodes: vvgen shows its root nodes, as Blender's importer does (it
+/// said "no mesh"), and poses them as the file with its one scene. A scene without `nodes` is empty.
+#[test]
+fn a_file_without_scenes_shows_its_root_nodes() {
+    let text = std::fs::read_to_string(asset_path("gltf/BoxAnimated/BoxAnimated.gltf")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let with_scene = load("gltf/BoxAnimated/BoxAnimated.gltf");
+    let obj = json.as_object_mut().unwrap();
+    obj.remove("scene");
+    obj.remove("scenes");
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("no-scenes.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let without = gltf::load(&path, None).unwrap_or_else(|e| panic!("{e}"));
+    let mut roots = without.roots.clone();
+    roots.sort();
+    assert_eq!(roots, [0, 3], "the nodes no node holds");
+    let (a, b) = (pose(&with_scene, &[0], 0.7), pose(&without, &[0], 0.7));
+    let positions = |p: &PosedScene| p.primitives.iter().flat_map(|q| q.positions.clone()).collect::<Vec<Vec3>>();
+    let (mut pa, mut pb) = (positions(&a), positions(&b));
+    let key = |v: &Vec3| v.to_array().map(f32::to_bits);
+    pa.sort_by_key(key);
+    pb.sort_by_key(key);
+    assert!(!pa.is_empty() && pa == pb, "posed as the file with its scene");
+
+    json["scenes"] = serde_json::json!([{"name": "Empty"}]);
+    json["scene"] = serde_json::json!(0);
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let empty = gltf::load(&path, None).unwrap_or_else(|e| panic!("{e}"));
+    assert!(empty.roots.is_empty(), "an empty scene shows nothing");
+}

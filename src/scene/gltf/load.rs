@@ -355,6 +355,13 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
             .collect(),
         None => match doc.default_scene() {
             Some(s) => s.nodes().map(|n| n.index()).collect(),
+            // A file without scenes is a library of nodes (the spec leaves what to show to the reader): its
+            // root nodes, those no node holds as a child, as Blender's importer shows them.
+            None if doc.scenes().len() == 0 => {
+                let mut held = vec![false; doc.nodes().len()];
+                doc.nodes().flat_map(|n| n.children()).for_each(|c| held[c.index()] = true);
+                (0..held.len()).filter(|&i| !held[i]).collect()
+            }
             None => doc.scenes().flat_map(|s| s.nodes().map(|n| n.index()).collect::<Vec<_>>()).collect(),
         },
     };
