@@ -14,6 +14,11 @@ const NODE_PATHS: [&str; 4] = ["translation", "rotation", "scale", "weights"];
 /// How many dropped pointers a warning names before it counts the rest.
 const SHOWN: usize = 4;
 
+/// The most channels a document's mesh-weight pointers may become: one pointer becomes a channel per node
+/// showing the mesh, so a hostile file (10⁴ pointers at a mesh 10⁴ nodes show) would ask for 10⁸ (a crowd of
+/// instanced morphing characters needs a few thousand).
+const MAX_EXPANDED: usize = 1 << 18;
+
 /// What [`follow`] did to a document.
 #[derive(Debug, Default)]
 pub(super) struct Followed {
@@ -42,6 +47,7 @@ pub(super) fn follow(doc: &mut Value) -> Result<Followed, String> {
         by
     };
     let Some(animations) = doc.get_mut("animations").and_then(Value::as_array_mut) else { return Ok(out) };
+    let mut expanded = 0usize;
     for (a, anim) in animations.iter_mut().enumerate() {
         let name = anim.get("name").and_then(Value::as_str).map(|n| format!(" (`{n}`)")).unwrap_or_default();
         let Some(channels) = anim.get_mut("channels").and_then(Value::as_array_mut) else { continue };
@@ -73,6 +79,14 @@ pub(super) fn follow(doc: &mut Value) -> Result<Followed, String> {
                         let meshes = shown_by.len();
                         return Err(format!("{at}: its pointer `{pointer}` names mesh {m}; the file has {meshes} meshes"));
                     };
+                    expanded += shown.len();
+                    if expanded > MAX_EXPANDED {
+                        return Err(format!(
+                            "{at}: its pointer `{pointer}` animates the weights of mesh {m}, which {} nodes show; the \
+                             file's mesh-weight pointers would become over {MAX_EXPANDED} channels",
+                            shown.len()
+                        ));
+                    }
                     kept.extend(shown.iter().map(|&n| core(&channel, n, "weights")));
                 }
                 None => dropped.push(pointer),
@@ -192,6 +206,11 @@ mod tests {
             let e = follow(&mut doc).unwrap_err();
             assert!(e.contains(says), "{e}");
         }
+        // A mesh that 600 nodes show, pointed at 600 times: 360 000 channels, past the bound.
+        let mut doc = json!({"nodes": vec![json!({"mesh": 0}); 600], "meshes": [{}],
+            "animations": [{"channels": vec![channel("/meshes/0/weights", 0); 600], "samplers": []}]});
+        let e = follow(&mut doc).unwrap_err();
+        assert!(e.contains("which 600 nodes show") && e.contains("over 262144 channels"), "{e}");
         // Not indices: `/nodes/-1/…`, `/nodes/01x/…`, and what a pointer escapes.
         for odd in ["/nodes/-1/rotation", "/nodes/1x/rotation", "/nodes/0/rotation/0", "nodes/0/rotation"] {
             assert!(target(odd).is_none(), "{odd}");
