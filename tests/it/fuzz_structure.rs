@@ -1,7 +1,7 @@
 //! Structure-aware glTF fuzzing (issue 50): each execution parses a seed's JSON, changes its structure (an
 //! accessor's type, component type, count, normalization or offsets; a bufferView's stride, length or offset;
 //! sparse data with and without a bufferView; attributes pointed at other accessors; removed or duplicated
-//! properties; cameras, skins, animations), writes it back, and loads, poses and renders it as `check`,
+//! properties; cameras, skins, animations, animation pointers), writes it back, and loads, poses and renders it as `check`,
 //! `inspect` and `build` do.
 //!
 //! Executions run in child processes (this test binary again, as `worker`) under an address-space limit set
@@ -192,6 +192,24 @@ fn mutate(rng: &mut Rng, doc: &mut Value) {
             let accessor = index_into(rng, &snapshot, "accessors");
             let Some(anims) = entries(doc, "animations") else { return };
             let a = rng.below(anims.len());
+            // Half the time: a channel retargeted through `KHR_animation_pointer`, at a node's property, a mesh's
+            // weights, a material, or nothing a pointer can name (indices from `number`).
+            if rng.below(2) == 0 {
+                if let Some(c) = anims[a].get_mut("channels").and_then(Value::as_array_mut).filter(|c| !c.is_empty()) {
+                    let i = rng.below(c.len());
+                    let k = number(rng);
+                    let pointer = match rng.below(5) {
+                        0 => format!("/nodes/{k}/{}", rng.pick(&["translation", "rotation", "scale", "weights"])),
+                        1 => format!("/meshes/{k}/weights"),
+                        2 => format!("/materials/{k}/pbrMetallicRoughness/baseColorFactor"),
+                        3 => format!("/nodes/{k}"),
+                        _ => String::new(),
+                    };
+                    c[i]["target"] =
+                        json!({"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": pointer}}});
+                }
+                return;
+            }
             if let Some(s) = anims[a].get_mut("samplers").and_then(Value::as_array_mut).filter(|s| !s.is_empty()) {
                 let i = rng.below(s.len());
                 match rng.below(3) {
