@@ -100,20 +100,23 @@ struct Described {
     note: String,
     /// Its first frame at rest.
     rest: scene::PosedScene,
-    /// A PLY's `origin`, when its coordinates are far from zero for its size ([`far_origin`]).
+    /// A PLY's or OBJ's `origin`, when its coordinates are far from zero for its size ([`far_origin`]).
     origin: Option<[f64; 3]>,
 }
 
-/// A PLY file at rest, read relative to its `origin` when its coordinates are far from zero for its size.
-fn ply_at_rest(path: &Path) -> anyhow::Result<(scene::PosedScene, Option<[f64; 3]>)> {
-    let s = scene::source::ply_scene(path)?;
+/// A PLY or OBJ file at rest, read relative to its `origin` when its coordinates are far from zero for its size.
+fn mesh_at_rest(path: &Path) -> anyhow::Result<(scene::PosedScene, Option<[f64; 3]>)> {
+    let obj = scene::source::is_obj(path);
+    let read = |o: [f64; 3]| if obj { scene::obj::scene_at(path, o) } else { scene::source::ply_scene_at(path, o) };
+    let s = read([0.0; 3])?;
     Ok(match far_origin(&s) {
-        Some(o) => (scene::source::ply_scene_at(path, o)?, Some(o)),
+        Some(o) => (read(o)?, Some(o)),
         None => (s, None),
     })
 }
 
-/// The asset's kind, its up axis, a line saying how that was decided, its first frame at rest, and a PLY's origin.
+/// The asset's kind, its up axis, a line saying how that was decided, its first frame at rest, and a PLY's or
+/// OBJ's origin.
 fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
     let ext = |p: &Path| p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     if asset.is_dir() {
@@ -130,7 +133,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             _ => ("mesh_sequence", "obj"),
         };
         let first = files.iter().find(|p| ext(p) == e).expect("counted above");
-        let (frame, origin) = if e == "obj" { (scene::obj::scene(first)?, None) } else { ply_at_rest(first)? };
+        let (frame, origin) = mesh_at_rest(first)?;
         drawable(&frame, first)?;
         let (up, why) = if e == "obj" { obj_up() } else { tallest(&frame, first) };
         let n = count(e);
@@ -208,17 +211,17 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             Ok(Described { kind: Asset::Blend { info }, up: "z", note, rest: first, origin: None })
         }
         "ply" => {
-            let (s, origin) = ply_at_rest(asset)?;
+            let (s, origin) = mesh_at_rest(asset)?;
             drawable(&s, asset)?;
             let (up, note) = cameras_up(&s, asset).unwrap_or_else(|| tallest(&s, asset));
             Ok(Described { kind: Asset::Mesh, up, note, rest: s, origin })
         }
         "obj" => {
-            let s = scene::obj::scene(asset)?;
+            let (s, origin) = mesh_at_rest(asset)?;
             drawable(&s, asset)?;
             let (up, why) = obj_up();
             // One OBJ is a static mesh (`mesh`), as one PLY is; a folder of them is a sequence.
-            Ok(Described { kind: Asset::Mesh, up, note: why, rest: s, origin: None })
+            Ok(Described { kind: Asset::Mesh, up, note: why, rest: s, origin })
         }
         _ => match scene::source::way_out_of(asset) {
             Some(way_out) => bail!("{way_out}"),
@@ -289,7 +292,7 @@ fn flat_colours(s: &scene::PosedScene) -> Option<usize> {
     Some(if colours.len() == 1 && textures.is_empty() { 0 } else { colours.len() })
 }
 
-/// The point to read a PLY's coordinates relative to (`origin`), when they lie so far from zero for the
+/// The point to read a PLY's or OBJ's coordinates relative to (`origin`), when they lie so far from zero for the
 /// subject's size that single precision would step its shape ([`crate::scene::transform::Stats::coarse_step`]):
 /// the middle of its bounds, in whole units.
 fn far_origin(s: &scene::PosedScene) -> Option<[f64; 3]> {
@@ -303,7 +306,7 @@ fn far_origin(s: &scene::PosedScene) -> Option<[f64; 3]> {
 struct Look {
     /// Flat colours, and how many ([`flat_colours`]): written lit.
     flat: Option<usize>,
-    /// The PLY's `origin`, when its coordinates are far from zero ([`far_origin`]).
+    /// The PLY's or OBJ's `origin`, when its coordinates are far from zero ([`far_origin`]).
     origin: Option<[f64; 3]>,
     /// A splatting model's training cameras ([`training_cameras`]), relative to the manifest: offered, commented,
     /// as a rig.

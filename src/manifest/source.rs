@@ -53,10 +53,10 @@ pub struct Source {
     pub(super) frames: Option<Spanned<Frames>>,
     /// A transform applied to this source alone, before the global `[transform]`.
     pub transform: Option<Transform>,
-    /// A point subtracted from a PLY file's coordinates as they are read, in double precision: a scan in
+    /// A point subtracted from a PLY or OBJ file's coordinates as they are read, in double precision: a scan in
     /// georeferenced coordinates (millions of metres from the origin) read relative to a point near it keeps
-    /// detail that single precision, which positions are held in, would step (0.25 m at 4 000 km). For PLY files:
-    /// `mesh`, `ply_sequence`, and `mesh_sequence` of `.ply` frames.
+    /// detail that single precision, which positions are held in, would step (0.25 m at 4 000 km). For PLY and
+    /// OBJ files: `mesh`, `ply_sequence`, and `mesh_sequence` of `.ply` or `.obj` frames.
     #[schemars(with = "Option<[f64; 3]>")]
     pub(super) origin: Option<Spanned<[f64; 3]>>,
 }
@@ -214,18 +214,19 @@ impl Source {
             }
         }
         if let (Some(o), Some((kind, file))) = (&self.origin, self.kind_spanned()) {
-            let ply = |f: &str| f.to_ascii_lowercase().ends_with(".ply");
-            let reads_ply = match kind {
+            let decimals = |f: &str| [".ply", ".obj"].iter().any(|e| f.to_ascii_lowercase().ends_with(e));
+            let reads_decimals = match kind {
                 SourceKind::PlySequence => true,
-                SourceKind::Mesh | SourceKind::MeshSequence => ply(file.get_ref()),
+                SourceKind::Mesh | SourceKind::MeshSequence => decimals(file.get_ref()),
                 _ => false,
             };
             if !o.get_ref().iter().all(|v| v.is_finite()) {
                 diags.push(Diagnostic::error("`origin` must be three finite numbers", Some(o.span())));
-            } else if !reads_ply {
+            } else if !reads_decimals {
                 diags.push(
                     Diagnostic::error(
-                        "`origin` applies to PLY files, whose coordinates may be doubles; this source reads none",
+                        "`origin` applies to PLY and OBJ files, whose coordinates may hold more digits than single \
+                         precision; this source reads neither",
                         Some(o.span()),
                     )
                     .with_help("to move this source, use `transform = { translate = [x, y, z] }`"),

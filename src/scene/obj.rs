@@ -23,6 +23,72 @@ fn at(path: &Path, line: usize, message: String) -> Error {
     Error::Mesh { path: path.to_path_buf(), line: Some(line), message }
 }
 
+/// An OBJ's lines with `origin` subtracted from each vertex position (`v x y z …`, the rest of the line kept), in
+/// double precision, written back in the shortest decimals that read as the difference: what tobj then parses to
+/// single precision is the position relative to `origin`. One line is held at a time.
+struct Shifted<R> {
+    inner: R,
+    origin: [f64; 3],
+    line: Vec<u8>,
+    at: usize,
+}
+
+impl<R: std::io::BufRead> Shifted<R> {
+    fn new(inner: R, origin: [f64; 3]) -> Self {
+        Shifted { inner, origin, line: Vec::new(), at: 0 }
+    }
+
+    /// `line` with its position shifted, when it is a vertex line whose first three values are numbers;
+    /// anything else as it was (tobj reports what it cannot read).
+    fn shift(&self, line: &[u8]) -> Option<Vec<u8>> {
+        let text = std::str::from_utf8(line).ok()?;
+        let rest = text.strip_prefix('v')?;
+        if !rest.starts_with([' ', '\t']) {
+            return None;
+        }
+        let mut words = rest.split_ascii_whitespace();
+        let mut out = String::from("v");
+        for o in self.origin {
+            let v: f64 = words.next()?.parse().ok()?;
+            out.push_str(&format!(" {}", v - o));
+        }
+        for w in words {
+            out.push(' ');
+            out.push_str(w);
+        }
+        out.push('\n');
+        Some(out.into_bytes())
+    }
+}
+
+impl<R: std::io::BufRead> std::io::Read for Shifted<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let got = std::io::BufRead::fill_buf(self)?;
+        let n = got.len().min(buf.len());
+        buf[..n].copy_from_slice(&got[..n]);
+        std::io::BufRead::consume(self, n);
+        Ok(n)
+    }
+}
+
+impl<R: std::io::BufRead> std::io::BufRead for Shifted<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        if self.at == self.line.len() {
+            self.line.clear();
+            self.at = 0;
+            self.inner.read_until(b'\n', &mut self.line)?;
+            if let Some(shifted) = self.shift(&self.line) {
+                self.line = shifted;
+            }
+        }
+        Ok(&self.line[self.at..])
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.at = (self.at + n).min(self.line.len());
+    }
+}
+
 /// Checks an OBJ's face indices, `mtllib` files and their `map_Kd` textures, naming file and line of the first
 /// problem; returns the files the OBJ depends on (MTL files, then textures), in the order named.
 pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
@@ -186,6 +252,13 @@ fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
 /// An OBJ frame as a posed scene in source space: one primitive per object, one material per MTL material (as
 /// Blender 4.5's importer builds it: [`mtl`]), drawn double-sided (captures rarely wind consistently).
 pub fn scene(path: &Path) -> Result<PosedScene, Error> {
+    scene_at(path, [0.0; 3])
+}
+
+/// [`scene`] with `origin` subtracted from the vertex positions as their lines are read, in double precision:
+/// photogrammetry exports (OpenDroneMap's, a drone survey's) write positions in georeferenced metres, whose
+/// decimals hold detail that single precision, which positions are held in, steps (0.25 m at 4 000 km).
+pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     scan(path)?;
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
     let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
@@ -200,9 +273,14 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
         folders.borrow_mut().extend(std::iter::repeat_n(crate::scene::input::folder_of(&file).to_path_buf(), loaded.0.len()));
         Ok(loaded)
     };
-    let mut reader =
+    let reader =
         std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?);
-    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, load_library).map_err(|e| fail(e.to_string()))?;
+    let (models, materials) = if origin == [0.0; 3] {
+        tobj::load_obj_buf(&mut { reader }, &options, load_library)
+    } else {
+        tobj::load_obj_buf(&mut Shifted::new(reader, origin), &options, load_library)
+    }
+    .map_err(|e| fail(e.to_string()))?;
     let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
     let folders = folders.into_inner();
     let mut images = mtl::Images::default();

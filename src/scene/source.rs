@@ -108,7 +108,7 @@ impl LoadedSource {
                 )
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
-            SourceFile::Mesh { path, .. } if is_obj(path) => SourceData::Static(super::obj::scene(path)?),
+            SourceFile::Mesh { path, .. } if is_obj(path) => SourceData::Static(super::obj::scene_at(path, req.origin)?),
             SourceFile::Mesh { path, scene } => {
                 if let Some(message) = way_out_of(path) {
                     return Err(Error::Source { name, message });
@@ -325,12 +325,12 @@ pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
     mesh_frame_at(path, [0.0; 3])
 }
 
-/// [`mesh_frame`] with `origin` subtracted from a PLY frame's coordinates as they are read (the manifest
-/// allows `origin` only where the frames are PLY).
+/// [`mesh_frame`] with `origin` subtracted from a PLY or OBJ frame's coordinates as they are read (the manifest
+/// allows `origin` only where the frames are PLY or OBJ).
 fn mesh_frame_at(path: &std::path::Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
-        "obj" => super::obj::scene(path),
+        "obj" => super::obj::scene_at(path, origin),
         "ply" => ply_scene_at(path, origin),
         _ => match way_out_of(path) {
             Some(message) => Err(Error::Mesh { path: path.to_path_buf(), line: None, message }),

@@ -71,7 +71,7 @@ impl Stats {
     }
 
     /// The warning for points whose [`Stats::coarse_step`] is too coarse, with the way out: the `origin` to set
-    /// on a PLY source (the middle of the bounds in whole units; `to_file` maps the points' space back to the
+    /// on a PLY or OBJ source (the middle of the bounds in whole units; `to_file` maps the points' space back to the
     /// file's), else moving the file near zero where it is made.
     pub fn far_from_origin(&self, to_file: DMat4) -> Option<String> {
         let step = self.coarse_step()?;
@@ -81,7 +81,7 @@ impl Stats {
         Some(format!(
             "its coordinates lie around ({:.1}, {:.1}, {:.1}) and span {extent:.3}: in single precision, which \
              vvgen (like Blender) holds positions in, they are {step} apart there ({:.2} % of that span), so its \
-             shape comes in steps. A PLY file of doubles: set `origin = [{:.0}, {:.0}, {:.0}]` on the source, \
+             shape comes in steps. A PLY file of doubles or an OBJ: set `origin = [{:.0}, {:.0}, {:.0}]` on the source, \
              subtracted as it is read; otherwise move it near the origin where it is made (CloudCompare offers a \
              global shift on import)",
             c.x,

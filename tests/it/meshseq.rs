@@ -278,3 +278,67 @@ fn a_gltf_frame_is_keyed_by_the_buffers_beside_it() {
     std::fs::write(d.join("seq/tri.bin"), triangle(1.0)).unwrap();
     assert_eq!(run(d).ran(Kind::RenderPass), 2, "the buffer changed, the JSON did not");
 }
+
+/// An OBJ in georeferenced coordinates (a photogrammetry export, UTM metres) is read relative to its `origin`
+/// in double precision, as a PLY is: the positions are the same file's near zero, vertex colours kept; without
+/// the origin, single precision steps them. `vvgen new` sets the origin, and `check` takes it on a `mesh` and on
+/// a `mesh_sequence` of OBJ frames.
+#[test]
+fn an_obj_far_from_the_origin_is_read_relative_to_its_origin() {
+    let d = tempfile::tempdir().unwrap();
+    let d = d.path();
+    // A 5 × 5 bumpy sheet with vertex colours, in dyadic metres (exact in decimal and in binary), written at `at`.
+    let write = |file: &str, at: [f64; 3]| {
+        let mut text = String::new();
+        for j in 0..5 {
+            for i in 0..5 {
+                let (x, y, z) = (i as f64 * 0.125, j as f64 * 0.125, ((i * 7 + j * 3) % 5) as f64 * 0.015625);
+                let c = (i + j) as f64 / 8.0;
+                text += &format!("v {:.6} {:.6} {:.6} {c} 0.5 {}\n", at[0] + x, at[1] + y, at[2] + z, 1.0 - c);
+            }
+        }
+        for j in 0..4 {
+            for i in 0..4 {
+                let a = j * 5 + i + 1;
+                text += &format!("f {} {} {}\nf {} {} {}\n", a, a + 1, a + 6, a, a + 6, a + 5);
+            }
+        }
+        std::fs::write(d.join(file), text).unwrap();
+    };
+    let far = [500_001.0, 4_000_001.0, 100.0];
+    write("local.obj", [0.0; 3]);
+    write("utm.obj", far);
+    let read = |file: &str, o: [f64; 3]| {
+        let s = vvgen::scene::obj::scene_at(&d.join(file), o).unwrap();
+        (s.primitives[0].positions.clone(), s.primitives[0].colors.clone())
+    };
+    let (near, near_colours) = read("local.obj", [0.0; 3]);
+    let (shifted, colours) = read("utm.obj", far);
+    assert_eq!(near.len(), 25, "the sheet's vertices");
+    assert_eq!(near, shifted, "read relative to its origin, the scan is the sheet near zero");
+    assert_eq!(near_colours, colours, "vertex colours kept");
+    let (stepped, _) = read("utm.obj", [0.0; 3]);
+    let o = glam::Vec3::new(far[0] as f32, far[1] as f32, far[2] as f32);
+    let lost = near.iter().zip(&stepped).map(|(a, b)| (*a - (*b - o)).abs().max_element()).fold(0.0, f32::max);
+    assert!(lost > 0.05, "without the origin the scan is stepped: {lost}");
+
+    let vvgen = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (code, err) = vvgen(&["new", "utm.obj", "-o", "new.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+    let text = std::fs::read_to_string(d.join("new.toml")).unwrap();
+    assert!(text.contains("origin = [500001, 4000001, 100]"), "{text}");
+    let (code, err) = vvgen(&["check", "new.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("single precision"), "{err}");
+    std::fs::create_dir(d.join("seq")).unwrap();
+    std::fs::copy(d.join("utm.obj"), d.join("seq/f_000.obj")).unwrap();
+    let seq = "[dataset]\nname = \"s\"\nout = \"out\"\n[source.s]\nmesh_sequence = \"seq/f_*.obj\"\n\
+               origin = [500001, 4000001, 100]\n[rig.h]\nkind = \"hemisphere\"\n[split.train]\nrig = \"h\"\n\
+               views = 2\n[output.d]\nwriter = \"dnerf\"\n";
+    std::fs::write(d.join("seq.toml"), seq).unwrap();
+    let (code, err) = vvgen(&["check", "seq.toml"]);
+    assert_eq!(code, Some(0), "{err}");
+}

@@ -299,7 +299,7 @@ fn a_scan_far_from_the_origin_is_warned_about_and_read_relative_to_its_origin() 
     );
     let (code, err) = run(&["check", "box.toml"]);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("`origin` applies to PLY files") && err.contains("translate"), "{err}");
+    assert!(err.contains("`origin` applies to PLY and OBJ files") && err.contains("translate"), "{err}");
 
     // `vvgen new` sets it.
     let (code, err) = run(&["new", "utm.ply", "-o", "new.toml"]);
