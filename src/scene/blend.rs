@@ -218,11 +218,14 @@ impl<'a> Importer<'a> {
         args["out"] = serde_json::Value::String(out_dir.to_string_lossy().into_owned());
         // `--factory-startup`: no user preferences or add-ons shape the export. `--disable-autoexec`: a file's
         // own Python (startup scripts, scripted drivers) never runs; Blender's simple driver expressions still do.
-        let out = Command::new(exe)
-            .args(["-b", "--factory-startup", "--disable-autoexec", "-noaudio"])
-            .arg(blend)
-            .arg("--python")
-            .arg(&script)
+        let mut command = Command::new(exe);
+        if is_python(exe) {
+            // The `bpy` module starts with factory settings; the file is opened without its scripts.
+            command.arg("-c").arg(OPEN_THEN_RUN).arg(blend).arg(&script);
+        } else {
+            command.args(["-b", "--factory-startup", "--disable-autoexec", "-noaudio"]).arg(blend).arg("--python").arg(&script);
+        }
+        let out = command
             .arg("--")
             .arg(args.to_string())
             .stdin(Stdio::null())
@@ -266,11 +269,18 @@ impl<'a> Importer<'a> {
         Ok(Imported { dir, info, ran: true })
     }
 
-    /// Blender's version (`blender --version`), remembered per content of the executable.
+    /// Blender's version (`blender --version`), remembered per content of the executable; a Python's `bpy`
+    /// version, remembered per content of the module's library in a virtual environment's `site-packages`
+    /// (the Python's own executable is the same whichever `bpy` it has), else asked on every build.
     fn version(&self, exe: &Path) -> Result<String, String> {
         let derive = || -> Result<String, String> {
-            let out = Command::new(exe)
-                .arg("--version")
+            let mut command = Command::new(exe);
+            if is_python(exe) {
+                command.arg("-c").arg(PRINT_VERSION);
+            } else {
+                command.arg("--version");
+            }
+            let out = command
                 .stdin(Stdio::null())
                 .output()
                 .map_err(|e| format!("cannot run Blender ({}): {e}", exe.display()))?;
@@ -281,12 +291,23 @@ impl<'a> Importer<'a> {
                 .map(str::trim)
                 .filter(|l| l.starts_with("Blender ") || l.starts_with("build hash"))
                 .collect();
+            if is_python(exe) && (!out.status.success() || lines.is_empty()) {
+                return Err(format!(
+                    "{} cannot import Blender's `bpy` module: install it there (`pip install bpy==4.5.*`, which \
+                     needs Python 3.11), or name Blender itself in VVGEN_BLENDER",
+                    exe.display()
+                ));
+            }
             if !out.status.success() || lines.is_empty() {
                 return Err(format!("{} --version did not print a Blender version: is it Blender?", exe.display()));
             }
             Ok(lines.join("; "))
         };
-        self.stat.derived("blender --version", exe, derive).map_err(|e| format!("{}: {e}", exe.display()))?
+        let keyed_by = if is_python(exe) { bpy_library(exe) } else { Some(exe.to_path_buf()) };
+        match keyed_by {
+            Some(p) => self.stat.derived("blender --version", &p, derive).map_err(|e| format!("{}: {e}", p.display()))?,
+            None => derive(),
+        }
     }
 }
 
@@ -388,7 +409,8 @@ fn newer_hint(blend: &Path, version: &str) -> String {
     match (file, ours) {
         (Some(f), Some(o)) if f > o => format!(
             "\n  the file was saved by Blender {}.{} and this is Blender {}.{}: run a Blender at least as new \
-             (VVGEN_BLENDER=/path/to/blender)",
+             (VVGEN_BLENDER=/path/to/blender, or a Python with `pip install bpy==4.5.*`: \
+             VVGEN_BLENDER=/path/to/venv/bin/python)",
             f.0, f.1, o.0, o.1
         ),
         _ => String::new(),
@@ -397,8 +419,9 @@ fn newer_hint(blend: &Path, version: &str) -> String {
 
 /// What to do without a Blender: install one, point at it, or export glTF from it.
 const WAYS_OUT: &str = "install Blender (Debian/Ubuntu: apt install blender python3-numpy; or blender.org) and put \
-                        it on the PATH or in VVGEN_BLENDER; or, in Blender, File > Export > glTF 2.0 and use \
-                        `gltf = \"….glb\"` instead";
+                        it on the PATH or in VVGEN_BLENDER, or name a Python with Blender's module in VVGEN_BLENDER \
+                        (`pip install bpy==4.5.*` in a Python 3.11 venv: VVGEN_BLENDER=/path/to/venv/bin/python); \
+                        or, in Blender, File > Export > glTF 2.0 and use `gltf = \"….glb\"` instead";
 
 /// Why no Blender can read a `.blend`; its message names the ways out.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -409,6 +432,40 @@ pub enum NoBlender {
     /// No `blender` executable is on the `PATH`.
     #[error("a .blend needs Blender to read it, and none is on the PATH: {WAYS_OUT}")]
     NotOnPath,
+}
+
+/// What a Python with `bpy` runs in place of `blender -b FILE --python SCRIPT`: opens the file by its absolute
+/// path (as Blender's command line makes it) with its own scripts off, as `--disable-autoexec` keeps them,
+/// then runs the export script, which reads its arguments
+/// after `--` as it does inside Blender. Arguments: FILE SCRIPT -- JSON.
+const OPEN_THEN_RUN: &str = "import os, runpy, sys, bpy\n\
+    bpy.ops.wm.open_mainfile(filepath=os.path.abspath(sys.argv[1]), load_ui=False, use_scripts=False)\n\
+    runpy.run_path(sys.argv[2], run_name='__main__')\n";
+
+/// What a Python with `bpy` prints in place of `blender --version`: the lines vvgen keys imports by.
+const PRINT_VERSION: &str = "import bpy\n\
+    print('Blender', bpy.app.version_string)\n\
+    print('build hash:', bpy.app.build_hash.decode())\n";
+
+/// Whether `exe` is a Python with Blender's `bpy` module (the PyPI wheel: `pip install bpy==4.5.*` brings a
+/// current Blender where the system's is old, as Debian 12's 3.4 is) rather than Blender: its name says so
+/// (`python`, `python3`, `python3.11`).
+pub fn is_python(exe: &Path) -> bool {
+    exe.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("python"))
+}
+
+/// The `bpy` module's library beside a virtual environment's Python (`…/bin/python` →
+/// `…/lib/python3.X/site-packages/bpy/__init__….so`), which names the `bpy` that Python runs.
+fn bpy_library(exe: &Path) -> Option<PathBuf> {
+    let lib = exe.parent()?.parent()?.join("lib");
+    let pythons = std::fs::read_dir(lib).ok()?.filter_map(|e| e.ok().map(|e| e.path()));
+    let mut found: Vec<PathBuf> = pythons
+        .filter_map(|p| std::fs::read_dir(p.join("site-packages/bpy")).ok())
+        .flat_map(|d| d.filter_map(|e| e.ok().map(|e| e.path())))
+        .filter(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("__init__") && n.ends_with(".so")))
+        .collect();
+    found.sort();
+    found.pop()
 }
 
 /// The Blender to run: `VVGEN_BLENDER`, else `blender` on the PATH.

@@ -29,6 +29,16 @@ def animated():
     return False
 
 
+def exporter_options(bpy, options):
+    """The glTF exporter's options as this Blender's exporter names them. Blender 4.2 replaced `export_colors`
+    (every mesh's colour attribute) with `export_vertex_color`, whose "ACTIVE" exports the active one whether or
+    not a material reads it; 4.x refused the old name."""
+    names = bpy.ops.export_scene.gltf.get_rna_type().properties.keys()
+    if "export_colors" not in names and "export_vertex_color" in names:
+        options["export_vertex_color"] = "ACTIVE" if options.pop("export_colors") else "NONE"
+    return options
+
+
 def fail(message):
     sys.stderr.write("vvgen: " + message + "\n")
     sys.stderr.flush()
@@ -132,7 +142,7 @@ def main():
     for i, f in enumerate(frames):
         scene.frame_set(f)
         path = os.path.join(out, "frame_%05d.gltf" % i)
-        result = bpy.ops.export_scene.gltf(
+        result = bpy.ops.export_scene.gltf(**exporter_options(bpy, dict(
             filepath=path,
             export_format="GLTF_SEPARATE",
             export_texture_dir="textures",
@@ -154,7 +164,7 @@ def main():
             export_lights=False,
             export_extras=False,
             export_image_format="AUTO",
-        )
+        )))
         if "FINISHED" not in result or not os.path.isfile(path):
             fail("Blender's glTF exporter failed at frame %d" % f)
         if i == 0:

@@ -205,3 +205,78 @@ fn blend_errors_name_the_file_and_the_way_out() {
     let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
     assert_eq!(code, 0, "{err}");
 }
+
+/// A Python with Blender's `bpy` module (the PyPI wheel: a current Blender where the system's is old) in
+/// `VVGEN_BLENDER` imports a `.blend` as Blender does: it opens the file, then runs the same export. Played here
+/// by Blender's own Python (`bpy` is `bpy`), behind a `python3` that runs `-c CODE ARGS…` inside Blender: the
+/// images are the Blender binary's, byte for byte. A Python without `bpy` is refused, saying how to add it.
+#[test]
+fn a_python_with_bpy_imports_a_blend_as_blender_does() {
+    let Some(blender) = blender() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let (by_blender, by_python) = (tmp.path().join("blender"), tmp.path().join("python"));
+    std::fs::create_dir_all(&by_blender).unwrap();
+    if make_scene(&blender, &by_blender).is_none() {
+        return;
+    }
+    // The scene with what it reads (its linked library, its texture).
+    std::fs::create_dir_all(&by_python).unwrap();
+    for f in std::fs::read_dir(&by_blender).unwrap().map(|e| e.unwrap().path()) {
+        std::fs::copy(&f, by_python.join(f.file_name().unwrap())).unwrap();
+    }
+    let bin = tmp.path().join("venv/bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let python = bin.join("python3");
+    let code = bin.join("code.py");
+    let expr = format!(
+        "import sys; sys.argv = ['-c'] + sys.argv[sys.argv.index('--') + 1:]; exec(compile(open('{}').read(), '<string>', 'exec'))",
+        code.display()
+    );
+    let script = format!(
+        "#!/bin/sh\n[ \"$1\" = -c ] || exit 64\nprintf '%s' \"$2\" > '{}'\nshift 2\nexec '{}' -b --factory-startup -noaudio \
+         --python-expr \"{expr}\" -- \"$@\"\n",
+        code.display(),
+        blender.display(),
+    );
+    std::fs::write(&python, script).unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&python, std::fs::Permissions::from_mode(0o755)).unwrap();
+
+    let images = |d: &Path, exe: &Path| -> Vec<Vec<u8>> {
+        write_manifest(d, "frames = { start = 1, end = 3 }");
+        let (code, err) = vvgen(d, &["build", "m.toml"], exe);
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("scene.blend with Blender "), "{err}");
+        // Every PNG the dataset holds, in path order.
+        let (mut files, mut dirs) = (Vec::new(), vec![d.join("out")]);
+        while let Some(dir) = dirs.pop() {
+            for p in std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()) {
+                match p.extension().and_then(|e| e.to_str()) {
+                    _ if p.is_dir() => dirs.push(p),
+                    Some("png") => files.push(p),
+                    _ => {}
+                }
+            }
+        }
+        files.sort();
+        assert!(files.len() >= 9, "three frames, three views: {files:?}");
+        files.iter().map(|f| std::fs::read(f).unwrap()).collect()
+    };
+    assert!(images(&by_python, &python) == images(&by_blender, &blender), "the Python route renders otherwise");
+
+    // A Python without `bpy`: the system's, under a name that says Python.
+    let Some(system) = std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
+        .map(|d| d.join("python3"))
+        .find(|p| p.is_file())
+    else {
+        eprintln!("skipping the bpy-less Python: no python3 on the PATH");
+        return;
+    };
+    let plain = tmp.path().join("plain");
+    std::fs::create_dir_all(&plain).unwrap();
+    std::fs::copy(by_blender.join("scene.blend"), plain.join("scene.blend")).unwrap();
+    write_manifest(&plain, "");
+    let (code, err) = vvgen(&plain, &["check", "m.toml"], &system);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot import Blender's `bpy` module") && err.contains("pip install bpy"), "{err}");
+}
