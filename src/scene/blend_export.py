@@ -131,9 +131,14 @@ def main():
             o.modifiers.new("vvgen-evaluate", "ARMATURE")
 
     # The files the import reads besides the .blend: its key's discovered inputs.
+    # Blender's bundled asset libraries (the essentials brushes a 4.3+ file links, by their path in the
+    # authoring machine's Blender) are not the file's content: Blender reads its own copies, so they are
+    # neither inputs nor missing.
     deps = set()
     for p in bpy.utils.blend_paths(absolute=True, packed=False, local=False):
-        deps.add(os.path.normpath(bpy.path.abspath(p)))
+        p = os.path.normpath(bpy.path.abspath(p))
+        if os.sep.join(("datafiles", "assets", "")) not in p:
+            deps.add(p)
     warnings = []
     for p in sorted(p for p in deps if not os.path.isfile(p)):
         warnings.append("names `%s`, which is missing (Blender draws it magenta): restore it, or pack the "

@@ -280,3 +280,54 @@ fn a_python_with_bpy_imports_a_blend_as_blender_does() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("cannot import Blender's `bpy` module") && err.contains("pip install bpy"), "{err}");
 }
+
+/// A library the file links from Blender's own bundled assets (`…/datafiles/assets/…`: the essentials brushes
+/// a Blender 4.3+ file links by its path on the authoring machine) is Blender's, not the file's: missing here,
+/// it is not warned of, while another missing library is.
+#[test]
+fn blenders_own_asset_libraries_are_not_missing_inputs() {
+    let Some(blender) = blender() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let script = d.join("make.py");
+    std::fs::write(
+        &script,
+        r#"import bpy, os, sys
+out = sys.argv[sys.argv.index("--") + 1]
+libs = [os.path.join(out, "blender", "datafiles", "assets", "brushes.blend"), os.path.join(out, "mine", "parts.blend")]
+for i, lib in enumerate(libs):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.data.materials.new("M%d" % i).use_fake_user = True
+    os.makedirs(os.path.dirname(lib), exist_ok=True)
+    bpy.ops.wm.save_as_mainfile(filepath=lib)
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.mesh.primitive_cube_add()
+for i, lib in enumerate(libs):
+    with bpy.data.libraries.load(lib, link=True) as (src, dst):
+        dst.materials = ["M%d" % i]
+    for m in dst.materials:
+        m.use_fake_user = True
+bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "scene.blend"))
+for lib in libs:
+    os.remove(lib)
+"#,
+    )
+    .unwrap();
+    let out = Command::new(&blender)
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(&script)
+        .arg("--")
+        .arg(d)
+        .output()
+        .unwrap();
+    assert!(out.status.success() && d.join("scene.blend").is_file(), "{}", String::from_utf8_lossy(&out.stderr));
+    write_manifest(d, "");
+    let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
+    if err.contains("numpy") {
+        eprintln!("skipping: Blender's Python lacks numpy (apt install python3-numpy)");
+        return;
+    }
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("parts.blend`, which is missing"), "the file's own library is warned of: {err}");
+    assert!(!err.contains("brushes.blend"), "Blender's bundled library is not: {err}");
+}
