@@ -29,6 +29,10 @@ def animated():
     return False
 
 
+# Object types Blender's glTF exporter skips.
+UNEXPORTED = ("POINTCLOUD", "CURVES", "VOLUME", "GPENCIL", "GREASEPENCIL")
+
+
 def exporter_options(bpy, options):
     """The glTF exporter's options as this Blender's exporter names them. Blender 4.2 replaced `export_colors`
     (every mesh's colour attribute) with `export_vertex_color`, whose "ACTIVE" exports the active one whether or
@@ -36,6 +40,8 @@ def exporter_options(bpy, options):
     names = bpy.ops.export_scene.gltf.get_rna_type().properties.keys()
     if "export_colors" not in names and "export_vertex_color" in names:
         options["export_vertex_color"] = "ACTIVE" if options.pop("export_colors") else "NONE"
+    if "export_gn_mesh" not in names:
+        del options["export_gn_mesh"]
     return options
 
 
@@ -169,14 +175,23 @@ def main():
             export_lights=False,
             export_extras=False,
             export_image_format="AUTO",
+            # Geometry nodes' instances, as Blender renders them (left out, a scattering node tree exported
+            # nothing); exporters before 4.1 lack the option (`exporter_options` drops it).
+            export_gn_mesh=True,
         )))
         if "FINISHED" not in result or not os.path.isfile(path):
             fail("Blender's glTF exporter failed at frame %d" % f)
         if i == 0:
             with open(path) as fh:
                 if not json.load(fh).get("meshes"):
-                    fail("scene `%s` has nothing to draw%s"
-                         % (scene.name, "" if chosen is None else " in what was selected"))
+                    skipped = sorted(o.name for o in (chosen or scene.objects) if o.type in UNEXPORTED)
+                    hint = ""
+                    if skipped:
+                        hint = (": Blender's glTF exporter writes no point cloud, hair curves, volume or grease "
+                                "pencil objects (%s); convert them to meshes (Object > Convert > Mesh), save, and "
+                                "name that file" % ", ".join(skipped[:4] + (["…"] if len(skipped) > 4 else [])))
+                    fail("scene `%s` has nothing to draw%s%s"
+                         % (scene.name, "" if chosen is None else " in what was selected", hint))
     files = []
     for base, _, names_here in os.walk(out):
         for n in names_here:
@@ -206,4 +221,11 @@ try:
 except SystemExit:
     raise
 except BaseException as e:  # noqa: BLE001  (any failure is reported as one line, never a Blender prompt)
-    fail("%s: %s" % (type(e).__name__, e))
+    # An operator's failure carries its Python traceback: its last line says what went wrong (a texture the
+    # exporter cannot read, say).
+    said = [l.strip() for l in str(e).splitlines() if l.strip()]
+    said = [l for l in said if not l.startswith(("Traceback", "File ", "Location:", "^", "~"))] or [str(e)]
+    last = said[-1]
+    while last.startswith(("RuntimeError: ", "Error: ")):
+        last = last.split(": ", 1)[1]
+    fail("%s: %s" % (type(e).__name__, last))

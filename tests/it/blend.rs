@@ -331,3 +331,32 @@ for lib in libs:
     assert!(err.contains("parts.blend`, which is missing"), "the file's own library is warned of: {err}");
     assert!(!err.contains("brushes.blend"), "Blender's bundled library is not: {err}");
 }
+
+/// A scene whose only object is one Blender's glTF exporter skips (hair curves here; point clouds, volumes and
+/// grease pencil too) has nothing to draw, and the error names the object and says to convert it to a mesh.
+#[test]
+fn a_scene_of_objects_the_exporter_skips_says_to_convert_them() {
+    let Some(blender) = blender() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let make = "import bpy, sys\nbpy.ops.wm.read_factory_settings(use_empty=True)\n\
+                o = bpy.data.objects.new('Hair', bpy.data.hair_curves.new('Hair'))\n\
+                bpy.context.scene.collection.objects.link(o)\n\
+                bpy.ops.wm.save_as_mainfile(filepath=sys.argv[sys.argv.index('--') + 1])\n";
+    let out = Command::new(&blender)
+        .args(["-b", "--factory-startup", "--python-expr", make, "--"])
+        .arg(d.join("scene.blend"))
+        .output()
+        .unwrap();
+    assert!(out.status.success() && d.join("scene.blend").is_file(), "{}", String::from_utf8_lossy(&out.stderr));
+    write_manifest(d, "");
+    let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
+    if err.contains("numpy") {
+        eprintln!("skipping: Blender's Python lacks numpy (apt install python3-numpy)");
+        return;
+    }
+    assert_eq!(code, 2, "{err}");
+    for says in ["has nothing to draw", "hair curves", "(Hair)", "Object > Convert > Mesh"] {
+        assert!(err.contains(says), "`{says}` not in: {err}");
+    }
+}
