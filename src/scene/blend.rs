@@ -450,7 +450,7 @@ const PRINT_VERSION: &str = "import bpy\n\
 /// Whether `exe` is a Python with Blender's `bpy` module (the PyPI wheel: `pip install bpy==4.5.*` brings a
 /// current Blender where the system's is old, as Debian 12's 3.4 is) rather than Blender: its name says so
 /// (`python`, `python3`, `python3.11`).
-pub fn is_python(exe: &Path) -> bool {
+fn is_python(exe: &Path) -> bool {
     exe.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("python"))
 }
 
