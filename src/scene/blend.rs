@@ -291,15 +291,16 @@ impl<'a> Importer<'a> {
                 .map(str::trim)
                 .filter(|l| l.starts_with("Blender ") || l.starts_with("build hash"))
                 .collect();
-            if is_python(exe) && (!out.status.success() || lines.is_empty()) {
-                return Err(format!(
-                    "{} cannot import Blender's `bpy` module: install it there (`pip install bpy==4.5.*`, which \
-                     needs Python 3.11), or name Blender itself in VVGEN_BLENDER",
-                    exe.display()
-                ));
-            }
             if !out.status.success() || lines.is_empty() {
-                return Err(format!("{} --version did not print a Blender version: is it Blender?", exe.display()));
+                return Err(if is_python(exe) {
+                    format!(
+                        "{} cannot import Blender's `bpy` module: install it there (`pip install bpy==4.5.*`, which \
+                         needs Python 3.11), or name Blender itself in VVGEN_BLENDER",
+                        exe.display()
+                    )
+                } else {
+                    format!("{} --version did not print a Blender version: is it Blender?", exe.display())
+                });
             }
             Ok(lines.join("; "))
         };

@@ -5,6 +5,7 @@
 //! a place (a face index out of range, an `mtllib` or texture that does not exist) and names the file and line;
 //! the same pass lists the files a frame depends on (its MTL files and textures), which key the frame.
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -50,7 +51,7 @@ impl<R: std::io::BufRead> Shifted<R> {
         let mut out = String::from("v");
         for o in self.origin {
             let v: f64 = words.next()?.parse().ok()?;
-            out.push_str(&format!(" {}", v - o));
+            write!(out, " {}", v - o).expect("BUG: writing to a String cannot fail");
         }
         for w in words {
             out.push(' ');

@@ -281,6 +281,22 @@ fn a_python_with_bpy_imports_a_blend_as_blender_does() {
     assert!(err.contains("cannot import Blender's `bpy` module") && err.contains("pip install bpy"), "{err}");
 }
 
+/// Runs Python `make` in Blender (the folder `d` after `--`), which saves `d/scene.blend`, then `vvgen check` of
+/// a manifest with that file as its source: the exit code and what it printed, or `None` (said) when Blender's
+/// Python lacks numpy.
+fn check_made(blender: &Path, d: &Path, make: &str) -> Option<(i32, String)> {
+    let out =
+        Command::new(blender).args(["-b", "--factory-startup", "--python-expr", make, "--"]).arg(d).output().unwrap();
+    assert!(out.status.success() && d.join("scene.blend").is_file(), "{}", String::from_utf8_lossy(&out.stderr));
+    write_manifest(d, "");
+    let (code, err) = vvgen(d, &["check", "m.toml"], blender);
+    if err.contains("numpy") {
+        eprintln!("skipping: Blender's Python lacks numpy (apt install python3-numpy)");
+        return None;
+    }
+    Some((code, err))
+}
+
 /// A library the file links from Blender's own bundled assets (`…/datafiles/assets/…`: the essentials brushes
 /// a Blender 4.3+ file links by its path on the authoring machine) is Blender's, not the file's: missing here,
 /// it is not warned of, while another missing library is.
@@ -289,10 +305,7 @@ fn blenders_own_asset_libraries_are_not_missing_inputs() {
     let Some(blender) = blender() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let script = d.join("make.py");
-    std::fs::write(
-        &script,
-        r#"import bpy, os, sys
+    let make = r#"import bpy, os, sys
 out = sys.argv[sys.argv.index("--") + 1]
 libs = [os.path.join(out, "blender", "datafiles", "assets", "brushes.blend"), os.path.join(out, "mine", "parts.blend")]
 for i, lib in enumerate(libs):
@@ -310,23 +323,8 @@ for i, lib in enumerate(libs):
 bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "scene.blend"))
 for lib in libs:
     os.remove(lib)
-"#,
-    )
-    .unwrap();
-    let out = Command::new(&blender)
-        .args(["-b", "--factory-startup", "--python"])
-        .arg(&script)
-        .arg("--")
-        .arg(d)
-        .output()
-        .unwrap();
-    assert!(out.status.success() && d.join("scene.blend").is_file(), "{}", String::from_utf8_lossy(&out.stderr));
-    write_manifest(d, "");
-    let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
-    if err.contains("numpy") {
-        eprintln!("skipping: Blender's Python lacks numpy (apt install python3-numpy)");
-        return;
-    }
+"#;
+    let Some((code, err)) = check_made(&blender, d, make) else { return };
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("parts.blend`, which is missing"), "the file's own library is warned of: {err}");
     assert!(!err.contains("brushes.blend"), "Blender's bundled library is not: {err}");
@@ -339,22 +337,11 @@ fn a_scene_of_objects_the_exporter_skips_says_to_convert_them() {
     let Some(blender) = blender() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let make = "import bpy, sys\nbpy.ops.wm.read_factory_settings(use_empty=True)\n\
+    let make = "import bpy, os, sys\nbpy.ops.wm.read_factory_settings(use_empty=True)\n\
                 o = bpy.data.objects.new('Hair', bpy.data.hair_curves.new('Hair'))\n\
                 bpy.context.scene.collection.objects.link(o)\n\
-                bpy.ops.wm.save_as_mainfile(filepath=sys.argv[sys.argv.index('--') + 1])\n";
-    let out = Command::new(&blender)
-        .args(["-b", "--factory-startup", "--python-expr", make, "--"])
-        .arg(d.join("scene.blend"))
-        .output()
-        .unwrap();
-    assert!(out.status.success() && d.join("scene.blend").is_file(), "{}", String::from_utf8_lossy(&out.stderr));
-    write_manifest(d, "");
-    let (code, err) = vvgen(d, &["check", "m.toml"], &blender);
-    if err.contains("numpy") {
-        eprintln!("skipping: Blender's Python lacks numpy (apt install python3-numpy)");
-        return;
-    }
+                bpy.ops.wm.save_as_mainfile(filepath=os.path.join(sys.argv[sys.argv.index('--') + 1], 'scene.blend'))\n";
+    let Some((code, err)) = check_made(&blender, d, make) else { return };
     assert_eq!(code, 2, "{err}");
     for says in ["has nothing to draw", "hair curves", "(Hair)", "Object > Convert > Mesh"] {
         assert!(err.contains(says), "`{says}` not in: {err}");

@@ -32,10 +32,9 @@ const SUPPORTED_REQUIRED: &[&str] = &[
 ];
 
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
-/// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required
-/// `KHR_mesh_quantization`, `EXT_texture_webp`, `EXT_mesh_gpu_instancing`, `KHR_gaussian_splatting`,
-/// `KHR_materials_specular`, `KHR_materials_variants` or `KHR_animation_pointer` (which gltf 1.4 calls
-/// unsupported). Returns the document and what reading it set aside (dropped pointer channels). vvgen's own reference check
+/// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required extension
+/// of [`SUPPORTED_REQUIRED`] that gltf 1.4 calls unsupported (`KHR_mesh_quantization`, `EXT_texture_webp`, …).
+/// Returns the document and what reading it set aside (dropped pointer channels). vvgen's own reference check
 /// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
 /// references.
 pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
@@ -72,19 +71,10 @@ pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
             if errors.iter().all(|(p, e)| {
                 let p = p.as_str();
                 let no_view = p.starts_with("accessors[") && p.ends_with("].bufferView");
-                // gltf 1.4 has no feature for these; vvgen reads quantized attributes and WebP images.
+                // gltf 1.4 has no feature for some extensions vvgen reads (quantized attributes, WebP images,
+                // instancing, Gaussians, pointers …): a required one of [`SUPPORTED_REQUIRED`] is read here.
                 let read_here = p.starts_with("extensionsRequired[")
-                    && [
-                        "\"KHR_mesh_quantization\"",
-                        "\"EXT_texture_webp\"",
-                        "\"EXT_mesh_gpu_instancing\"",
-                        "\"KHR_gaussian_splatting\"",
-                        "\"KHR_materials_specular\"",
-                        "\"KHR_materials_variants\"",
-                        "\"KHR_animation_pointer\"",
-                    ]
-                        .iter()
-                        .any(|x| p.ends_with(x));
+                    && SUPPORTED_REQUIRED.iter().any(|x| p.ends_with(&format!("\"{x}\"")));
                 use gltf::json::validation::Error::{Missing, Unsupported};
                 (no_view && matches!(e, Missing)) || (read_here && matches!(e, Unsupported))
             }) =>
