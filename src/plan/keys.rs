@@ -96,6 +96,12 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     // An OBJ's MTL materials were read as Kd and map_Kd alone before "mtl 1" read them as Blender
                     // 4.5's importer does: frames with a material library re-render, others keep their keys.
                     bytes.extend((is_obj(&f.path) && !deps.is_empty()).then_some(b"mtl 1".as_slice()));
+                    // An OBJ's polylines of three or more vertices were filled as polygons (tobj's reading) before
+                    // "obj polylines 1" dropped them, as Blender draws no lines: frames with them re-render, others
+                    // keep their keys.
+                    if is_obj(&f.path) && crate::scene::obj::polylines_cached(&f.path, stat)? {
+                        bytes.push(b"obj polylines 1");
+                    }
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))
                 })

@@ -12,6 +12,7 @@ pub mod light;
 pub mod material;
 mod mtl;
 pub mod obj;
+mod obj_text;
 pub mod ply;
 mod ply_scene;
 pub mod posed;

@@ -1,11 +1,12 @@
 //! Wavefront OBJ frames (with MTL materials and `map_Kd` textures, vertex colours where present), as captured
 //! volumetric video is distributed: one textured mesh per frame, the topology changing every frame.
 //!
-//! Parsing is `tobj`'s. Before it runs, one pass over the lines ([`scan`]) checks what tobj would report without
-//! a place (a face index out of range, an `mtllib` or texture that does not exist) and names the file and line;
-//! the same pass lists the files a frame depends on (its MTL files and textures), which key the frame.
+//! Parsing is `tobj`'s, of the text as [`obj_text`] hands it on (UTF-8, edited where tobj and Blender's importer
+//! disagree). Before it runs, one pass over the lines ([`scan`]) checks what tobj would report without a place (a
+//! face index out of range, an `mtllib` or texture that does not exist) and names the file and line (a number
+//! tobj cannot parse is looked for once it has failed); the same pass lists the files a frame depends on (its MTL files and textures), which key the
+//! frame.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -13,6 +14,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::material::{srgb_to_linear, Material};
 use super::mtl;
+use super::obj_text::{self, Edit, Lines};
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
 use super::texture::Texture;
 use super::Error;
@@ -24,77 +26,17 @@ fn at(path: &Path, line: usize, message: String) -> Error {
     Error::Mesh { path: path.to_path_buf(), line: Some(line), message }
 }
 
-/// An OBJ's lines with `origin` subtracted from each vertex position (`v x y z …`, the rest of the line kept), in
-/// double precision, written back in the shortest decimals that read as the difference: what tobj then parses to
-/// single precision is the position relative to `origin`. One line is held at a time.
-struct Shifted<R> {
-    inner: R,
-    origin: [f64; 3],
-    line: Vec<u8>,
-    at: usize,
-}
-
-impl<R: std::io::BufRead> Shifted<R> {
-    fn new(inner: R, origin: [f64; 3]) -> Self {
-        Shifted { inner, origin, line: Vec::new(), at: 0 }
-    }
-
-    /// `line` with its position shifted, when it is a vertex line whose first three values are numbers;
-    /// anything else as it was (tobj reports what it cannot read).
-    fn shift(&self, line: &[u8]) -> Option<Vec<u8>> {
-        let text = std::str::from_utf8(line).ok()?;
-        let rest = text.strip_prefix('v')?;
-        if !rest.starts_with([' ', '\t']) {
-            return None;
-        }
-        let mut words = rest.split_ascii_whitespace();
-        let mut out = String::from("v");
-        for o in self.origin {
-            let v: f64 = words.next()?.parse().ok()?;
-            write!(out, " {}", v - o).expect("BUG: writing to a String cannot fail");
-        }
-        for w in words {
-            out.push(' ');
-            out.push_str(w);
-        }
-        out.push('\n');
-        Some(out.into_bytes())
-    }
-}
-
-impl<R: std::io::BufRead> std::io::Read for Shifted<R> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let got = std::io::BufRead::fill_buf(self)?;
-        let n = got.len().min(buf.len());
-        buf[..n].copy_from_slice(&got[..n]);
-        std::io::BufRead::consume(self, n);
-        Ok(n)
-    }
-}
-
-impl<R: std::io::BufRead> std::io::BufRead for Shifted<R> {
-    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
-        if self.at == self.line.len() {
-            self.line.clear();
-            self.at = 0;
-            self.inner.read_until(b'\n', &mut self.line)?;
-            if let Some(shifted) = self.shift(&self.line) {
-                self.line = shifted;
-            }
-        }
-        Ok(&self.line[self.at..])
-    }
-
-    fn consume(&mut self, n: usize) {
-        self.at = (self.at + n).min(self.line.len());
-    }
-}
-
-/// Checks an OBJ's face indices, `mtllib` files and their `map_Kd` textures, naming file and line of the first
-/// problem; returns the files the OBJ depends on (MTL files, then textures), in the order named.
+/// Checks an OBJ's face indices, `mtllib` files and their `map_Kd` textures, naming file and line of
+/// the first problem; returns the files the OBJ depends on (MTL files, then textures), in the order named.
 pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
-    let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    resolve(path, &libraries(path, &text)?)
+    scan_text(path).map(|(deps, _)| deps)
+}
+
+/// [`scan`], and what the OBJ's text says of its vertices' colours.
+fn scan_text(path: &Path) -> Result<(Vec<PathBuf>, Text), Error> {
+    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let text = read_text(path, &bytes)?;
+    Ok((resolve(path, &text.libs)?, text))
 }
 
 /// [`scan`], reading the OBJ only when the stat cache does not remember its libraries for its current content:
@@ -102,35 +44,78 @@ pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
 /// content changing, so a build that keys unchanged frames reads none of them. The libraries and textures are
 /// checked every time.
 pub fn scan_cached(path: &Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
-    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-    let text = stat
-        .derived("obj libraries 1", path, || {
-            let bytes = std::fs::read(path).map_err(io)?;
-            libraries(path, &bytes).map(|l| serde_json::to_string(&l).expect("BUG: a list of names serializes"))
-        })
-        .map_err(io)??;
-    let libs: Vec<(usize, String)> = serde_json::from_str(&text).map_err(|e| Error::Mesh {
-        path: path.to_path_buf(),
-        line: None,
-        message: format!("BUG: remembered libraries do not read back: {e}"),
-    })?;
+    let (libs, _) = remembered(path, stat)?;
     resolve(path, &libs)
 }
 
-/// What an OBJ's text alone decides: every face index is in range (else an error at its line); returns the
-/// `mtllib` names with their lines.
-fn libraries(path: &Path, text: &[u8]) -> Result<Vec<(usize, String)>, Error> {
-    let text = String::from_utf8_lossy(text);
+/// Whether OBJ `path` has polylines of three or more vertices, remembered as [`scan_cached`] remembers its
+/// libraries: tobj filled them as polygons until "obj polylines 1", so a frame with them is keyed apart.
+pub fn polylines_cached(path: &Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
+    remembered(path, stat).map(|(_, polylines)| polylines)
+}
+
+/// The `mtllib` names (with their lines) of OBJ `path` and whether it has polylines of three or more vertices,
+/// from the stat cache for its current content, else read.
+fn remembered(path: &Path, stat: &crate::cache::StatCache) -> Result<(Vec<(usize, String)>, bool), Error> {
+    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    let text = stat
+        // "2": the scan has checked numbers, counted polylines and read the text as `obj_text` decodes it.
+        .derived("obj libraries 2", path, || {
+            let bytes = std::fs::read(path).map_err(io)?;
+            read_text(path, &bytes).map(|t| {
+                serde_json::to_string(&(&t.libs, t.polylines > 0)).expect("BUG: a list of names serializes")
+            })
+        })
+        .map_err(io)??;
+    serde_json::from_str(&text).map_err(|e| Error::Mesh {
+        path: path.to_path_buf(),
+        line: None,
+        message: format!("BUG: remembered libraries do not read back: {e}"),
+    })
+}
+
+/// What an OBJ's text alone decides, once checked.
+struct Text {
+    /// The `mtllib` names with their lines.
+    libs: Vec<(usize, String)>,
+    /// Whether some vertices have a colour and others not (see [`Edit::Obj`]).
+    partial_colours: bool,
+    /// How many vertices (`v`), faces (`f`) and polylines (`l`) it has, and how many of those have three or more
+    /// vertices (tobj filled them as polygons until [`Edit::Obj`] dropped them).
+    vertices: i64,
+    faces: usize,
+    lines: usize,
+    polylines: usize,
+}
+
+/// Reads an OBJ's text (decoded as tobj will be given it: [`obj_text`]): every face index is in range, else an
+/// error at the line.
+fn read_text(path: &Path, bytes: &[u8]) -> Result<Text, Error> {
+    let text = obj_text::decode(bytes);
     let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
-    let mut libs = Vec::new();
+    let (mut coloured, mut plain) = (false, false);
+    let (mut libs, mut faces, mut lines, mut polylines) = (Vec::new(), 0, 0, 0);
     for (i, line) in text.lines().enumerate() {
         let line_no = i + 1;
         let mut words = line.split_whitespace();
-        match words.next() {
+        let key = words.next();
+        if key == Some("v") {
+            // x y z, then w or a colour (tobj reads either).
+            let count = words.clone().take(6).count();
+            coloured |= count == 6;
+            plain |= count == 3;
+        }
+        match key {
             Some("v") => v += 1,
             Some("vt") => vt += 1,
             Some("vn") => vn += 1,
-            Some("f") => {
+            Some(k @ ("f" | "l")) => {
+                if k == "f" {
+                    faces += 1;
+                } else {
+                    lines += 1;
+                    polylines += usize::from(words.clone().count() >= 3);
+                }
                 for corner in words {
                     for (k, part) in corner.split('/').enumerate() {
                         if part.is_empty() {
@@ -162,7 +147,31 @@ fn libraries(path: &Path, text: &[u8]) -> Result<Vec<(usize, String)>, Error> {
             _ => {}
         }
     }
-    Ok(libs)
+    Ok(Text { libs, partial_colours: coloured && plain, vertices: v, faces, lines, polylines })
+}
+
+/// The first number of a vertex, texture coordinate or normal in OBJ `path` that does not parse as tobj parses it
+/// (which names no line), as an error at its line; `None` if all do. Looked for only once tobj has failed: the
+/// good path parses each number once.
+fn bad_number(path: &Path) -> Option<Error> {
+    let bytes = std::fs::read(path).ok()?;
+    for (i, line) in obj_text::decode(&bytes).lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let (k, needed, most) = match words.next() {
+            Some(k @ "v") => (k, 3, 6),
+            Some(k @ "vt") => (k, 2, 2),
+            Some(k @ "vn") => (k, 3, 3),
+            _ => continue,
+        };
+        let numbers: Vec<&str> = words.take(most).collect();
+        if let Some(bad) = numbers.iter().find(|w| w.parse::<f32>().is_err()) {
+            return Some(at(path, i + 1, format!("`{bad}` is not a number, in `{}`", line.trim())));
+        }
+        if numbers.len() < needed {
+            return Some(at(path, i + 1, format!("`{k}` needs {needed} numbers: `{}`", line.trim())));
+        }
+    }
+    None
 }
 
 /// The MTL files `libs` (named at their OBJ lines), each checked to exist, each followed by its textures.
@@ -215,14 +224,15 @@ fn libraries_in(dir: &Path) -> Vec<String> {
 /// and a number that is not finite (which it accepts) would reach the images.
 fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
     let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    let text = String::from_utf8_lossy(&text);
+    let text = obj_text::decode(&text);
     let dir = crate::scene::input::folder_of(path);
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let key = words.next();
         let count = match key {
-            Some(k @ ("Ka" | "Kd" | "Ks" | "Ke")) => Some((k, 3)),
+            // One number is a grey, as the format reads it (written out for tobj: `Edit::Mtl`).
+            Some(k @ ("Ka" | "Kd" | "Ks" | "Ke")) => Some((k, if words.clone().count() == 1 { 1 } else { 3 })),
             Some(k @ ("Ns" | "Ni" | "d")) => Some((k, 1)),
             _ => None,
         };
@@ -230,7 +240,11 @@ fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
             // tobj reads the first `n` words as numbers and ignores the rest.
             let finite = words.clone().take(n).filter(|w| w.parse::<f32>().is_ok_and(f32::is_finite)).count();
             if finite < n {
-                let what = if n == 1 { "a finite number".to_string() } else { format!("{n} finite numbers") };
+                let what = match (n, key) {
+                    (1, "Ns" | "Ni" | "d") => "a finite number",
+                    (1, _) => "a finite number (a grey)",
+                    _ => "3 finite numbers (or one, a grey)",
+                };
                 return Err(at(path, i + 1, format!("`{key}` needs {what}: `{}`", line.trim())));
             }
         }
@@ -260,7 +274,7 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
 /// photogrammetry exports (OpenDroneMap's, a drone survey's) write positions in georeferenced metres, whose
 /// decimals hold detail that single precision, which positions are held in, steps (0.25 m at 4 000 km).
 pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
-    scan(path)?;
+    let (_, text) = scan_text(path)?;
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
     let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
     let dir = crate::scene::input::folder_of(path);
@@ -269,20 +283,32 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     let folders = std::cell::RefCell::new(Vec::new());
     let load_library = |name: &Path| {
         let file = mtl::locate(dir, &name.to_string_lossy()).map_err(|_| tobj::LoadError::OpenFileFailed)?;
-        let mut reader = std::io::BufReader::new(std::fs::File::open(&file).map_err(|_| tobj::LoadError::OpenFileFailed)?);
-        let loaded = tobj::load_mtl_buf(&mut reader)?;
+        let reader = std::io::BufReader::new(std::fs::File::open(&file).map_err(|_| tobj::LoadError::OpenFileFailed)?);
+        let loaded = tobj::load_mtl_buf(&mut Lines::new(reader, Edit::Mtl))?;
         folders.borrow_mut().extend(std::iter::repeat_n(crate::scene::input::folder_of(&file).to_path_buf(), loaded.0.len()));
         Ok(loaded)
     };
     let reader =
         std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?);
-    let (models, materials) = if origin == [0.0; 3] {
-        tobj::load_obj_buf(&mut { reader }, &options, load_library)
-    } else {
-        tobj::load_obj_buf(&mut Shifted::new(reader, origin), &options, load_library)
-    }
-    .map_err(|e| fail(e.to_string()))?;
+    let edit = Edit::Obj { origin, pad_colours: text.partial_colours };
+    let (models, materials) = tobj::load_obj_buf(&mut Lines::new(reader, edit), &options, load_library)
+        .map_err(|e| match e {
+            tobj::LoadError::PositionParseError | tobj::LoadError::TexcoordParseError | tobj::LoadError::NormalParseError => {
+                bad_number(path).unwrap_or_else(|| fail(e.to_string()))
+            }
+            e => fail(e.to_string()),
+        })?;
     let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
+    if text.faces == 0 && text.vertices > 0 {
+        // MeshLab and CloudCompare write point clouds so; Blender imports them as loose vertices, drawing nothing.
+        let lines = if text.lines > 0 { format!(", {} lines", text.lines) } else { String::new() };
+        return Err(fail(format!(
+            "{} vertices{lines} and no faces: nothing to draw (Blender imports them as loose vertices and edges; \
+             vvgen draws no lines). If it is a point cloud, save it as PLY (MeshLab: File → Export Mesh As… → \
+             PLY), which vvgen draws as points",
+            text.vertices
+        )));
+    }
     let folders = folders.into_inner();
     let mut images = mtl::Images::default();
     let mut mats: Vec<Material> = Vec::new();
@@ -313,7 +339,8 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
         } else {
             Vec::new()
         };
-        let colors: Vec<Vec4> = if m.vertex_color.len() == m.positions.len() {
+        // Colours of NaN mark vertices without one: Blender keeps no colours on an object with such vertices.
+        let colors: Vec<Vec4> = if m.vertex_color.len() == m.positions.len() && !m.vertex_color.iter().any(|c| c.is_nan()) {
             m.vertex_color
                 .chunks_exact(3)
                 .map(|c| Vec4::new(srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]), 1.0))
@@ -355,15 +382,15 @@ pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
         let path = p.to_path_buf();
         move |e| Error::Io { path, source: e }
     };
-    let mut head = std::io::BufReader::new(std::fs::File::open(path).map_err(io(path))?);
+    let head = std::io::BufReader::new(std::fs::File::open(path).map_err(io(path))?);
+    let mut head = Lines::new(head, Edit::Obj { origin: [0.0; 3], pad_colours: false });
     let dir = crate::scene::input::folder_of(path);
-    let (mut libs, mut line) = (Vec::new(), Vec::new());
+    let (mut libs, mut text) = (Vec::new(), String::new());
     loop {
-        line.clear();
-        if head.read_until(b'\n', &mut line).map_err(io(path))? == 0 {
+        text.clear();
+        if head.read_line(&mut text).map_err(io(path))? == 0 {
             break;
         }
-        let text = String::from_utf8_lossy(&line);
         match text.split_whitespace().next() {
             Some("v" | "vt" | "vn" | "f") => break,
             Some("mtllib") => libs.extend(mtl::locate(dir, text.trim_start()["mtllib".len()..].trim()).ok()),
@@ -376,7 +403,7 @@ pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
         // (name, d ≤ 0, map_d) of each material, in one pass over its lines; the `newmtl` added at the end closes
         // the last one.
         let mut current: Option<(String, bool, bool)> = None;
-        for line in String::from_utf8_lossy(&text).lines().chain(["newmtl"]) {
+        for line in obj_text::decode(&text).lines().chain(["newmtl"]) {
             let mut words = line.split_whitespace();
             match (words.next(), &mut current) {
                 (Some("newmtl"), _) => {

@@ -26,6 +26,7 @@ mod meshseq;
 mod mtl;
 mod new;
 mod normal_maps;
+mod obj_text;
 mod path;
 mod ply;
 mod point_shadows;
