@@ -403,6 +403,13 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| err(path, format!("embedded texture `{}`: {e}", t.element.name)))?;
+    if reader.format().is_none() {
+        // TGA has no signature to guess from (3ds Max embeds it): the name the file gives the image says it.
+        let named = [&t.relative_filename, &t.filename].into_iter().find_map(|n| image::ImageFormat::from_path(n.as_ref() as &str).ok());
+        if let Some(format) = named {
+            reader.set_format(format);
+        }
+    }
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(crate::scene::obj::MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(crate::scene::obj::MAX_TEXTURE_SIDE);

@@ -157,6 +157,16 @@ fn an_fbx_whose_texture_was_left_behind_loads_in_its_colours_and_says_where_to_p
     assert_ne!(std::fs::read(&first).unwrap(), plain);
 }
 
+/// 3ds Max embeds TGA images, which have no signature to tell their format by: the name the file gives the
+/// image says it (assimp's test cube; Blender 4.5 does not import ASCII FBX at all).
+#[test]
+fn an_embedded_tga_texture_is_read_by_its_name() {
+    // An image that does not decode is an error: loading is decoding.
+    let asset = vvgen::scene::fbx::load(&data("fbx/assimp_box_embedded_tga_ascii.fbx")).unwrap();
+    assert!(asset.named_materials().iter().any(|(_, m)| m.base_color_texture.is_some()));
+    assert!(asset.warnings.is_empty(), "{:?}", asset.warnings);
+}
+
 #[test]
 fn an_fbx_material_blenders_importer_reads_as_fully_transparent_is_a_warning_naming_it() {
     // The sausage's material is white in `TransparentColor` with a `TransparencyFactor` of 0: Blender's importer

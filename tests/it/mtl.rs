@@ -54,6 +54,27 @@ fn a_windows_authored_mtl_finds_its_textures_as_blender_does() {
     assert!(right[2].abs_diff(230) <= 2 && right[0].abs_diff(40) <= 2, "{right:?}");
 }
 
+/// Game assets and 3ds Max exports name TGA and BMP textures, which Blender reads: they render as the PNG does.
+#[test]
+fn tga_and_bmp_textures_render_as_the_png_does() {
+    let mut images = Vec::new();
+    for ext in ["png", "tga", "bmp"] {
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        let mut checker = image::RgbImage::new(4, 4);
+        for (x, y, p) in checker.enumerate_pixels_mut() {
+            *p = if (x + y) % 2 == 0 { image::Rgb([230, 40, 40]) } else { image::Rgb([40, 40, 230]) };
+        }
+        checker.save(d.join(format!("skin.{ext}"))).unwrap();
+        std::fs::write(d.join("model.obj"), OBJ).unwrap();
+        std::fs::write(d.join("model.mtl"), format!("newmtl skin\nmap_Kd skin.{ext}\nnewmtl lid\nKd 1 1 1\n")).unwrap();
+        run(d);
+        images.push(std::fs::read(d.join("out/m_dnerf/train/r_0000.png")).unwrap());
+    }
+    assert_eq!(images[0], images[1], "TGA");
+    assert_eq!(images[0], images[2], "BMP");
+}
+
 #[test]
 fn a_missing_texture_or_library_is_an_error_naming_its_line_and_what_lies_beside() {
     let tmp = tempfile::tempdir().unwrap();
