@@ -21,6 +21,30 @@ fn empty_file_is_not_ply() {
     assert_eq!(load("assimp_empty_0bytes.ply").unwrap_err(), PlyError::NotPly);
 }
 
+/// Blender 2.4x's exporter wrote "Created by Blender3D 247 …" after `format`, without `comment` (assimp's
+/// Wuson.ply has it), and comments may be in a legacy encoding: both read as comments, as Blender 4.5 reads them.
+/// An unknown keyword among the elements is still an error at its line.
+#[test]
+fn a_blender_2_4_header_line_and_a_latin1_comment_are_comments() {
+    let header = |extra: &[u8], after: &[u8]| {
+        [
+            b"ply\nformat ascii 1.0\n",
+            extra,
+            b"element vertex 1\n",
+            after,
+            b"property float x\nproperty float y\n\
+           property float z\nend_header\n1 2 3\n",
+        ]
+        .concat()
+    };
+    let old = ply::read(&header(b"Created by Blender3D 247 - www.blender.org, source file: \n", b"")).unwrap();
+    assert_eq!(old.positions, [[1.0, 2.0, 3.0]]);
+    let latin1 = ply::read(&header(b"comment Cr\xe9\xe9 par Ren\xe9\n", b"")).unwrap();
+    assert_eq!(latin1.positions, [[1.0, 2.0, 3.0]]);
+    let e = ply::read(&header(b"", b"propety float w\n")).unwrap_err();
+    assert_eq!(e, PlyError::Header { line: 4, msg: "unknown header keyword `propety`".into() });
+}
+
 #[test]
 fn binary_body_starting_with_newline_is_kept() {
     let d = load("assimp_cube_binary_starts_with_nl.ply").unwrap();

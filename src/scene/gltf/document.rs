@@ -32,13 +32,17 @@ const SUPPORTED_REQUIRED: &[&str] = &[
 ];
 
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
-/// zeros, then sparse values, but gltf 1.4's validation calls it missing data) and so is a required extension
+/// zeros, then sparse values, but gltf 1.4's validation calls it missing data), so is a position accessor
+/// without `min` and `max` (as Blender's importer accepts it), and so is a required extension
 /// of [`SUPPORTED_REQUIRED`] that gltf 1.4 calls unsupported (`KHR_mesh_quantization`, `EXT_texture_webp`, …).
 /// Returns the document and what reading it set aside (dropped pointer channels). vvgen's own reference check
 /// ([`super::validate`]) runs first, on the raw JSON, because the crate's validation panics on some dangling
 /// references.
 pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
     let (json, bin): (std::borrow::Cow<'_, [u8]>, _) = if bytes.starts_with(b"glTF") {
+        if bytes.get(4..8) == Some(&[1, 0, 0, 0]) {
+            return Err(version_one("a binary glTF 1.0 file (GLB version 1)"));
+        }
         let glb = gltf::Glb::from_slice(bytes).map_err(|e| format!("a truncated or malformed GLB ({e})"))?;
         (glb.json, glb.bin)
     } else if bytes.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
@@ -49,6 +53,14 @@ pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
         (bytes.into(), None)
     };
     let mut doc: serde_json::Value = serde_json::from_slice(&json).map_err(|e| format!("not glTF JSON: {e}"))?;
+    if let Some(version) = doc.pointer("/asset/version").and_then(|v| v.as_str()) {
+        if version.starts_with("1.") || version.starts_with("0.") {
+            return Err(version_one(&format!("glTF {version} (`asset.version`)")));
+        }
+    } else if ["scenes", "nodes", "meshes", "accessors"].iter().any(|k| doc.get(k).is_some_and(|v| v.is_object())) {
+        // glTF 1.0 makes `asset` optional; its objects are keyed by name where 2.0's are arrays.
+        return Err(version_one("glTF 1.0 (its objects are keyed by name)"));
+    }
     required_extensions(&doc)?;
     super::validate::check(&doc)?;
     // After the check, whose messages name the file's own attributes.
@@ -71,12 +83,15 @@ pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
             if errors.iter().all(|(p, e)| {
                 let p = p.as_str();
                 let no_view = p.starts_with("accessors[") && p.ends_with("].bufferView");
+                // The spec requires a position accessor's bounds; readers (Blender's importer, three.js) compute
+                // them, and so does vvgen, which never reads them.
+                let no_bounds = p.ends_with("\"POSITION\"].min") || p.ends_with("\"POSITION\"].max");
                 // gltf 1.4 has no feature for some extensions vvgen reads (quantized attributes, WebP images,
                 // instancing, Gaussians, pointers …): a required one of [`SUPPORTED_REQUIRED`] is read here.
                 let read_here = p.starts_with("extensionsRequired[")
                     && SUPPORTED_REQUIRED.iter().any(|x| p.ends_with(&format!("\"{x}\"")));
                 use gltf::json::validation::Error::{Missing, Unsupported};
-                (no_view && matches!(e, Missing)) || (read_here && matches!(e, Unsupported))
+                ((no_view || no_bounds) && matches!(e, Missing)) || (read_here && matches!(e, Unsupported))
             }) =>
         {
             read(false)
@@ -84,6 +99,15 @@ pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
         other => other,
     };
     parsed.map(|gltf| (gltf, followed.warnings)).map_err(|e| e.to_string())
+}
+
+/// The error for a file in glTF 1.0, which glTF 2.0 replaced in 2017 (its objects are keyed by name, its materials
+/// are shader techniques): `what` says how the file says so. Blender's importer refuses it too.
+fn version_one(what: &str) -> String {
+    format!(
+        "{what}, which vvgen does not read (nor does Blender's importer): glTF 2.0 replaced it. Way out: \
+         `npx gltf-pipeline -i in.gltf -o out.glb` upgrades it to glTF 2.0; name that"
+    )
 }
 
 /// Gives every scene without `nodes` an empty list: the spec makes the key optional (an empty scene, as
@@ -155,6 +179,32 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
 
 #[cfg(test)]
 mod tests {
+    /// glTF 1.0, binary or JSON, with or without its optional `asset`, is refused with the way out.
+    #[test]
+    fn gltf_1_is_refused_with_the_way_out() {
+        let mut glb = b"glTF\x01\x00\x00\x00\x14\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00".to_vec();
+        glb.truncate(20);
+        let json = br#"{"asset": {"version": "1.0"}, "scene": "s", "scenes": {"s": {"nodes": []}}}"#;
+        let bare = br#"{"scene": "s", "scenes": {"s": {"nodes": []}}}"#;
+        for (bytes, says) in [(&glb[..], "binary glTF 1.0"), (json, "glTF 1.0 (`asset.version`)"), (bare, "glTF 1.0")] {
+            let e = super::parse(bytes).map(|_| ()).unwrap_err();
+            assert!(e.contains(says) && e.contains("npx gltf-pipeline"), "{e}");
+        }
+    }
+
+    /// A position accessor without the `min` and `max` the spec requires reads (Blender's importer reads it; vvgen
+    /// never reads them); without a `count` it is still an error.
+    #[test]
+    fn a_position_accessor_without_bounds_reads() {
+        let json = r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}], "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}]}"#;
+        assert!(super::parse(json.as_bytes()).is_ok());
+        let e = super::parse(json.replace(r#""count": 3, "#, "").as_bytes()).map(|_| ()).unwrap_err();
+        assert!(e.contains("count"), "{e}");
+    }
+
     /// A scene without `nodes` (Blender's exporter writes an empty scene so) is an empty scene, not an error.
     #[test]
     fn a_scene_without_nodes_is_empty() {

@@ -145,8 +145,14 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
             next += 1;
         }
         line_no += 1;
-        let line = std::str::from_utf8(&rest[..end])
-            .map_err(|_| PlyError::Header { line: line_no, msg: "not text".into() })?;
+        // A comment may be in a legacy encoding (a Latin-1 author's name): read as far as it is text.
+        let raw = &rest[..end];
+        let line = match std::str::from_utf8(raw) {
+            Ok(line) => std::borrow::Cow::Borrowed(line),
+            Err(_) if raw.starts_with(b"comment") || raw.starts_with(b"obj_info") => String::from_utf8_lossy(raw),
+            Err(_) => return Err(PlyError::Header { line: line_no, msg: "not text".into() }),
+        };
+        let line = line.as_ref();
         let herr = |msg: String| PlyError::Header { line: line_no, msg };
         let mut words = line.split_ascii_whitespace();
         match words.next() {
@@ -196,6 +202,9 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
                 let format = format.ok_or_else(|| herr("no `format` line before end_header".into()))?;
                 return Ok(Header { format, elements, comments, obj_info, body_start: next });
             }
+            // Blender 2.4x's exporter wrote its "Created by Blender3D …" line after `format`, without
+            // `comment`; Blender's importer reads any such line before the first element as a comment.
+            Some(_) if elements.is_empty() => comments.push(line.trim().to_string()),
             Some(w) => return Err(herr(format!("unknown header keyword `{w}`"))),
         }
         pos = next;
