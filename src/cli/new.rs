@@ -57,6 +57,13 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
         .map_or_else(|| crate::manifest::folder_of(&out).join("cache"), PathBuf::from);
     let Described { kind, up, mut note, rest, origin } = describe(asset, &cache, ui)?;
     let flat = flat_colours(&rest);
+    // Old FBX exporters (3ds Max's) and some OBJ exporters write opaque surfaces fully transparent as Blender's
+    // importer reads them: a manifest that draws nothing of the subject would be no start.
+    let opaque =
+        !rest.primitives.is_empty() && rest.primitives.iter().all(|p| rest.material(p.material).base_color.w <= 0.0);
+    if opaque {
+        note.push_str("; every material is fully transparent as Blender reads it: drawn opaque (`opaque = true`)");
+    }
     if let Some(o) = origin {
         let _ = write!(note, "; its coordinates are far from zero for its size: read relative to {o:?} (`origin`)");
     }
@@ -81,7 +88,7 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     let manifest_dir = absolute(folder)?;
     let rel = |p: &Path| -> anyhow::Result<String> { Ok(relative(&manifest_dir, &absolute(p)?)) };
     let cameras = training_cameras(&rest, asset).map(|c| rel(&c)).transpose()?;
-    let text = manifest(&name, asset, &kind, up, &note, Look { flat, origin, cameras }, writer, &rel)?;
+    let text = manifest(&name, asset, &kind, up, &note, Look { flat, origin, cameras, opaque }, writer, &rel)?;
     std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
     if !ui.quiet {
         eprintln!("wrote {}: {note}", out.display());
@@ -311,6 +318,8 @@ struct Look {
     /// A splatting model's training cameras ([`training_cameras`]), relative to the manifest: offered, commented,
     /// as a rig.
     cameras: Option<String>,
+    /// Whether every material is fully transparent as read (nothing would show): written `opaque`.
+    opaque: bool,
 }
 
 /// OBJ's up axis: +Y, the convention of Blender's and most exporters. Not guessed from the extents, which a
@@ -477,6 +486,13 @@ fn manifest(
             w,
             "origin = [{x}, {y}, {z}]   # subtracted from the file's coordinates as they are read, in double\n\
              \x20                                  # precision: they lie far from zero for the subject's size"
+        );
+    }
+    if look.opaque {
+        let _ = writeln!(
+            w,
+            "opaque = true   # every material is fully transparent as Blender's importer reads it, so nothing\n\
+             \x20               # would show: its own opacity is taken as 1 (a texture's alpha still cuts out)"
         );
     }
     let _ = writeln!(w, "\n[transform]\nup     = \"{up}\"    # {}", up_note(note));

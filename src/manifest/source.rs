@@ -59,6 +59,12 @@ pub struct Source {
     /// OBJ files: `mesh`, `ply_sequence`, and `mesh_sequence` of `.ply` or `.obj` frames.
     #[schemars(with = "Option<[f64; 3]>")]
     pub(super) origin: Option<Spanned<[f64; 3]>>,
+    /// Takes every material's own opacity as 1 (an FBX's `Opacity` or `TransparentColor`, an MTL's `d`, a glTF's
+    /// base colour alpha), for files whose exporter wrote opaque surfaces as transparent: Blender's importer reads
+    /// them as transparent, so Cycles (and vvgen, by default) draws nothing of them. A texture's alpha still cuts
+    /// out. `vvgen new` sets it when nothing of a file would show otherwise.
+    #[schemars(with = "Option<bool>")]
+    pub(super) opaque: Option<Spanned<bool>>,
 }
 
 /// `plane = { size = [w, d], color = [r, g, b], z = … }`.
@@ -204,6 +210,7 @@ impl Source {
                 ("frames", self.frames.is_some()),
                 ("transform", self.transform.is_some()),
                 ("scene", self.scene.is_some()),
+                ("opaque", self.opaque.is_some()),
             ] {
                 if set {
                     diags.push(
@@ -368,6 +375,11 @@ impl Source {
     /// The mesh file, when given.
     pub fn mesh(&self) -> Option<&str> {
         self.mesh.as_ref().map(|f| f.get_ref().as_str())
+    }
+
+    /// `opaque = true`: every material's own opacity taken as 1.
+    pub fn opaque(&self) -> bool {
+        self.opaque.as_ref().is_some_and(|o| *o.get_ref())
     }
 
     /// `origin = [x, y, z]`: the point subtracted from its PLY files' coordinates as they are read.

@@ -61,6 +61,9 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
         // Files of 3D Gaussians were drawn as points before "gaussians 1" drew them as splats: a sequence of them
         // re-renders (posed sources' Gaussians are in their geometry digest); other sequences keep their keys.
         let splats: Option<&[u8]> = src.splats.then_some(b"gaussians 1".as_slice());
+        // `opaque` changes a sequence's materials as its frames are read (posed sources' materials are in their
+        // digest); sequences without it keep their keys.
+        let opaque: Option<&[u8]> = src.opaque.then_some(b"opaque".as_slice());
         let keys = match &src.data {
             SourceData::Sequence(files) => {
                 points_per_source.push(vec![true; files.len()]);
@@ -71,6 +74,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     let mut bytes: Vec<&[u8]> = vec![world, &d.0];
                     bytes.extend(origin);
                     bytes.extend(splats);
+                    bytes.extend(opaque);
                     Ok(key("frame ply", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?
@@ -93,6 +97,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     let mut bytes: Vec<&[u8]> = vec![world];
                     bytes.extend(origin);
                     bytes.extend(splats);
+                    bytes.extend(opaque);
                     // An OBJ's MTL materials were read as Kd and map_Kd alone before "mtl 1" read them as Blender
                     // 4.5's importer does: frames with a material library re-render, others keep their keys.
                     bytes.extend((is_obj(&f.path) && !deps.is_empty()).then_some(b"mtl 1".as_slice()));

@@ -78,6 +78,9 @@ pub struct FbxAsset {
     layered: Vec<super::fbx_layers::Layered>,
     /// What the user should know about how it loaded: textures it names but neither holds nor has beside it.
     pub warnings: Vec<String>,
+    /// Warnings naming the materials Blender's importer reads as fully transparent (nothing of them shows), said
+    /// unless the source takes the materials as opaque (`opaque`).
+    pub unseen: Vec<String>,
 }
 
 impl FbxAsset {
@@ -185,7 +188,7 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
         .iter()
         .map(|s| Take { name: s.element.name.to_string(), begin: s.time_begin, end: s.time_end })
         .collect();
-    let (materials, textures, warnings) = materials(path, &scene)?;
+    let Shading { materials, textures, warnings, unseen } = materials(path, &scene)?;
     // The first of the two defaults for faces without a material (white, then unassigned grey).
     let fallback = materials.len() as u32 - 2;
     let mut parts = Vec::new();
@@ -241,11 +244,18 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
     }
     let blend_shapes = scene.meshes.iter().any(|m| !m.blend_deformers.is_empty());
     let layered = super::fbx_layers::find(&scene);
-    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes, layered, warnings })
+    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes, layered, warnings, unseen })
 }
 
-/// Materials, the textures they use, and warnings about textures they name that are missing.
-type Shading = (Arc<Vec<Material>>, Arc<Vec<Texture>>, Vec<String>);
+/// Materials and the textures they use, with what to say of them.
+struct Shading {
+    materials: Arc<Vec<Material>>,
+    textures: Arc<Vec<Texture>>,
+    /// Textures they name that are missing.
+    warnings: Vec<String>,
+    /// Materials read as fully transparent ([`FbxAsset::unseen`]).
+    unseen: Vec<String>,
+}
 
 /// The scene's materials as the renderer's metallic-roughness, mapped from the FBX material's classic properties
 /// as Blender's importer maps them (`blen_read_material` in io_scene_fbx, 3.4 to 4.5): base colour
@@ -265,7 +275,7 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
     let mut textures: Vec<Texture> = Vec::new();
     let mut cache: std::collections::HashMap<u32, Option<(u32, bool)>> = Default::default();
     let mut mats = Vec::new();
-    let mut warnings = Vec::new();
+    let (mut warnings, mut unseen) = (Vec::new(), Vec::new());
     for m in scene.materials.iter() {
         let props = &m.element.props;
         // `find_prop` looks in the template (`props.defaults`) too, as Blender's `elem_props_get_*` do.
@@ -289,10 +299,10 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
             // Blender's reading, kept (Cycles renders the material so), but a surprise: the FBX SDK takes a
             // `TransparencyFactor` of 0 as opaque whatever `TransparentColor` says, and Eevee ignores alpha
             // unless the blend mode says otherwise. A material's own `Opacity` comes first.
-            warnings.push(format!(
+            unseen.push(format!(
                 "material `{}` is fully transparent as Blender's importer reads it (alpha 0 from its `{from}`), so \
-                 nothing drawn in it shows, as in Cycles (Eevee and the FBX SDK draw it opaque); give the material \
-                 an `Opacity` of 1 in the file to see it",
+                 nothing drawn in it shows, as in Cycles (Eevee and the FBX SDK draw it opaque); set `opaque = \
+                 true` on the source, or give the material an `Opacity` of 1 in the file, to see it",
                 m.element.name
             ));
         }
@@ -348,7 +358,7 @@ fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Error> {
     // Faces without a material: white where the mesh has vertex colours, else Blender's grey.
     mats.push(Material::default());
     mats.push(Material::unassigned());
-    Ok((Arc::new(mats), Arc::new(textures), warnings))
+    Ok(Shading { materials: Arc::new(mats), textures: Arc::new(textures), warnings, unseen })
 }
 
 /// The warning for material `material`'s texture `missing` (as the file names it), with where to put it: at

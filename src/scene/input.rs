@@ -34,6 +34,8 @@ pub struct SourceRequest {
     pub placement: Placement,
     /// Subtracted from its PLY files' coordinates as they are read, in double precision (zero: none).
     pub origin: [f64; 3],
+    /// Whether every material's own opacity is taken as 1 ([`super::posed::PosedScene::make_opaque`]).
+    pub opaque: bool,
 }
 
 /// What a source reads. Paths are as the caller resolved them (the manifest's folder joined).

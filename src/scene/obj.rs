@@ -422,7 +422,8 @@ pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
     let (what, has) = if unseen.len() == 1 { ("material", "has") } else { ("materials", "have") };
     Ok(vec![format!(
         "{}: {what} {} {has} `d 0`, wholly transparent: nothing of it shows, as in Blender. If the file means it \
-         opaque (some exporters write `d` as a transparency, `Tr`'s sense), set `d 1` in its MTL",
+         opaque (some exporters write `d` as a transparency, `Tr`'s sense), set `opaque = true` on the source, or \
+         `d 1` in its MTL",
         path.display(),
         unseen.join(", "),
     )])

@@ -95,6 +95,22 @@ impl PosedScene {
         self.materials.get(i as usize).unwrap_or(&DEFAULT)
     }
 
+    /// Takes every material's own opacity as 1 (a source's `opaque`): its base colour's alpha becomes 1, and a
+    /// blended material without a base colour texture, whose alpha was its own alone, is drawn opaque. A texture's
+    /// alpha still cuts out or blends. Materials already so are left shared.
+    pub fn make_opaque(&mut self) {
+        use super::material::AlphaMode;
+        let own_alpha = |m: &Material| m.alpha_mode == AlphaMode::Blend && m.base_color_texture.is_none();
+        if self.materials.iter().any(|m| m.base_color.w < 1.0 || own_alpha(m)) {
+            for m in Arc::make_mut(&mut self.materials) {
+                m.base_color.w = 1.0;
+                if own_alpha(m) {
+                    m.alpha_mode = AlphaMode::Opaque;
+                }
+            }
+        }
+    }
+
     /// Axis-aligned bounds of every position, or `None` when empty.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut it = self.primitives.iter().flat_map(|p| p.positions.iter());

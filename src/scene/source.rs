@@ -62,6 +62,8 @@ pub struct LoadedSource {
     /// Whether its PLY files hold 3D Gaussians with their shapes, drawn as splatting draws them (found from the
     /// first frame's header, as `check` sees it).
     pub splats: bool,
+    /// Whether every material's own opacity is taken as 1 ([`PosedScene::make_opaque`], on every frame posed).
+    pub opaque: bool,
 }
 
 impl LoadedSource {
@@ -90,6 +92,9 @@ impl LoadedSource {
                     return Err(Error::Source { name, message });
                 }
                 warnings.extend(asset.warnings.iter().map(|w| format!("{}: {w}", path.display())));
+                if !req.opaque {
+                    warnings.extend(asset.unseen.iter().map(|w| format!("{}: {w}", path.display())));
+                }
                 let take = super::fbx::select_take(&asset, &name, &req.clips)?;
                 let duration = take.map_or(0.0, |t| asset.takes[t].duration());
                 let times = frame_times(&req.frames, duration);
@@ -144,7 +149,7 @@ impl LoadedSource {
             SourceFile::MeshSequence(frames) => frames.first().map(|f| &f.path).filter(|p| is_obj(p)),
             _ => None,
         };
-        if let Some(path) = first_obj {
+        if let Some(path) = first_obj.filter(|_| !req.opaque) {
             warnings.extend(super::obj::unseen_materials(path)?);
         }
         // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
@@ -155,7 +160,7 @@ impl LoadedSource {
             SourceFile::Gltf { .. } | SourceFile::Mesh { .. } | SourceFile::MeshSequence(_) => UpAxis::Y,
             _ => UpAxis::Z,
         };
-        Ok(LoadedSource { name, data, default_up, ground, warnings, origin: req.origin, splats })
+        Ok(LoadedSource { name, data, default_up, ground, warnings, origin: req.origin, splats, opaque: req.opaque })
     }
 
     /// blake3 of the bytes a frame is read from: the frame's PLY for a sequence, the file for glTF and meshes
@@ -205,6 +210,9 @@ impl LoadedSource {
             SourceData::MeshSequence(frames) => {
                 *out = transformed(mesh_frame_at(&frames[frame.min(frames.len() - 1)].path, self.origin)?, post);
             }
+        }
+        if self.opaque {
+            out.make_opaque();
         }
         Ok(())
     }

@@ -73,6 +73,7 @@ fn source(m: &Manifest, name: &str, s: &Source) -> Result<SourceRequest, Error> 
         frames,
         placement: placement(&s.transform.clone().unwrap_or_default(), &m.transform),
         origin: s.origin().unwrap_or_default(),
+        opaque: s.opaque(),
     })
 }
 

@@ -179,7 +179,7 @@ fn an_fbx_material_blenders_importer_reads_as_fully_transparent_is_a_warning_nam
         std::fs::write(tmp.path().join("sausage.fbx"), text).unwrap();
         let asset = vvgen::scene::fbx::load(&tmp.path().join("sausage.fbx")).unwrap();
         let alpha = asset.named_materials()[0].1.base_color.w;
-        (alpha, asset.warnings)
+        (alpha, asset.unseen)
     };
     assert_eq!(load(&text), (1.0, Vec::new()));
     let (alpha, warnings) = load(&text.replace(opacity, ""));
@@ -187,7 +187,24 @@ fn an_fbx_material_blenders_importer_reads_as_fully_transparent_is_a_warning_nam
     assert_eq!(warnings.len(), 1, "{warnings:?}");
     let w = &warnings[0];
     assert!(w.contains("material `unnamed` is fully transparent") && w.contains("`TransparentColor`"), "{w}");
-    assert!(w.contains("an `Opacity` of 1"), "{w}");
+    assert!(w.contains("an `Opacity` of 1") && w.contains("`opaque = true`"), "{w}");
+    // Nothing of such a file would show: `vvgen new` draws it opaque, and it builds visible, without the warning.
+    std::fs::write(tmp.path().join("sausage.fbx"), text.replace(opacity, "")).unwrap();
+    let (code, err) = vvgen(tmp.path(), &["new", "sausage.fbx", "-o", "s.toml"]);
+    assert_eq!(code, 0, "{err}");
+    let manifest = std::fs::read_to_string(tmp.path().join("s.toml")).unwrap();
+    assert!(manifest.contains("\nopaque = true"), "{manifest}");
+    let small = manifest.replace("resolution     = [400, 400]", "resolution = [48, 48]");
+    std::fs::write(
+        tmp.path().join("s.toml"),
+        small.replace("frames = { count = ", "frames = { count = 1, fps = 1 } # "),
+    )
+    .unwrap();
+    let (code, err) = vvgen(tmp.path(), &["--color", "never", "build", "s.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("fully transparent"), "{err}");
+    let image = image::open(tmp.path().join("out/sausage/sausage_dnerf/train/r_0000.png")).unwrap().to_rgba8();
+    assert!(image.pixels().filter(|p| p[3] == 255).count() > 100, "the sausage shows");
 }
 
 /// vvgen's posed control points against Blender 3.4's own FBX import of the same files (arrays stored in

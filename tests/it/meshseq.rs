@@ -342,3 +342,32 @@ fn an_obj_far_from_the_origin_is_read_relative_to_its_origin() {
     let (code, err) = vvgen(&["check", "seq.toml"]);
     assert_eq!(code, Some(0), "{err}");
 }
+
+/// `opaque = true` takes the materials' own opacity as 1: an OBJ sequence whose MTL says `d 0` (an exporter's
+/// transparency, `Tr`'s sense) draws nothing, as in Blender, and is warned of; with `opaque` its frames re-render
+/// (the option is in their keys, read from files) and show, without the warning. A plane takes no `opaque`.
+#[test]
+fn opaque_draws_a_sequence_whose_materials_read_as_transparent() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    write_sequence(d);
+    std::fs::write(d.join("seq/skin.mtl"), "newmtl skin\nKd 1 1 1\nd 0\nmap_Kd tex.png\n").unwrap();
+    let source = "mesh_sequence = \"seq/f_{frame:03}.obj\"";
+    std::fs::write(d.join("m.toml"), manifest(source)).unwrap();
+    let check = |d: &Path| {
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["check", "m.toml"]).output().unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        String::from_utf8_lossy(&out.stderr).contains("wholly transparent")
+    };
+    assert!(check(d), "the transparent material is warned of");
+    assert_eq!(run(d).ran(Kind::RenderPass), 3);
+    let centre = |d: &Path| pixel(d, "out/ms_dnerf/train/r_0000.png", 24, 24)[3];
+    assert_eq!(centre(d), 0, "nothing of it shows");
+    std::fs::write(d.join("m.toml"), manifest(&format!("{source}\nopaque = true"))).unwrap();
+    assert!(!check(d), "no warning once it is drawn opaque");
+    assert_eq!(run(d).ran(Kind::RenderPass), 3, "its frames re-render");
+    assert_eq!(centre(d), 255);
+    let plane = "[dataset]\nname = \"p\"\n[source.g]\nplane = { size = [1.0, 1.0] }\nopaque = true\n";
+    let errors = vvgen::manifest::parse(plane, &d.join("p.toml")).unwrap_err();
+    assert!(errors.render(false).contains("`opaque` does not apply to a `plane`"), "{}", errors.render(false));
+}

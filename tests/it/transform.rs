@@ -124,6 +124,7 @@ fn a_scene_opens_from_its_own_request_as_from_the_manifest_that_says_the_same() 
             frames: FrameRange { count: Some(20), fps: Some(10.0), ..Default::default() },
             placement: Placement::default(),
             origin: [0.0; 3],
+            opaque: false,
         }],
         global: Placement { fit: Some(Fit::Height(2.4)), center: Some(Center::Bbox), ..Placement::default() },
         ..Request::default()
