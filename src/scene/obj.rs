@@ -301,11 +301,13 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
     if text.faces == 0 && text.vertices > 0 {
         // MeshLab and CloudCompare write point clouds so; Blender imports them as loose vertices, drawing nothing.
-        let lines = if text.lines > 0 { format!(", {} lines", text.lines) } else { String::new() };
+        let (lines, loose) = match text.lines {
+            0 => (String::new(), "loose vertices"),
+            n => (format!(", {n} lines"), "loose vertices and edges; vvgen draws no lines"),
+        };
         return Err(fail(format!(
-            "{} vertices{lines} and no faces: nothing to draw (Blender imports them as loose vertices and edges; \
-             vvgen draws no lines). If it is a point cloud, save it as PLY (MeshLab: File → Export Mesh As… → \
-             PLY), which vvgen draws as points",
+            "{} vertices{lines} and no faces: nothing to draw (Blender imports them as {loose}). If it is a point \
+             cloud, save it as PLY (MeshLab: File → Export Mesh As… → PLY), which vvgen draws as points",
             text.vertices
         )));
     }

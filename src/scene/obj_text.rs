@@ -75,7 +75,7 @@ pub(super) enum Edit {
     /// without a colour gets a colour of NaNs: some of the file's vertices have colours and some do not, which
     /// tobj refuses (an index out of bounds) and after which Blender keeps colours only on the objects whose
     /// every vertex has one; the NaNs mark the others. A `usemtl` without a name uses [`UNNAMED`]; a polyline
-    /// (`l`) of three or more vertices is dropped.
+    /// (`l`) of three or more vertices is dropped, and so is a face without corners.
     Obj { origin: [f64; 3], pad_colours: bool },
     /// An MTL's lines: a colour statement of one number (`Kd 0.8`), which the format reads as a grey (`Kd 0.8
     /// 0.8 0.8`) and tobj cannot parse, written out in full; a `newmtl` without a name is [`UNNAMED`].
@@ -97,6 +97,8 @@ impl Edit {
             // A polyline: tobj fills one of three or more vertices as a polygon; Blender imports its edges, which
             // draw nothing (one of two vertices, which tobj makes a triangle without area, is left as it is).
             Edit::Obj { .. } if key == "l" => (words.count() >= 3).then(String::new),
+            // A face without corners: tobj refuses the file ("invalid polygon", no line); Blender skips it.
+            Edit::Obj { .. } if key == "f" => words.next().is_none().then(String::new),
             Edit::Obj { origin, pad_colours } => {
                 if key != "v" || (origin == [0.0; 3] && !pad_colours) {
                     return None;
@@ -270,6 +272,6 @@ mod tests {
         assert_eq!(through(b"Ks 0\nKd 0.1 0.2 0.3\nNs 10\n", Edit::Mtl), "Ks 0 0 0\nKd 0.1 0.2 0.3\nNs 10\n");
         assert_eq!(through(b"newmtl \nnewmtl a\n", Edit::Mtl), "newmtl (unnamed)\nnewmtl a\n");
         assert_eq!(through(b"usemtl\r\nusemtl a\n", PLAIN), "usemtl (unnamed)\nusemtl a\n");
-        assert_eq!(through(b"l 1 2 3\nl 1 2\nf 1 2 3\n", PLAIN), "\nl 1 2\nf 1 2 3\n");
+        assert_eq!(through(b"l 1 2 3\nl 1 2\nf 1 2 3\nf\n", PLAIN), "\nl 1 2\nf 1 2 3\n\n");
     }
 }
