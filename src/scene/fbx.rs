@@ -150,15 +150,33 @@ pub fn load(path: &Path) -> Result<FbxAsset, Error> {
     if !path.is_file() {
         return Err(Error::Io { path: path.to_path_buf(), source: std::io::ErrorKind::NotFound.into() });
     }
-    let scene = ufbx::load_file(file, options())
-        .map_err(|e| err(path, format!("not a readable FBX file: {}", e.description)))?;
+    let scene = ufbx::load_file(file, options()).map_err(|e| {
+        let mut head = [0u8; 23];
+        let read = std::fs::File::open(path).and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head));
+        unreadable(path, read.map_or(&[][..], |()| &head[..]), &e)
+    })?;
     finish(path, scene)
+}
+
+/// The error for a file ufbx cannot load, `head` being its first bytes. A binary FBX whose signature is damaged
+/// (`Kaydara FBX Binary` then two spaces, a NUL, 0x1A and a NUL) says so: a transfer in text mode turns those
+/// bytes into others, and ufbx says only "Not an FBX file".
+fn unreadable(path: &Path, head: &[u8], e: &ufbx::Error) -> Error {
+    let signature = b"Kaydara FBX Binary  \x00\x1a\x00";
+    if head.starts_with(b"Kaydara FBX Binary") && !head.starts_with(signature) {
+        return err(
+            path,
+            "a binary FBX whose signature is damaged (its first bytes are not `Kaydara FBX Binary  \\0\\x1a\\0`), \
+             as a transfer in text mode leaves it: copy or download the file again in binary mode"
+                .to_string(),
+        );
+    }
+    err(path, format!("not a readable FBX file: {}", e.description))
 }
 
 /// [`load`] of a file's bytes (`path` names it and locates the textures beside it).
 pub fn load_slice(bytes: &[u8], path: &Path) -> Result<FbxAsset, Error> {
-    let scene = ufbx::load_memory(bytes, options())
-        .map_err(|e| err(path, format!("not a readable FBX file: {}", e.description)))?;
+    let scene = ufbx::load_memory(bytes, options()).map_err(|e| unreadable(path, bytes, &e))?;
     finish(path, scene)
 }
 

@@ -157,6 +157,23 @@ fn an_fbx_whose_texture_was_left_behind_loads_in_its_colours_and_says_where_to_p
     assert_ne!(std::fs::read(&first).unwrap(), plain);
 }
 
+/// A binary FBX whose zero bytes a text-mode transfer turned into spaces (assimp's transparentTest.fbx came so)
+/// is said to be damaged, with the way out, where ufbx says only "Not an FBX file".
+#[test]
+fn a_binary_fbx_damaged_in_transfer_says_so() {
+    let mut bytes = std::fs::read(data("fbx/CesiumMan.fbx")).unwrap();
+    assert!(bytes.starts_with(b"Kaydara FBX Binary  \0\x1a\0"));
+    for b in bytes.iter_mut().filter(|b| **b == 0) {
+        *b = b' ';
+    }
+    let e = vvgen::scene::fbx::load_slice(&bytes, Path::new("man.fbx")).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("signature is damaged") && e.contains("in binary mode"), "{e}");
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("man.fbx"), &bytes).unwrap();
+    let e = vvgen::scene::fbx::load(&tmp.path().join("man.fbx")).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("signature is damaged"), "{e}");
+}
+
 /// 3ds Max embeds TGA images, which have no signature to tell their format by: the name the file gives the
 /// image says it (assimp's test cube; Blender 4.5 does not import ASCII FBX at all).
 #[test]
