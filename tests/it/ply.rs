@@ -45,6 +45,19 @@ fn a_blender_2_4_header_line_and_a_latin1_comment_are_comments() {
     assert_eq!(e, PlyError::Header { line: 4, msg: "unknown header keyword `propety`".into() });
 }
 
+/// An ASCII row's values past those its header declares, on its line, are ignored, as Blender's importer and
+/// trimesh ignore them (VCGLIB, MeshLab's library, writes face rows so: trimesh's fuze_ascii.ply); a row that runs
+/// over two lines still reads.
+#[test]
+fn values_past_an_ascii_rows_declared_ones_are_ignored() {
+    let text = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+                 element face 2\nproperty list uchar int vertex_indices\nproperty uchar red\nend_header\n\
+                 0 0 0 7 7\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2 255 9 1 1 1 1 1 1 1 1 1\n3 1 3\n2 255\n";
+    let d = ply::read(text).unwrap();
+    assert_eq!(d.positions, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]);
+    assert_eq!(d.triangles, [0, 1, 2, 1, 3, 2]);
+}
+
 #[test]
 fn binary_body_starting_with_newline_is_kept() {
     let d = load("assimp_cube_binary_starts_with_nl.ply").unwrap();

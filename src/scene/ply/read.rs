@@ -297,6 +297,22 @@ impl<'a> Cursor<'a> {
         (i > s).then(|| &b[s..i])
     }
 
+    /// Ends an ASCII row: values left on the line its last value was on are skipped. Every writer puts a row on a
+    /// line; VCGLIB (MeshLab's library) writes face rows with more values than their header declares, which
+    /// Blender's importer and trimesh ignore, as here (a row may still run over several lines).
+    #[inline]
+    fn end_row(&mut self) {
+        if self.format != Format::Ascii {
+            return;
+        }
+        let b = self.body;
+        let mut i = self.pos;
+        while i < b.len() && b[i] != b'\n' && b[i] != b'\r' {
+            i += 1;
+        }
+        self.pos = i;
+    }
+
     /// One value of type `ty`.
     #[inline]
     fn value(&mut self, ty: Scalar, el: &Element, row: usize) -> Result<f64, PlyError> {
@@ -358,6 +374,7 @@ impl<'a> Cursor<'a> {
                     }
                 }
             }
+            self.end_row();
         }
         Ok(())
     }
@@ -511,6 +528,7 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
                     }
                 }
             }
+            c.end_row();
             push(&v);
         }
     }
@@ -574,6 +592,7 @@ fn read_faces(c: &mut Cursor<'_>, el: &Element, n_vertices: usize, tris: &mut Ve
                 }
             }
         }
+        c.end_row();
     }
     Ok(())
 }
