@@ -139,7 +139,13 @@ fn a_wholly_transparent_material_is_warned_of() {
         std::process::Command::new(env!("CARGO_BIN_EXE_vvgen")).arg("check").arg(d.join("m.toml")).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
-    assert!(err.contains("material `skin` has `d 0`") && !err.contains("`lid`") && err.contains("set `d 1`"), "{err}");
+    assert!(
+        err.contains("material `skin` has `d 0`")
+            && !err.contains("`lid`")
+            && err.contains("set `opaque = true`")
+            && err.contains("`d 1` in its MTL"),
+        "{err}"
+    );
 }
 
 #[test]
