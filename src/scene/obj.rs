@@ -3,9 +3,9 @@
 //!
 //! Parsing is `tobj`'s, of the text as [`obj_text`] hands it on (UTF-8, edited where tobj and Blender's importer
 //! disagree). Before it runs, one pass over the lines ([`scan`]) checks what tobj would report without a place (a
-//! face index out of range, an `mtllib` or texture that does not exist) and names the file and line (a number
-//! tobj cannot parse is looked for once it has failed); the same pass lists the files a frame depends on (its MTL files and textures), which key the
-//! frame.
+//! face index out of range) and names the file and line (a number tobj cannot parse is looked for once it has
+//! failed); the same pass lists the files a frame depends on (its MTL files and textures), which key the frame.
+//! A library or texture named and missing is left out, as Blender's importer leaves it, and said ([`missing`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -29,11 +29,11 @@ fn at(path: &Path, line: usize, message: String) -> Error {
 /// Checks an OBJ's face indices, `mtllib` files and their `map_Kd` textures, naming file and line of
 /// the first problem; returns the files the OBJ depends on (MTL files, then textures), in the order named.
 pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
-    scan_text(path).map(|(deps, _)| deps)
+    scan_text(path).map(|(deps, _)| deps.files)
 }
 
 /// [`scan`], and what the OBJ's text says of its vertices' colours.
-fn scan_text(path: &Path) -> Result<(Vec<PathBuf>, Text), Error> {
+fn scan_text(path: &Path) -> Result<(Deps, Text), Error> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let text = read_text(path, &bytes)?;
     Ok((resolve(path, &text.libs)?, text))
@@ -45,7 +45,7 @@ fn scan_text(path: &Path) -> Result<(Vec<PathBuf>, Text), Error> {
 /// checked every time.
 pub fn scan_cached(path: &Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
     let (libs, _) = remembered(path, stat)?;
-    resolve(path, &libs)
+    resolve(path, &libs).map(|d| d.files)
 }
 
 /// Whether OBJ `path` has polylines of three or more vertices, remembered as [`scan_cached`] remembers its
@@ -174,31 +174,51 @@ fn bad_number(path: &Path) -> Option<Error> {
     None
 }
 
-/// The MTL files `libs` (named at their OBJ lines), each checked to exist, each followed by its textures.
-fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Vec<PathBuf>, Error> {
+/// The files an OBJ reads besides itself, and what it names that is missing.
+struct Deps {
+    /// The MTL files `libs` names that exist, each followed by the textures it names that exist.
+    files: Vec<PathBuf>,
+    /// A warning for each library or texture named and missing, naming file and line ([`missing`]).
+    missing: Vec<String>,
+}
+
+/// The MTL files `libs` (named at their OBJ lines) and their textures, as [`Deps`]. A missing library or texture
+/// is left out, as Blender's importer leaves it (the OBJ renders without the library's materials, a material
+/// without the texture), and said.
+fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Deps, Error> {
     let dir = crate::scene::input::folder_of(path);
-    let mut deps = Vec::new();
+    let mut deps = Deps { files: Vec::new(), missing: Vec::new() };
     for (line_no, name) in libs {
         let mtl = match mtl::locate(dir, name) {
             Ok(mtl) => mtl,
             Err(tried) => {
-            let mut message = format!("material library `{name}` not found ({})", tried.display());
-            // Libraries get renamed apart from the OBJ that names them: name the ones beside it.
-            let beside = libraries_in(dir);
-            message += &match beside.as_slice() {
-                [] => format!("; put it there, or delete line {line_no} to render without materials"),
-                found => format!(
-                    "; beside it: {}. Point line {line_no} at one, or delete the line to render without materials",
-                    found.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
-                ),
-            };
-            return Err(at(path, *line_no, message));
+                let mut message = format!(
+                    "material library `{name}` not found ({}), so what it would colour renders in Blender's grey, \
+                     as in Blender",
+                    tried.display()
+                );
+                // Libraries get renamed apart from the OBJ that names them: name the ones beside it.
+                message += &match libraries_in(dir).as_slice() {
+                    [] => "; put it there to use it".to_string(),
+                    found => format!(
+                        "; beside it: {}. Point line {line_no} at one to use it",
+                        found.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
+                    ),
+                };
+                deps.missing.push(at(path, *line_no, message).to_string());
+                continue;
             }
         };
-        deps.push(mtl.clone());
-        deps.extend(scan_mtl(&mtl)?);
+        deps.files.push(mtl.clone());
+        scan_mtl(&mtl, &mut deps)?;
     }
     Ok(deps)
+}
+
+/// Warnings for the material libraries and textures OBJ `path` names and that are missing (see [`resolve`]).
+pub fn missing(path: &Path) -> Result<Vec<String>, Error> {
+    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    Ok(resolve(path, &read_text(path, &bytes)?.libs)?.missing)
 }
 
 /// The names of the material libraries (`.mtl`, any case, or a shortened `.mt`) in folder `dir`, sorted; at
@@ -219,14 +239,14 @@ fn libraries_in(dir: &Path) -> Vec<String> {
     found
 }
 
-/// The textures of an MTL file that vvgen reads ([`mtl::MAPS`]), each checked to exist; and the numbers tobj reads, checked here with
-/// their line: tobj panics on a colour with fewer than three numbers and names no line for one it cannot parse,
-/// and a number that is not finite (which it accepts) would reach the images.
-fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
+/// Adds to `deps` the textures of an MTL file that vvgen reads ([`mtl::MAPS`]) that exist, and a warning for each
+/// that does not; and checks the numbers tobj reads, with their line: tobj panics on a colour with fewer than
+/// three numbers and names no line for one it cannot parse, and a number that is not finite (which it accepts)
+/// would reach the images.
+fn scan_mtl(path: &Path, deps: &mut Deps) -> Result<(), Error> {
     let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let text = obj_text::decode(&text);
     let dir = crate::scene::input::folder_of(path);
-    let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let key = words.next();
@@ -254,14 +274,24 @@ fn scan_mtl(path: &Path) -> Result<Vec<PathBuf>, Error> {
                 return Err(at(path, i + 1, format!("`{key}` names no file")));
             };
             match mtl::locate(dir, &map.name) {
-                Ok(tex) => out.push(tex),
-                Err(tried) => {
-                    return Err(at(path, i + 1, format!("texture `{}` not found ({})", map.name, tried.display())))
-                }
+                Ok(tex) => deps.files.push(tex),
+                Err(tried) => deps.missing.push(
+                    at(
+                        path,
+                        i + 1,
+                        format!(
+                            "texture `{}` not found ({}), so its material renders without it (Blender shows its \
+                             missing-image magenta); put it there to use it",
+                            map.name,
+                            tried.display()
+                        ),
+                    )
+                    .to_string(),
+                ),
             }
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// An OBJ frame as a posed scene in source space: one primitive per object, one material per MTL material (as
@@ -282,7 +312,8 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     // textures are named relative to it. Libraries are found as `scan` found them.
     let folders = std::cell::RefCell::new(Vec::new());
     let load_library = |name: &Path| {
-        let file = mtl::locate(dir, &name.to_string_lossy()).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        // A missing library is none (said by `missing`), as in Blender.
+        let Ok(file) = mtl::locate(dir, &name.to_string_lossy()) else { return Ok(Default::default()) };
         let reader = std::io::BufReader::new(std::fs::File::open(&file).map_err(|_| tobj::LoadError::OpenFileFailed)?);
         let loaded = tobj::load_mtl_buf(&mut Lines::new(reader, Edit::Mtl))?;
         folders.borrow_mut().extend(std::iter::repeat_n(crate::scene::input::folder_of(&file).to_path_buf(), loaded.0.len()));

@@ -142,15 +142,19 @@ impl LoadedSource {
             splats = splatted;
             warnings.extend(note);
         }
-        // An OBJ whose material is wholly transparent (`d 0`) draws nothing of it, in Blender too; some exporters
-        // write it for opaque surfaces, so it is said (of the first frame, as `check` sees it).
+        // The libraries and textures an OBJ names and that are missing, and a material wholly transparent (`d 0`),
+        // which draws nothing, in Blender too (some exporters write it for opaque surfaces): said of the first
+        // frame, as `check` sees it.
         let first_obj = match &req.file {
             SourceFile::Mesh { path, .. } if is_obj(path) => Some(path),
             SourceFile::MeshSequence(frames) => frames.first().map(|f| &f.path).filter(|p| is_obj(p)),
             _ => None,
         };
-        if let Some(path) = first_obj.filter(|_| !req.opaque) {
-            warnings.extend(super::obj::unseen_materials(path)?);
+        if let Some(path) = first_obj {
+            warnings.extend(super::obj::missing(path)?);
+            if !req.opaque {
+                warnings.extend(super::obj::unseen_materials(path)?);
+            }
         }
         // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
         // .blend in Blender's (exported +Z up). A ground plane is placed in world units.
