@@ -86,15 +86,17 @@ struct Text {
     faces: usize,
     lines: usize,
     polylines: usize,
+    /// Whether a face corner's texture coordinate or normal index is out of range (see [`Edit::Obj`]).
+    bad_corners: bool,
 }
 
-/// Reads an OBJ's text (decoded as tobj will be given it: [`obj_text`]): every face index is in range, else an
-/// error at the line.
+/// Reads an OBJ's text (decoded as tobj will be given it: [`obj_text`]): every face's vertex index is in range,
+/// else an error at the line.
 fn read_text(path: &Path, bytes: &[u8]) -> Result<Text, Error> {
     let text = obj_text::decode(bytes);
     let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
     let (mut coloured, mut plain) = (false, false);
-    let (mut libs, mut faces, mut lines, mut polylines) = (Vec::new(), 0, 0, 0);
+    let (mut libs, mut faces, mut lines, mut polylines, mut bad_corners) = (Vec::new(), 0, 0, 0, false);
     for (i, line) in text.lines().enumerate() {
         let line_no = i + 1;
         let mut words = line.split_whitespace();
@@ -131,6 +133,11 @@ fn read_text(path: &Path, bytes: &[u8]) -> Result<Text, Error> {
                         })?;
                         // 1-based, or negative: relative to the last one defined.
                         let resolved = if idx < 0 { n + idx + 1 } else { idx };
+                        // A texture coordinate or normal out of range is dropped, as Blender drops it.
+                        if k > 0 && (idx == 0 || resolved < 1 || resolved > n) {
+                            bad_corners = true;
+                            continue;
+                        }
                         if idx == 0 || resolved < 1 || resolved > n {
                             return Err(at(
                                 path,
@@ -147,7 +154,7 @@ fn read_text(path: &Path, bytes: &[u8]) -> Result<Text, Error> {
             _ => {}
         }
     }
-    Ok(Text { libs, partial_colours: coloured && plain, vertices: v, faces, lines, polylines })
+    Ok(Text { libs, partial_colours: coloured && plain, vertices: v, faces, lines, polylines, bad_corners })
 }
 
 /// The first number of a vertex, texture coordinate or normal in OBJ `path` that does not parse as tobj parses it
@@ -321,7 +328,7 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     };
     let reader =
         std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?);
-    let edit = Edit::Obj { origin, pad_colours: text.partial_colours };
+    let edit = Edit::Obj { origin, pad_colours: text.partial_colours, fix_corners: text.bad_corners };
     let (models, materials) = tobj::load_obj_buf(&mut Lines::new(reader, edit), &options, load_library)
         .map_err(|e| match e {
             tobj::LoadError::PositionParseError | tobj::LoadError::TexcoordParseError | tobj::LoadError::NormalParseError => {
@@ -416,7 +423,7 @@ pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
         move |e| Error::Io { path, source: e }
     };
     let head = std::io::BufReader::new(std::fs::File::open(path).map_err(io(path))?);
-    let mut head = Lines::new(head, Edit::Obj { origin: [0.0; 3], pad_colours: false });
+    let mut head = Lines::new(head, Edit::Obj { origin: [0.0; 3], pad_colours: false, fix_corners: false });
     let dir = crate::scene::input::folder_of(path);
     let (mut libs, mut text) = (Vec::new(), String::new());
     loop {

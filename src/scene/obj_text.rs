@@ -47,8 +47,41 @@ fn utf16_line(raw: &[u8], big_endian: bool) -> String {
 }
 
 /// A whole file's text decoded as [`Lines`] decodes it line by line (without its edits): borrowed when it is
-/// UTF-8 without a byte-order mark, as most files are.
+/// UTF-8 without a byte-order mark and without continued lines, as most files are. A line continued by a `\\` at
+/// its end is joined with the next, and an empty line follows the joined one for each line joined, so that
+/// later lines keep their numbers.
 pub(super) fn decode(bytes: &[u8]) -> Cow<'_, str> {
+    let text = decode_lines(bytes);
+    if !text.contains("\\\n") && !text.contains("\\\r\n") {
+        return text;
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut joined = 0;
+    for line in text.split_inclusive('\n') {
+        match continued(line) {
+            Some(head) => {
+                out.push_str(head);
+                out.push(' ');
+                joined += 1;
+            }
+            None => {
+                out.push_str(line);
+                out.extend(std::iter::repeat_n('\n', joined));
+                joined = 0;
+            }
+        }
+    }
+    Cow::Owned(out)
+}
+
+/// `line` without its `\\` and line end, when it is continued on the next line (OBJ's line continuation, which
+/// Blender's importer reads and tobj does not).
+fn continued(line: &str) -> Option<&str> {
+    line.trim_end_matches(['\n', '\r']).strip_suffix('\\')
+}
+
+/// [`decode`] before lines are joined.
+fn decode_lines(bytes: &[u8]) -> Cow<'_, str> {
     let (encoding, mark) = Encoding::of(bytes);
     let body = &bytes[mark..];
     match encoding {
@@ -76,7 +109,9 @@ pub(super) enum Edit {
     /// tobj refuses (an index out of bounds) and after which Blender keeps colours only on the objects whose
     /// every vertex has one; the NaNs mark the others. A `usemtl` without a name uses [`UNNAMED`]; a polyline
     /// (`l`) of three or more vertices is dropped, and so is a face without corners.
-    Obj { origin: [f64; 3], pad_colours: bool },
+    /// With `fix_corners`, a face corner's texture coordinate or normal index that is out of range is dropped, as
+    /// Blender's importer drops it (tobj refuses the file).
+    Obj { origin: [f64; 3], pad_colours: bool, fix_corners: bool },
     /// An MTL's lines: a colour statement of one number (`Kd 0.8`), which the format reads as a grey (`Kd 0.8
     /// 0.8 0.8`) and tobj cannot parse, written out in full; a `newmtl` without a name is [`UNNAMED`].
     Mtl,
@@ -88,10 +123,12 @@ const UNNAMED: &str = "(unnamed)";
 
 impl Edit {
     /// `line` (without its newline) edited, or `None` when it stays as it is (most lines: this is cheap for them).
-    fn apply(self, line: &str) -> Option<String> {
+    /// `seen` counts the texture coordinates and normals above it (kept by [`Lines`] when corners are fixed).
+    fn apply(self, line: &str, seen: [i64; 2]) -> Option<String> {
         let mut words = line.split_ascii_whitespace();
         let key = words.next()?;
         match self {
+            Edit::Obj { fix_corners: true, .. } if key == "f" && line.contains('/') => fixed_face(words, seen),
             Edit::Obj { .. } if key == "usemtl" => words.next().is_none().then(|| format!("usemtl {UNNAMED}")),
             Edit::Mtl if key == "newmtl" => words.next().is_none().then(|| format!("newmtl {UNNAMED}")),
             // A polyline: tobj fills one of three or more vertices as a polygon; Blender imports its edges, which
@@ -99,7 +136,7 @@ impl Edit {
             Edit::Obj { .. } if key == "l" => (words.count() >= 3).then(String::new),
             // A face without corners: tobj refuses the file ("invalid polygon", no line); Blender skips it.
             Edit::Obj { .. } if key == "f" => words.next().is_none().then(String::new),
-            Edit::Obj { origin, pad_colours } => {
+            Edit::Obj { origin, pad_colours, .. } => {
                 if key != "v" || (origin == [0.0; 3] && !pad_colours) {
                     return None;
                 }
@@ -128,6 +165,35 @@ impl Edit {
     }
 }
 
+/// A face line's corners with each texture coordinate or normal index that `seen` (the counts of texture
+/// coordinates and normals above it) does not hold dropped; `None` when none is.
+fn fixed_face<'a>(corners: impl Iterator<Item = &'a str>, seen: [i64; 2]) -> Option<String> {
+    let mut out = String::from("f");
+    let mut changed = false;
+    for corner in corners {
+        let mut parts = corner.split('/');
+        let v = parts.next().unwrap_or("");
+        let mut kept = [""; 2];
+        for (k, part) in parts.take(2).enumerate() {
+            let i: i64 = part.parse().unwrap_or(0);
+            let resolved = if i < 0 { seen[k] + i + 1 } else { i };
+            if (1..=seen[k]).contains(&resolved) {
+                kept[k] = part;
+            } else {
+                changed |= !part.is_empty();
+            }
+        }
+        out.push(' ');
+        out.push_str(v);
+        match kept {
+            ["", ""] => {}
+            [t, ""] => write!(out, "/{t}").expect("BUG: writing to a String cannot fail"),
+            [t, n] => write!(out, "/{t}/{n}").expect("BUG: writing to a String cannot fail"),
+        }
+    }
+    changed.then_some(out)
+}
+
 /// A reader of an OBJ's or MTL's text that hands tobj UTF-8 lines, edited as `edit` says; one line is held at
 /// a time. The input is read through `inner`'s own buffer.
 pub(super) struct Lines<R> {
@@ -137,34 +203,13 @@ pub(super) struct Lines<R> {
     encoding: Option<Encoding>,
     line: Vec<u8>,
     at: usize,
+    /// The texture coordinates and normals read so far (counted when corners are fixed).
+    seen: [i64; 2],
 }
 
 impl<R: std::io::BufRead> Lines<R> {
     pub(super) fn new(inner: R, edit: Edit) -> Self {
-        Lines { inner, edit, encoding: None, line: Vec::new(), at: 0 }
-    }
-
-    /// Reads the next line's raw bytes (newline included) into `self.line`, in the file's encoding.
-    fn read_raw(&mut self, encoding: Encoding) -> std::io::Result<()> {
-        match encoding {
-            Encoding::Bytes => {
-                self.inner.read_until(b'\n', &mut self.line)?;
-            }
-            Encoding::Utf16 { big_endian } => loop {
-                let mut unit = [0u8; 2];
-                match std::io::Read::read_exact(&mut self.inner, &mut unit) {
-                    Ok(()) => {}
-                    Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break,
-                    Err(e) => return Err(e),
-                }
-                self.line.extend_from_slice(&unit);
-                let newline = if big_endian { [0, b'\n'] } else { [b'\n', 0] };
-                if unit == newline {
-                    break;
-                }
-            },
-        }
-        Ok(())
+        Lines { inner, edit, encoding: None, line: Vec::new(), at: 0, seen: [0; 2] }
     }
 
     /// Replaces the held line by the next one, decoded and edited.
@@ -180,16 +225,36 @@ impl<R: std::io::BufRead> Lines<R> {
                 e
             }
         };
-        self.read_raw(encoding)?;
-        let text = match encoding {
-            Encoding::Bytes => match std::str::from_utf8(&self.line) {
-                Ok(s) => Cow::Borrowed(s),
-                Err(_) => bytes_line(&self.line),
-            },
-            Encoding::Utf16 { big_endian } => Cow::Owned(utf16_line(&self.line, big_endian)),
-        };
+        let mut text = read_decoded(&mut self.inner, &mut self.line, encoding)?;
+        // A continued line is joined with the next (and the next, …), as Blender's importer reads it.
+        if let Some(head) = continued(&text) {
+            let mut joined = format!("{head} ");
+            let mut more = Vec::new();
+            loop {
+                more.clear();
+                let next = read_decoded(&mut self.inner, &mut more, encoding)?;
+                match continued(&next) {
+                    Some(head) if !next.is_empty() => {
+                        joined.push_str(head);
+                        joined.push(' ');
+                    }
+                    _ => {
+                        joined.push_str(&next);
+                        break;
+                    }
+                }
+            }
+            text = Cow::Owned(joined);
+        }
         let body = text.trim_end_matches(['\n', '\r']);
-        let edited = self.edit.apply(body);
+        if let Edit::Obj { fix_corners: true, .. } = self.edit {
+            match body.split_ascii_whitespace().next() {
+                Some("vt") => self.seen[0] += 1,
+                Some("vn") => self.seen[1] += 1,
+                _ => {}
+            }
+        }
+        let edited = self.edit.apply(body, self.seen);
         // The common case: a UTF-8 line that no edit touches stays in place.
         if edited.is_none() && matches!(text, Cow::Borrowed(_)) {
             return Ok(());
@@ -201,6 +266,37 @@ impl<R: std::io::BufRead> Lines<R> {
         self.line = out.into_bytes();
         Ok(())
     }
+}
+
+/// Reads the next line of `inner` (newline included) into `line`, in the file's encoding, and decodes it:
+/// borrowed from `line` when it is UTF-8.
+fn read_decoded<'l>(inner: &mut impl std::io::BufRead, line: &'l mut Vec<u8>, encoding: Encoding) -> std::io::Result<Cow<'l, str>> {
+    match encoding {
+        Encoding::Bytes => {
+            inner.read_until(b'\n', line)?;
+        }
+        Encoding::Utf16 { big_endian } => loop {
+            let mut unit = [0u8; 2];
+            match std::io::Read::read_exact(inner, &mut unit) {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break,
+                Err(e) => return Err(e),
+            }
+            line.extend_from_slice(&unit);
+            let newline = if big_endian { [0, b'\n'] } else { [b'\n', 0] };
+            if unit == newline {
+                break;
+            }
+        },
+    }
+    let line: &'l [u8] = line;
+    Ok(match encoding {
+        Encoding::Bytes => match std::str::from_utf8(line) {
+            Ok(s) => Cow::Borrowed(s),
+            Err(_) => bytes_line(line),
+        },
+        Encoding::Utf16 { big_endian } => Cow::Owned(utf16_line(line, big_endian)),
+    })
 }
 
 impl<R: std::io::BufRead> std::io::Read for Lines<R> {
@@ -237,7 +333,7 @@ mod tests {
         out
     }
 
-    const PLAIN: Edit = Edit::Obj { origin: [0.0; 3], pad_colours: false };
+    const PLAIN: Edit = Edit::Obj { origin: [0.0; 3], pad_colours: false, fix_corners: false };
 
     #[test]
     fn utf8_text_passes_unchanged_and_a_byte_order_mark_is_dropped() {
@@ -265,9 +361,9 @@ mod tests {
 
     #[test]
     fn vertex_lines_are_shifted_and_padded_and_mtl_greys_written_out() {
-        let shift = Edit::Obj { origin: [500000.0, 0.0, 0.0], pad_colours: false };
+        let shift = Edit::Obj { origin: [500000.0, 0.0, 0.0], pad_colours: false, fix_corners: false };
         assert_eq!(through(b"v 500001.5 2 3 0.1 0.2 0.3\nvt 1 2\n", shift), "v 1.5 2 3 0.1 0.2 0.3\nvt 1 2\n");
-        let pad = Edit::Obj { origin: [0.0; 3], pad_colours: true };
+        let pad = Edit::Obj { origin: [0.0; 3], pad_colours: true, fix_corners: false };
         assert_eq!(through(b"v 1 2 3\nv 1 2 3 0.5 0.5 0.5\n", pad), "v 1 2 3 NaN NaN NaN\nv 1 2 3 0.5 0.5 0.5\n");
         assert_eq!(through(b"Ks 0\nKd 0.1 0.2 0.3\nNs 10\n", Edit::Mtl), "Ks 0 0 0\nKd 0.1 0.2 0.3\nNs 10\n");
         assert_eq!(through(b"newmtl \nnewmtl a\n", Edit::Mtl), "newmtl (unnamed)\nnewmtl a\n");

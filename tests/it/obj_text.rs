@@ -131,3 +131,25 @@ fn a_number_tobj_cannot_read_is_an_error_at_its_line() {
     let e = obj::scene(&d.join("n.obj")).unwrap_err().to_string();
     assert!(e.contains("n.obj:4") && e.contains("`vt` needs 2 numbers"), "{e}");
 }
+
+/// A line continued by `\` (the OBJ spec's continuation, trimesh's wallhole.obj) reads joined, as Blender reads
+/// it, and later lines keep their numbers in errors; a texture coordinate or normal index out of range is
+/// dropped as Blender drops it (trimesh's cubevt.obj), a vertex index out of range stays an error.
+#[test]
+fn continued_lines_join_and_corner_indices_out_of_range_are_dropped() {
+    let d = tempfile::tempdir().unwrap();
+    let d = d.path();
+    std::fs::write(d.join("one.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").unwrap();
+    std::fs::write(d.join("split.obj"), "v 0 0 0\nv 1 0 \\\n0\nv 1 1 0\r\nv 0 1 0\nf 1 2 \\\r\n3 \\\n4\n").unwrap();
+    let geometry = |s: &PosedScene| (s.primitives[0].positions.clone(), s.primitives[0].indices.to_vec());
+    assert_eq!(geometry(&read(d, "split.obj")), geometry(&read(d, "one.obj")));
+    std::fs::write(d.join("bad.obj"), "v 0 0 0\nv 1 \\\n0 0\nv 1 1 0\nf 1 2 \\\n3\nf 1 2 9\n").unwrap();
+    let e = obj::scene(&d.join("bad.obj")).unwrap_err().to_string();
+    assert!(e.contains("bad.obj:7") && e.contains("vertex 9"), "{e}");
+    // `vt` and `vn` named but never given: the corners keep their vertices.
+    std::fs::write(d.join("corners.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/4/7\n")
+        .unwrap();
+    let s = read(d, "corners.obj");
+    assert_eq!(geometry(&s), geometry(&read(d, "one.obj")));
+    assert!(s.primitives[0].uvs.is_empty());
+}
