@@ -13,6 +13,7 @@ pub mod material;
 mod mtl;
 pub mod obj;
 mod obj_text;
+mod polygon;
 pub mod ply;
 mod ply_scene;
 pub mod posed;

@@ -313,7 +313,8 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
 pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     let (_, text) = scan_text(path)?;
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
-    let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
+    // Polygons are filled here ([`super::polygon`]): tobj's own fan fills a concave one wrongly.
+    let options = tobj::LoadOptions { single_index: true, triangulate: false, ..Default::default() };
     let dir = crate::scene::input::folder_of(path);
     // Each material's MTL folder, in tobj's order (it appends each library's materials as it loads them): their
     // textures are named relative to it. Libraries are found as `scan` found them.
@@ -361,13 +362,25 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     mats.push(Material { double_sided: true, ..Material::default() });
     mats.push(Material { double_sided: true, ..Material::unassigned() });
     let mut primitives = Vec::new();
+    let mut scratch = super::polygon::Scratch::default();
     for (object, model) in models.iter().enumerate() {
         let m = &model.mesh;
         let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
         if positions.iter().any(|p| !p.is_finite()) {
             return Err(fail(format!("object `{}` has a vertex that is not finite", model.name)));
         }
-        let indices = m.indices.clone();
+        let indices = if m.face_arities.is_empty() {
+            m.indices.clone()
+        } else {
+            let mut tris = Vec::with_capacity(m.indices.len() * 3 / 2);
+            let mut at = 0;
+            for &n in &m.face_arities {
+                let poly = m.indices.get(at..at + n as usize).unwrap_or(&[]);
+                super::polygon::triangulate(&positions, poly, &mut scratch, &mut tris);
+                at += n as usize;
+            }
+            tris
+        };
         let normals = if m.normals.len() == m.positions.len() {
             m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or_zero()).collect()
         } else {
