@@ -22,6 +22,9 @@ pub(crate) fn triangulate(positions: &[Vec3], poly: &[u32], scratch: &mut Scratc
         [a] => out.extend_from_slice(&[a, a, a]),
         [a, b] => out.extend_from_slice(&[a, b, b]),
         [a, b, c] => out.extend_from_slice(&[a, b, c]),
+        // Most polygons are quads: split along the first diagonal unless that folds the quad (its two halves
+        // facing apart, the test Blender makes), without projecting it.
+        [a, b, c, d] if unfolded(positions, [a, b, c, d]) => out.extend_from_slice(&[a, b, c, a, c, d]),
         _ => {
             let Scratch { ear, flat, tris } = scratch;
             projected(positions, poly, flat);
@@ -45,6 +48,12 @@ pub(crate) fn triangulate(positions: &[Vec3], poly: &[u32], scratch: &mut Scratc
             }
         }
     }
+}
+
+/// Whether quad `q`'s halves along its first diagonal face the same way.
+fn unfolded(positions: &[Vec3], q: [u32; 4]) -> bool {
+    let [a, b, c, d] = q.map(|i| positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+    (b - a).cross(c - a).dot((c - a).cross(d - a)) > 0.0
 }
 
 /// The fan from the first corner.
