@@ -5,6 +5,7 @@
 pub mod blend;
 pub mod fbx;
 mod fbx_layers;
+mod fbx_materials;
 pub mod gaussians;
 pub mod gltf;
 pub mod input;
