@@ -223,7 +223,8 @@ impl<'a> Importer<'a> {
             // The `bpy` module starts with factory settings; the file is opened without its scripts.
             command.arg("-c").arg(OPEN_THEN_RUN).arg(blend).arg(&script);
         } else {
-            command.args(["-b", "--factory-startup", "--disable-autoexec", "-noaudio"]).arg(blend).arg("--python").arg(&script);
+            let flags = ["-b", "--factory-startup", "--disable-autoexec", "-noaudio"];
+            command.args(flags).arg(blend).arg("--python").arg(&script);
         }
         let out = command
             .arg("--")
@@ -463,7 +464,10 @@ fn bpy_library(exe: &Path) -> Option<PathBuf> {
     let mut found: Vec<PathBuf> = pythons
         .filter_map(|p| std::fs::read_dir(p.join("site-packages/bpy")).ok())
         .flat_map(|d| d.filter_map(|e| e.ok().map(|e| e.path())))
-        .filter(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("__init__") && n.ends_with(".so")))
+        .filter(|p| {
+            let name = p.file_name().and_then(|n| n.to_str());
+            name.is_some_and(|n| n.starts_with("__init__") && n.ends_with(".so"))
+        })
         .collect();
     found.sort();
     found.pop()

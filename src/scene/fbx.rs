@@ -263,7 +263,8 @@ fn finish(path: &Path, scene: ufbx::SceneRoot) -> Result<FbxAsset, Error> {
     }
     let blend_shapes = scene.meshes.iter().any(|m| !m.blend_deformers.is_empty());
     let layered = super::fbx_layers::find(&scene);
-    Ok(FbxAsset { path: path.to_path_buf(), scene, takes, parts, materials, textures, blend_shapes, layered, warnings, unseen })
+    let path = path.to_path_buf();
+    Ok(FbxAsset { path, scene, takes, parts, materials, textures, blend_shapes, layered, warnings, unseen })
 }
 
 impl FbxAsset {

@@ -179,7 +179,9 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
         .map_err(|e| err(path, format!("embedded texture `{}`: {e}", t.element.name)))?;
     if reader.format().is_none() {
         // TGA has no signature to guess from (3ds Max embeds it): the name the file gives the image says it.
-        let named = [&t.relative_filename, &t.filename].into_iter().find_map(|n| image::ImageFormat::from_path(n.as_ref() as &str).ok());
+        let named = [&t.relative_filename, &t.filename]
+            .into_iter()
+            .find_map(|n| image::ImageFormat::from_path(n.as_ref() as &str).ok());
         if let Some(format) = named {
             reader.set_format(format);
         }

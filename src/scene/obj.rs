@@ -311,7 +311,12 @@ pub fn scene(path: &Path) -> Result<PosedScene, Error> {
 /// photogrammetry exports (OpenDroneMap's, a drone survey's) write positions in georeferenced metres, whose
 /// decimals hold detail that single precision, which positions are held in, steps (0.25 m at 4 000 km).
 pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
-    let (_, text) = scan_text(path)?;
+    scene_and_missing(path, origin).map(|(scene, _)| scene)
+}
+
+/// [`scene_at`], and the warnings [`missing`] gives, from the same reading of the file.
+pub(crate) fn scene_and_missing(path: &Path, origin: [f64; 3]) -> Result<(PosedScene, Vec<String>), Error> {
+    let (deps, text) = scan_text(path)?;
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
     // Polygons are filled here ([`super::polygon`]): tobj's own fan fills a concave one wrongly.
     let options = tobj::LoadOptions { single_index: true, triangulate: false, ..Default::default() };
@@ -322,20 +327,23 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
     let load_library = |name: &Path| {
         // A missing library is none (said by `missing`), as in Blender.
         let Ok(file) = mtl::locate(dir, &name.to_string_lossy()) else { return Ok(Default::default()) };
-        let reader = std::io::BufReader::new(std::fs::File::open(&file).map_err(|_| tobj::LoadError::OpenFileFailed)?);
-        let loaded = tobj::load_mtl_buf(&mut Lines::new(reader, Edit::Mtl))?;
-        folders.borrow_mut().extend(std::iter::repeat_n(crate::scene::input::folder_of(&file).to_path_buf(), loaded.0.len()));
+        let opened = std::fs::File::open(&file).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let loaded = tobj::load_mtl_buf(&mut Lines::new(std::io::BufReader::new(opened), Edit::Mtl))?;
+        let folder = crate::scene::input::folder_of(&file).to_path_buf();
+        folders.borrow_mut().extend(std::iter::repeat_n(folder, loaded.0.len()));
         Ok(loaded)
     };
-    let reader =
-        std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?);
+    let opened = std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let reader = std::io::BufReader::new(opened);
     let edit = Edit::Obj { origin, pad_colours: text.partial_colours, fix_corners: text.bad_corners };
-    let (models, materials) = tobj::load_obj_buf(&mut Lines::new(reader, edit), &options, load_library)
-        .map_err(|e| match e {
-            tobj::LoadError::PositionParseError | tobj::LoadError::TexcoordParseError | tobj::LoadError::NormalParseError => {
-                bad_number(path).unwrap_or_else(|| fail(e.to_string()))
+    let (models, materials) =
+        tobj::load_obj_buf(&mut Lines::new(reader, edit), &options, load_library).map_err(|e| {
+            use tobj::LoadError::{NormalParseError, PositionParseError, TexcoordParseError};
+            match e {
+                PositionParseError | TexcoordParseError | NormalParseError => bad_number(path),
+                _ => None,
             }
-            e => fail(e.to_string()),
+            .unwrap_or_else(|| fail(e.to_string()))
         })?;
     let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
     if text.faces == 0 && text.vertices > 0 {
@@ -393,7 +401,8 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
             Vec::new()
         };
         // Colours of NaN mark vertices without one: Blender keeps no colours on an object with such vertices.
-        let colors: Vec<Vec4> = if m.vertex_color.len() == m.positions.len() && !m.vertex_color.iter().any(|c| c.is_nan()) {
+        let whole = m.vertex_color.len() == m.positions.len() && !m.vertex_color.iter().any(|c| c.is_nan());
+        let colors: Vec<Vec4> = if whole {
             m.vertex_color
                 .chunks_exact(3)
                 .map(|c| Vec4::new(srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]), 1.0))
@@ -422,7 +431,8 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
             gaussians: None,
         });
     }
-    Ok(PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures), lights: Vec::new() })
+    let scene = PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures), lights: Vec::new() };
+    Ok((scene, deps.missing))
 }
 
 /// A warning naming the MTL materials of OBJ `path` that are wholly transparent (`d 0`, no `map_d`): nothing of
@@ -436,7 +446,7 @@ pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
         move |e| Error::Io { path, source: e }
     };
     let head = std::io::BufReader::new(std::fs::File::open(path).map_err(io(path))?);
-    let mut head = Lines::new(head, Edit::Obj { origin: [0.0; 3], pad_colours: false, fix_corners: false });
+    let mut head = Lines::new(head, Edit::OBJ_AS_IS);
     let dir = crate::scene::input::folder_of(path);
     let (mut libs, mut text) = (Vec::new(), String::new());
     loop {
@@ -460,10 +470,13 @@ pub fn unseen_materials(path: &Path) -> Result<Vec<String>, Error> {
             let mut words = line.split_whitespace();
             match (words.next(), &mut current) {
                 (Some("newmtl"), _) => {
-                    unseen.extend(current.take().filter(|&(_, zero, map)| zero && !map).map(|(n, ..)| format!("`{n}`")));
+                    let shows_nothing = current.take().filter(|&(_, zero, map)| zero && !map);
+                    unseen.extend(shows_nothing.map(|(n, ..)| format!("`{n}`")));
                     current = Some((line.trim_start()["newmtl".len()..].trim().to_string(), false, false));
                 }
-                (Some("d"), Some(m)) => m.1 = words.next().and_then(|w| w.parse::<f32>().ok()).is_some_and(|d| d <= 0.0),
+                (Some("d"), Some(m)) => {
+                    m.1 = words.next().and_then(|w| w.parse::<f32>().ok()).is_some_and(|d| d <= 0.0);
+                }
                 (Some("map_d"), Some(m)) => m.2 = true,
                 _ => {}
             }

@@ -42,7 +42,8 @@ fn bytes_line(raw: &[u8]) -> Cow<'_, str> {
 /// The UTF-16 code units `raw` (pairs of bytes in the order `big_endian` says) as text, an unpaired surrogate
 /// as U+FFFD.
 fn utf16_line(raw: &[u8], big_endian: bool) -> String {
-    let units = raw.chunks_exact(2).map(|p| if big_endian { u16::from_be_bytes([p[0], p[1]]) } else { u16::from_le_bytes([p[0], p[1]]) });
+    let unit = |p: &[u8]| if big_endian { u16::from_be_bytes([p[0], p[1]]) } else { u16::from_le_bytes([p[0], p[1]]) };
+    let units = raw.chunks_exact(2).map(unit);
     char::decode_utf16(units).map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER)).collect()
 }
 
@@ -122,6 +123,9 @@ pub(super) enum Edit {
 const UNNAMED: &str = "(unnamed)";
 
 impl Edit {
+    /// An OBJ's lines with no option set: what every reading of an OBJ edits (see [`Edit::Obj`]).
+    pub(super) const OBJ_AS_IS: Edit = Edit::Obj { origin: [0.0; 3], pad_colours: false, fix_corners: false };
+
     /// `line` (without its newline) edited, or `None` when it stays as it is (most lines: this is cheap for them).
     /// `seen` counts the texture coordinates and normals above it (kept by [`Lines`] when corners are fixed).
     fn apply(self, line: &str, seen: [i64; 2]) -> Option<String> {
@@ -270,7 +274,11 @@ impl<R: std::io::BufRead> Lines<R> {
 
 /// Reads the next line of `inner` (newline included) into `line`, in the file's encoding, and decodes it:
 /// borrowed from `line` when it is UTF-8.
-fn read_decoded<'l>(inner: &mut impl std::io::BufRead, line: &'l mut Vec<u8>, encoding: Encoding) -> std::io::Result<Cow<'l, str>> {
+fn read_decoded<'l>(
+    inner: &mut impl std::io::BufRead,
+    line: &'l mut Vec<u8>,
+    encoding: Encoding,
+) -> std::io::Result<Cow<'l, str>> {
     match encoding {
         Encoding::Bytes => {
             inner.read_until(b'\n', line)?;
@@ -333,7 +341,7 @@ mod tests {
         out
     }
 
-    const PLAIN: Edit = Edit::Obj { origin: [0.0; 3], pad_colours: false, fix_corners: false };
+    const PLAIN: Edit = Edit::OBJ_AS_IS;
 
     #[test]
     fn utf8_text_passes_unchanged_and_a_byte_order_mark_is_dropped() {

@@ -109,7 +109,8 @@ mod tests {
 
     /// Area of the triangles `t` over `p`.
     fn area(p: &[Vec3], t: &[u32]) -> f32 {
-        t.chunks_exact(3).map(|t| (p[t[1] as usize] - p[t[0] as usize]).cross(p[t[2] as usize] - p[t[0] as usize]).length() / 2.0).sum()
+        let at = |i: u32| p[i as usize];
+        t.chunks_exact(3).map(|t| (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0])).length() / 2.0).sum()
     }
 
     #[test]
@@ -120,7 +121,8 @@ mod tests {
         triangulate(&quad, &[0, 1, 2, 3], &mut scratch, &mut out);
         assert_eq!(out, [0, 1, 2, 0, 2, 3]);
         // An L (area 3) in the XZ plane, fanned from a corner that does not see its far arm: the fan is wrong.
-        let l = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]].map(|[x, z]| Vec3::new(x, 0.0, z));
+        let outline = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]];
+        let l = outline.map(|[x, z]| Vec3::new(x, 0.0, z));
         let poly = [1, 2, 3, 4, 5, 0];
         let mut fanned = Vec::new();
         fan(&poly, &mut fanned);

@@ -81,7 +81,8 @@ impl LoadedSource {
                 if let Some(message) = nothing_drawn(path, asset.holds()) {
                     return Err(Error::Source { name, message });
                 }
-                let clips = select_clips(&asset, &req.clips).map_err(|message| Error::Clip { name: name.clone(), message })?;
+                let clips =
+                    select_clips(&asset, &req.clips).map_err(|message| Error::Clip { name: name.clone(), message })?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
                 let times = frame_times(&req.frames, duration as f64);
                 SourceData::Gltf { asset: Box::new(asset), clips, times }
@@ -108,12 +109,17 @@ impl LoadedSource {
                 let got = importer.import(path, select, &req.frames)?;
                 warnings.extend(got.info.warnings.iter().map(|w| format!("{}: {w}", path.display())));
                 let frames = got.info.frames.iter().enumerate();
-                SourceData::MeshSequence(
-                    frames.map(|(i, &number)| FrameFile { number, path: got.dir.join(format!("frame_{i:05}.gltf")) }).collect(),
-                )
+                let file = |(i, &number): (usize, &i64)| {
+                    FrameFile { number, path: got.dir.join(format!("frame_{i:05}.gltf")) }
+                };
+                SourceData::MeshSequence(frames.map(file).collect())
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
-            SourceFile::Mesh { path, .. } if is_obj(path) => SourceData::Static(super::obj::scene_at(path, req.origin)?),
+            SourceFile::Mesh { path, .. } if is_obj(path) => {
+                let (scene, missing) = super::obj::scene_and_missing(path, req.origin)?;
+                warnings.extend(missing);
+                SourceData::Static(scene)
+            }
             SourceFile::Mesh { path, scene } => {
                 if let Some(message) = way_out_of(path) {
                     return Err(Error::Source { name, message });
@@ -151,7 +157,10 @@ impl LoadedSource {
             _ => None,
         };
         if let Some(path) = first_obj {
-            warnings.extend(super::obj::missing(path)?);
+            // A static OBJ's were said as it was read.
+            if matches!(req.file, SourceFile::MeshSequence(_)) {
+                warnings.extend(super::obj::missing(path)?);
+            }
             if !req.opaque {
                 warnings.extend(super::obj::unseen_materials(path)?);
             }
