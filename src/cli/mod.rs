@@ -155,13 +155,13 @@ pub enum Command {
         #[arg(long)]
         cache: Option<PathBuf>,
     },
-    /// Write a commented manifest to start from, for a glTF, FBX, .blend, PLY or OBJ file or a folder of PLY or
-    /// OBJ frames: clips, frame count and up axis read off the asset, the NeRF-synthetic recipe for the rest.
+    /// Write a commented manifest to start from, for a glTF, FBX, .blend, PLY, OBJ or STL file or a folder of PLY,
+    /// OBJ or STL frames: clips, frame count and up axis read off the asset, the NeRF-synthetic recipe for the rest.
     #[command(
         after_help = "Examples:\n  vvgen new CesiumMan.glb\n  vvgen new frames/ --writer nerfstudio -o scan.toml"
     )]
     New {
-        /// The asset: a .gltf/.glb, .fbx, .blend, .ply or .obj file, or a folder of .ply or .obj frames.
+        /// The asset: a .gltf/.glb, .fbx, .blend, .ply, .obj or .stl file, or a folder of .ply, .obj or .stl frames.
         asset: PathBuf,
         /// The output's writer.
         #[arg(long, default_value = "dnerf", value_parser = clap::builder::PossibleValuesParser::new(new::WRITERS))]

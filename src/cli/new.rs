@@ -134,16 +134,25 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             .collect();
         files.sort();
         let count = |e: &str| files.iter().filter(|p| ext(p) == e).count();
-        let (key, e) = match (count("ply"), count("obj")) {
-            (0, 0) => bail!("{}: no .ply or .obj frames in this folder", asset.display()),
-            (p, o) if p >= o => ("ply_sequence", "ply"),
-            _ => ("mesh_sequence", "obj"),
-        };
+        // The kind of frame the folder holds most of (PLY first when as many).
+        let (e, n) = ["ply", "obj", "stl"]
+            .map(|e| (e, count(e)))
+            .into_iter()
+            .rev()
+            .max_by_key(|&(_, n)| n)
+            .unwrap_or(("ply", 0));
+        if n == 0 {
+            bail!("{}: no .ply, .obj or .stl frames in this folder", asset.display());
+        }
+        let key = if e == "ply" { "ply_sequence" } else { "mesh_sequence" };
         let first = files.iter().find(|p| ext(p) == e).expect("counted above");
-        let (frame, origin) = mesh_at_rest(first)?;
+        let (frame, origin) = if e == "stl" { (scene::stl::scene(first)?, None) } else { mesh_at_rest(first)? };
         drawable(&frame, first)?;
-        let (up, why) = if e == "obj" { obj_up() } else { tallest(&frame, first) };
-        let n = count(e);
+        let (up, why) = match e {
+            "obj" => obj_up(),
+            "stl" => stl_up(),
+            _ => tallest(&frame, first),
+        };
         let seq = Asset::Sequence { key, glob: format!("*.{e}"), frames: n };
         let note = format!("{n} {e} frames; {why}");
         return Ok(Described { kind: seq, up, note, rest: frame, origin });
@@ -230,9 +239,15 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             // One OBJ is a static mesh (`mesh`), as one PLY is; a folder of them is a sequence.
             Ok(Described { kind: Asset::Mesh, up, note: why, rest: s, origin })
         }
+        "stl" => {
+            let s = scene::stl::scene(asset)?;
+            drawable(&s, asset)?;
+            let (up, why) = stl_up();
+            Ok(Described { kind: Asset::Mesh, up, note: why, rest: s, origin: None })
+        }
         _ => match scene::source::way_out_of(asset) {
             Some(way_out) => bail!("{way_out}"),
-            None => bail!("{}: not a glTF, FBX, .blend, PLY or OBJ file, nor a folder of frames", asset.display()),
+            None => bail!("{}: not a glTF, FBX, .blend, PLY, OBJ or STL file, nor a folder of frames", asset.display()),
         },
     }
 }
@@ -326,6 +341,11 @@ struct Look {
 /// wide subject (a car, a plate) would get wrong.
 fn obj_up() -> (&'static str, String) {
     ("y", "up \"y\": OBJ files are +Y up by convention (Blender's exporter and most others)".into())
+}
+
+/// An STL file's up axis, and why.
+fn stl_up() -> (&'static str, String) {
+    ("z", "up \"z\": STL files are +Z up, as a 3D printer's bed and Blender's importer take them".into())
 }
 
 /// The up axis of a 3D Gaussian splatting file, from the cameras it was trained on: graphdeco-inria's trainer
@@ -590,6 +610,8 @@ fn up_note(note: &str) -> &'static str {
         "guessed from the first frame's extents: check it"
     } else if note.contains("OBJ") {
         "OBJ's usual up axis; the world is +Z up"
+    } else if note.contains("STL") {
+        "STL's up axis (a printer's bed is XY); the world is +Z up"
     } else if note.contains("FBX") {
         "FBX is loaded in the world's axes"
     } else if note.contains("as Blender shows it") {

@@ -28,13 +28,13 @@ pub struct Source {
     pub object: Option<String>,
     /// A `.blend` source's collection to import (with its child collections).
     pub collection: Option<String>,
-    /// A static mesh, glTF or PLY.
+    /// A static mesh: glTF, PLY, OBJ (with MTL and textures) or STL.
     #[schemars(with = "Option<String>")]
     pub(super) mesh: Option<Spanned<String>>,
     /// A PLY sequence: a pattern with `{frame}` / `{frame:04}`, or a glob (`*`, `?`, `[…]`).
     #[schemars(with = "Option<String>")]
     pub(super) ply_sequence: Option<Spanned<String>>,
-    /// A mesh sequence, one file per frame (OBJ with MTL and textures, textured PLY, or glTF), with the same
+    /// A mesh sequence, one file per frame (OBJ with MTL and textures, textured PLY, STL, or glTF), with the same
     /// patterns and globs as `ply_sequence`; the topology may change every frame.
     #[schemars(with = "Option<String>")]
     pub(super) mesh_sequence: Option<Spanned<String>>,

@@ -8,7 +8,7 @@ use crate::cache::{key, Digest, StatCache};
 use crate::manifest::Manifest;
 use crate::render::light::glossy;
 use crate::scene::material::AlphaMode;
-use crate::scene::source::is_obj;
+use crate::scene::source::{is_obj, is_stl};
 use crate::scene::{Poser, PrimKind, Scene, SourceData};
 
 /// The keys of every scene frame.
@@ -83,8 +83,8 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 // Its frames are not posed to plan: whether one holds glossy glass is not known, so each counts as
                 // holding it (an OBJ's or a `.blend`'s transparent materials may be glossy).
                 glass_per_source.push(vec![true; files.len()]);
-                // Nor whether one holds points: an OBJ never does.
-                points_per_source.push(files.iter().map(|f| !is_obj(&f.path)).collect());
+                // Nor whether one holds points: an OBJ or STL never does.
+                points_per_source.push(files.iter().map(|f| !is_obj(&f.path) && !is_stl(&f.path)).collect());
                 files
                 .iter()
                 .map(|f| {

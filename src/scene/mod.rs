@@ -20,6 +20,7 @@ mod ply_scene;
 pub mod posed;
 pub mod source;
 pub mod spacing;
+pub mod stl;
 pub mod texture;
 pub mod transform;
 

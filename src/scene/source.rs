@@ -115,6 +115,7 @@ impl LoadedSource {
                 SourceData::MeshSequence(frames.map(file).collect())
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
+            SourceFile::Mesh { path, .. } if is_stl(path) => SourceData::Static(super::stl::scene(path)?),
             SourceFile::Mesh { path, .. } if is_obj(path) => {
                 let (scene, missing) = super::obj::scene_and_missing(path, req.origin)?;
                 warnings.extend(missing);
@@ -133,6 +134,14 @@ impl LoadedSource {
             SourceFile::PlySequence(frames) => SourceData::Sequence(frames.clone()),
             SourceFile::MeshSequence(frames) => SourceData::MeshSequence(frames.clone()),
         };
+        // An empty PLY, OBJ or STL (a header alone, `solid`/`endsolid` alone) would render blank images: refused
+        // as a glTF or FBX with nothing to draw is.
+        if let (SourceFile::Mesh { path, .. }, SourceData::Static(s)) = (&req.file, &data) {
+            if (is_ply(path) || is_obj(path) || is_stl(path)) && s.triangle_count() + s.point_count() == 0 {
+                let drawn = Holds { draws: false, nodes: 0, meshes: true, clips: 0, clip: "" };
+                return Err(Error::Source { name, message: nothing_drawn(path, drawn).unwrap_or_default() });
+            }
+        }
         // A 3D Gaussian splatting file (found from its first frame's header, as `check` sees it) is drawn as
         // splatting draws it; one without the Gaussians' shapes as points, which is said.
         let first_ply = match &req.file {
@@ -165,11 +174,13 @@ impl LoadedSource {
                 warnings.extend(super::obj::unseen_materials(path)?);
             }
         }
-        // PLY is a scanner's format (Z up); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
-        // .blend in Blender's (exported +Z up). A ground plane is placed in world units.
+        // PLY is a scanner's format (Z up), STL a printer's (Z up, as slicers and Blender read it); OBJ and glTF
+        // are Y up; FBX is loaded in the world's axes, and a .blend in Blender's (exported +Z up). A ground plane
+        // is placed in world units.
+        let z_up = |p: &std::path::Path| is_ply(p) || is_stl(p);
         let default_up = match &req.file {
-            SourceFile::Mesh { path, .. } if is_ply(path) => UpAxis::Z,
-            SourceFile::MeshSequence(frames) if frames.first().is_some_and(|f| is_ply(&f.path)) => UpAxis::Z,
+            SourceFile::Mesh { path, .. } if z_up(path) => UpAxis::Z,
+            SourceFile::MeshSequence(frames) if frames.first().is_some_and(|f| z_up(&f.path)) => UpAxis::Z,
             SourceFile::Gltf { .. } | SourceFile::Mesh { .. } | SourceFile::MeshSequence(_) => UpAxis::Y,
             _ => UpAxis::Z,
         };
@@ -305,6 +316,8 @@ pub(crate) fn is_obj(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 
+pub(crate) use super::stl::is_stl;
+
 /// What to do with a file in a format vvgen does not read but a newcomer brings (by its extension): the tool
 /// that turns it into one vvgen reads. `None` for any other name.
 pub fn way_out_of(path: &std::path::Path) -> Option<String> {
@@ -317,7 +330,7 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
             "{name}: Gaussian splats in the .{ext} form, which vvgen does not read: `npx @playcanvas/splat-transform \
              \"{name}\" \"{stem}.ply\"` writes them in 3D Gaussian splatting's PLY layout, which vvgen reads"
         ),
-        "abc" | "usd" | "usda" | "usdc" | "usdz" | "dae" | "stl" | "3ds" | "x3d" | "wrl" => format!(
+        "abc" | "usd" | "usda" | "usdc" | "usdz" | "dae" | "3ds" | "x3d" | "wrl" => format!(
             "{name}: vvgen does not read .{ext} files: import it in Blender (File → Import; a blender.org build reads \
              Alembic and USD), save it as a .blend and name that (`vvgen new \"{stem}.blend\"`): Blender then \
              evaluates every frame for vvgen"
@@ -341,7 +354,7 @@ fn frame_times(f: &FrameRange, duration: f64) -> Vec<f32> {
 }
 
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has
-/// `texture_u/v` or `s/t` and a `comment TextureFile`), or glTF posed at rest.
+/// `texture_u/v` or `s/t` and a `comment TextureFile`), STL, or glTF posed at rest.
 pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
     mesh_frame_at(path, [0.0; 3])
 }
@@ -353,6 +366,7 @@ fn mesh_frame_at(path: &std::path::Path, origin: [f64; 3]) -> Result<PosedScene,
     match ext.as_str() {
         "obj" => super::obj::scene_at(path, origin),
         "ply" => ply_scene_at(path, origin),
+        "stl" => super::stl::scene(path),
         _ => match way_out_of(path) {
             Some(message) => Err(Error::Mesh { path: path.to_path_buf(), line: None, message }),
             None => gltf_at_rest(path, None),
@@ -382,6 +396,7 @@ pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => super::obj::scan(path),
+        "stl" => Ok(Vec::new()),
         "ply" => Ok(texture_file(&checked_ply(path)?.comments, path)?.into_iter().collect()),
         _ => Ok(beside(path, gltf_side_files(path)?)),
     }
@@ -405,6 +420,7 @@ pub fn mesh_frame_deps_cached(path: &std::path::Path, stat: &crate::cache::StatC
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => super::obj::scan_cached(path, stat),
+        "stl" => Ok(Vec::new()),
         "ply" => {
             let io = |e| Error::Io { path: path.to_path_buf(), source: e };
             let name = stat

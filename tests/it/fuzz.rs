@@ -150,6 +150,21 @@ fn fuzz_ply_reading_and_rendering() {
 }
 
 #[test]
+fn fuzz_stl_reading_and_rendering() {
+    // SolidWorks' binary cube (its header starting with `solid`) and two ASCII solids; a mutant's size decides its
+    // form, as the reader decides it, so both readers are reached.
+    let seeds = seeds("stl", &["stl"]);
+    let dir = tempfile::tempdir().unwrap();
+    fuzz("stl", &seeds, 7, |_, bytes| {
+        let path = dir.path().join("part.stl");
+        std::fs::write(&path, bytes).unwrap();
+        if let Ok(scene) = vvgen::scene::stl::scene(&path) {
+            render_small(&scene);
+        }
+    });
+}
+
+#[test]
 fn fuzz_gltf_loading_posing_and_rendering() {
     let mut seeds = seeds("gltf", &["gltf", "glb"]);
     // Files the tests make: lights (KHR_lights_punctual, animated) and a normal texture with and without TANGENT.

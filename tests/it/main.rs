@@ -37,6 +37,7 @@ mod rigs;
 mod scene;
 mod schema;
 mod slurm;
+mod stl;
 mod transform;
 mod transparency;
 mod video;
