@@ -8,7 +8,7 @@ use crate::cache::{key, Digest, StatCache};
 use crate::manifest::Manifest;
 use crate::render::light::glossy;
 use crate::scene::material::AlphaMode;
-use crate::scene::source::{is_obj, is_stl};
+use crate::scene::source::{is_obj, is_ply, is_stl};
 use crate::scene::{Poser, PrimKind, Scene, SourceData};
 
 /// The keys of every scene frame.
@@ -43,6 +43,13 @@ pub struct FrameKeys {
     pub point_casters: Vec<bool>,
 }
 
+/// A PLY frame's polygons were all filled by the fan from their first corner before "ply polygons 1" filled the
+/// concave ones (and quads folded along their first diagonal) as Blender does: a frame with such a polygon is keyed
+/// apart; every other frame (point clouds, triangles, convex polygons) keeps its key.
+fn unfanned(path: &std::path::Path, stat: &StatCache) -> Result<Option<&'static [u8]>, Error> {
+    Ok(crate::scene::source::unfanned_cached(path, stat)?.then_some(b"ply polygons 1".as_slice()))
+}
+
 /// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
 pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKeys, Error> {
     let mut per_source: Vec<Vec<Digest>> = Vec::new();
@@ -75,6 +82,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     bytes.extend(origin);
                     bytes.extend(splats);
                     bytes.extend(opaque);
+                    bytes.extend(unfanned(&f.path, stat)?);
                     Ok(key("frame ply", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?
@@ -106,6 +114,9 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     // keep their keys.
                     if is_obj(&f.path) && crate::scene::obj::polylines_cached(&f.path, stat)? {
                         bytes.push(b"obj polylines 1");
+                    }
+                    if is_ply(&f.path) {
+                        bytes.extend(unfanned(&f.path, stat)?);
                     }
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))

@@ -62,6 +62,25 @@ pub fn checked_ply(path: &std::path::Path) -> Result<ply::Header, Error> {
     ply::check_file(path).map_err(|e| file_error(path, e))
 }
 
+/// Whether the PLY file at `path` has a polygon filled otherwise than by the fan from its first corner (a concave
+/// one, or a quad folded along its first diagonal: [`ply::PlyData::unfanned`]), remembered by the stat cache for
+/// its content. Every polygon was fanned until "ply polygons 1", so a sequence's frame with such a polygon is keyed
+/// apart; a file without faces (a point cloud) is answered from its header alone.
+pub fn unfanned_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
+    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    let fact = stat
+        .derived("ply polygons 1", path, || {
+            let header = checked_ply(path)?;
+            if !header.elements.iter().any(|e| e.name == "face" && e.count > 0) {
+                return Ok("0".to_string());
+            }
+            let data = ply::read_file(path).map_err(|e| file_error(path, e))?;
+            Ok::<_, Error>(if data.unfanned { "1" } else { "0" }.to_string())
+        })
+        .map_err(io)??;
+    Ok(fact == "1")
+}
+
 fn file_error(path: &std::path::Path, e: ply::FileError) -> Error {
     match e {
         ply::FileError::Io(source) => Error::Io { path: path.to_path_buf(), source },
@@ -76,7 +95,7 @@ pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScen
 
 /// A decoded PLY as a posed scene in source space; `path` finds its texture and names it in errors.
 fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Error> {
-    let ply::PlyData { positions, normals, colors, uvs, triangles, comments, gaussians } = d;
+    let ply::PlyData { positions, normals, colors, uvs, triangles, comments, gaussians, .. } = d;
     let kind = if triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
     // In place: `[f32; 3]` and `Vec3` have one size and alignment, so the collect reuses the allocation.
     let positions: Vec<Vec3> = positions.into_iter().map(Vec3::from).collect();

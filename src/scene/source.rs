@@ -9,7 +9,7 @@ use super::gltf::{GltfAsset, PoseScratch};
 use super::material::Material;
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
 use super::ply_scene::{splats_of, texture_file};
-pub use super::ply_scene::{checked_ply, ply_scene, ply_scene_at, ply_scene_slice};
+pub use super::ply_scene::{checked_ply, ply_scene, ply_scene_at, ply_scene_slice, unfanned_cached};
 use super::Error;
 use super::input::{folder_of, Clip, Clips, FrameFile, FrameRange, Ground, SourceFile, SourceRequest, UpAxis};
 
@@ -307,7 +307,8 @@ fn select_clips(asset: &GltfAsset, sel: &Clips) -> Result<Vec<usize>, String> {
     }
 }
 
-fn is_ply(path: &std::path::Path) -> bool {
+/// Whether a file is a PLY, by its extension.
+pub(crate) fn is_ply(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
 }
 

@@ -359,3 +359,47 @@ fn a_scan_far_from_the_origin_is_warned_about_and_read_relative_to_its_origin() 
         assert!(err.contains(&format!("2 images: {want}")), "origin x {x}: {err}");
     }
 }
+
+/// An ASCII PLY of one hexagon, its corners `corners` listed from the one at `first`.
+fn hexagon(corners: [&str; 6], first: usize) -> String {
+    let order: Vec<String> = (0..6).map(|k| ((first + k) % 6).to_string()).collect();
+    format!(
+        "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 1\nproperty list uchar int vertex_indices\nend_header\n{}\n6 {}\n",
+        corners.join("\n"),
+        order.join(" ")
+    )
+}
+
+/// An L of three unit squares (area 3), and a convex hexagon.
+const L_SHAPE: [&str; 6] = ["0 0 0", "2 0 0", "2 1 0", "1 1 0", "1 2 0", "0 2 0"];
+const CONVEX: [&str; 6] = ["0 0 0", "2 0 0", "3 1 0", "2 2 0", "0 2 0", "-1 1 0"];
+
+/// A concave polygon is filled as Blender fills it (ear clipping in its plane), where the fan from its first corner
+/// covered the notch and overlapped itself; a convex polygon keeps its fan, triangle for triangle. Whether a file
+/// has a polygon filled otherwise than by its fan keys a sequence's frame apart ("ply polygons 1"), and is
+/// remembered by the stat cache; a point cloud's is answered from its header.
+#[test]
+fn concave_polygons_are_filled_as_blender_fills_them_and_key_their_frames() {
+    let area = |d: &ply::PlyData| {
+        let p = |i: u32| glam::Vec3::from(d.positions[i as usize]);
+        d.triangles.chunks_exact(3).map(|t| 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length()).sum::<f32>()
+    };
+    // From corner (2, 1), beside the notch: the fan's second triangle lay in the notch, outside the L.
+    let notch = ply::read(hexagon(L_SHAPE, 2).as_bytes()).unwrap();
+    assert_eq!(notch.triangles.len(), 12);
+    assert!((area(&notch) - 3.0).abs() < 1e-5, "{}", area(&notch));
+    assert!(notch.unfanned);
+    let convex = ply::read(hexagon(CONVEX, 0).as_bytes()).unwrap();
+    assert_eq!(convex.triangles, [0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5]);
+    assert!(!convex.unfanned);
+    let d = tempfile::tempdir().unwrap();
+    let stat = vvgen::cache::StatCache::load(&d.path().join("stat"));
+    let cloud = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n\
+                 end_header\n0 0 0\n";
+    let files = [("notch.ply", hexagon(L_SHAPE, 2), true), ("convex.ply", hexagon(CONVEX, 3), false)];
+    for (name, text, unfanned) in files.into_iter().chain([("cloud.ply", cloud.to_string(), false)]) {
+        std::fs::write(d.path().join(name), text).unwrap();
+        assert_eq!(vvgen::scene::source::unfanned_cached(&d.path().join(name), &stat).unwrap(), unfanned, "{name}");
+    }
+}

@@ -18,8 +18,12 @@ pub struct PlyData {
     pub colors: Option<Vec<[u8; 4]>>,
     /// Per-vertex texture coordinates (`texture_u`/`texture_v`, `s`/`t` or `u`/`v`; v up), when the file has them.
     pub uvs: Option<Vec<[f32; 2]>>,
-    /// Triangles (polygons fan-triangulated), indices into `positions`.
+    /// Triangles, indices into `positions`: polygons filled as Blender fills them (a convex one as the fan from its
+    /// first corner, a concave one or a folded quad otherwise: [`crate::scene::polygon`]).
     pub triangles: Vec<u32>,
+    /// Whether some polygon was filled otherwise than by the fan from its first corner, which every polygon was
+    /// until "ply polygons 1" (sequences' frames with such polygons are keyed apart).
+    pub unfanned: bool,
     /// Header comments.
     pub comments: Vec<String>,
     /// A 3D Gaussian splatting file's Gaussians beside their centres (`positions`), as the file stores them, when
@@ -182,7 +186,7 @@ pub fn read_at(bytes: &[u8], origin: [f64; 3]) -> Result<PlyData, PlyError> {
                 let checked = read_vertices(&mut cursor, el, &mut out, origin)?;
                 check_finite(&out.positions, checked, points)?;
             }
-            "face" => read_faces(&mut cursor, el, out.positions.len(), &mut out.triangles)?,
+            "face" => out.unfanned |= read_faces(&mut cursor, el, &out.positions, &mut out.triangles)?,
             _ => cursor.skip_element(el)?,
         }
     }
@@ -551,12 +555,14 @@ fn to_rgba8(v: &[f64; SLOTS], scale: f64) -> [u8; 4] {
     [q(v[6]), q(v[7]), q(v[8]), q(v[9])]
 }
 
-fn read_faces(c: &mut Cursor<'_>, el: &Element, n_vertices: usize, tris: &mut Vec<u32>) -> Result<(), PlyError> {
+fn read_faces(c: &mut Cursor<'_>, el: &Element, positions: &[[f32; 3]], tris: &mut Vec<u32>) -> Result<bool, PlyError> {
     c.check_count(el)?;
+    let n_vertices = positions.len();
+    let corners: &[glam::Vec3] = bytemuck::cast_slice(positions);
     let list_idx =
         el.props.iter().position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"));
     tris.reserve(el.count.min(c.remaining()) * 3);
-    let mut poly: Vec<u32> = Vec::new();
+    let (mut poly, mut scratch, mut unfanned): (Vec<u32>, _, _) = (Vec::new(), Default::default(), false);
     for row in 0..el.count {
         for (i, p) in el.props.iter().enumerate() {
             match p.list {
@@ -586,13 +592,22 @@ fn read_faces(c: &mut Cursor<'_>, el: &Element, n_vertices: usize, tris: &mut Ve
                         }
                         poly.push(v as u32);
                     }
-                    for k in 1..poly.len().saturating_sub(1) {
-                        tris.extend_from_slice(&[poly[0], poly[k], poly[k + 1]]);
+                    // Fewer than three corners draw nothing.
+                    if poly.len() >= 3 {
+                        let start = tris.len();
+                        crate::scene::polygon::triangulate(corners, &poly, &mut scratch, tris);
+                        unfanned |= poly.len() > 3 && !fanned(&poly, &tris[start..]);
                     }
                 }
             }
         }
         c.end_row();
     }
-    Ok(())
+    Ok(unfanned)
+}
+
+/// Whether `tris` are polygon `poly`'s fan from its first corner.
+fn fanned(poly: &[u32], tris: &[u32]) -> bool {
+    let fan = |(t, k): (&[u32], usize)| t == [poly[0], poly[k], poly[k + 1]];
+    tris.len() == 3 * (poly.len() - 2) && tris.chunks_exact(3).zip(1..).all(fan)
 }
