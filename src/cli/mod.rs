@@ -10,6 +10,7 @@ mod new;
 mod plan;
 mod preview;
 mod release;
+mod up;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
