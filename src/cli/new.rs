@@ -150,7 +150,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         let (frame, origin) = if e == "stl" { (scene::stl::scene(first)?, None) } else { mesh_at_rest(first)? };
         drawable(&frame, first)?;
         let (up, why) = match e {
-            "obj" => obj_up(),
+            "obj" if !points_only(&frame) => obj_up(),
             "stl" => stl_up(),
             _ => tallest(&frame, first),
         };
@@ -236,7 +236,8 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         "obj" => {
             let (s, origin) = mesh_at_rest(asset)?;
             drawable(&s, asset)?;
-            let (up, why) = obj_up();
+            // A point cloud keeps its scanner's axes, as a PLY scan does: its up is guessed as a scan's is.
+            let (up, why) = if points_only(&s) { tallest(&s, asset) } else { obj_up() };
             // One OBJ is a static mesh (`mesh`), as one PLY is; a folder of them is a sequence.
             Ok(Described { kind: Asset::Mesh, up, note: why, rest: s, origin })
         }
@@ -253,13 +254,23 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
     }
 }
 
-/// Refuses an asset with nothing the renderer draws (lines only, empty meshes): its manifest could not check.
+/// Whether a scene is points alone (a point cloud).
+fn points_only(s: &scene::PosedScene) -> bool {
+    s.triangle_count() == 0 && s.point_count() > 0
+}
+
+/// Refuses an asset with nothing the renderer draws (lines only, empty meshes) or nothing to frame (one point): its
+/// manifest could not check.
 fn drawable(s: &scene::PosedScene, path: &Path) -> anyhow::Result<()> {
     if s.triangle_count() + s.point_count() == 0 {
         bail!(
             "{}: nothing to render: no triangles or points (vvgen draws neither lines nor empty meshes)",
             path.display()
         );
+    }
+    // One point (MeshLab writes a lone vertex so), or all at one point: no size to frame it by.
+    if let Some((lo, _)) = s.bounds().filter(|(lo, hi)| lo == hi) {
+        bail!("{}: every vertex is at one point, {lo}: nothing to frame (`fit` needs a size)", path.display());
     }
     Ok(())
 }

@@ -38,8 +38,8 @@ pub struct FrameKeys {
     /// Whether frame `f` has points that may cast shadows (a point primitive, plain or of 3D Gaussians, whose
     /// material casts): they have cast into shadow maps since "points cast 1" (triangles alone did before), so
     /// those frames' light is keyed apart, and with it their lit passes and lit point colours; every other frame
-    /// keeps its keys. A PLY sequence's frames, and a mesh sequence's that are not OBJ files, keyed by their files
-    /// and not posed to plan, count as having them.
+    /// keeps its keys. A PLY sequence's frames, and a mesh sequence's PLY and glTF frames and OBJ point clouds,
+    /// keyed by their files and not posed to plan, count as having them.
     pub point_casters: Vec<bool>,
 }
 
@@ -91,8 +91,13 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 // Its frames are not posed to plan: whether one holds glossy glass is not known, so each counts as
                 // holding it (an OBJ's or a `.blend`'s transparent materials may be glossy).
                 glass_per_source.push(vec![true; files.len()]);
-                // Nor whether one holds points: an OBJ or STL never does.
-                points_per_source.push(files.iter().map(|f| !is_obj(&f.path) && !is_stl(&f.path)).collect());
+                // Nor whether one holds points: an STL never does, an OBJ when it is a point cloud (remembered by
+                // the stat cache for its content).
+                let points = files.iter().map(|f| match f.path.as_path() {
+                    p if is_obj(p) => crate::scene::obj::cloud_cached(p, stat),
+                    p => Ok(!is_stl(p)),
+                });
+                points_per_source.push(points.collect::<Result<_, _>>()?);
                 files
                 .iter()
                 .map(|f| {

@@ -29,14 +29,14 @@ fn at(path: &Path, line: usize, message: String) -> Error {
 /// Checks an OBJ's face indices, `mtllib` files and their `map_Kd` textures, naming file and line of
 /// the first problem; returns the files the OBJ depends on (MTL files, then textures), in the order named.
 pub fn scan(path: &Path) -> Result<Vec<PathBuf>, Error> {
-    scan_text(path).map(|(deps, _)| deps.files)
+    scan_text(path).map(|(deps, ..)| deps.files)
 }
 
-/// [`scan`], and what the OBJ's text says of its vertices' colours.
-fn scan_text(path: &Path) -> Result<(Deps, Text), Error> {
+/// [`scan`], what the OBJ's text says of its vertices' colours, and its bytes.
+fn scan_text(path: &Path) -> Result<(Deps, Text, Vec<u8>), Error> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
     let text = read_text(path, &bytes)?;
-    Ok((resolve(path, &text.libs)?, text))
+    Ok((resolve(path, &text.libs)?, text, bytes))
 }
 
 /// [`scan`], reading the OBJ only when the stat cache does not remember its libraries for its current content:
@@ -44,26 +44,38 @@ fn scan_text(path: &Path) -> Result<(Deps, Text), Error> {
 /// content changing, so a build that keys unchanged frames reads none of them. The libraries and textures are
 /// checked every time.
 pub fn scan_cached(path: &Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
-    let (libs, _) = remembered(path, stat)?;
+    let (libs, ..) = remembered(path, stat)?;
     resolve(path, &libs).map(|d| d.files)
 }
 
 /// Whether OBJ `path` has polylines of three or more vertices, remembered as [`scan_cached`] remembers its
 /// libraries: tobj filled them as polygons until "obj polylines 1", so a frame with them is keyed apart.
 pub fn polylines_cached(path: &Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
-    remembered(path, stat).map(|(_, polylines)| polylines)
+    remembered(path, stat).map(|(_, polylines, _)| polylines)
 }
 
-/// The `mtllib` names (with their lines) of OBJ `path` and whether it has polylines of three or more vertices,
-/// from the stat cache for its current content, else read.
-fn remembered(path: &Path, stat: &crate::cache::StatCache) -> Result<(Vec<(usize, String)>, bool), Error> {
+/// Whether OBJ `path` is a point cloud (vertices alone: [`scene_at`] draws them as points), remembered as
+/// [`scan_cached`] remembers its libraries: a sequence's frames are keyed before they are read, and whether they
+/// hold points keys their light.
+pub fn cloud_cached(path: &Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
+    remembered(path, stat).map(|(.., cloud)| cloud)
+}
+
+/// What the stat cache remembers of an OBJ's content: its `mtllib` names with their lines, whether it has
+/// polylines of three or more vertices, and whether it is a point cloud.
+type Remembered = (Vec<(usize, String)>, bool, bool);
+
+/// The `mtllib` names (with their lines) of OBJ `path`, whether it has polylines of three or more vertices and
+/// whether it is a point cloud, from the stat cache for its current content, else read.
+fn remembered(path: &Path, stat: &crate::cache::StatCache) -> Result<Remembered, Error> {
     let io = |e| Error::Io { path: path.to_path_buf(), source: e };
     let text = stat
-        // "2": the scan has checked numbers, counted polylines and read the text as `obj_text` decodes it.
-        .derived("obj libraries 2", path, || {
+        // "3": the scan has checked numbers, counted polylines, read the text as `obj_text` decodes it, and told a
+        // point cloud.
+        .derived("obj libraries 3", path, || {
             let bytes = std::fs::read(path).map_err(io)?;
             read_text(path, &bytes).map(|t| {
-                serde_json::to_string(&(&t.libs, t.polylines > 0)).expect("BUG: a list of names serializes")
+                serde_json::to_string(&(&t.libs, t.polylines > 0, t.cloud())).expect("BUG: a list of names serializes")
             })
         })
         .map_err(io)??;
@@ -75,6 +87,7 @@ fn remembered(path: &Path, stat: &crate::cache::StatCache) -> Result<(Vec<(usize
 }
 
 /// What an OBJ's text alone decides, once checked.
+#[derive(Debug)]
 struct Text {
     /// The `mtllib` names with their lines.
     libs: Vec<(usize, String)>,
@@ -88,6 +101,14 @@ struct Text {
     polylines: usize,
     /// Whether a face corner's texture coordinate or normal index is out of range (see [`Edit::Obj`]).
     bad_corners: bool,
+}
+
+impl Text {
+    /// Whether it is a point cloud: vertices and nothing else drawn from them (MeshLab and CloudCompare write
+    /// clouds so).
+    fn cloud(&self) -> bool {
+        self.vertices > 0 && self.faces == 0 && self.lines == 0
+    }
 }
 
 /// Reads an OBJ's text (decoded as tobj will be given it: [`obj_text`]): every face's vertex index is in range,
@@ -316,7 +337,10 @@ pub fn scene_at(path: &Path, origin: [f64; 3]) -> Result<PosedScene, Error> {
 
 /// [`scene_at`], and the warnings [`missing`] gives, from the same reading of the file.
 pub(crate) fn scene_and_missing(path: &Path, origin: [f64; 3]) -> Result<(PosedScene, Vec<String>), Error> {
-    let (deps, text) = scan_text(path)?;
+    let (deps, text, bytes) = scan_text(path)?;
+    if text.cloud() {
+        return Ok((cloud(path, origin, &bytes)?, deps.missing));
+    }
     let fail = |message: String| Error::Mesh { path: path.to_path_buf(), line: None, message };
     // Polygons are filled here ([`super::polygon`]): tobj's own fan fills a concave one wrongly.
     let options = tobj::LoadOptions { single_index: true, triangulate: false, ..Default::default() };
@@ -347,15 +371,12 @@ pub(crate) fn scene_and_missing(path: &Path, origin: [f64; 3]) -> Result<(PosedS
         })?;
     let materials = materials.map_err(|e| fail(format!("its material library: {e}")))?;
     if text.faces == 0 && text.vertices > 0 {
-        // MeshLab and CloudCompare write point clouds so; Blender imports them as loose vertices, drawing nothing.
-        let (lines, loose) = match text.lines {
-            0 => (String::new(), "loose vertices"),
-            n => (format!(", {n} lines"), "loose vertices and edges; vvgen draws no lines"),
-        };
+        // A wireframe: Blender imports loose vertices and edges, which Cycles does not draw.
         return Err(fail(format!(
-            "{} vertices{lines} and no faces: nothing to draw (Blender imports them as {loose}). If it is a point \
-             cloud, save it as PLY (MeshLab: File → Export Mesh As… → PLY), which vvgen draws as points",
-            text.vertices
+            "{} vertices, {} lines and no faces: nothing to draw (vvgen draws no lines; Blender imports them as \
+             loose vertices and edges, which it does not render either). Without its `l` lines, vvgen draws its \
+             vertices as a point cloud",
+            text.vertices, text.lines
         )));
     }
     let folders = folders.into_inner();
@@ -433,6 +454,41 @@ pub(crate) fn scene_and_missing(path: &Path, origin: [f64; 3]) -> Result<(PosedS
     }
     let scene = PosedScene { primitives, materials: Arc::new(mats), textures: Arc::new(textures), lights: Vec::new() };
     Ok((scene, deps.missing))
+}
+
+/// An OBJ of vertices alone (a point cloud, as MeshLab and CloudCompare write one) as points, drawn as a PLY cloud
+/// is (Blender imports them as loose vertices, which it does not render): white, or each vertex's colour when every
+/// vertex has one (`v x y z r g b`, sRGB in 0..1). Positions are read in double precision, `origin` subtracted.
+fn cloud(path: &Path, origin: [f64; 3], bytes: &[u8]) -> Result<PosedScene, Error> {
+    let (mut positions, mut colours, mut every) = (Vec::new(), Vec::new(), true);
+    for (i, line) in obj_text::decode(bytes).lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        let numbers: Vec<f64> = words.take(6).map_while(|w| w.parse::<f64>().ok()).collect();
+        let p = match numbers[..] {
+            [x, y, z, ..] => Vec3::new((x - origin[0]) as f32, (y - origin[1]) as f32, (z - origin[2]) as f32),
+            _ => return Err(at(path, i + 1, format!("`v` needs three numbers: `{}`", line.trim()))),
+        };
+        if !p.is_finite() {
+            return Err(at(path, i + 1, format!("a vertex that is not finite: `{}`", line.trim())));
+        }
+        positions.push(p);
+        match numbers[..] {
+            [_, _, _, r, g, b] => {
+                let c = |v: f64| srgb_to_linear(v as f32);
+                colours.push(Vec4::new(c(r), c(g), c(b), 1.0));
+            }
+            _ => every = false,
+        }
+    }
+    if !every {
+        colours.clear();
+    }
+    let normals = vec![Vec3::ZERO; positions.len()];
+    let material = Material { double_sided: true, ..Material::default() };
+    Ok(PosedScene::single(PrimKind::Points, positions, normals, colours, Vec::new(), material))
 }
 
 /// A warning naming the MTL materials of OBJ `path` that are wholly transparent (`d 0`, no `map_d`): nothing of

@@ -114,7 +114,7 @@ fn keying_remembers_each_frames_libraries_by_content() {
     let facts: usize = std::fs::read_dir(&stat_dir)
         .unwrap()
         .map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap())
-        .map(|t| t.lines().filter(|l| l.starts_with("derived\tobj libraries 2\t")).count())
+        .map(|t| t.lines().filter(|l| l.starts_with("derived\tobj libraries 3\t")).count())
         .sum();
     assert_eq!(facts, 3);
     assert!(run(d).nothing_to_do());

@@ -102,22 +102,69 @@ fn colours_on_some_vertices_only_are_dropped_per_object_as_blender_drops_them() 
 }
 
 #[test]
-fn polylines_and_loose_vertices_draw_nothing_as_in_blender() {
+fn polylines_draw_nothing_as_in_blender() {
     let d = tempfile::tempdir().unwrap();
     let d = d.path();
     // A triangle and a square polyline: tobj filled the polyline as a polygon (two more triangles).
     std::fs::write(d.join("lines.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nl 1 2 3 4 1\n").unwrap();
     assert_eq!(read(d, "lines.obj").triangle_count(), 1);
-    // Vertices alone (MeshLab's point clouds), or with lines: an error that says so and the way out.
-    std::fs::write(d.join("cloud.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\n").unwrap();
+    // Vertices with lines and no faces (a wireframe): an error that says so, and that without its lines the
+    // vertices are drawn as points.
     std::fs::write(d.join("wire.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nl 1 2 3\nl 3 1\n").unwrap();
-    for (file, says) in [("cloud.obj", "3 vertices and no faces"), ("wire.obj", "3 vertices, 2 lines and no faces")] {
-        let e = obj::scene(&d.join(file)).unwrap_err().to_string();
-        assert!(e.contains(says) && e.contains("save it as PLY"), "{e}");
-        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["new", file]).output().unwrap();
-        assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
-        assert!(String::from_utf8_lossy(&out.stderr).contains(says));
+    let says = "3 vertices, 2 lines and no faces";
+    let e = obj::scene(&d.join("wire.obj")).unwrap_err().to_string();
+    assert!(e.contains(says) && e.contains("as a point cloud"), "{e}");
+    let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["new", "wire.obj"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(says));
+}
+
+/// An OBJ of vertices alone (MeshLab's and CloudCompare's point clouds, `v x y z r g b`) is drawn as points, as the
+/// same cloud in PLY is: a coloured scan saved both ways renders the same images, from a manifest `vvgen new` writes
+/// for the OBJ by its bare name. Vertices without colours are white; colours on only some vertices are dropped.
+#[test]
+fn an_obj_point_cloud_renders_as_its_ply_twin() {
+    let d = tempfile::tempdir().unwrap();
+    let d = d.path();
+    let ply = std::fs::read(crate::common::data("seq/torus_vox10_1000.ply")).unwrap();
+    std::fs::write(d.join("scan.ply"), &ply).unwrap();
+    let cloud = vvgen::scene::ply::read(&ply).unwrap();
+    let colours = cloud.colors.as_ref().expect("a coloured scan");
+    let mut obj = String::from("# MeshLab\n");
+    for (p, c) in cloud.positions.iter().zip(colours) {
+        let [r, g, b] = [c[0], c[1], c[2]].map(|v| v as f64 / 255.0);
+        obj += &format!("v {} {} {} {r:.9} {g:.9} {b:.9}\n", p[0], p[1], p[2]);
     }
+    std::fs::write(d.join("scan.obj"), obj).unwrap();
+    let s = read(d, "scan.obj");
+    assert_eq!((s.point_count(), s.triangle_count()), (cloud.positions.len(), 0));
+    let vvgen = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    };
+    vvgen(&["new", "scan.obj"]);
+    let text = std::fs::read_to_string(d.join("scan.toml")).unwrap();
+    // A cloud keeps its scanner's axes: its up is guessed as a PLY scan's is, not taken as OBJ's +Y.
+    assert!(text.contains("mesh   = \"scan.obj\"") && text.contains("guessed"), "{text}");
+    let quick = text
+        .replace("views = 100", "views = 2")
+        .replace("views = 10", "views = 1")
+        .replace("views    = 20", "views    = 1");
+    std::fs::write(d.join("obj.toml"), quick.replace("out/scan", "out/obj")).unwrap();
+    std::fs::write(d.join("ply.toml"), quick.replace("out/scan", "out/ply").replace("scan.obj", "scan.ply")).unwrap();
+    vvgen(&["-q", "build", "obj.toml"]);
+    vvgen(&["-q", "build", "ply.toml"]);
+    let image =
+        |which: &str| image::open(d.join(format!("out/{which}/scan_dnerf/train/r_0001.png"))).unwrap().to_rgba8();
+    let (a, b) = (image("obj"), image("ply"));
+    assert!(a.pixels().filter(|p| p[3] == 255).count() > 1000, "the cloud shows");
+    let off = a.pixels().zip(b.pixels()).map(|(p, q)| (0..4).map(|k| p[k].abs_diff(q[k])).max().unwrap()).max();
+    assert!(off.unwrap() <= 1, "the OBJ and PLY clouds differ by {off:?} levels");
+    // Colours on some vertices only: dropped (white), as for a mesh.
+    std::fs::write(d.join("partial.obj"), "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 1 0\n").unwrap();
+    let s = read(d, "partial.obj");
+    assert_eq!((s.point_count(), s.primitives[0].colors.len()), (3, 0));
+    assert_eq!(s.material(s.primitives[0].material).base_color, glam::Vec4::ONE);
 }
 
 #[test]
