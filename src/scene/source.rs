@@ -397,7 +397,8 @@ pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => super::obj::scan(path),
-        "stl" => Ok(Vec::new()),
+        // Nothing beside it; its form and size checked (`vvgen check` runs this on every frame).
+        "stl" => super::stl::check_file(path).map(|()| Vec::new()),
         "ply" => Ok(texture_file(&checked_ply(path)?.comments, path)?.into_iter().collect()),
         _ => Ok(beside(path, gltf_side_files(path)?)),
     }

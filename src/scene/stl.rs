@@ -54,37 +54,77 @@ pub(crate) fn is_stl(path: &Path) -> bool {
 /// Every triangle's three corners, in the file's order, the degenerate ones (two corners at one point, which
 /// Blender's importer removes) left out.
 fn triangles(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, Problem> {
-    let mut out = match count(bytes) {
-        Some(n) if is_binary(bytes) => binary(bytes, n as usize)?,
-        _ if starts_solid(bytes) => ascii(bytes)?,
-        _ => {
-            let message = if bytes.iter().all(u8::is_ascii_whitespace) {
-                "empty: neither a binary nor an ASCII STL".to_string()
-            } else {
-                format!(
-                    "{} bytes: too short for a binary STL (its header is {COUNTED} bytes) and not text starting \
-                     with `solid`",
-                    bytes.len()
-                )
-            };
-            return Err(Problem { line: None, message });
-        }
+    let mut out = match form(bytes, bytes.len() as u64)? {
+        Form::Binary(n) => binary(bytes, n)?,
+        Form::Ascii => ascii(bytes)?,
     };
     out.retain(|[a, b, c]| a != b && b != c && a != c);
     Ok(out)
 }
 
-/// Whether `bytes` are a binary STL: their size is what their triangle count makes it, as Blender decides. A text
-/// file of that size by chance is still text when it reads as one (its first facet follows its `solid` line).
-fn is_binary(bytes: &[u8]) -> bool {
-    let Some(n) = count(bytes) else {
-        return false;
+/// What `vvgen check` can refuse in an STL frame without reading it all (a sequence's frames are read when they
+/// render): not an STL, or a binary one cut short. Reads its first bytes and its size.
+pub(crate) fn check_file(path: &Path) -> Result<(), Error> {
+    use std::io::Read;
+    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let mut head = Vec::with_capacity(HEAD);
+    file.take(HEAD as u64).read_to_end(&mut head).map_err(io)?;
+    let problem = match form(&head, len) {
+        Ok(Form::Binary(n)) => cut_short(n, len),
+        Ok(Form::Ascii) => None,
+        Err(p) => Some(p),
     };
-    if bytes.len() as u64 != COUNTED as u64 + TRIANGLE as u64 * n as u64 {
-        return !starts_solid(bytes) && bytes.len() >= COUNTED;
+    problem.map_or(Ok(()), |p| Err(Error::Mesh { path: path.to_path_buf(), line: p.line, message: p.message }))
+}
+
+/// How much of a file's start [`form`] looks at.
+const HEAD: usize = 4096;
+
+/// An STL's form, and a binary one's triangle count.
+enum Form {
+    Binary(usize),
+    Ascii,
+}
+
+/// The form of the STL of size `len` that starts with `head` (its first [`HEAD`] bytes, or all of it). Blender
+/// decides by size alone (binary when it is what the triangle count makes it); here a file is text when it starts
+/// with `solid` and reads as text after that line (ASCII, with a `facet` or `endsolid` in it), else binary when it
+/// is long enough to be: so SolidWorks' binary files, whose header starts with `solid`, are binary whatever their
+/// size, and one cut short says so. A file too short for a binary STL's header that does not start with `solid`
+/// is none.
+fn form(head: &[u8], len: u64) -> Result<Form, Problem> {
+    let head = &head[..head.len().min(HEAD)];
+    let after = head.iter().position(|&b| b == b'\n').map_or(&[][..], |i| &head[i + 1..]);
+    let keyword = |k: &[u8]| after.windows(k.len()).any(|w| w == k);
+    let text = starts_solid(head) && after.is_ascii() && (keyword(b"facet") || keyword(b"endsolid"));
+    if let Some(n) = count(head).filter(|_| !text) {
+        return Ok(Form::Binary(n as usize));
     }
-    let head = &bytes[..bytes.len().min(512)];
-    !(starts_solid(bytes) && head.iter().all(|b| b.is_ascii()) && head.windows(5).any(|w| w == b"facet"))
+    if starts_solid(head) {
+        return Ok(Form::Ascii);
+    }
+    // Shorter than a binary header (else it was taken as binary above): `head` is the whole file.
+    let message = if head.iter().all(u8::is_ascii_whitespace) {
+        "empty: neither a binary nor an ASCII STL".to_string()
+    } else {
+        format!("{len} bytes: too short for a binary STL (its header is {COUNTED} bytes) and not text starting with \
+                 `solid`")
+    };
+    Err(Problem { line: None, message })
+}
+
+/// Why a binary STL of `n` triangles and `len` bytes cannot be read, when it is shorter than they need.
+fn cut_short(n: usize, len: u64) -> Option<Problem> {
+    let need = COUNTED as u64 + (n as u64) * TRIANGLE as u64;
+    (len < need).then(|| Problem {
+        line: None,
+        message: format!(
+            "a binary STL whose header counts {n} triangles ({need} bytes) but that holds {len} bytes: it is cut \
+             short; copy or export it again"
+        ),
+    })
 }
 
 /// A binary STL's triangle count, when `bytes` are long enough to hold one.
@@ -101,18 +141,10 @@ fn starts_solid(bytes: &[u8]) -> bool {
 /// A binary STL's `n` triangles. The count is checked against the file's size before anything is allocated
 /// for it.
 fn binary(bytes: &[u8], n: usize) -> Result<Vec<[Vec3; 3]>, Problem> {
-    let body = &bytes[COUNTED..];
-    if body.len() / TRIANGLE < n {
-        return Err(Problem {
-            line: None,
-            message: format!(
-                "a binary STL whose header counts {n} triangles ({} bytes) but that holds {} bytes: it is cut \
-                 short; copy or export it again",
-                COUNTED + n * TRIANGLE,
-                bytes.len()
-            ),
-        });
+    if let Some(p) = cut_short(n, bytes.len() as u64) {
+        return Err(p);
     }
+    let body = &bytes[COUNTED..];
     let f = |b: &[u8], i: usize| f32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]]);
     let mut out = Vec::with_capacity(n);
     for (t, b) in body.chunks_exact(TRIANGLE).take(n).enumerate() {

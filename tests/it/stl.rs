@@ -140,6 +140,15 @@ fn a_folder_of_stl_frames_is_a_mesh_sequence() {
         image::open(png).unwrap().to_rgba8().pixels().filter(|p| p[3] == 255).count()
     };
     assert!(covered(&frames[1]) as f64 > 1.3 * covered(&frames[0]) as f64);
+    // A frame cut short in a copy: `check` names it (from its size: frames are read in full when they render).
+    let whole = std::fs::read(d.join("print/layer_1.stl")).unwrap();
+    std::fs::write(d.join("print/layer_1.stl"), &whole[..whole.len() - 7]).unwrap();
+    let (code, err) = vvgen(d, &["check", "print.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("layer_1.stl: a binary STL whose header counts 4 triangles") && err.contains("cut short"),
+        "{err}"
+    );
 }
 
 #[test]
