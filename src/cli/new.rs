@@ -1,6 +1,6 @@
 //! `vvgen new ASSET`: a commented manifest to start from, for a glTF, FBX, `.blend`, PLY, OBJ or STL file, or a
-//! folder of PLY, OBJ or STL frames. What it can read off the asset (clips, frame count, the up axis) it writes in and says; the rest
-//! is the NeRF-synthetic recipe (a ±1.3 box, the hemisphere cameras, D-NeRF's splits).
+//! folder of PLY, OBJ or STL frames. What it can read off the asset (clips, frame count, the up axis) it writes in
+//! and says; the rest is the NeRF-synthetic recipe (a ±1.3 box, the hemisphere cameras, D-NeRF's splits).
 
 use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};

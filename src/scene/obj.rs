@@ -87,7 +87,6 @@ fn remembered(path: &Path, stat: &crate::cache::StatCache) -> Result<Remembered,
 }
 
 /// What an OBJ's text alone decides, once checked.
-#[derive(Debug)]
 struct Text {
     /// The `mtllib` names with their lines.
     libs: Vec<(usize, String)>,
@@ -466,8 +465,16 @@ fn cloud(path: &Path, origin: [f64; 3], bytes: &[u8]) -> Result<PosedScene, Erro
         if words.next() != Some("v") {
             continue;
         }
-        let numbers: Vec<f64> = words.take(6).map_while(|w| w.parse::<f64>().ok()).collect();
-        let p = match numbers[..] {
+        // Up to six numbers (x y z, then a colour), without an allocation per vertex (clouds run to millions).
+        let (mut read, mut count) = ([0.0f64; 6], 0);
+        for (slot, w) in read.iter_mut().zip(words) {
+            match w.parse::<f64>() {
+                Ok(v) => (*slot, count) = (v, count + 1),
+                Err(_) => break,
+            }
+        }
+        let numbers = &read[..count];
+        let p = match *numbers {
             [x, y, z, ..] => Vec3::new((x - origin[0]) as f32, (y - origin[1]) as f32, (z - origin[2]) as f32),
             _ => return Err(at(path, i + 1, format!("`v` needs three numbers: `{}`", line.trim()))),
         };
@@ -475,7 +482,7 @@ fn cloud(path: &Path, origin: [f64; 3], bytes: &[u8]) -> Result<PosedScene, Erro
             return Err(at(path, i + 1, format!("a vertex that is not finite: `{}`", line.trim())));
         }
         positions.push(p);
-        match numbers[..] {
+        match *numbers {
             [_, _, _, r, g, b] => {
                 let c = |v: f64| srgb_to_linear(v as f32);
                 colours.push(Vec4::new(c(r), c(g), c(b), 1.0));
