@@ -6,6 +6,8 @@ use super::columns::{Columns, Layout};
 use super::header::{parse_header, Element, Format, Scalar};
 use super::PlyError;
 
+mod faces;
+
 /// What vvgen takes from a PLY: points with optional normals and colours, and triangles.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PlyData {
@@ -186,7 +188,7 @@ pub fn read_at(bytes: &[u8], origin: [f64; 3]) -> Result<PlyData, PlyError> {
                 let checked = read_vertices(&mut cursor, el, &mut out, origin)?;
                 check_finite(&out.positions, checked, points)?;
             }
-            "face" => out.unfanned |= read_faces(&mut cursor, el, &out.positions, &mut out.triangles)?,
+            "face" => out.unfanned |= faces::read(&mut cursor, el, &out.positions, &mut out.triangles)?,
             _ => cursor.skip_element(el)?,
         }
     }
@@ -553,61 +555,4 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
 fn to_rgba8(v: &[f64; SLOTS], scale: f64) -> [u8; 4] {
     let q = |x: f64| (x * scale).round().clamp(0.0, 255.0) as u8;
     [q(v[6]), q(v[7]), q(v[8]), q(v[9])]
-}
-
-fn read_faces(c: &mut Cursor<'_>, el: &Element, positions: &[[f32; 3]], tris: &mut Vec<u32>) -> Result<bool, PlyError> {
-    c.check_count(el)?;
-    let n_vertices = positions.len();
-    let corners: &[glam::Vec3] = bytemuck::cast_slice(positions);
-    let list_idx =
-        el.props.iter().position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"));
-    tris.reserve(el.count.min(c.remaining()) * 3);
-    let (mut poly, mut scratch, mut unfanned): (Vec<u32>, _, _) = (Vec::new(), Default::default(), false);
-    for row in 0..el.count {
-        for (i, p) in el.props.iter().enumerate() {
-            match p.list {
-                None => {
-                    c.value(p.ty, el, row)?;
-                }
-                Some(ct) => {
-                    let len = c.list_len(ct, el, row)?;
-                    if Some(i) != list_idx {
-                        for _ in 0..len {
-                            c.value(p.ty, el, row)?;
-                        }
-                        continue;
-                    }
-                    if len > c.remaining() {
-                        return Err(PlyError::Truncated(format!("face row {row} lists {len} vertices")));
-                    }
-                    poly.clear();
-                    for _ in 0..len {
-                        let v = c.value(p.ty, el, row)?;
-                        if !(v >= 0.0 && (v as usize) < n_vertices) {
-                            return Err(PlyError::Body {
-                                element: el.name.clone(),
-                                row,
-                                msg: format!("vertex index {v} is out of range (0..{n_vertices})"),
-                            });
-                        }
-                        poly.push(v as u32);
-                    }
-                    // Fewer than three corners draw nothing.
-                    if poly.len() >= 3 {
-                        let start = tris.len();
-                        crate::scene::polygon::triangulate(corners, &poly, &mut scratch, tris);
-                        unfanned |= poly.len() > 3 && !fanned(&poly, &tris[start..]);
-                    }
-                }
-            }
-        }
-        c.end_row();
-    }
-    Ok(unfanned)
-}
-
-/// Whether `tris` are polygon `poly`'s fan from its first corner.
-fn fanned(poly: &[u32], tris: &[u32]) -> bool {
-    let fan = |(t, k): (&[u32], usize)| t == [poly[0], poly[k], poly[k + 1]];
-    tris.len() == 3 * (poly.len() - 2) && tris.chunks_exact(3).zip(1..).all(fan)
 }
