@@ -244,8 +244,7 @@ fn resolve(path: &Path, libs: &[(usize, String)]) -> Result<Deps, Error> {
 
 /// Warnings for the material libraries and textures OBJ `path` names and that are missing (see [`resolve`]).
 pub fn missing(path: &Path) -> Result<Vec<String>, Error> {
-    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    Ok(resolve(path, &read_text(path, &bytes)?.libs)?.missing)
+    scan_text(path).map(|(deps, ..)| deps.missing)
 }
 
 /// The names of the material libraries (`.mtl`, any case, or a shortened `.mt`) in folder `dir`, sorted; at
@@ -356,8 +355,8 @@ pub(crate) fn scene_and_missing(path: &Path, origin: [f64; 3]) -> Result<(PosedS
         folders.borrow_mut().extend(std::iter::repeat_n(folder, loaded.0.len()));
         Ok(loaded)
     };
-    let opened = std::fs::File::open(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    let reader = std::io::BufReader::new(opened);
+    // tobj reads the bytes the scan read, not the file a second time.
+    let reader = &bytes[..];
     let edit = Edit::Obj { origin, pad_colours: text.partial_colours, fix_corners: text.bad_corners };
     let (models, materials) =
         tobj::load_obj_buf(&mut Lines::new(reader, edit), &options, load_library).map_err(|e| {

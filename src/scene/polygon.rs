@@ -72,20 +72,21 @@ fn projected(positions: &[Vec3], poly: &[u32], flat: &mut Vec<Vec2>) {
         n += Vec3::new((p.y - q.y) * (p.z + q.z), (p.z - q.z) * (p.x + q.x), (p.x - q.x) * (p.y + q.y));
     }
     let a = n.abs();
+    // The dominant axis is dropped; the other two are kept in the order that keeps the winding (swapped when the
+    // dropped axis' component is negative).
+    let (i, j, positive) = if a.z >= a.x && a.z >= a.y {
+        (0, 1, n.z >= 0.0)
+    } else if a.x >= a.y {
+        (1, 2, n.x >= 0.0)
+    } else {
+        (2, 0, n.y >= 0.0)
+    };
+    let (i, j) = if positive { (i, j) } else { (j, i) };
     flat.clear();
-    flat.extend(poly.iter().map(|&i| {
-            let p = at(i);
-            // Dropping the dominant axis keeps the winding when that axis' component is positive.
-            if a.z >= a.x && a.z >= a.y {
-                if n.z >= 0.0 { Vec2::new(p.x, p.y) } else { Vec2::new(p.y, p.x) }
-            } else if a.x >= a.y {
-                if n.x >= 0.0 { Vec2::new(p.y, p.z) } else { Vec2::new(p.z, p.y) }
-            } else if n.y >= 0.0 {
-                Vec2::new(p.z, p.x)
-            } else {
-                Vec2::new(p.x, p.z)
-            }
-        }));
+    flat.extend(poly.iter().map(|&k| {
+        let p = at(k);
+        Vec2::new(p[i], p[j])
+    }));
 }
 
 /// Twice the signed area of the closed outline `p` (positive counter-clockwise).

@@ -154,7 +154,7 @@ fn binary(bytes: &[u8], n: usize) -> Result<Vec<[Vec3; 3]>, Problem> {
         if !tri.iter().all(|v| v.is_finite()) {
             return Err(Problem {
                 line: None,
-                message: format!("triangle {t} (byte {}) has a corner that is not a finite number", COUNTED + t * 50),
+                message: format!("triangle {t} (byte {}) has a corner that is not a finite number", COUNTED + t * TRIANGLE),
             });
         }
         out.push(tri);
