@@ -45,11 +45,7 @@ fn write(asset: &Path, writer: &str, out: Option<&Path>, ui: Ui) -> anyhow::Resu
     }
     // `vvgen new .` names the dataset after the folder, not after `.`.
     let named = if asset.is_dir() { absolute(asset)? } else { asset.to_path_buf() };
-    let name: String = named
-        .file_stem()
-        .map(|s| s.to_string_lossy().chars().map(|c| if c.is_alphanumeric() || c == '-' { c } else { '-' }).collect())
-        .filter(|s: &String| !s.is_empty())
-        .unwrap_or_else(|| "dataset".into());
+    let name = named.file_stem().map(|s| dataset_name(&s.to_string_lossy())).unwrap_or_else(|| "dataset".into());
     let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
     // What the asset is comes first: `vvgen new base.toml` is "not an asset", not "base.toml exists". A .blend
     // is imported into the cache the manifest will use (`cache/` beside it), so its build starts from there.
@@ -376,11 +372,8 @@ fn manifest(
                     writeln!(w, "#   {i}: `{n}`, {d:.3} s: frames = {{ count = {}, fps = 30 }}", frames_covering(*d));
             }
             let n = frames_covering(clips[0].1);
-            let _ = writeln!(
-                w,
-                "animation = 0\nframes = {{ count = {n}, fps = 30 }}   # the first clip's length at 30 fps"
-            );
-            n
+            let _ = writeln!(w, "animation = 0\n{}", first_clip_frames(n, "clip"));
+            n.min(LONGEST)
         }
         Asset::Fbx { takes } => {
             let _ = writeln!(w, "fbx    = \"{}\"", rel(asset)?);
@@ -396,11 +389,8 @@ fn manifest(
                     );
                 }
                 let n = frames_covering(takes[0].1);
-                let _ = writeln!(
-                    w,
-                    "animation = 0\nframes = {{ count = {n}, fps = 30 }}   # the first take's length at 30 fps"
-                );
-                n
+                let _ = writeln!(w, "animation = 0\n{}", first_clip_frames(n, "take"));
+                n.min(LONGEST)
             }
         }
         Asset::Blend { info } => {
@@ -534,6 +524,44 @@ fn manifest(
 /// Frames at 30 fps from 0 that cover a clip of `seconds`, its last pose included.
 fn frames_covering(seconds: f32) -> usize {
     (seconds as f64 * 30.0 + 1e-4).floor() as usize + 1
+}
+
+/// The most frames `vvgen new` asks of a clip: 10 minutes at 30 fps. Longer clips are most often a timeline left
+/// at its end by the exporter (ufbx's corpus has takes of 92 hours); a whole one is a `count` away.
+const LONGEST: usize = 18_000;
+
+/// The `frames` line for a first clip (glTF) or take (FBX) of `n` frames at 30 fps: all of it, or its first
+/// [`LONGEST`] frames, saying so.
+fn first_clip_frames(n: usize, clip: &str) -> String {
+    if n <= LONGEST {
+        format!("frames = {{ count = {n}, fps = 30 }}   # the first {clip}'s length at 30 fps")
+    } else {
+        format!(
+            "frames = {{ count = {LONGEST}, fps = 30 }}   # the first 10 minutes of the first {clip}, which has {n} \
+             frames at 30 fps; raise `count` for more (at most {})",
+            crate::manifest::frames::MAX_FRAMES
+        )
+    }
+}
+
+/// A dataset name from a file's stem that `check` accepts ([`crate::manifest::is_plain_name`]: it names folders
+/// on every platform): ASCII letters and digits, each run of anything else one `-` (`人物_walk` is `walk`,
+/// `my file.v2` is `my-file-v2`), "dataset" when nothing is left.
+fn dataset_name(stem: &str) -> String {
+    let mut name = String::new();
+    for c in stem.chars() {
+        if c.is_ascii_alphanumeric() {
+            name.push(c);
+        } else if !name.is_empty() && !name.ends_with('-') {
+            name.push('-');
+        }
+    }
+    let name = name.trim_end_matches('-');
+    if name.is_empty() {
+        "dataset".into()
+    } else {
+        name.into()
+    }
 }
 
 /// A TOML bare key from a name.

@@ -95,6 +95,8 @@ impl FbxAsset {
             meshes: !self.scene.meshes.is_empty(),
             clips: self.takes.len(),
             clip: "take",
+            skeleton: !self.scene.bones.is_empty(),
+            curves: self.scene.nurbs_curves.len() + self.scene.nurbs_surfaces.len() + self.scene.line_curves.len(),
         }
     }
 

@@ -99,6 +99,15 @@ pub(super) fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Err
                             warnings.push(missing_texture(dir, &m.element.name, &missing));
                             None
                         }
+                        Image::Unnamed(kind) => {
+                            warnings.push(format!(
+                                "material `{}`: its colour's texture `{}` is {kind} that names no image file, which \
+                                 vvgen does not read (nor does Blender's importer), so the material renders in its \
+                                 colour alone; connect an image file to the diffuse colour before export to use one",
+                                m.element.name, t.element.name
+                            ));
+                            None
+                        }
                     };
                     cache.insert(id, got);
                     got
@@ -147,6 +156,8 @@ enum Image {
     Found(Texture, bool),
     /// Nothing, embedded or in the folder: the path the file names (see [`materials`]).
     Missing(String),
+    /// No image file named at all: what the texture is instead ("a layered texture", "a procedural map", …).
+    Unnamed(&'static str),
 }
 
 /// A texture: embedded in the file, or a file beside it that stays inside its folder (as glTF URIs must), or
@@ -154,6 +165,15 @@ enum Image {
 fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
     let bytes: Vec<u8> = if t.content.size > 0 {
         t.content.to_vec()
+    } else if t.relative_filename.is_empty() && t.filename.is_empty() {
+        // 3ds Max's OSL and shader maps, Maya's layered textures: no file to look for (joined to the folder, an
+        // empty name would name the folder itself).
+        return Ok(Image::Unnamed(match t.type_ {
+            ufbx::TextureType::Layered => "a layered texture",
+            ufbx::TextureType::Procedural => "a procedural map",
+            ufbx::TextureType::Shader => "a shader map",
+            ufbx::TextureType::File => "a file texture",
+        }));
     } else {
         let rel = if t.relative_filename.is_empty() { t.filename.to_string() } else { t.relative_filename.to_string() };
         let rel = rel.replace('\\', "/");
@@ -171,6 +191,9 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
         };
         if !inside {
             return Err(err(path, format!("texture `{rel}` points outside the FBX file's folder")));
+        }
+        if !full.is_file() {
+            return Ok(Image::Missing(rel));
         }
         return found(&full);
     };

@@ -84,7 +84,8 @@ impl LoadedSource {
                 let clips =
                     select_clips(&asset, &req.clips).map_err(|message| Error::Clip { name: name.clone(), message })?;
                 let duration = clips.iter().map(|&c| asset.animations[c].duration()).fold(0.0f32, f32::max);
-                let times = frame_times(&req.frames, duration as f64);
+                let times = frame_times(&req.frames, duration as f64, "animation")
+                    .map_err(|message| Error::Clip { name: name.clone(), message })?;
                 SourceData::Gltf { asset: Box::new(asset), clips, times }
             }
             SourceFile::Fbx(path) => {
@@ -98,7 +99,8 @@ impl LoadedSource {
                 }
                 let take = super::fbx::select_take(&asset, &name, &req.clips)?;
                 let duration = take.map_or(0.0, |t| asset.takes[t].duration());
-                let times = frame_times(&req.frames, duration);
+                let times = frame_times(&req.frames, duration, "take")
+                    .map_err(|message| Error::Clip { name: name.clone(), message })?;
                 SourceData::Fbx { asset: Box::new(asset), take, times }
             }
             SourceFile::Blend { path, select } => {
@@ -138,7 +140,8 @@ impl LoadedSource {
         // as a glTF or FBX with nothing to draw is.
         if let (SourceFile::Mesh { path, .. }, SourceData::Static(s)) = (&req.file, &data) {
             if (is_ply(path) || is_obj(path) || is_stl(path)) && s.triangle_count() + s.point_count() == 0 {
-                let drawn = Holds { draws: false, nodes: 0, meshes: true, clips: 0, clip: "" };
+                let drawn =
+                    Holds { draws: false, nodes: 0, meshes: true, clips: 0, clip: "", skeleton: false, curves: 0 };
                 return Err(Error::Source { name, message: nothing_drawn(path, drawn).unwrap_or_default() });
             }
         }
@@ -256,6 +259,10 @@ pub struct Holds {
     pub clips: usize,
     /// What the format calls a clip: "animation", "take".
     pub clip: &'static str,
+    /// Whether it has a skeleton (glTF skins, FBX bones): a clip then most likely moves a character left out.
+    pub skeleton: bool,
+    /// Its curves and NURBS surfaces (FBX): shapes a modeller draws that are not polygon meshes.
+    pub curves: usize,
 }
 
 /// Why a glTF or FBX file with nothing to draw (nor, in glTF, a light) cannot be a source, and the way out;
@@ -270,14 +277,24 @@ pub fn nothing_drawn(path: &std::path::Path, h: Holds) -> Option<String> {
         Holds { meshes: true, .. } => {
             format!("`{file}`: nothing to render: no triangles or points (vvgen draws neither lines nor empty meshes)")
         }
-        Holds { clips: 0, nodes, .. } => {
-            format!("`{file}` holds {nodes} node(s) and no mesh: nothing to render; name a file with the subject's mesh")
-        }
-        Holds { nodes, clips, clip, .. } => format!(
+        Holds { curves: 1.., .. } => format!(
+            "`{file}` holds {} curve or NURBS object(s) and no polygon mesh: vvgen draws polygon meshes only (as \
+             Blender's FBX importer, which skips them too); convert them before export (Maya: Modify > Convert > \
+             NURBS to Polygons; 3ds Max: Convert To > Editable Poly; Blender: Object > Convert > Mesh)",
+            h.curves
+        ),
+        Holds { clips: clips @ 1.., skeleton: true, nodes, clip, .. } => format!(
             "`{file}` holds {nodes} node(s) and {clips} {clip}(s) but no mesh: an animation-only export (a skeleton \
              and its motion, as Mixamo's \"Without Skin\" download); download or export the character with its mesh \
              (Mixamo: \"With Skin\"), or in Blender apply the motion to the character and name the .blend"
         ),
+        Holds { nodes, clips, clip, .. } => {
+            let moving = if clips > 0 { format!(" and {clips} {clip}(s)") } else { String::new() };
+            format!(
+                "`{file}` holds {nodes} node(s){moving} and no mesh (cameras, lights or empty nodes): nothing to \
+                 render; name a file with the subject's mesh"
+            )
+        }
     })
 }
 
@@ -341,17 +358,30 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
 }
 
 /// The times (seconds from the clip's start) of an animated source's frames: `frames`, else the clip's whole
-/// `duration` at its rate.
-fn frame_times(f: &FrameRange, duration: f64) -> Vec<f32> {
+/// `duration` at its rate. The manifest bounds `frames`; a whole clip longer than
+/// [`crate::manifest::frames::MAX_FRAMES`] frames (exporters leave takes 92 hours long) is refused, saying how to
+/// take part of it.
+fn frame_times(f: &FrameRange, duration: f64, clip: &str) -> Result<Vec<f32>, String> {
     let fps = f.fps();
     let start = f.start.unwrap_or(0);
     let step = f.step() as i64;
     let end = match (f.end, f.count) {
         (Some(e), _) => e,
         (None, Some(c)) => start + (c as i64 - 1) * step,
-        (None, None) => start.max((duration * fps + 1e-4).floor() as i64),
+        (None, None) => {
+            let last = duration * fps + 1e-4;
+            let max = crate::manifest::frames::MAX_FRAMES;
+            if !last.is_finite() || last >= (max * f.step()) as f64 {
+                return Err(format!(
+                    "the {clip} is {duration:.3} s long: {:.0} frames at {fps} fps, more than {max}; take part of it \
+                     with `frames = {{ count = N }}` (or `start` and `end`)",
+                    last.floor() + 1.0
+                ));
+            }
+            start.max(last.floor() as i64)
+        }
     };
-    (start..=end).step_by(step as usize).map(|n| (n as f64 / fps) as f32).collect()
+    Ok((start..=end).step_by(step as usize).map(|n| (n as f64 / fps) as f32).collect())
 }
 
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has

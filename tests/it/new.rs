@@ -274,3 +274,49 @@ fn a_splatting_model_folder_takes_its_up_from_its_training_cameras() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("up \"z\" guessed"), "{err}");
 }
+
+/// What ufbx's corpus of exporters' files showed `new` (each used from its own folder): a name of other scripts
+/// than Latin gives a dataset name `check` accepts; a take left 92 hours long gives its first 10 minutes, not a
+/// count `check` refuses; a layered texture (no image file of its own) is a warning, where it stopped `new`
+/// reading the folder as an image; a file of NURBS alone, or of lights alone, is refused saying what it holds.
+#[test]
+fn exporters_leftovers_give_a_manifest_that_checks_or_say_what_the_file_holds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::copy(data("fbx/maya_long_keyframes_6100_binary.fbx"), d.join("長い take.fbx")).unwrap();
+    let (code, err) = vvgen(d, &["new", "長い take.fbx"]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("take.toml")).unwrap();
+    assert!(text.contains("name = \"take\""), "{text}");
+    assert!(text.contains("frames = { count = 18000, fps = 30 }   # the first 10 minutes"), "{text}");
+    assert!(text.contains("10000001 frames"), "{text}");
+    let (code, err) = vvgen(d, &["check", "take.toml"]);
+    assert_eq!(code, 0, "{err}");
+    // Without `frames`, the whole take: refused by `check` with the way out, never planned frame by frame.
+    let whole: String = text.lines().filter(|l| !l.starts_with("frames")).map(|l| format!("{l}\n")).collect();
+    std::fs::write(d.join("whole.toml"), whole).unwrap();
+    let (code, err) = vvgen(d, &["check", "whole.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("the take is 333333.333 s long: 10000001 frames at 30 fps, more than 1000000"), "{err}");
+    assert!(err.contains("`frames = { count = N }`"), "{err}");
+
+    std::fs::copy(data("fbx/maya_texture_layers_7500_binary.fbx"), d.join("layers.fbx")).unwrap();
+    let (code, err) = vvgen(d, &["new", "layers.fbx"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = vvgen(d, &["check", "layers.toml"]);
+    assert_eq!(code, 0, "{err}");
+    for s in ["warning", "layers.fbx", "`lambert2`", "`layeredTexture1` is a layered texture", "colour alone"] {
+        assert!(err.contains(s), "`{s}` not in: {err}");
+    }
+
+    for (file, says) in [
+        ("maya_nurbs_surface_plane_7500_binary.fbx", "holds 1 curve or NURBS object(s) and no polygon mesh"),
+        ("maya_anim_light_7500_binary.fbx", "holds 1 node(s) and 1 take(s) and no mesh (cameras, lights"),
+    ] {
+        std::fs::copy(data(&format!("fbx/{file}")), d.join(file)).unwrap();
+        let (code, err) = vvgen(d, &["new", file]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(says), "`{says}` not in: {err}");
+        assert!(!err.contains("animation-only"), "{err}");
+    }
+}

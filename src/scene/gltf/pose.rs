@@ -60,6 +60,9 @@ impl GltfAsset {
             meshes: self.order.iter().any(|&(n, _)| self.nodes[n].mesh.is_some()),
             clips: self.animations.len(),
             clip: "animation",
+            // An animation-only glTF keeps no skin (it has no mesh to bind): a hierarchy of nodes is taken for one.
+            skeleton: self.nodes.len() > 1 || self.nodes.iter().any(|n| n.skin.is_some()),
+            curves: 0,
         }
     }
 
