@@ -28,7 +28,9 @@ pub(super) struct Shading {
 /// `1 − TransparentColor.r`), emission `EmissiveColor × EmissiveFactor`; the `DiffuseColor` texture is the base
 /// colour's. Each property comes from the material, else its file's template, else Blender's default. The PBR
 /// properties some exporters add (Stingray, 3ds Max physical) are ignored, as Blender ignores them. A default
-/// material is last.
+/// material is last. Every one is drawn on both sides, as Blender draws an imported FBX (FBX has no two-sided
+/// flag it reads; Cycles culls nothing): a one-sided quad, a cloth panel or a mirrored part would otherwise
+/// vanish from the views behind it.
 ///
 /// A texture the file names but neither embeds nor has beside it (exporters keep the path on the artist's
 /// machine; downloads often leave the images out) is a warning, not an error: the material keeps its colour
@@ -79,6 +81,7 @@ pub(super) fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Err
             roughness: unit(1.0 - real("Shininess", 20.0).max(0.0).sqrt() / 10.0),
             specular: unit(real("SpecularFactor", 0.25) * 2.0),
             emissive: rgb("EmissiveColor", 0.0) * real("EmissiveFactor", 1.0) as f32,
+            double_sided: true,
             ..Material::default()
         };
         if mat.base_color.w < 1.0 {
@@ -129,8 +132,8 @@ pub(super) fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Err
         mats.push(mat);
     }
     // Faces without a material: white where the mesh has vertex colours, else Blender's grey.
-    mats.push(Material::default());
-    mats.push(Material::unassigned());
+    mats.push(Material { double_sided: true, ..Material::default() });
+    mats.push(Material { double_sided: true, ..Material::unassigned() });
     Ok(Shading { materials: Arc::new(mats), textures: Arc::new(textures), warnings, unseen })
 }
 

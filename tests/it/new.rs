@@ -300,7 +300,7 @@ fn exporters_leftovers_give_a_manifest_that_checks_or_say_what_the_file_holds() 
     assert!(err.contains("the take is 333333.333 s long: 10000001 frames at 30 fps, more than 1000000"), "{err}");
     assert!(err.contains("`frames = { count = N }`"), "{err}");
 
-    std::fs::copy(data("fbx/maya_texture_layers_7500_binary.fbx"), d.join("layers.fbx")).unwrap();
+    std::fs::copy(data("fbx/leftovers/maya_texture_layers_7500_binary.fbx"), d.join("layers.fbx")).unwrap();
     let (code, err) = vvgen(d, &["new", "layers.fbx"]);
     assert_eq!(code, 0, "{err}");
     let (code, err) = vvgen(d, &["check", "layers.toml"]);
@@ -313,7 +313,7 @@ fn exporters_leftovers_give_a_manifest_that_checks_or_say_what_the_file_holds() 
         ("maya_nurbs_surface_plane_7500_binary.fbx", "holds 1 curve or NURBS object(s) and no polygon mesh"),
         ("maya_anim_light_7500_binary.fbx", "holds 1 node(s) and 1 take(s) and no mesh (cameras, lights"),
     ] {
-        std::fs::copy(data(&format!("fbx/{file}")), d.join(file)).unwrap();
+        std::fs::copy(data(&format!("fbx/leftovers/{file}")), d.join(file)).unwrap();
         let (code, err) = vvgen(d, &["new", file]);
         assert_eq!(code, 2, "{err}");
         assert!(err.contains(says), "`{says}` not in: {err}");
