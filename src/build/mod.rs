@@ -472,6 +472,7 @@ fn crop_warnings(m: &Manifest, p: &Prepared, to_render: &[usize]) -> Result<Vec<
     })?;
     let mut said = coverage::warnings(m, &p.plan, &c);
     said.extend(coverage::misread_warnings(m, &p.plan, &c));
+    said.extend(coverage::small_warnings(m, &p.plan, &c));
     Ok(said)
 }
 

@@ -34,6 +34,7 @@ pub fn run(paths: &[PathBuf], deny_warnings: bool, ui: Ui) -> anyhow::Result<Exi
                         warnings.extend(plan.warnings.iter().cloned());
                         warnings.extend(coverage::warnings(&m, &plan, &crops));
                         warnings.extend(coverage::misread_warnings(&m, &plan, &crops));
+                        warnings.extend(coverage::small_warnings(&m, &plan, &crops));
                         // The consumers' frame-count limits, on the frames each output's splits select.
                         let mut diags = Vec::new();
                         for (name, out) in &m.outputs {

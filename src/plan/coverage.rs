@@ -61,7 +61,17 @@ pub struct Coverage {
     /// The images of `dnerf` outputs whose subject 4DGaussians and Deformable-3DGS would draw at least an eighth
     /// of a pixel off, in image order.
     pub misread: Vec<Misread>,
+    /// Each measured image and how far across the subject's box reaches in it, pixels (clipped to the image;
+    /// infinite when the box reaches behind the camera), in image order.
+    pub spans: Vec<(usize, f64)>,
+    /// The diagonal of each measured frame's subject box (in frame order), and that of the box of every measured
+    /// frame: how far the subject moves for its size.
+    pub sizes: (Vec<f64>, f64),
 }
+
+/// A subject whose box spans under this share of the image's shorter side in half a split's views is said to be
+/// small: a tenth, 40 pixels of a 400² image.
+const SMALL: f64 = 0.1;
 
 /// Measures `images` (all when `None`) of `m`'s plan, posing each frame they show once, frames in parallel; the
 /// misread poses only of the images a `dnerf` output writes (the readers that misread them read only those).
@@ -86,7 +96,7 @@ pub fn measure(m: &Manifest, scene: &Scene, plan: &Plan, images: Option<&[usize]
             dnerf[i] = true;
         }
     }
-    type Found = (Vec<Crop>, Vec<Misread>, f64);
+    type Found = (Vec<Crop>, Vec<Misread>, Vec<(usize, f64)>, f64, (Vec3, Vec3));
     let per_frame: Vec<Result<Found, scene::Error>> = by_frame
         .into_par_iter()
         .map_init(Poser::default, |poser, (frame, list)| {
@@ -98,25 +108,106 @@ pub fn measure(m: &Manifest, scene: &Scene, plan: &Plan, images: Option<&[usize]
             }
             let reach = points.iter().map(|p| p.as_dvec3().length_squared()).fold(0.0, f64::max).sqrt();
             let bounds = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
-            let (mut crops, mut misreads) = (Vec::new(), Vec::new());
+            let (mut crops, mut misreads, mut spans) = (Vec::new(), Vec::new(), Vec::new());
             for i in list {
                 let w2c = plan.images[i].camera.w2c();
                 crops.extend(crop(plan, i, &w2c, &points, bounds));
                 misreads.extend(dnerf[i].then(|| misread(plan, i, &w2c, &points)).flatten());
+                spans.extend((!points.is_empty()).then(|| (i, span(&plan.images[i].camera, &w2c, bounds))));
             }
-            Ok((crops, misreads, reach))
+            Ok((crops, misreads, spans, reach, bounds))
         })
         .collect();
     let mut out = Coverage { measured: images.len(), ..Coverage::default() };
+    let mut all = (Vec3::INFINITY, Vec3::NEG_INFINITY);
     for r in per_frame {
-        let (crops, misread, reach) = r?;
+        let (crops, misread, spans, reach, (lo, hi)) = r?;
         out.crops.extend(crops);
         out.misread.extend(misread);
+        out.spans.extend(spans);
         out.reach = out.reach.max(reach);
+        if lo.cmple(hi).all() {
+            out.sizes.0.push(f64::from((hi - lo).length()));
+            all = (all.0.min(lo), all.1.max(hi));
+        }
+    }
+    if all.0.cmple(all.1).all() {
+        out.sizes.1 = f64::from((all.1 - all.0).length());
     }
     out.crops.sort_by_key(|c| c.image);
     out.misread.sort_by_key(|m| m.image);
+    out.spans.sort_by_key(|s| s.0);
     Ok(out)
+}
+
+/// How far across, in pixels, the box `(lo, hi)` reaches in the image of `cam` (whose world-to-camera is `w2c`):
+/// the larger side of its eight corners' projections, clipped to the image; infinite when a corner is behind the
+/// camera (the box is then all around it).
+fn span(cam: &crate::camera::Camera, w2c: &DMat4, (lo, hi): (Vec3, Vec3)) -> f64 {
+    let (mut u, mut v) = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, f64::NEG_INFINITY));
+    for k in 0..8 {
+        let c = DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x } as f64,
+            if k & 2 == 0 { lo.y } else { hi.y } as f64,
+            if k & 4 == 0 { lo.z } else { hi.z } as f64,
+        );
+        let p = w2c.transform_point3(c);
+        let z = -p.z;
+        if z <= 0.0 {
+            return f64::INFINITY;
+        }
+        let (x, y) = (cam.cx + cam.fx * p.x / z, cam.cy - cam.fy * p.y / z);
+        u = (u.0.min(x), u.1.max(x));
+        v = (v.0.min(y), v.1.max(y));
+    }
+    let (w, h) = (f64::from(cam.width), f64::from(cam.height));
+    (u.1.min(w) - u.0.max(0.0)).max(v.1.min(h) - v.0.max(0.0)).max(0.0)
+}
+
+/// A warning when, in half of some split's measured views, the subject spans under [`SMALL`] of the image: in
+/// which splits, how small, why (a motion many times the subject's size, all of which `fit = "frame"` keeps in
+/// every view), and what makes it larger. Such a dataset builds, and a trainer sees a few pixels of subject.
+pub fn small_warnings(m: &Manifest, plan: &Plan, c: &Coverage) -> Vec<String> {
+    let mut per_split: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+    for &(i, px) in &c.spans {
+        per_split.entry(plan.images[i].split).or_default().push(px);
+    }
+    let (mut splits, mut medians, mut size) = (Vec::new(), Vec::new(), None);
+    for (s, mut spans) in per_split {
+        let Some(cam) = plan.splits[s].images.first().map(|&i| &plan.images[i].camera) else { continue };
+        spans.sort_by(f64::total_cmp);
+        let median = spans[spans.len() / 2];
+        if median < SMALL * f64::from(cam.width.min(cam.height)) {
+            splits.push(format!("`{}`", plan.splits[s].name));
+            medians.push(median);
+            size.get_or_insert((cam.width, cam.height));
+        }
+    }
+    let Some((w, h)) = size else { return Vec::new() };
+    let px = |v: f64| format!("{v:.0}");
+    let (lo, hi) = medians.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
+    let across = if px(lo) == px(hi) { px(lo) } else { format!("{}–{}", px(lo), px(hi)) };
+    // How far the subject moves for its size: its whole box against a typical frame's.
+    let mut frames = c.sizes.0.clone();
+    frames.sort_by(f64::total_cmp);
+    let typical = frames.get(frames.len() / 2).copied().unwrap_or(0.0);
+    let moves = (typical > 0.0 && c.sizes.1 >= 3.0 * typical).then(|| c.sizes.1 / typical);
+    let frame_fit = m.transform.fit().is_some_and(|f| f.frame);
+    let (why, fix) = match (moves, frame_fit) {
+        (Some(k), true) => (
+            format!(
+                ": it moves across {k:.0}× its own size, and fit = \"frame\" keeps all of its motion in every \
+                 view"
+            ),
+            "take a shorter stretch of the clip (`frames`), play the motion in place, or raise `resolution`",
+        ),
+        (_, false) => (String::new(), "[transform] fit = \"frame\" sizes it for the cameras"),
+        (None, true) => (String::new(), "bring the rig's cameras closer, or raise `resolution`"),
+    };
+    vec![format!(
+        "the subject is small in {}: about {across} px across in half of the views ({w}×{h} images){why}; {fix}",
+        splits.join(", ")
+    )]
 }
 
 /// [`Misread`] of image `i` showing `points`, when at least [`MISREAD_PX`].

@@ -126,6 +126,10 @@ pub enum Clip {
     Name(String),
 }
 
+/// The most frames a source plays: the manifest's own bound (`settings` holds the two equal), which a clip's
+/// whole duration, played when no frames are named, must keep too.
+pub const MAX_FRAMES: u64 = 1_000_000;
+
 /// Which frames of an animated file play: frame `n` is at `n / fps` seconds from the clip's start.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct FrameRange {

@@ -359,7 +359,7 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
 
 /// The times (seconds from the clip's start) of an animated source's frames: `frames`, else the clip's whole
 /// `duration` at its rate. The manifest bounds `frames`; a whole clip longer than
-/// [`crate::manifest::frames::MAX_FRAMES`] frames (exporters leave takes 92 hours long) is refused, saying how to
+/// [`super::input::MAX_FRAMES`] frames (exporters leave takes 92 hours long) is refused, saying how to
 /// take part of it.
 fn frame_times(f: &FrameRange, duration: f64, clip: &str) -> Result<Vec<f32>, String> {
     let fps = f.fps();
@@ -370,7 +370,7 @@ fn frame_times(f: &FrameRange, duration: f64, clip: &str) -> Result<Vec<f32>, St
         (None, Some(c)) => start + (c as i64 - 1) * step,
         (None, None) => {
             let last = duration * fps + 1e-4;
-            let max = crate::manifest::frames::MAX_FRAMES;
+            let max = super::input::MAX_FRAMES;
             if !last.is_finite() || last >= (max * f.step()) as f64 {
                 return Err(format!(
                     "the {clip} is {duration:.3} s long: {:.0} frames at {fps} fps, more than {max}; take part of it \

@@ -12,6 +12,9 @@ use crate::scene::input::{
 };
 use crate::scene::{Error, Request, Scene};
 
+// The scene bounds a clip played whole as the manifest bounds `frames`.
+const _: () = assert!(crate::scene::input::MAX_FRAMES == crate::manifest::frames::MAX_FRAMES);
+
 /// Opens `m`'s scene; `importer` imports `.blend` sources ([`Scene::open_importing`]).
 pub fn open(m: &Manifest, importer: Option<&Importer>) -> Result<Scene, Error> {
     Scene::open_importing(&request(m)?, importer)

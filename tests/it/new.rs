@@ -320,3 +320,43 @@ fn exporters_leftovers_give_a_manifest_that_checks_or_say_what_the_file_holds() 
         assert!(!err.contains("animation-only"), "{err}");
     }
 }
+
+/// A subject that travels many times its size (ufbx's cube with extrapolated keys) is small in every view once
+/// `fit = "frame"` keeps its whole motion there: `check` says how small, why, and what makes it larger; the
+/// first frame alone, framed by itself, is not small. A static subject made small by its fit is told the fit.
+#[test]
+fn a_subject_small_in_its_views_is_warned_of_with_why_and_the_way_out() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::copy(data("fbx/leftovers/maya_extrapolate_cube_7700_ascii.fbx"), d.join("cube.fbx")).unwrap();
+    let (code, err) = vvgen(d, &["new", "cube.fbx"]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("cube.toml")).unwrap();
+    let (code, err) = vvgen(d, &["--color", "never", "check", "cube.toml"]);
+    assert_eq!(code, 0, "{err}");
+    for s in [
+        "the subject is small in `test`, `train`, `val`: about ",
+        "px across in half of the views (400×400 images): it moves across ",
+        "× its own size, and fit = \"frame\" keeps all of its motion in every view",
+        "take a shorter stretch of the clip (`frames`)",
+    ] {
+        assert!(err.contains(s), "`{s}` not in: {err}");
+    }
+    let px: f64 =
+        err.split("about ").nth(1).unwrap().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap();
+    assert!(px < 40.0, "{err}");
+    let first: Vec<&str> =
+        text.lines().map(|l| if l.starts_with("frames") { "frames = { count = 1 }" } else { l }).collect();
+    let first = first.join("\n");
+    std::fs::write(d.join("first.toml"), &first).unwrap();
+    let (code, err) = vvgen(d, &["--color", "never", "check", "first.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("small"), "{err}");
+    // One frame, small because its fit says so.
+    let tiny = first.replace("fit    = \"frame\"", "fit = { height = 0.1 }");
+    assert_ne!(tiny, first);
+    std::fs::write(d.join("tiny.toml"), tiny).unwrap();
+    let (code, err) = vvgen(d, &["--color", "never", "check", "tiny.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("the subject is small in") && err.contains("[transform] fit = \"frame\" sizes it"), "{err}");
+}
