@@ -148,8 +148,8 @@ fn missing_texture(dir: &Path, material: &str, missing: &str) -> String {
         format!("beside the FBX file as `{}`", dir.join(name.as_ref()).display())
     };
     format!(
-        "material `{material}`: texture `{missing}` is neither in the file nor beside it, so the material renders \
-         in its colour alone; put the image {place} to use it"
+        "material `{material}`: texture `{missing}` is neither in the file nor in its folder (searched below it, as \
+         Blender's importer searches), so the material renders in its colour alone; put the image {place} to use it"
     )
 }
 
@@ -184,9 +184,10 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
         let inside = match (std::fs::canonicalize(dir), std::fs::canonicalize(&full)) {
             (Ok(d), Ok(f)) => f.starts_with(&d),
             _ => {
-                // Exporters often keep only an absolute path from another machine: try the name beside the file.
+                // Exporters often keep only an absolute path from another machine: try the name beside the file,
+                // then anywhere below it, as Blender's importer searches ("Image Search", on by default).
                 let name = Path::new(&rel).file_name().map(|n| dir.join(n));
-                return match name.filter(|n| n.is_file()) {
+                return match name.filter(|n| n.is_file()).or_else(|| search_below(dir, &rel)) {
                     Some(n) => found(&n),
                     None => Ok(Image::Missing(rel)),
                 };
@@ -196,7 +197,7 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
             return Err(err(path, format!("texture `{rel}` points outside the FBX file's folder")));
         }
         if !full.is_file() {
-            return Ok(Image::Missing(rel));
+            return search_below(dir, &rel).map_or(Ok(Image::Missing(rel)), |n| found(&n));
         }
         return found(&full);
     };
@@ -222,6 +223,44 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
     let alpha = img.color().has_alpha();
     let img = img.into_rgba8();
     Ok(Image::Found(Texture::new(img.width(), img.height(), img.into_raw(), true), alpha))
+}
+
+/// How deep below the FBX file's folder, and through how many entries, [`search_below`] looks: a file left in
+/// a home folder must not walk the disk.
+const SEARCH_DEPTH: usize = 8;
+const SEARCH_ENTRIES: usize = 20_000;
+
+/// The first file below `dir` named as `named`'s last component, case aside (`Textures/Wood.PNG` finds
+/// `textures/wood.png`), as Blender's importer finds a texture whose path is not there (`load_image`'s
+/// recursive search). Deterministic where Blender's walk is in directory order: the shallowest first, names
+/// sorted; hidden folders and symbolic links to folders are not entered.
+fn search_below(dir: &Path, named: &str) -> Option<std::path::PathBuf> {
+    let want = Path::new(named).file_name()?.to_string_lossy().to_lowercase();
+    let mut level = vec![dir.to_path_buf()];
+    let mut seen = 0;
+    for _ in 0..=SEARCH_DEPTH {
+        let mut next = Vec::new();
+        for d in level {
+            let Ok(read) = std::fs::read_dir(&d) else { continue };
+            let mut entries: Vec<(String, std::path::PathBuf, bool)> = Vec::new();
+            for e in read.flatten() {
+                seen += 1;
+                if seen > SEARCH_ENTRIES {
+                    return None;
+                }
+                // `file_type` does not follow symbolic links: a link to a folder is not a folder here.
+                let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+                entries.push((e.file_name().to_string_lossy().into_owned(), e.path(), is_dir));
+            }
+            entries.sort();
+            if let Some((_, p, _)) = entries.iter().find(|(n, p, d)| !d && n.to_lowercase() == want && p.is_file()) {
+                return Some(p.clone());
+            }
+            next.extend(entries.into_iter().filter(|(n, _, d)| *d && !n.starts_with('.')).map(|(_, p, _)| p));
+        }
+        level = next;
+    }
+    None
 }
 
 /// The image file at `file`, read.

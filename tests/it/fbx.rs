@@ -127,7 +127,8 @@ fn an_fbx_whose_texture_was_left_behind_loads_in_its_colours_and_says_where_to_p
         .unwrap();
     let (code, err) = vvgen(d, &["--color", "never", "check", "checker-quad.toml"]);
     assert_eq!(code, 0, "{err}");
-    let said = "material `Checker`: texture `textures/checker.png` is neither in the file nor beside it";
+    let said = "material `Checker`: texture `textures/checker.png` is neither in the file nor in its folder \
+                (searched below it, as Blender's importer searches)";
     assert!(
         err.contains(said) && err.contains("textures/checker.png` or beside the FBX file as `checker.png`"),
         "{err}"
@@ -147,6 +148,13 @@ fn an_fbx_whose_texture_was_left_behind_loads_in_its_colours_and_says_where_to_p
     std::fs::copy(&image, d.join("checker.png")).unwrap();
     assert_eq!(textured(d), (true, 0));
     std::fs::remove_file(d.join("checker.png")).unwrap();
+    // Anywhere below, whatever its case, as Blender's "Image Search" finds it (a download's `Model.fbm/`, `maps/`);
+    // a hidden folder is not searched.
+    std::fs::create_dir_all(d.join("download/Maps")).unwrap();
+    std::fs::copy(&image, d.join("download/Maps/CHECKER.PNG")).unwrap();
+    assert_eq!(textured(d), (true, 0));
+    std::fs::rename(d.join("download"), d.join(".download")).unwrap();
+    assert_eq!(textured(d), (false, 1));
     std::fs::create_dir(d.join("textures")).unwrap();
     std::fs::copy(&image, d.join("textures/checker.png")).unwrap();
     assert_eq!(textured(d), (true, 0));
