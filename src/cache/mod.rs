@@ -110,6 +110,11 @@ fn place(d: Digest, f: Staged, stat: &StatCache, how: Commit) -> Result<(), Erro
     Ok(())
 }
 
+/// The file that marks a folder as a cache (<https://bford.info/cachedir/>).
+pub const CACHE_TAG: &str = "CACHEDIR.TAG";
+const CACHE_TAG_TEXT: &str = "Signature: 8a477f597d28d172789f06886806bc55\n\
+    # This file is a cache directory tag created by vvgen: its objects are rebuilt by `vvgen build`.\n";
+
 /// A cache directory.
 #[derive(Debug, Clone)]
 pub struct Store {
@@ -117,10 +122,16 @@ pub struct Store {
 }
 
 impl Store {
-    /// Opens (creating) the store at `root`.
+    /// Opens (creating) the store at `root`, tagged as a cache (`CACHEDIR.TAG`, the convention backup tools and
+    /// vvgen's own texture search skip).
     pub fn open(root: &Path) -> Result<Store, Error> {
         let objects = root.join("objects");
         fs::create_dir_all(&objects).map_err(|e| Error::io(&objects, e))?;
+        let tag = root.join(CACHE_TAG);
+        if !tag.exists() {
+            // Best effort: a store on a read-only copy still reads.
+            let _ = fs::write(&tag, CACHE_TAG_TEXT);
+        }
         Ok(Store { root: root.to_path_buf() })
     }
 

@@ -233,7 +233,9 @@ const SEARCH_ENTRIES: usize = 20_000;
 /// The first file below `dir` named as `named`'s last component, case aside (`Textures/Wood.PNG` finds
 /// `textures/wood.png`), as Blender's importer finds a texture whose path is not there (`load_image`'s
 /// recursive search). Deterministic where Blender's walk is in directory order: the shallowest first, names
-/// sorted; hidden folders and symbolic links to folders are not entered.
+/// sorted; hidden folders, symbolic links to folders, caches (`CACHEDIR.TAG`, as vvgen's own) and vvgen's
+/// datasets (`vvgen/dataset.json`) are not entered, so what a build writes beside the file never changes what the
+/// next one finds.
 fn search_below(dir: &Path, named: &str) -> Option<std::path::PathBuf> {
     let want = Path::new(named).file_name()?.to_string_lossy().to_lowercase();
     let mut level = vec![dir.to_path_buf()];
@@ -256,7 +258,10 @@ fn search_below(dir: &Path, named: &str) -> Option<std::path::PathBuf> {
             if let Some((_, p, _)) = entries.iter().find(|(n, p, d)| !d && n.to_lowercase() == want && p.is_file()) {
                 return Some(p.clone());
             }
-            next.extend(entries.into_iter().filter(|(n, _, d)| *d && !n.starts_with('.')).map(|(_, p, _)| p));
+            // (`export::meta::META`, named here since export reads scenes.)
+            let ours = |p: &Path| p.join(crate::cache::CACHE_TAG).exists() || p.join("vvgen/dataset.json").exists();
+            let enter = |(n, p, d): &(String, std::path::PathBuf, bool)| *d && !n.starts_with('.') && !ours(p);
+            next.extend(entries.into_iter().filter(enter).map(|(_, p, _)| p));
         }
         level = next;
     }

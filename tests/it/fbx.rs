@@ -155,6 +155,16 @@ fn an_fbx_whose_texture_was_left_behind_loads_in_its_colours_and_says_where_to_p
     assert_eq!(textured(d), (true, 0));
     std::fs::rename(d.join("download"), d.join(".download")).unwrap();
     assert_eq!(textured(d), (false, 1));
+    // Nor a cache or a dataset vvgen wrote there: what a build leaves beside the file never changes the next.
+    for (folder, tag) in [("cache", "CACHEDIR.TAG"), ("out/a", "vvgen/dataset.json")] {
+        std::fs::create_dir_all(d.join(folder).join("vvgen")).unwrap();
+        std::fs::write(d.join(folder).join(tag), "").unwrap();
+        std::fs::copy(&image, d.join(folder).join("checker.png")).unwrap();
+        assert_eq!(textured(d), (false, 1), "{folder}");
+        std::fs::remove_file(d.join(folder).join(tag)).unwrap();
+        assert_eq!(textured(d), (true, 0), "{folder}");
+        std::fs::remove_dir_all(d.join(folder)).unwrap();
+    }
     std::fs::create_dir(d.join("textures")).unwrap();
     std::fs::copy(&image, d.join("textures/checker.png")).unwrap();
     assert_eq!(textured(d), (true, 0));
