@@ -290,9 +290,10 @@ pub fn nothing_drawn(path: &std::path::Path, h: Holds) -> Option<String> {
         ),
         Holds { nodes, clips, clip, .. } => {
             let moving = if clips > 0 { format!(" and {clips} {clip}(s)") } else { String::new() };
+            let what = if nodes > 0 { " (cameras, lights or empty nodes)" } else { "" };
             format!(
-                "`{file}` holds {nodes} node(s){moving} and no mesh (cameras, lights or empty nodes): nothing to \
-                 render; name a file with the subject's mesh"
+                "`{file}` holds {nodes} node(s){moving} and no mesh{what}: nothing to render; name a file with the \
+                 subject's mesh"
             )
         }
     })
