@@ -163,8 +163,8 @@ enum Image {
     Unnamed(&'static str),
 }
 
-/// A texture: embedded in the file, or a file beside it that stays inside its folder (as glTF URIs must), or
-/// missing. An image that is there but does not decode, or a path out of the folder, is an error.
+/// A texture: embedded in the file, the file its path names, found by its name below the FBX's folder, or
+/// missing. An image that is there but does not decode is an error.
 fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
     let bytes: Vec<u8> = if t.content.size > 0 {
         t.content.to_vec()
@@ -180,26 +180,19 @@ fn texture(path: &Path, dir: &Path, t: &ufbx::Texture) -> Result<Image, Error> {
     } else {
         let rel = if t.relative_filename.is_empty() { t.filename.to_string() } else { t.relative_filename.to_string() };
         let rel = rel.replace('\\', "/");
+        // Where the file says: relative to its folder (out of it too: `../textures/`, as Blender reads it), or an
+        // absolute path that exists here. Only a regular file: a device or a pipe is never read.
         let full = dir.join(&rel);
-        let inside = match (std::fs::canonicalize(dir), std::fs::canonicalize(&full)) {
-            (Ok(d), Ok(f)) => f.starts_with(&d),
-            _ => {
-                // Exporters often keep only an absolute path from another machine: try the name beside the file,
-                // then anywhere below it, as Blender's importer searches ("Image Search", on by default).
-                let name = Path::new(&rel).file_name().map(|n| dir.join(n));
-                return match name.filter(|n| n.is_file()).or_else(|| search_below(dir, &rel)) {
-                    Some(n) => found(&n),
-                    None => Ok(Image::Missing(rel)),
-                };
-            }
+        if full.is_file() {
+            return found(&full);
+        }
+        // Exporters often keep only an absolute path from another machine: try the name beside the file, then
+        // anywhere below it, as Blender's importer searches ("Image Search", on by default).
+        let name = Path::new(&rel).file_name().map(|n| dir.join(n));
+        return match name.filter(|n| n.is_file()).or_else(|| search_below(dir, &rel)) {
+            Some(n) => found(&n),
+            None => Ok(Image::Missing(rel)),
         };
-        if !inside {
-            return Err(err(path, format!("texture `{rel}` points outside the FBX file's folder")));
-        }
-        if !full.is_file() {
-            return search_below(dir, &rel).map_or(Ok(Image::Missing(rel)), |n| found(&n));
-        }
-        return found(&full);
     };
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()

@@ -456,3 +456,26 @@ fn an_fbx_is_drawn_on_both_sides_as_blender_draws_it() {
     // The same square, mirrored: the same pixels covered.
     assert_eq!(above, below);
 }
+
+/// A texture path out of the FBX's folder (`../textures/`, as downloads lay files out) is read as Blender reads
+/// it, where vvgen refused the file; only a regular file is: a path naming a folder is a missing texture.
+#[test]
+fn an_fbx_texture_out_of_its_folder_is_read_as_blender_reads_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // ufbx's file names its texture `../../../temporary.png`.
+    let deep = d.join("a/b/c");
+    std::fs::create_dir_all(&deep).unwrap();
+    std::fs::copy(data("fbx/leftovers/synthetic_parent_directory_7700_ascii.fbx"), deep.join("p.fbx")).unwrap();
+    let textured = || {
+        let asset = vvgen::scene::fbx::load(&deep.join("p.fbx")).unwrap();
+        let n = asset.named_materials().iter().filter(|(_, m)| m.base_color_texture.is_some()).count();
+        (n, asset.warnings.len())
+    };
+    assert_eq!(textured(), (0, 1));
+    std::fs::create_dir(d.join("temporary.png")).unwrap();
+    assert_eq!(textured(), (0, 1));
+    std::fs::remove_dir(d.join("temporary.png")).unwrap();
+    std::fs::copy(data("fbx/external/textures/checker.png"), d.join("temporary.png")).unwrap();
+    assert_eq!(textured(), (1, 0));
+}
