@@ -138,11 +138,12 @@ pub(super) fn materials(path: &Path, scene: &ufbx::Scene) -> Result<Shading, Err
 }
 
 /// The warning for material `material`'s texture `missing` (as the file names it), with where to put it: at
-/// that path in the folder `dir` when it is one, else (a path from another machine) by its name beside the file.
+/// that path from the folder `dir` when it is relative, else (a path from another machine) by its name beside
+/// the file.
 fn missing_texture(dir: &Path, material: &str, missing: &str) -> String {
     let name = Path::new(missing).file_name().map_or_else(|| missing.into(), |n| n.to_string_lossy());
-    let inside = !missing.contains(':') && !missing.starts_with('/') && !missing.split('/').any(|c| c == "..");
-    let place = if inside && missing != name {
+    let relative = !missing.contains(':') && !missing.starts_with('/');
+    let place = if relative && missing != name {
         format!("at `{}` or beside the FBX file as `{name}`", dir.join(missing).display())
     } else {
         format!("beside the FBX file as `{}`", dir.join(name.as_ref()).display())
