@@ -17,8 +17,11 @@ pub(super) fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
     }
     let decoded = percent_decode(uri);
     let rel = Path::new(&decoded);
+    // Out of the folder is refused (a document must not read the disk at large); the fix is a layout.
+    let fix = "keep the files it names in the glTF's folder or below it (glTF-Transform's `copy` writes a .glb \
+               holding them)";
     if rel.is_absolute() || decoded.contains("://") {
-        return Err(format!("URI `{uri}` points outside the glTF's folder"));
+        return Err(format!("URI `{uri}` points outside the glTF's folder; {fix}"));
     }
     // Containment is judged on the resolved paths: `sub/../x.bin` stays inside, a symlink out of the folder
     // does not.
@@ -26,7 +29,7 @@ pub(super) fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
     let (inside, target) = (std::fs::canonicalize(dir), std::fs::canonicalize(&full));
     match (inside, target) {
         (Ok(inside), Ok(target)) if target.starts_with(&inside) => {}
-        (Ok(_), Ok(_)) => return Err(format!("URI `{uri}` points outside the glTF's folder")),
+        (Ok(_), Ok(_)) => return Err(format!("URI `{uri}` points outside the glTF's folder; {fix}")),
         (_, Err(e)) => return Err(format!("cannot read `{}`: {e}", full.display())),
         (Err(e), _) => return Err(format!("cannot read the folder `{}`: {e}", dir.display())),
     }
