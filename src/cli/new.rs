@@ -537,8 +537,9 @@ fn first_clip_frames(n: usize, clip: &str) -> String {
         format!("frames = {{ count = {n}, fps = 30 }}   # the first {clip}'s length at 30 fps")
     } else {
         format!(
-            "frames = {{ count = {LONGEST}, fps = 30 }}   # the first 10 minutes of the first {clip}, which has {n} \
+            "frames = {{ count = {LONGEST}, fps = 30 }}   # the first {} minutes of the first {clip}, which has {n} \
              frames at 30 fps; raise `count` for more (at most {})",
+            LONGEST / 30 / 60,
             crate::manifest::frames::MAX_FRAMES
         )
     }

@@ -64,9 +64,11 @@ pub struct Coverage {
     /// Each measured image and how far across the subject's box reaches in it, pixels (clipped to the image;
     /// infinite when the box reaches behind the camera), in image order.
     pub spans: Vec<(usize, f64)>,
-    /// The diagonal of each measured frame's subject box (in frame order), and that of the box of every measured
-    /// frame: how far the subject moves for its size.
-    pub sizes: (Vec<f64>, f64),
+    /// The diagonal of each measured frame's subject box, in frame order.
+    pub frame_sizes: Vec<f64>,
+    /// The diagonal of the box of every measured frame: against [`Coverage::frame_sizes`], how far the subject
+    /// moves for its size.
+    pub extent: f64,
 }
 
 /// A subject whose box spans under this share of the image's shorter side in half a split's views is said to be
@@ -127,12 +129,12 @@ pub fn measure(m: &Manifest, scene: &Scene, plan: &Plan, images: Option<&[usize]
         out.spans.extend(spans);
         out.reach = out.reach.max(reach);
         if lo.cmple(hi).all() {
-            out.sizes.0.push(f64::from((hi - lo).length()));
+            out.frame_sizes.push(f64::from((hi - lo).length()));
             all = (all.0.min(lo), all.1.max(hi));
         }
     }
     if all.0.cmple(all.1).all() {
-        out.sizes.1 = f64::from((all.1 - all.0).length());
+        out.extent = f64::from((all.1 - all.0).length());
     }
     out.crops.sort_by_key(|c| c.image);
     out.misread.sort_by_key(|m| m.image);
@@ -145,12 +147,7 @@ pub fn measure(m: &Manifest, scene: &Scene, plan: &Plan, images: Option<&[usize]
 /// camera (the box is then all around it).
 fn span(cam: &crate::camera::Camera, w2c: &DMat4, (lo, hi): (Vec3, Vec3)) -> f64 {
     let (mut u, mut v) = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, f64::NEG_INFINITY));
-    for k in 0..8 {
-        let c = DVec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x } as f64,
-            if k & 2 == 0 { lo.y } else { hi.y } as f64,
-            if k & 4 == 0 { lo.z } else { hi.z } as f64,
-        );
+    for c in corners(lo, hi) {
         let p = w2c.transform_point3(c);
         let z = -p.z;
         if z <= 0.0 {
@@ -188,10 +185,10 @@ pub fn small_warnings(m: &Manifest, plan: &Plan, c: &Coverage) -> Vec<String> {
     let (lo, hi) = medians.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
     let across = if px(lo) == px(hi) { px(lo) } else { format!("{}–{}", px(lo), px(hi)) };
     // How far the subject moves for its size: its whole box against a typical frame's.
-    let mut frames = c.sizes.0.clone();
+    let mut frames = c.frame_sizes.clone();
     frames.sort_by(f64::total_cmp);
     let typical = frames.get(frames.len() / 2).copied().unwrap_or(0.0);
-    let moves = (typical > 0.0 && c.sizes.1 >= 3.0 * typical).then(|| c.sizes.1 / typical);
+    let moves = (typical > 0.0 && c.extent >= 3.0 * typical).then(|| c.extent / typical);
     let frame_fit = m.transform.fit().is_some_and(|f| f.frame);
     let (why, fix) = match (moves, frame_fit) {
         (Some(k), true) => (
@@ -239,18 +236,22 @@ fn crop(plan: &Plan, i: usize, w2c: &DMat4, points: &[Vec3], (lo, hi): (Vec3, Ve
         return None;
     }
     let cam = &plan.images[i].camera;
-    let corners = (0..8).map(|k| {
+    if corners(lo, hi).all(|c| cam.shows(w2c, c)) {
+        return None;
+    }
+    let outside = points.iter().filter(|p| !cam.shows(w2c, p.as_dvec3())).count();
+    (outside > 0).then(|| Crop { image: i, outside: outside as f64 / points.len() as f64 })
+}
+
+/// The eight corners of the box `(lo, hi)`.
+fn corners(lo: Vec3, hi: Vec3) -> impl Iterator<Item = DVec3> {
+    (0..8).map(move |k| {
         DVec3::new(
             if k & 1 == 0 { lo.x } else { hi.x } as f64,
             if k & 2 == 0 { lo.y } else { hi.y } as f64,
             if k & 4 == 0 { lo.z } else { hi.z } as f64,
         )
-    });
-    if corners.into_iter().all(|c| cam.shows(w2c, c)) {
-        return None;
-    }
-    let outside = points.iter().filter(|p| !cam.shows(w2c, p.as_dvec3())).count();
-    (outside > 0).then(|| Crop { image: i, outside: outside as f64 / points.len() as f64 })
+    })
 }
 
 /// One warning per split whose views crop the subject: how many, the worst, and what keeps it whole.
