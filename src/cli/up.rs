@@ -80,7 +80,7 @@ pub(super) fn tallest(s: &scene::PosedScene, path: &Path) -> (&'static str, Stri
     if let Some((up, _)) = flat {
         return (up, format!("up \"{up}\" guessed: {name} is flat along {up} {extent}, lying as terrain lies"));
     }
-    let up = if e.y >= e.z && e.y >= e.x { "y" } else { "z" };
+    let up = if e.y >= e.z { "y" } else { "z" };
     (up, format!("up \"{up}\" guessed: the taller of y and z in {name} {extent}"))
 }
 

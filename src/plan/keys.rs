@@ -43,11 +43,15 @@ pub struct FrameKeys {
     pub point_casters: Vec<bool>,
 }
 
-/// A PLY frame's polygons were all filled by the fan from their first corner before "ply polygons 1" filled the
-/// concave ones (and quads folded along their first diagonal) as Blender does: a frame with such a polygon is keyed
-/// apart; every other frame (point clouds, triangles, convex polygons) keeps its key.
-fn unfanned(path: &std::path::Path, stat: &StatCache) -> Result<Option<&'static [u8]>, Error> {
-    Ok(crate::scene::source::unfanned_cached(path, stat)?.then_some(b"ply polygons 1".as_slice()))
+/// What a PLY frame's key adds for how its file is read since it first was. Its polygons were all filled by the fan
+/// from their first corner before "ply polygons 1" filled the concave ones (and quads folded along their first
+/// diagonal) as Blender does; its triangle strips were dropped (the file read as a point cloud) before "ply strips
+/// 1" cut them into triangles as Blender 4.x does. A frame with either is keyed apart; every other frame (point
+/// clouds, triangles, convex polygons) keeps its key.
+fn ply_reading(path: &std::path::Path, stat: &StatCache) -> Result<Vec<&'static [u8]>, Error> {
+    let unfanned = crate::scene::source::unfanned_cached(path, stat)?.then_some(b"ply polygons 1".as_slice());
+    let strips = crate::scene::source::strips_cached(path, stat)?.then_some(b"ply strips 1".as_slice());
+    Ok(unfanned.into_iter().chain(strips).collect())
 }
 
 /// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
@@ -82,7 +86,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     bytes.extend(origin);
                     bytes.extend(splats);
                     bytes.extend(opaque);
-                    bytes.extend(unfanned(&f.path, stat)?);
+                    bytes.extend(ply_reading(&f.path, stat)?);
                     Ok(key("frame ply", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?
@@ -121,7 +125,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         bytes.push(b"obj polylines 1");
                     }
                     if is_ply(&f.path) {
-                        bytes.extend(unfanned(&f.path, stat)?);
+                        bytes.extend(ply_reading(&f.path, stat)?);
                     }
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))

@@ -43,7 +43,17 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
     };
     terrain("pond.ply", [3.5, 0.5, 3.1]);
     terrain("field.ply", [2.0, 3.0, 0.2]);
-    let cases: [(&str, String, &str, &str); 8] = [
+    // A long subject (x) of triangle strips, as Stanford's scans are stored: a mesh (it read as a point cloud
+    // before), standing on the taller of y and z (it stood on z whenever x was the longest: cows lay on their side).
+    let mut strips = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n\
+         element tristrips 1\nproperty list int int vertex_indices\nend_header\n",
+    );
+    for [x, y, z] in [[0, 0, 0], [0, 2, 1], [1, 0, 1], [1, 2, 0], [2, 0, 0], [2, 2, 1], [3, 0, 1], [4, 2, 0]] {
+        strips += &format!("{x} {y} {z}\n");
+    }
+    std::fs::write(d.join("long.ply"), strips + "9 0 1 2 3 -1 3 4 5 6 7\n").unwrap();
+    let cases: [(&str, String, &str, &str); 9] = [
         (
             "animated glTF",
             data("gltf/CesiumMan/CesiumMan.glb").display().to_string(),
@@ -57,6 +67,7 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
         ("a PLY mesh", d.join("tall.ply").display().to_string(), "dnerf", "up     = \"z\""),
         ("flat along y", d.join("pond.ply").display().to_string(), "dnerf", "up     = \"y\""),
         ("flat along z", d.join("field.ply").display().to_string(), "dnerf", "up     = \"z\""),
+        ("a long PLY of strips", d.join("long.ply").display().to_string(), "dnerf", "up     = \"y\""),
     ];
     for (i, (what, asset, writer, says)) in cases.iter().enumerate() {
         let name = format!("m{i}.toml");
@@ -72,6 +83,8 @@ fn new_manifests_check_clean_and_build_for_every_asset_kind() {
     }
     assert!(d.join("out/CesiumMan/CesiumMan_dnerf/transforms_train.json").is_file());
     assert!(d.join("out/tall/tall_dnerf/transforms_test.json").is_file());
+    // The strips are a surface: written lit, as a mesh without colours is (a cloud stays unlit).
+    assert!(std::fs::read_to_string(d.join("m8.toml")).unwrap().contains("shading        = \"pbr\""));
     // Never overwrites.
     let (code, err) = vvgen(d, &["new", &data("seq").display().to_string(), "-o", "m0.toml"]);
     assert_eq!(code, 2);

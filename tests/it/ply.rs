@@ -403,3 +403,28 @@ fn concave_polygons_are_filled_as_blender_fills_them_and_key_their_frames() {
         assert_eq!(vvgen::scene::source::unfanned_cached(&d.path().join(name), &stat).unwrap(), unfanned, "{name}");
     }
 }
+
+/// A file of triangle strips (Stanford's scans are stored so) is a mesh, where it read as its vertices alone, a
+/// point cloud: whether a file has strips keys a sequence's frame apart ("ply strips 1"), answered from its header
+/// and remembered by the stat cache.
+#[test]
+fn triangle_strips_are_a_mesh_and_key_their_frames() {
+    let header = |el: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+             {el}end_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n"
+        )
+    };
+    let strips = header("element tristrips 1\nproperty list int int vertex_indices\n") + "4 0 1 2 3\n";
+    let d = ply::read(strips.as_bytes()).unwrap();
+    assert_eq!(d.triangles, [0, 1, 2, 2, 1, 3]);
+    let dir = tempfile::tempdir().unwrap();
+    let stat = vvgen::cache::StatCache::load(&dir.path().join("stat"));
+    let faces = header("element face 1\nproperty list uchar int vertex_indices\n") + "4 0 1 3 2\n";
+    for (name, text, has) in
+        [("strips.ply", strips, true), ("faces.ply", faces, false), ("cloud.ply", header(""), false)]
+    {
+        std::fs::write(dir.path().join(name), text).unwrap();
+        assert_eq!(vvgen::scene::source::strips_cached(&dir.path().join(name), &stat).unwrap(), has, "{name}");
+    }
+}

@@ -21,7 +21,8 @@ pub struct PlyData {
     /// Per-vertex texture coordinates (`texture_u`/`texture_v`, `s`/`t` or `u`/`v`; v up), when the file has them.
     pub uvs: Option<Vec<[f32; 2]>>,
     /// Triangles, indices into `positions`: polygons filled as Blender fills them (a convex one as the fan from its
-    /// first corner, a concave one or a folded quad otherwise: [`crate::scene::polygon`]).
+    /// first corner, a concave one or a folded quad otherwise: [`crate::scene::polygon`]), and triangle strips cut
+    /// into triangles as Blender 4.x cuts them.
     pub triangles: Vec<u32>,
     /// Whether some polygon was filled otherwise than by the fan from its first corner, which every polygon was
     /// until "ply polygons 1" (sequences' frames with such polygons are keyed apart).
@@ -189,6 +190,7 @@ pub fn read_at(bytes: &[u8], origin: [f64; 3]) -> Result<PlyData, PlyError> {
                 check_finite(&out.positions, checked, points)?;
             }
             "face" => out.unfanned |= faces::read(&mut cursor, el, &out.positions, &mut out.triangles)?,
+            "tristrips" => faces::read_strips(&mut cursor, el, &out.positions, &mut out.triangles)?,
             _ => cursor.skip_element(el)?,
         }
     }
