@@ -349,10 +349,24 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
             "{name}: Gaussian splats in the .{ext} form, which vvgen does not read: `npx @playcanvas/splat-transform \
              \"{name}\" \"{stem}.ply\"` writes them in 3D Gaussian splatting's PLY layout, which vvgen reads"
         ),
-        "abc" | "usd" | "usda" | "usdc" | "usdz" | "dae" | "3ds" | "x3d" | "wrl" => format!(
-            "{name}: vvgen does not read .{ext} files: import it in Blender (File → Import; a blender.org build reads \
-             Alembic and USD), save it as a .blend and name that (`vvgen new \"{stem}.blend\"`): Blender then \
-             evaluates every frame for vvgen"
+        "abc" | "usd" | "usda" | "usdc" | "usdz" | "dae" | "3ds" | "x3d" | "wrl" => {
+            // Blender 4.2 moved its 3DS and X3D/VRML importers out to extensions (4.5 LTS has neither built in).
+            let how = match ext.as_str() {
+                "3ds" => "File → Import, once the \"Autodesk 3DS format\" extension is added from Edit → Preferences → \
+                          Get Extensions",
+                "x3d" | "wrl" => "File → Import, once the \"Web3D X3D/VRML2 format\" extension is added from Edit → \
+                                  Preferences → Get Extensions",
+                _ => "File → Import; a blender.org build reads Alembic and USD",
+            };
+            format!(
+                "{name}: vvgen does not read .{ext} files: import it in Blender ({how}), save it as a .blend and name \
+                 that (`vvgen new \"{stem}.blend\"`): Blender then evaluates every frame for vvgen"
+            )
+        }
+        // Geometry processing's format (libigl's and ModelNet's meshes); Blender has no importer for it either.
+        "off" => format!(
+            "{name}: vvgen does not read .off files (nor does Blender): `pip install trimesh`, then `python -c \
+             \"import trimesh; trimesh.load('{name}').export('{stem}.ply')\"` writes it as a PLY mesh, which vvgen reads"
         ),
         _ => return None,
     })
