@@ -366,7 +366,8 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
         // Geometry processing's format (libigl's and ModelNet's meshes); Blender has no importer for it either.
         "off" => format!(
             "{name}: vvgen does not read .off files (nor does Blender): `pip install trimesh`, then `python -c \
-             \"import trimesh; trimesh.load('{name}').export('{stem}.ply')\"` writes it as a PLY mesh, which vvgen reads"
+             \"import trimesh; trimesh.load('{name}').export('{stem}.ply')\"` writes it as a PLY mesh, which vvgen \
+             reads"
         ),
         _ => return None,
     })
