@@ -69,6 +69,7 @@ impl<'a> Graph<'a> {
             frame_shadeless_points: &frame_keys.shadeless_points,
             frame_glossy_glass: &frame_keys.glossy_glass,
             frame_point_casters: &frame_keys.point_casters,
+            frame_two_sided: &frame_keys.two_sided,
             render: {
                 let mut r = crate::settings::renderer(&m.render, scene.voxel_size());
                 if !scene.has_points() {

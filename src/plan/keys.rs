@@ -41,6 +41,12 @@ pub struct FrameKeys {
     /// keeps its keys. A PLY sequence's frames, and a mesh sequence's PLY and glTF frames and OBJ point clouds,
     /// keyed by their files and not posed to plan, count as having them.
     pub point_casters: Vec<bool>,
+    /// Whether frame `f` has two-sided triangles (a double-sided material's: every PLY, OBJ, STL and FBX mesh's,
+    /// a glTF's that asks): their vertices have gathered light on both sides since "sides 1" (their front sides'
+    /// alone before, which lit an inside-out mesh by its inside), so those frames' light is keyed apart, and with
+    /// it their lit passes and lit point colours; every other frame keeps its keys. A mesh sequence's frames,
+    /// not posed to plan, count as having them; a PLY sequence's when the file has faces or strips.
+    pub two_sided: Vec<bool>,
 }
 
 /// What a PLY frame's key adds for how its file is read since it first was. Its polygons were all filled by the fan
@@ -62,6 +68,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
     let mut shadeless_per_source: Vec<Vec<bool>> = Vec::new();
     let mut glass_per_source: Vec<Vec<bool>> = Vec::new();
     let mut points_per_source: Vec<Vec<bool>> = Vec::new();
+    let mut sides_per_source: Vec<Vec<bool>> = Vec::new();
     let mut poser = Poser::default();
     for (i, src) in scene.sources.iter().enumerate() {
         let world = scene.world_from_source(i).to_cols_array();
@@ -78,6 +85,8 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
         let keys = match &src.data {
             SourceData::Sequence(files) => {
                 points_per_source.push(vec![true; files.len()]);
+                let surfaces = files.iter().map(|f| crate::scene::source::surface_cached(&f.path, stat));
+                sides_per_source.push(surfaces.collect::<Result<_, _>>()?);
                 files
                 .iter()
                 .map(|f| {
@@ -95,6 +104,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 // Its frames are not posed to plan: whether one holds glossy glass is not known, so each counts as
                 // holding it (an OBJ's or a `.blend`'s transparent materials may be glossy).
                 glass_per_source.push(vec![true; files.len()]);
+                sides_per_source.push(vec![true; files.len()]);
                 // Nor whether one holds points: an STL never does, an OBJ when it is a point cloud (remembered by
                 // the stat cache for its content).
                 let points = files.iter().map(|f| match f.path.as_path() {
@@ -142,6 +152,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 let mut shadeless = Vec::new();
                 let mut glass = Vec::new();
                 let mut points = Vec::new();
+                let mut sides = Vec::new();
                 for f in 0..n {
                     let posed = scene.pose_source(i, f, &mut poser)?;
                     glass.push(posed.primitives.iter().any(|p| {
@@ -153,6 +164,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         let m = posed.material(p.material);
                         p.kind == PrimKind::Points && m.casts_shadows && !m.unlit
                     }));
+                    sides.push(posed.primitives.iter().any(|p| crate::render::light::sides(posed, p) == 2));
                     let m = *materials.get_or_insert_with(|| posed.material_digest());
                     let geometry = posed.geometry_digest();
                     let mut parts: Vec<&[u8]> = vec![geometry.as_bytes(), m.as_bytes()];
@@ -185,6 +197,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 shadeless_per_source.push(shadeless);
                 glass_per_source.push(glass);
                 points_per_source.push(points);
+                sides_per_source.push(sides);
                 keys
             }
         };
@@ -215,8 +228,8 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
         (0..scene.frames).map(|f| per.iter().any(|s| s.get(f.min(s.len().max(1) - 1)) == Some(&true))).collect()
     };
     let (shadeless_points, glossy_glass) = (any(&shadeless_per_source), any(&glass_per_source));
-    let point_casters = any(&points_per_source);
-    Ok(FrameKeys { content, lights, lit, shadeless_points, glossy_glass, point_casters })
+    let (point_casters, two_sided) = (any(&points_per_source), any(&sides_per_source));
+    Ok(FrameKeys { content, lights, lit, shadeless_points, glossy_glass, point_casters, two_sided })
 }
 
 /// The content key of `m`'s `[environment] map`, when it names one.

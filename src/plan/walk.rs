@@ -34,6 +34,8 @@ pub struct Keying<'a> {
     pub frame_glossy_glass: &'a [bool],
     /// Whether every frame has points that may cast shadows ([`super::keys::FrameKeys::point_casters`]).
     pub frame_point_casters: &'a [bool],
+    /// Whether every frame has two-sided triangles ([`super::keys::FrameKeys::two_sided`]).
+    pub frame_two_sided: &'a [bool],
     /// The renderer's settings.
     pub render: RenderSettings,
     /// How passes are encoded.
@@ -81,6 +83,10 @@ impl Action {
                     w.str("point casters", "points cast 1");
                     w.f64("point caster size", p.size.map_or(0.0, f64::from));
                     w.bool("point casters cubes", p.cube);
+                }
+                if cx.frame_two_sided.get(*frame) == Some(&true) {
+                    // Its two-sided triangles' vertices gather light on both sides.
+                    w.str("sides", "sides 1");
                 }
                 if let Some(env) = deps.first() {
                     w.digest("prefiltered environment", env);

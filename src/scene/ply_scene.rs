@@ -81,6 +81,20 @@ pub fn unfanned_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -
     Ok(fact == "1")
 }
 
+/// Whether the PLY file at `path` has a surface (a `face` or `tristrips` element with rows) rather than points
+/// alone, remembered by the stat cache for its content; the header alone answers.
+pub fn surface_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
+    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    let fact = stat
+        .derived("ply surface 1", path, || {
+            let header = checked_ply(path)?;
+            let surface = header.elements.iter().any(|e| (e.name == "face" || e.name == "tristrips") && e.count > 0);
+            Ok::<_, Error>(if surface { "1" } else { "0" }.to_string())
+        })
+        .map_err(io)??;
+    Ok(fact == "1")
+}
+
 /// Whether the PLY file at `path` has triangle strips (a `tristrips` element with rows), remembered by the stat
 /// cache for its content. Such a file read as its vertices alone, a point cloud, until "ply strips 1" cut its strips
 /// into triangles, so a sequence's frame with them is keyed apart; the header alone answers.

@@ -55,14 +55,22 @@ impl FrameLight {
         if let Some(c) = material.filter(|_| top).and_then(|m| self.shade_ground(m, p, albedo)) {
             return self.displayed(c + emission);
         }
-        let gathered = self.vertex_visibility.get(prim).and_then(|v| {
-            let at = corners.map(|c| v.get(c as usize).copied());
-            Some([at[0]?, at[1]?, at[2]?])
-        });
+        let side = |offset: usize| {
+            let v = self.vertex_visibility.get(prim)?;
+            let at = corners.map(|c| v.get(offset + c as usize).copied());
+            Some(Visibility::blend(&[at[0]?, at[1]?, at[2]?], k))
+        };
+        // A two-sided surface's point takes the side the world sees more of (the outside of an inside-out scan):
+        // a point has one colour, and a camera would mostly see that side.
+        let count = scene.primitives.get(prim).map_or(0, |q| q.positions.len());
+        let gathered = match (side(0), side(count).filter(|_| count > 0)) {
+            (Some(front), Some(back)) if back.env > front.env => Some((back, -n)),
+            (front, _) => front.map(|v| (v, n)),
+        };
         match gathered {
-            Some(v) if n != Vec3::ZERO => {
+            Some((v, n)) if n != Vec3::ZERO => {
                 // A plane's visibility is its grid's, as its pixels read it (its underside here).
-                let vis = material.and_then(|m| self.plane_visibility_at(m, p)).unwrap_or(Visibility::blend(&v, k));
+                let vis = material.and_then(|m| self.plane_visibility_at(m, p)).unwrap_or(v);
                 let s = Surface { base: albedo, metallic: 0.0, roughness: 1.0, specular: 0.0, f0: DIELECTRIC };
                 self.displayed(self.shade(p, n, n, &s, 1.0, vis, false) + emission)
             }

@@ -39,12 +39,13 @@ const GROUND_RAYS: u32 = 256;
 const CONE_RAYS: u32 = 64;
 
 /// Where one gathering ray met a caster: the triangle, the barycentric weights of its second and third corners
-/// there, the diffuse reflectance of the surface there and the radiance it emits (its material's emission: a
-/// glowing part lights the rest, as in a path tracer).
+/// there, whether it met the triangle's back, the diffuse reflectance of the surface there and the radiance it
+/// emits (its material's emission: a glowing part lights the rest, as in a path tracer).
 #[derive(Clone, Copy)]
 struct Hit {
     tri: u32,
     k: [f32; 2],
+    back: bool,
     albedo: [u8; 3],
     emission: Vec3,
 }
@@ -55,9 +56,12 @@ pub(super) struct Subject {
     /// A sphere about the casters: the middle of their bounds and half its diagonal.
     sphere: (Vec3, f32),
     /// The gathering vertices (every caster's), as (primitive, vertex), numbered in primitive order (a vertex's
-    /// serial number); `first[p]` is primitive p's first.
+    /// serial number); `first[p]` is primitive p's first. A two-sided primitive's ([`super::sides`]) back sides
+    /// follow its front sides, as vertices `n..2n` of its `n`; `back[p]` is where they start within it (0: one
+    /// side, whose back a ray meeting it reads as its front, as before).
     vertices: Vec<(u32, u32)>,
     first: Vec<usize>,
+    back: Vec<usize>,
 }
 
 /// What the gather found: per serial number, the irradiance the subject reflects onto the vertex, and all it
@@ -71,11 +75,14 @@ impl Subject {
     /// The casters of `scene`, `None` when nothing casts shadows.
     pub(super) fn of(scene: &PosedScene) -> Option<Subject> {
         let mut first = vec![0usize; scene.primitives.len()];
+        let mut back = vec![0usize; scene.primitives.len()];
         let mut vertices: Vec<(u32, u32)> = Vec::new();
         for (i, prim) in scene.primitives.iter().enumerate() {
             if is_caster(scene, prim) {
+                let (n, sides) = (prim.positions.len(), super::sides(scene, prim));
                 first[i] = vertices.len();
-                vertices.extend((0..prim.positions.len() as u32).map(|v| (i as u32, v)));
+                back[i] = if sides == 2 { n } else { 0 };
+                vertices.extend((0..(n * sides) as u32).map(|v| (i as u32, v)));
             }
         }
         let (lo, hi) = caster_bounds(scene)?;
@@ -84,7 +91,20 @@ impl Subject {
         }
         let tracer = Arc::new(Tracer::of(scene, Rays::Many)?);
         let sphere = ((lo + hi) * 0.5, 0.5 * (hi - lo).length());
-        Some(Subject { tracer, sphere, vertices, first })
+        Some(Subject { tracer, sphere, vertices, first, back })
+    }
+
+    /// The position and normal of vertex `v` of primitive `pi` as the gather numbers them: a back side's normal
+    /// reversed.
+    #[inline]
+    fn side(&self, scene: &PosedScene, pi: u32, v: u32) -> (Vec3, Vec3) {
+        let prim = &scene.primitives[pi as usize];
+        let (v, back) = (v as usize, self.back[pi as usize]);
+        if back > 0 && v >= back {
+            (prim.positions[v - back], -prim.normals[v - back])
+        } else {
+            (prim.positions[v], prim.normals[v])
+        }
     }
 
     /// Its casters' tree.
@@ -98,15 +118,15 @@ impl Subject {
         let n = self.vertices.len();
         let rays = 1usize << (RAY_BUDGET / n).clamp(MIN_RAYS, MAX_RAYS).ilog2();
         let hits = self.trace_all(scene, rays);
-        let neighbours = Neighbours::of(scene, &self.first, &self.vertices);
-        // The direct light each vertex receives (irradiance, by its normal).
+        let neighbours = Neighbours::of(scene, self);
+        // The direct light each vertex receives (irradiance, by its normal; its sides as the light holds them).
         let direct: Vec<Vec3> = self
             .vertices
             .par_iter()
             .map(|&(pi, v)| {
-                let (prim, v) = (&scene.primitives[pi as usize], v as usize);
-                let vis = light.vertex_visibility[pi as usize].get(v).copied().unwrap_or(Visibility::OPEN);
-                light.direct_irradiance(prim.positions[v], prim.normals[v], &vis)
+                let (p, n) = self.side(scene, pi, v);
+                let vis = light.vertex_visibility[pi as usize].get(v as usize).copied().unwrap_or(Visibility::OPEN);
+                light.direct_irradiance(p, n, &vis)
             })
             .collect();
         // The bounces: each gather reads the irradiance the last one left at the vertices.
@@ -123,20 +143,21 @@ impl Subject {
     }
 
     /// The radiance coming back along a ray that met the subject at `h`: the diffuse surface there under all it
-    /// receives (`g`'s totals, interpolated across the triangle), and what it emits.
+    /// receives (`g`'s totals of the side the ray met, interpolated across the triangle), and what it emits.
     #[inline]
     fn reflected(&self, g: &Gathered, h: &Hit) -> Vec3 {
         let (pi, [a, b, c]) = self.tracer.casters.corners[h.tri as usize];
-        let at = |v: u32| g.total.get(self.first[pi as usize] + v as usize).map_or(Vec3::ZERO, |e| e.max(Vec3::ZERO));
+        let first = self.first[pi as usize] + if h.back { self.back[pi as usize] } else { 0 };
+        let at = |v: u32| g.total.get(first + v as usize).map_or(Vec3::ZERO, |e| e.max(Vec3::ZERO));
         let e = at(a) * (1.0 - h.k[0] - h.k[1]) + at(b) * h.k[0] + at(c) * h.k[1];
         Vec3::new(h.albedo[0] as f32, h.albedo[1] as f32, h.albedo[2] as f32) * (1.0 / 255.0) * e * (1.0 / PI)
             + h.emission
     }
 
-    /// The serial numbers of primitive `prim`'s vertices.
+    /// The serial numbers of primitive `prim`'s vertices (their back sides' after them when it is two-sided).
     pub(super) fn serials(&self, scene: &PosedScene, prim: usize) -> std::ops::Range<usize> {
         let k = self.first[prim];
-        k..k + scene.primitives[prim].positions.len()
+        k..k + scene.primitives[prim].positions.len() + self.back[prim]
     }
 
     /// The irradiance the subject (lit as `g` found) reflects onto each of `points`, surfaces facing `normal`
@@ -196,11 +217,13 @@ impl Subject {
             .par_iter()
             .enumerate()
             .map(|(serial, &(pi, v))| {
-                let prim = &scene.primitives[pi as usize];
-                let (p, n) = (prim.positions[v as usize], prim.normals[v as usize]);
+                let (p, n) = self.side(scene, pi, v);
                 let (t, b) = basis(n);
                 // The same set rotated per vertex (Cranley–Patterson, by its serial number in the frame):
-                // neighbours sample different directions, so their errors average out where they are smoothed.
+                // neighbours sample different directions, so their errors average out where they are smoothed. A
+                // back side turns it as its front side does (a mesh stored inside out gathers as right side out).
+                let back = self.back[pi as usize];
+                let serial = if back > 0 && v as usize >= back { serial - back } else { serial };
                 let shift = hammersley(serial as u32 % 4093, 4093);
                 (0..rays as u32)
                     .filter_map(|i| self.trace(scene, p + n * self.tracer.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
@@ -221,10 +244,13 @@ impl Subject {
         let casters = &self.tracer.casters;
         let (pi, c) = casters.corners[tri];
         let t = &casters.tris[tri];
-        let k = barycentric(o + d * at, t.v0.into(), t.v1.into(), t.v2.into());
+        let (v0, v1, v2): (Vec3, Vec3, Vec3) = (t.v0.into(), t.v1.into(), t.v2.into());
+        let k = barycentric(o + d * at, v0, v1, v2);
+        // The back of a triangle is the side its corners turn clockwise on, as a camera's back faces are.
+        let back = d.dot((v1 - v0).cross(v2 - v0)) > 0.0;
         let (albedo, emission) = surface_at(scene, &scene.primitives[pi as usize], c, k);
         let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-        Some(Hit { tri: tri as u32, k, albedo: [q(albedo.x), q(albedo.y), q(albedo.z)], emission })
+        Some(Hit { tri: tri as u32, k, back, albedo: [q(albedo.x), q(albedo.y), q(albedo.z)], emission })
     }
 }
 
@@ -255,25 +281,28 @@ struct Neighbours {
 }
 
 impl Neighbours {
-    fn of(scene: &PosedScene, first: &[usize], vertices: &[(u32, u32)]) -> Neighbours {
-        let count = vertices.len();
+    /// Of `subject`'s gathering vertices: a back side's neighbours are its neighbours' back sides.
+    fn of(scene: &PosedScene, subject: &Subject) -> Neighbours {
+        let count = subject.vertices.len();
         let mut sets: Vec<Vec<u32>> = vec![Vec::new(); count];
         for (i, prim) in scene.primitives.iter().enumerate() {
             if !is_caster(scene, prim) {
                 continue;
             }
-            for t in prim.indices.chunks_exact(3) {
-                for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                    let (ka, kb) = (first[i] + a as usize, first[i] + b as usize);
-                    if ka < count && kb < count && ka != kb {
-                        sets[ka].push(kb as u32);
-                        sets[kb].push(ka as u32);
+            let back = subject.back[i];
+            for first in [subject.first[i], subject.first[i] + back].into_iter().take(if back > 0 { 2 } else { 1 }) {
+                for t in prim.indices.chunks_exact(3) {
+                    for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                        let (ka, kb) = (first + a as usize, first + b as usize);
+                        if ka < count && kb < count && ka != kb {
+                            sets[ka].push(kb as u32);
+                            sets[kb].push(ka as u32);
+                        }
                     }
                 }
             }
         }
-        let normals: Vec<Vec3> =
-            vertices.iter().map(|&(pi, v)| scene.primitives[pi as usize].normals[v as usize]).collect();
+        let normals: Vec<Vec3> = subject.vertices.iter().map(|&(pi, v)| subject.side(scene, pi, v).1).collect();
         let (mut start, mut list) = (vec![0], Vec::new());
         for (k, set) in sets.iter_mut().enumerate() {
             set.sort_unstable();

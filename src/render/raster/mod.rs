@@ -39,8 +39,10 @@ struct ClipVert {
     uv: Vec2,
     normal: Vec3,
     color: Vec4,
-    /// What reaches it of the environment's light (lit shading; 1 otherwise).
+    /// What reaches it of the environment's light (lit shading; 1 otherwise), on its front side and on its back
+    /// side (the same unless its primitive is two-sided: [`crate::render::light::sides`]).
     vis: Visibility,
+    vis_back: Visibility,
     /// Tangent and handedness for a normal texture (zero without one).
     tangent: Vec4,
 }
@@ -53,6 +55,7 @@ impl ClipVert {
             normal: self.normal.lerp(o.normal, t),
             color: self.color.lerp(o.color, t),
             vis: self.vis.lerp(o.vis, t),
+            vis_back: self.vis_back.lerp(o.vis_back, t),
             tangent: self.tangent.lerp(o.tangent, t),
         }
     }

@@ -18,6 +18,7 @@ pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles, visibility: Optio
     for (pi, prim) in scene.primitives.iter().enumerate().filter(|(_, q)| q.kind == PrimKind::Triangles) {
         let vis: &[Visibility] = visibility.and_then(|v| v.get(pi)).map_or(&[], |v| v.as_slice());
         let double_sided = scene.materials.get(prim.material as usize).is_some_and(|m| m.double_sided);
+        let count = prim.positions.len();
         // Vertices are shared by about six triangles of a mesh: project each once. Triangles whose vertices are
         // all inside the clip planes use these; clipped ones project their new vertices the same way.
         let planes = clip_planes(p);
@@ -43,6 +44,8 @@ pub fn setup(scene: &PosedScene, p: &Projection, tiles: Tiles, visibility: Optio
                             normal: prim.normals[i],
                             color: prim.colors.get(i).copied().unwrap_or(Vec4::ONE),
                             vis: vis.get(i).copied().unwrap_or(Visibility::OPEN),
+                            // A two-sided primitive's back sides follow its front sides.
+                            vis_back: vis.get(count + i).or(vis.get(i)).copied().unwrap_or(Visibility::OPEN),
                             tangent: prim.tangents.get(i).copied().unwrap_or(Vec4::ZERO),
                         }
                     };
@@ -212,7 +215,8 @@ fn assemble(
         ds_step,
         normal: [v[idx[0]].normal, v[idx[1]].normal, v[idx[2]].normal],
         color: [v[idx[0]].color, v[idx[1]].color, v[idx[2]].color],
-        vis: [v[idx[0]].vis, v[idx[1]].vis, v[idx[2]].vis],
+        // The camera sees the side it sees: an inside-out mesh shows its back sides, lit as they are.
+        vis: idx.map(|i| if back { v[i].vis_back } else { v[i].vis }),
         tangent: [v[idx[0]].tangent, v[idx[1]].tangent, v[idx[2]].tangent],
         bbox,
         material,
