@@ -41,10 +41,11 @@ pub struct FrameKeys {
     /// keeps its keys. A PLY sequence's frames, and a mesh sequence's PLY and glTF frames and OBJ point clouds,
     /// keyed by their files and not posed to plan, count as having them.
     pub point_casters: Vec<bool>,
-    /// Whether frame `f` has two-sided triangles (a double-sided material's: every PLY, OBJ, STL and FBX mesh's,
-    /// a glTF's that asks): their vertices have gathered light on both sides since "sides 1" (their front sides'
-    /// alone before, which lit an inside-out mesh by its inside), so those frames' light is keyed apart, and with
-    /// it their lit passes and lit point colours; every other frame keeps its keys. A mesh sequence's frames,
+    /// Whether frame `f` has two-sided triangles (a double-sided caster's: every PLY, OBJ, STL and FBX mesh's, a
+    /// glTF's that asks): their vertices have gathered light on both sides since "sides 1" (their front sides'
+    /// alone before, which lit an inside-out mesh by its inside; a mesh closed and facing out, decided as the
+    /// light is gathered, still gathers on its fronts alone), so those frames' light is keyed apart, and with it
+    /// their lit passes and lit point colours; every other frame keeps its keys. A mesh sequence's frames,
     /// not posed to plan, count as having them; a PLY sequence's when the file has faces or strips.
     pub two_sided: Vec<bool>,
 }
@@ -164,7 +165,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         let m = posed.material(p.material);
                         p.kind == PrimKind::Points && m.casts_shadows && !m.unlit
                     }));
-                    sides.push(posed.primitives.iter().any(|p| crate::render::light::sides(posed, p) == 2));
+                    sides.push(posed.primitives.iter().any(|p| crate::render::light::two_sided(posed, p)));
                     let m = *materials.get_or_insert_with(|| posed.material_digest());
                     let geometry = posed.geometry_digest();
                     let mut parts: Vec<&[u8]> = vec![geometry.as_bytes(), m.as_bytes()];

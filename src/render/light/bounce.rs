@@ -62,6 +62,9 @@ pub(super) struct Subject {
     vertices: Vec<(u32, u32)>,
     first: Vec<usize>,
     back: Vec<usize>,
+    /// Primitive p's first front side's number counting front sides alone: what turns a vertex's rays (so that
+    /// how many sides other primitives gather does not).
+    fronts: Vec<usize>,
 }
 
 /// What the gather found: per serial number, the irradiance the subject reflects onto the vertex, and all it
@@ -72,16 +75,20 @@ pub(super) struct Gathered {
 }
 
 impl Subject {
-    /// The casters of `scene`, `None` when nothing casts shadows.
-    pub(super) fn of(scene: &PosedScene) -> Option<Subject> {
+    /// The casters of `scene`, `None` when nothing casts shadows; `visibility` (the frame's per vertex) holds both
+    /// sides of a primitive that gathers on both ([`super::sides`]).
+    pub(super) fn of(scene: &PosedScene, visibility: &[Vec<Visibility>]) -> Option<Subject> {
         let mut first = vec![0usize; scene.primitives.len()];
         let mut back = vec![0usize; scene.primitives.len()];
-        let mut vertices: Vec<(u32, u32)> = Vec::new();
+        let mut fronts = vec![0usize; scene.primitives.len()];
+        let (mut vertices, mut front_count): (Vec<(u32, u32)>, usize) = (Vec::new(), 0);
         for (i, prim) in scene.primitives.iter().enumerate() {
             if is_caster(scene, prim) {
-                let (n, sides) = (prim.positions.len(), super::sides(scene, prim));
-                first[i] = vertices.len();
+                let n = prim.positions.len();
+                let sides = if visibility.get(i).is_some_and(|v| v.len() == 2 * n && n > 0) { 2 } else { 1 };
+                (first[i], fronts[i]) = (vertices.len(), front_count);
                 back[i] = if sides == 2 { n } else { 0 };
+                front_count += n;
                 vertices.extend((0..(n * sides) as u32).map(|v| (i as u32, v)));
             }
         }
@@ -91,7 +98,7 @@ impl Subject {
         }
         let tracer = Arc::new(Tracer::of(scene, Rays::Many)?);
         let sphere = ((lo + hi) * 0.5, 0.5 * (hi - lo).length());
-        Some(Subject { tracer, sphere, vertices, first, back })
+        Some(Subject { tracer, sphere, vertices, first, back, fronts })
     }
 
     /// The position and normal of vertex `v` of primitive `pi` as the gather numbers them: a back side's normal
@@ -215,16 +222,16 @@ impl Subject {
         let per_vertex: Vec<Vec<Hit>> = self
             .vertices
             .par_iter()
-            .enumerate()
-            .map(|(serial, &(pi, v))| {
+            .map(|&(pi, v)| {
                 let (p, n) = self.side(scene, pi, v);
                 let (t, b) = basis(n);
-                // The same set rotated per vertex (Cranley–Patterson, by its serial number in the frame):
-                // neighbours sample different directions, so their errors average out where they are smoothed. A
-                // back side turns it as its front side does (a mesh stored inside out gathers as right side out).
-                let back = self.back[pi as usize];
-                let serial = if back > 0 && v as usize >= back { serial - back } else { serial };
-                let shift = hammersley(serial as u32 % 4093, 4093);
+                // The same set rotated per vertex (Cranley–Patterson, by its number among the frame's front
+                // sides): neighbours sample different directions, so their errors average out where they are
+                // smoothed. A back side turns it as its front side does (a mesh stored inside out gathers as the
+                // same mesh right side out).
+                let (back, v) = (self.back[pi as usize], v as usize);
+                let front = self.fronts[pi as usize] + if back > 0 && v >= back { v - back } else { v };
+                let shift = hammersley(front as u32 % 4093, 4093);
                 (0..rays as u32)
                     .filter_map(|i| self.trace(scene, p + n * self.tracer.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
                     .collect()

@@ -23,6 +23,7 @@ mod penumbra;
 mod rays;
 mod scan;
 pub mod shadow;
+mod sides;
 
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -36,6 +37,7 @@ use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
 pub use bake::BAKE_SALT;
+pub use sides::two_sided;
 pub use gathered::{Gathered, GatheredError};
 use ground::{ground_planes, Ground};
 use plane_grid::PlaneVisibility;
@@ -113,7 +115,8 @@ pub struct FrameLight {
     /// and a parallel shadow map from it. Empty when nothing casts shadows.
     occlusion: Vec<(Vec3, f32, ShadowMap)>,
     /// Per primitive, per vertex: what reaches it of the environment's light ([`Visibility`], by the vertex
-    /// normal), then, for a two-sided primitive ([`sides`]), per vertex its back side's (by the reversed normal).
+    /// normal), then, for a primitive that gathers on both sides ([`sides`]), per vertex its back side's (by the
+    /// reversed normal).
     /// Empty for point primitives.
     pub vertex_visibility: Vec<Vec<Visibility>>,
     /// The light over each ground plane, on a grid (see [`PlaneVisibility`]).
@@ -144,21 +147,6 @@ pub enum Lobe {
 /// casts them (every material but a `plane` source's).
 fn is_caster(scene: &PosedScene, p: &PosedPrimitive) -> bool {
     p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows && !m.unlit)
-}
-
-/// How many sides of primitive `p`'s vertices gather light: two for casting triangles of a double-sided material,
-/// which a camera may see from behind (an inside-out scan shows nothing else: lit by what its inward normals saw,
-/// the mesh's own inside, VCG's horse rendered 20 % dark where Cycles, which turns a back face's normal to the
-/// eye, rendered it as the same mesh turned right side out), else one (a ground plane's underside reads its grids,
-/// a shadeless surface no light). A two-sided primitive's back sides follow its front sides in
-/// [`FrameLight::vertex_visibility`] and in the gather.
-pub fn sides(scene: &PosedScene, p: &PosedPrimitive) -> usize {
-    let double_sided = scene.materials.get(p.material as usize).is_some_and(|m| m.double_sided);
-    if is_caster(scene, p) && double_sided {
-        2
-    } else {
-        1
-    }
 }
 
 /// Bounds of the geometry that casts shadows.
@@ -206,7 +194,7 @@ impl FrameLight {
                         prim.positions.par_iter().zip(normals).map(move |(&p, &n)| lit.visibility(p, n * s))
                     };
                     let mut v: Vec<Visibility> = side(1.0).collect();
-                    if sides(scene, prim) == 2 {
+                    if sides::sides(scene, prim) == 2 {
                         v.par_extend(side(-1.0));
                     }
                     v
@@ -248,7 +236,10 @@ impl FrameLight {
     ) -> Result<FrameLight, GatheredError> {
         let fits = scene.primitives.len() == g.vertices.len()
             && scene.primitives.iter().zip(&g.vertices).all(|(prim, v)| match prim.kind {
-                PrimKind::Triangles => v.len() == prim.positions.len() * sides(scene, prim),
+                PrimKind::Triangles => {
+                    let n = prim.positions.len();
+                    v.len() == n || (v.len() == 2 * n && two_sided(scene, prim))
+                }
                 PrimKind::Points => v.is_empty(),
             })
             && ground_planes(scene).count() == g.planes.len();
@@ -268,7 +259,7 @@ impl FrameLight {
     /// This lighting with what the subject reflects onto itself and onto the ground gathered ([`bounce`]): what
     /// rendered meshes read (a baked point has no vertices to gather at, and estimates it instead).
     pub fn with_bounce(mut self, scene: &PosedScene) -> FrameLight {
-        let Some(subject) = bounce::Subject::of(scene) else {
+        let Some(subject) = bounce::Subject::of(scene, &self.vertex_visibility) else {
             return self;
         };
         // The gather's tree serves the glossy lobes' rays too, as a render's does (`from_gathered`).

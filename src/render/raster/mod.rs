@@ -40,7 +40,7 @@ struct ClipVert {
     normal: Vec3,
     color: Vec4,
     /// What reaches it of the environment's light (lit shading; 1 otherwise), on its front side and on its back
-    /// side (the same unless its primitive is two-sided: [`crate::render::light::sides`]).
+    /// side (the same unless its primitive gathers on both sides: see [`crate::render::light::two_sided`]).
     vis: Visibility,
     vis_back: Visibility,
     /// Tangent and handedness for a normal texture (zero without one).
