@@ -123,10 +123,15 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
     } else {
         let full = dir.join(spec);
         let pattern = full.to_string_lossy().to_string();
+        // As a shell globs: a hidden file is matched only by a name that starts with its dot (the `._frame_0001.ply`
+        // macOS writes beside every file it copies to another file system, 4 KB of metadata, would be a frame that
+        // is no PLY). The crate's `require_literal_leading_dot` refuses them even then: their names are filtered.
+        let dot = |p: &Path| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
+        let hidden_asked = dot(Path::new(spec));
         let mut paths: Vec<PathBuf> = glob::glob(&pattern)
             .map_err(|e| Error::Glob { spec: spec.to_string(), why: e.to_string() })?
             .filter_map(Result::ok)
-            .filter(|p| p.is_file())
+            .filter(|p| p.is_file() && (hidden_asked || !dot(p)))
             .collect();
         paths.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
         if paths.is_empty() {
@@ -209,6 +214,22 @@ mod tests {
         assert_eq!(format_frame("loot_vox10_{frame:04}.ply", 7).unwrap(), "loot_vox10_0007.ply");
         assert_eq!(format_frame("f{frame}.ply", 1051).unwrap(), "f1051.ply");
         assert!(format_frame("f{frame:x}.ply", 1).is_err());
+    }
+
+    #[test]
+    fn a_glob_leaves_hidden_files_out_as_a_shell_does() {
+        // Frames copied from a Mac: each beside its `._` companion (AppleDouble metadata, no PLY).
+        let d = tempfile::tempdir().unwrap();
+        for f in ["f1.ply", "f2.ply", "._f1.ply", "._f2.ply", ".f3.ply"] {
+            std::fs::write(d.path().join(f), b"ply").unwrap();
+        }
+        let names = |spec: &str| -> Vec<String> {
+            let frames = resolve(d.path(), spec, &Frames::default()).unwrap();
+            frames.iter().map(|f| f.path.file_name().unwrap().to_string_lossy().into_owned()).collect()
+        };
+        assert_eq!(names("*.ply"), ["f1.ply", "f2.ply"]);
+        // Named with its dot, a hidden file is matched.
+        assert_eq!(names(".f*.ply"), [".f3.ply"]);
     }
 
     #[test]

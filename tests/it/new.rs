@@ -373,3 +373,25 @@ fn a_subject_small_in_its_views_is_warned_of_with_why_and_the_way_out() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("the subject is small in") && err.contains("[transform] fit = \"frame\" sizes it"), "{err}");
 }
+
+/// Frames copied from a Mac arrive each beside its `._` companion (AppleDouble metadata, 4 KB that is no PLY):
+/// `new` and the manifest's glob leave hidden files out, as a shell's `*` does, where the first one stopped `new`
+/// ("not a PLY file").
+#[test]
+fn a_folder_of_frames_copied_from_a_mac_reads_its_frames_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::create_dir(d.join("frames")).unwrap();
+    for f in 0..2 {
+        std::fs::write(d.join(format!("frames/frame_{f}.ply")), pyramid(None)).unwrap();
+        std::fs::write(d.join(format!("frames/._frame_{f}.ply")), [0u8, 5, 22, 7, 0, 2, 0, 0]).unwrap();
+    }
+    std::fs::write(d.join("frames/.DS_Store"), [0u8; 8]).unwrap();
+    let (code, err) = vvgen(d, &["new", "frames", "-o", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("m.toml")).unwrap();
+    assert!(text.contains("ply_sequence = \"frames/*.ply\"   # 2 file(s)"), "{text}");
+    let (code, err) = vvgen(d, &["check", "m.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("error") && !err.contains("warning"), "{err}");
+}
