@@ -67,45 +67,41 @@ pub fn checked_ply(path: &std::path::Path) -> Result<ply::Header, Error> {
 /// its content. Every polygon was fanned until "ply polygons 1", so a sequence's frame with such a polygon is keyed
 /// apart; a file without faces (a point cloud) is answered from its header alone.
 pub fn unfanned_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
-    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-    let fact = stat
-        .derived("ply polygons 1", path, || {
-            let header = checked_ply(path)?;
-            if !header.elements.iter().any(|e| e.name == "face" && e.count > 0) {
-                return Ok("0".to_string());
-            }
-            let data = ply::read_file(path).map_err(|e| file_error(path, e))?;
-            Ok::<_, Error>(if data.unfanned { "1" } else { "0" }.to_string())
-        })
-        .map_err(io)??;
-    Ok(fact == "1")
+    fact_cached(path, stat, "ply polygons 1", || {
+        if !has_rows(&checked_ply(path)?, &["face"]) {
+            return Ok(false);
+        }
+        Ok(ply::read_file(path).map_err(|e| file_error(path, e))?.unfanned)
+    })
 }
 
 /// Whether the PLY file at `path` has a surface (a `face` or `tristrips` element with rows) rather than points
 /// alone, remembered by the stat cache for its content; the header alone answers.
 pub fn surface_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
-    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-    let fact = stat
-        .derived("ply surface 1", path, || {
-            let header = checked_ply(path)?;
-            let surface = header.elements.iter().any(|e| (e.name == "face" || e.name == "tristrips") && e.count > 0);
-            Ok::<_, Error>(if surface { "1" } else { "0" }.to_string())
-        })
-        .map_err(io)??;
-    Ok(fact == "1")
+    fact_cached(path, stat, "ply surface 1", || Ok(has_rows(&checked_ply(path)?, &["face", "tristrips"])))
 }
 
 /// Whether the PLY file at `path` has triangle strips (a `tristrips` element with rows), remembered by the stat
 /// cache for its content. Such a file read as its vertices alone, a point cloud, until "ply strips 1" cut its strips
 /// into triangles, so a sequence's frame with them is keyed apart; the header alone answers.
 pub fn strips_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
+    fact_cached(path, stat, "ply strips 1", || Ok(has_rows(&checked_ply(path)?, &["tristrips"])))
+}
+
+/// Whether `header` declares an element named one of `names` with rows.
+fn has_rows(header: &ply::Header, names: &[&str]) -> bool {
+    header.elements.iter().any(|e| names.contains(&e.name.as_str()) && e.count > 0)
+}
+
+/// A yes-or-no fact `find` tells of the file at `path`, remembered by the stat cache under `name` for its content.
+fn fact_cached(
+    path: &std::path::Path,
+    stat: &crate::cache::StatCache,
+    name: &str,
+    find: impl FnOnce() -> Result<bool, Error>,
+) -> Result<bool, Error> {
     let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-    let fact = stat
-        .derived("ply strips 1", path, || {
-            let strips = checked_ply(path)?.elements.iter().any(|e| e.name == "tristrips" && e.count > 0);
-            Ok::<_, Error>(if strips { "1" } else { "0" }.to_string())
-        })
-        .map_err(io)??;
+    let fact = stat.derived(name, path, || Ok::<_, Error>(if find()? { "1" } else { "0" }.to_string())).map_err(io)??;
     Ok(fact == "1")
 }
 
