@@ -371,6 +371,12 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
              \"import trimesh; trimesh.load('{name}').export('{stem}.ply')\"` writes it as a PLY mesh, which vvgen \
              reads"
         ),
+        // The Point Cloud Library's format (ASCII, binary or compressed): Open3D reads each and writes the PLY.
+        "pcd" => format!(
+            "{name}: vvgen does not read .pcd files: `pip install open3d`, then `python -c \"import open3d as o3d; \
+             o3d.io.write_point_cloud('{stem}.ply', o3d.io.read_point_cloud('{name}'))\"` writes it as a PLY point \
+             cloud (normals and colours kept), which vvgen reads"
+        ),
         _ => return None,
     })
 }

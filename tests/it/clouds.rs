@@ -238,7 +238,7 @@ fn a_sequence_in_metres_renders_as_its_integer_twin() {
 
 /// Formats a newcomer brings that vvgen does not read are refused by `new` and by `check` with the tool that turns
 /// them into one it reads: Gaussian splats packed by SuperSplat (`.compressed.ply`) or in web forms (`.spz`,
-/// `.splat`), Alembic and USD (through Blender, as a `.blend`), OFF (through trimesh, as a PLY).
+/// `.splat`), Alembic and USD (through Blender, as a `.blend`), OFF and PCD (through trimesh and Open3D, as a PLY).
 #[test]
 fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
     let tmp = tempfile::tempdir().unwrap();
@@ -252,11 +252,13 @@ fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
     std::fs::write(d.join("scan.spz"), [0x1f, 0x8b, 8, 0]).unwrap();
     std::fs::write(d.join("shot.usdz"), b"PK").unwrap();
     std::fs::write(d.join("homer.off"), b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+    std::fs::write(d.join("bunny.pcd"), b"VERSION .5\nFIELDS x y z\nPOINTS 1\nDATA ascii\n0 0 0\n").unwrap();
     let cases = [
         ("scan.compressed.ply", "splat-transform in.compressed.ply out.ply"),
         ("scan.spz", "splat-transform \"scan.spz\" \"scan.ply\""),
         ("shot.usdz", "save it as a .blend"),
         ("homer.off", "trimesh.load('homer.off').export('homer.ply')"),
+        ("bunny.pcd", "o3d.io.write_point_cloud('bunny.ply', o3d.io.read_point_cloud('bunny.pcd'))"),
     ];
     for (file, says) in cases {
         let (code, err) = vvgen(d, &["new", file]);
