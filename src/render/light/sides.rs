@@ -41,7 +41,8 @@ pub(super) fn closed_outward(p: &PosedPrimitive) -> bool {
             *weld.entry(v.to_array().map(f32::to_bits)).or_insert(next)
         })
         .collect();
-    let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(p.indices.len());
+    // Directed edges as a < 2³² pairs, sorted: 8 bytes an edge (a scan's millions of them), no hashing.
+    let mut edges: Vec<u64> = Vec::with_capacity(p.indices.len());
     let mut volume = 0.0f64;
     for t in p.indices.chunks_exact(3) {
         let [a, b, c] = [0, 1, 2].map(|k| ids.get(t[k] as usize).copied());
@@ -49,13 +50,14 @@ pub(super) fn closed_outward(p: &PosedPrimitive) -> bool {
         if a == b || b == c || a == c {
             continue;
         }
-        for e in [(a, b), (b, c), (c, a)] {
-            *edges.entry(e).or_insert(0) += 1;
-        }
+        edges.extend([(a, b), (b, c), (c, a)].map(|(x, y)| (u64::from(x) << 32) | u64::from(y)));
         let [pa, pb, pc] = [0, 1, 2].map(|k| p.positions[t[k] as usize].as_dvec3());
         volume += pa.dot(pb.cross(pc));
     }
-    !edges.is_empty() && volume > 0.0 && edges.iter().all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+    edges.sort_unstable();
+    let once = edges.windows(2).all(|w| w[0] != w[1]);
+    let reversed = |e: &u64| edges.binary_search(&(e.rotate_left(32))).is_ok();
+    !edges.is_empty() && volume > 0.0 && once && edges.iter().all(reversed)
 }
 
 #[cfg(test)]
