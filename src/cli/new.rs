@@ -125,7 +125,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
     let ext = |p: &Path| p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     if asset.is_dir() {
         // Hidden files left out, as the manifest's glob leaves them (macOS's `._` companions of copied files).
-        let hidden = |p: &Path| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
+        let hidden = crate::manifest::sequence::hidden;
         let mut files: Vec<PathBuf> = std::fs::read_dir(asset)
             .with_context(|| format!("reading {}", asset.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))

@@ -126,12 +126,11 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
         // As a shell globs: a hidden file is matched only by a name that starts with its dot (the `._frame_0001.ply`
         // macOS writes beside every file it copies to another file system, 4 KB of metadata, would be a frame that
         // is no PLY). The crate's `require_literal_leading_dot` refuses them even then: their names are filtered.
-        let dot = |p: &Path| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
-        let hidden_asked = dot(Path::new(spec));
+        let hidden_asked = hidden(Path::new(spec));
         let mut paths: Vec<PathBuf> = glob::glob(&pattern)
             .map_err(|e| Error::Glob { spec: spec.to_string(), why: e.to_string() })?
             .filter_map(Result::ok)
-            .filter(|p| p.is_file() && (hidden_asked || !dot(p)))
+            .filter(|p| p.is_file() && (hidden_asked || !hidden(p)))
             .collect();
         paths.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
         if paths.is_empty() {
@@ -151,6 +150,11 @@ pub fn resolve(dir: &Path, spec: &str, frames: &Frames) -> Result<Vec<SequenceFr
             .map(|i| SequenceFrame { number: i, path: paths[i as usize].clone() })
             .collect())
     }
+}
+
+/// Whether the file at `p` is hidden (its name starts with a dot), as a shell's `*` leaves it out.
+pub fn hidden(p: &Path) -> bool {
+    p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'))
 }
 
 /// With no end or count: consecutive numbers from `start` until the first missing file.

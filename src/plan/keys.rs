@@ -8,7 +8,7 @@ use crate::cache::{key, Digest, StatCache};
 use crate::manifest::Manifest;
 use crate::render::light::glossy;
 use crate::scene::material::AlphaMode;
-use crate::scene::source::{is_obj, is_ply, is_stl};
+use crate::scene::source::{is_obj, is_ply, is_stl, ply_facts, PlyFacts};
 use crate::scene::{Poser, PrimKind, Scene, SourceData};
 
 /// The keys of every scene frame.
@@ -55,10 +55,8 @@ pub struct FrameKeys {
 /// diagonal) as Blender does; its triangle strips were dropped (the file read as a point cloud) before "ply strips
 /// 1" cut them into triangles as Blender 4.x does. A frame with either is keyed apart; every other frame (point
 /// clouds, triangles, convex polygons) keeps its key.
-fn ply_reading(path: &std::path::Path, stat: &StatCache) -> Result<Vec<&'static [u8]>, Error> {
-    let unfanned = crate::scene::source::unfanned_cached(path, stat)?.then_some(b"ply polygons 1".as_slice());
-    let strips = crate::scene::source::strips_cached(path, stat)?.then_some(b"ply strips 1".as_slice());
-    Ok(unfanned.into_iter().chain(strips).collect())
+fn ply_reading(facts: PlyFacts) -> [Option<&'static [u8]>; 2] {
+    [facts.unfanned.then_some(b"ply polygons 1".as_slice()), facts.strips.then_some(b"ply strips 1".as_slice())]
 }
 
 /// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
@@ -86,17 +84,18 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
         let keys = match &src.data {
             SourceData::Sequence(files) => {
                 points_per_source.push(vec![true; files.len()]);
-                let surfaces = files.iter().map(|f| crate::scene::source::surface_cached(&f.path, stat));
-                sides_per_source.push(surfaces.collect::<Result<_, _>>()?);
+                let facts = files.iter().map(|f| ply_facts(&f.path, stat)).collect::<Result<Vec<_>, _>>()?;
+                sides_per_source.push(facts.iter().map(|f| f.surface).collect());
                 files
                 .iter()
-                .map(|f| {
+                .zip(facts)
+                .map(|(f, facts)| {
                     let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
                     let mut bytes: Vec<&[u8]> = vec![world, &d.0];
                     bytes.extend(origin);
                     bytes.extend(splats);
                     bytes.extend(opaque);
-                    bytes.extend(ply_reading(&f.path, stat)?);
+                    bytes.extend(ply_reading(facts).into_iter().flatten());
                     Ok(key("frame ply", &bytes))
                 })
                 .collect::<Result<Vec<_>, Error>>()?
@@ -136,7 +135,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         bytes.push(b"obj polylines 1");
                     }
                     if is_ply(&f.path) {
-                        bytes.extend(ply_reading(&f.path, stat)?);
+                        bytes.extend(ply_reading(ply_facts(&f.path, stat)?).into_iter().flatten());
                     }
                     bytes.extend(parts.iter().map(|d| &d.0[..]));
                     Ok(key("frame mesh", &bytes))

@@ -62,47 +62,35 @@ pub fn checked_ply(path: &std::path::Path) -> Result<ply::Header, Error> {
     ply::check_file(path).map_err(|e| file_error(path, e))
 }
 
-/// Whether the PLY file at `path` has a polygon filled otherwise than by the fan from its first corner (a concave
-/// one, or a quad folded along its first diagonal: [`ply::PlyData::unfanned`]), remembered by the stat cache for
-/// its content. Every polygon was fanned until "ply polygons 1", so a sequence's frame with such a polygon is keyed
-/// apart; a file without faces (a point cloud) is answered from its header alone.
-pub fn unfanned_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
-    fact_cached(path, stat, "ply polygons 1", || {
-        if !has_rows(&checked_ply(path)?, &["face"]) {
-            return Ok(false);
-        }
-        Ok(ply::read_file(path).map_err(|e| file_error(path, e))?.unfanned)
-    })
+/// What keying knows of a PLY file besides its bytes' digest ([`ply_facts`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PlyFacts {
+    /// It has a surface (a `face` or `tristrips` element with rows) rather than points alone.
+    pub surface: bool,
+    /// It has triangle strips (a `tristrips` element with rows). Such a file read as its vertices alone, a point
+    /// cloud, until "ply strips 1" cut its strips into triangles, so a sequence's frame with them is keyed apart.
+    pub strips: bool,
+    /// It has a polygon filled otherwise than by the fan from its first corner (a concave one, or a quad folded
+    /// along its first diagonal: [`ply::PlyData::unfanned`]). Every polygon was fanned until "ply polygons 1", so a
+    /// sequence's frame with such a polygon is keyed apart.
+    pub unfanned: bool,
 }
 
-/// Whether the PLY file at `path` has a surface (a `face` or `tristrips` element with rows) rather than points
-/// alone, remembered by the stat cache for its content; the header alone answers.
-pub fn surface_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
-    fact_cached(path, stat, "ply surface 1", || Ok(has_rows(&checked_ply(path)?, &["face", "tristrips"])))
-}
-
-/// Whether the PLY file at `path` has triangle strips (a `tristrips` element with rows), remembered by the stat
-/// cache for its content. Such a file read as its vertices alone, a point cloud, until "ply strips 1" cut its strips
-/// into triangles, so a sequence's frame with them is keyed apart; the header alone answers.
-pub fn strips_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<bool, Error> {
-    fact_cached(path, stat, "ply strips 1", || Ok(has_rows(&checked_ply(path)?, &["tristrips"])))
-}
-
-/// Whether `header` declares an element named one of `names` with rows.
-fn has_rows(header: &ply::Header, names: &[&str]) -> bool {
-    header.elements.iter().any(|e| names.contains(&e.name.as_str()) && e.count > 0)
-}
-
-/// A yes-or-no fact `find` tells of the file at `path`, remembered by the stat cache under `name` for its content.
-fn fact_cached(
-    path: &std::path::Path,
-    stat: &crate::cache::StatCache,
-    name: &str,
-    find: impl FnOnce() -> Result<bool, Error>,
-) -> Result<bool, Error> {
+/// The [`PlyFacts`] of the PLY file at `path`, remembered by the stat cache for its content as one fact: its
+/// header read once, and its body only when it has faces (a point cloud is answered from its header alone).
+pub fn ply_facts(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<PlyFacts, Error> {
     let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-    let fact = stat.derived(name, path, || Ok::<_, Error>(if find()? { "1" } else { "0" }.to_string())).map_err(io)??;
-    Ok(fact == "1")
+    let fact = stat
+        .derived("ply facts 1", path, || {
+            let header = checked_ply(path)?;
+            let has = |name: &str| header.elements.iter().any(|e| e.name == name && e.count > 0);
+            let (faces, strips) = (has("face"), has("tristrips"));
+            let unfanned = faces && ply::read_file(path).map_err(|e| file_error(path, e))?.unfanned;
+            Ok::<_, Error>([faces || strips, strips, unfanned].map(|b| if b { '1' } else { '0' }).iter().collect())
+        })
+        .map_err(io)??;
+    let bit = |k: usize| fact.as_bytes().get(k) == Some(&b'1');
+    Ok(PlyFacts { surface: bit(0), strips: bit(1), unfanned: bit(2) })
 }
 
 fn file_error(path: &std::path::Path, e: ply::FileError) -> Error {

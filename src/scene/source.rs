@@ -9,9 +9,7 @@ use super::gltf::{GltfAsset, PoseScratch};
 use super::material::Material;
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
 use super::ply_scene::{splats_of, texture_file};
-pub use super::ply_scene::{
-    checked_ply, ply_scene, ply_scene_at, ply_scene_slice, strips_cached, surface_cached, unfanned_cached,
-};
+pub use super::ply_scene::{checked_ply, ply_facts, ply_scene, ply_scene_at, ply_scene_slice, PlyFacts};
 use super::Error;
 use super::input::{folder_of, Clip, Clips, FrameFile, FrameRange, Ground, SourceFile, SourceRequest, UpAxis};
 

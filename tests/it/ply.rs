@@ -400,7 +400,7 @@ fn concave_polygons_are_filled_as_blender_fills_them_and_key_their_frames() {
     let files = [("notch.ply", hexagon(L_SHAPE, 2), true), ("convex.ply", hexagon(CONVEX, 3), false)];
     for (name, text, unfanned) in files.into_iter().chain([("cloud.ply", cloud.to_string(), false)]) {
         std::fs::write(d.path().join(name), text).unwrap();
-        assert_eq!(vvgen::scene::source::unfanned_cached(&d.path().join(name), &stat).unwrap(), unfanned, "{name}");
+        assert_eq!(vvgen::scene::source::ply_facts(&d.path().join(name), &stat).unwrap().unfanned, unfanned, "{name}");
     }
 }
 
@@ -425,6 +425,6 @@ fn triangle_strips_are_a_mesh_and_key_their_frames() {
         [("strips.ply", strips, true), ("faces.ply", faces, false), ("cloud.ply", header(""), false)]
     {
         std::fs::write(dir.path().join(name), text).unwrap();
-        assert_eq!(vvgen::scene::source::strips_cached(&dir.path().join(name), &stat).unwrap(), has, "{name}");
+        assert_eq!(vvgen::scene::source::ply_facts(&dir.path().join(name), &stat).unwrap().strips, has, "{name}");
     }
 }

@@ -63,7 +63,7 @@ impl FrameLight {
         // A two-sided surface's point takes the side the world sees more of (the outside of an inside-out scan):
         // a point has one colour, and a camera would mostly see that side.
         let count = scene.primitives.get(prim).map_or(0, |q| q.positions.len());
-        let gathered = match (side(0), side(count).filter(|_| count > 0)) {
+        let gathered = match (side(0), side(count)) {
             (Some(front), Some(back)) if back.env > front.env => Some((back, -n)),
             (front, _) => front.map(|v| (v, n)),
         };

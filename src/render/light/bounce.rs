@@ -101,17 +101,24 @@ impl Subject {
         Some(Subject { tracer, sphere, vertices, first, back, fronts })
     }
 
+    /// Vertex `v` of primitive `pi` as the gather numbers them: the mesh's vertex, and whether it is its back side.
+    #[inline]
+    fn vertex(&self, pi: u32, v: u32) -> (usize, bool) {
+        let (v, back) = (v as usize, self.back[pi as usize]);
+        if back > 0 && v >= back {
+            (v - back, true)
+        } else {
+            (v, false)
+        }
+    }
+
     /// The position and normal of vertex `v` of primitive `pi` as the gather numbers them: a back side's normal
     /// reversed.
     #[inline]
     fn side(&self, scene: &PosedScene, pi: u32, v: u32) -> (Vec3, Vec3) {
         let prim = &scene.primitives[pi as usize];
-        let (v, back) = (v as usize, self.back[pi as usize]);
-        if back > 0 && v >= back {
-            (prim.positions[v - back], -prim.normals[v - back])
-        } else {
-            (prim.positions[v], prim.normals[v])
-        }
+        let (v, back) = self.vertex(pi, v);
+        (prim.positions[v], if back { -prim.normals[v] } else { prim.normals[v] })
     }
 
     /// Its casters' tree.
@@ -229,8 +236,7 @@ impl Subject {
                 // sides): neighbours sample different directions, so their errors average out where they are
                 // smoothed. A back side turns it as its front side does (a mesh stored inside out gathers as the
                 // same mesh right side out).
-                let (back, v) = (self.back[pi as usize], v as usize);
-                let front = self.fronts[pi as usize] + if back > 0 && v >= back { v - back } else { v };
+                let front = self.fronts[pi as usize] + self.vertex(pi, v).0;
                 let shift = hammersley(front as u32 % 4093, 4093);
                 (0..rays as u32)
                     .filter_map(|i| self.trace(scene, p + n * self.tracer.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
@@ -296,8 +302,8 @@ impl Neighbours {
             if !is_caster(scene, prim) {
                 continue;
             }
-            let back = subject.back[i];
-            for first in [subject.first[i], subject.first[i] + back].into_iter().take(if back > 0 { 2 } else { 1 }) {
+            let (first, back) = (subject.first[i], subject.back[i]);
+            for first in std::iter::once(first).chain((back > 0).then_some(first + back)) {
                 for t in prim.indices.chunks_exact(3) {
                     for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
                         let (ka, kb) = (first + a as usize, first + b as usize);
