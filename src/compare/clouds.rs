@@ -169,7 +169,13 @@ fn f64s(p: &[f32; 3]) -> [f64; 3] {
 }
 
 /// Normals for `b`'s points from the reference `a`'s (pc_error's `scaleNormals` with averaging).
-fn derived_normals(a: &[[f32; 3]], a_normals: &[[f32; 3]], a_index: &Index, b: &[[f32; 3]], b_index: &Index) -> Vec<[f64; 3]> {
+fn derived_normals(
+    a: &[[f32; 3]],
+    a_normals: &[[f32; 3]],
+    a_index: &Index,
+    b: &[[f32; 3]],
+    b_index: &Index,
+) -> Vec<[f64; 3]> {
     // (reference point, test point) pairs, chunk by chunk in point order: eight bytes a pair, where a list per
     // point would cost an allocation each.
     let given: Vec<Vec<(u32, u32)>> = a
@@ -333,10 +339,8 @@ fn intrinsic_resolution(c: &Cloud, index: &Index) -> f64 {
 pub fn score(name: &str, reference: &Cloud, test: &Cloud, peak: Option<f64>) -> Score {
     let (ia, ib) = (Index::new(&reference.positions), Index::new(&test.positions));
     let peak = peak.unwrap_or_else(|| intrinsic_resolution(reference, &ia));
-    let b_normals = reference
-        .normals
-        .as_deref()
-        .map(|n| derived_normals(&reference.positions, n, &ia, &test.positions, &ib));
+    let b_normals =
+        reference.normals.as_deref().map(|n| derived_normals(&reference.positions, n, &ia, &test.positions, &ib));
     let a_normals: Option<Vec<[f64; 3]>> =
         reference.normals.as_ref().map(|n| n.iter().map(|v| v.map(f64::from)).collect());
     let ab = one_way(reference, test, &ib, b_normals.as_deref());

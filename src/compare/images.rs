@@ -15,8 +15,8 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use super::ssim::{self, Plane};
-use crate::manifest::sequence::natural_cmp;
 use super::Error;
+use crate::manifest::sequence::natural_cmp;
 
 /// How images are compared.
 #[derive(Debug, Clone, Copy)]
@@ -119,8 +119,10 @@ pub fn pairs(gt: &Path, test: &Path, frames: Option<&Path>) -> Result<Vec<(Strin
 /// extension, as NeRF-synthetic's loaders do).
 fn frame_images(file: &Path) -> Result<Vec<String>, Error> {
     let text = std::fs::read_to_string(file).map_err(|e| Error::Io { path: file.to_path_buf(), source: e })?;
-    let doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Pairing(format!("{}: {e}", file.display())))?;
-    let frames = doc["frames"].as_array().ok_or_else(|| Error::Pairing(format!("{}: no `frames` list", file.display())))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| Error::Pairing(format!("{}: {e}", file.display())))?;
+    let frames =
+        doc["frames"].as_array().ok_or_else(|| Error::Pairing(format!("{}: no `frames` list", file.display())))?;
     frames
         .iter()
         .enumerate()
@@ -144,7 +146,10 @@ fn images_under(dir: &Path) -> Result<Vec<String>, Error> {
             let p = e.map_err(|e| Error::Io { path: d.clone(), source: e })?.path();
             if p.is_dir() {
                 todo.push(p);
-            } else if p.extension().is_some_and(|e| ["png", "jpg", "jpeg"].contains(&e.to_string_lossy().to_ascii_lowercase().as_str())) {
+            } else if p
+                .extension()
+                .is_some_and(|e| ["png", "jpg", "jpeg"].contains(&e.to_string_lossy().to_ascii_lowercase().as_str()))
+            {
                 if let Ok(rel) = p.strip_prefix(dir) {
                     out.push(rel.to_string_lossy().replace('\\', "/"));
                 }

@@ -138,7 +138,8 @@ mod tests {
     #[test]
     fn queries_agree_with_brute_force_on_a_grid_full_of_ties() {
         // Integer points, many on the same planes and at equal distances.
-        let pts: Vec<[f32; 3]> = (0..2000u32).map(|i| [(i % 13) as f32, ((i / 13) % 11) as f32, (i % 7) as f32]).collect();
+        let pts: Vec<[f32; 3]> =
+            (0..2000u32).map(|i| [(i % 13) as f32, ((i / 13) % 11) as f32, (i % 7) as f32]).collect();
         let t = KdTree::new(&pts);
         let mut got = Vec::new();
         for (k, q) in [[0.5, 0.5, 0.5], [12.0, 10.0, 6.0], [6.2, 5.0, 3.0], [-3.0, 20.0, 1.0]].iter().enumerate() {

@@ -53,7 +53,9 @@ pub fn is_clouds(p: &Path) -> bool {
     std::fs::read_dir(p).is_ok_and(|d| {
         let names: Vec<PathBuf> = d.filter_map(|e| e.ok().map(|e| e.path())).collect();
         names.iter().any(|f| ply(f))
-            && !names.iter().any(|f| f.extension().is_some_and(|e| ["png", "jpg", "jpeg"].contains(&e.to_string_lossy().as_ref())))
+            && !names
+                .iter()
+                .any(|f| f.extension().is_some_and(|e| ["png", "jpg", "jpeg"].contains(&e.to_string_lossy().as_ref())))
     })
 }
 

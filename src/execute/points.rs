@@ -204,7 +204,8 @@ fn samples(
             // occlusion maps, which the light action does not keep, so they are made here when there are any,
             // without points casting (a point's neighbours, drawn at their centres' depths, would shadow it).
             let points = posed.primitives.iter().any(|p| p.kind == PrimKind::Points);
-            let apart = points.then(|| seen(FrameLight::prepare(&whole, &lights.lights, env.clone(), PointCasters::NONE)));
+            let apart =
+                points.then(|| seen(FrameLight::prepare(&whole, &lights.lights, env.clone(), PointCasters::NONE)));
             let casters = PointCasters::of(&g.keying.render.splat);
             let light = FrameLight::from_gathered(&whole, &lights.lights, env, casters, gathered).map_err(content)?;
             Some((seen(light), apart, whole, first))

@@ -76,7 +76,8 @@ pub(super) fn lights(
             let posed = x.scene.pose(frame, poser).map_err(|source| Error::Scene { action: label.clone(), source })?;
             super::check_posed(posed, label)?;
             let casters = PointCasters::of(&g.keying.render.splat);
-            let gathered = FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone(), casters).gather(posed);
+            let gathered =
+                FrameLight::prepare(posed, &g.keying.render.lighting.lights, env.clone(), casters).gather(posed);
             let stored = x.store(g, id, &[gathered.encode()])?;
             done();
             Ok((id, stored))
@@ -96,12 +97,10 @@ pub(super) fn environment_light(
     background: bool,
 ) -> Result<EnvLight, Error> {
     let light = g.node(light_id);
-    let env_id = light
-        .deps
-        .first()
-        .copied()
-        .filter(|&id| g.node(id).action == Action::Environment)
-        .ok_or_else(|| Error::Content { action: light.label.clone(), message: "BUG: no environment action".into() })?;
+    let env_id =
+        light.deps.first().copied().filter(|&id| g.node(id).action == Action::Environment).ok_or_else(|| {
+            Error::Content { action: light.label.clone(), message: "BUG: no environment action".into() }
+        })?;
     let label = g.node(env_id).label.clone();
     let pre = Prefiltered::decode(&x.read(g, blobs, env_id, 0)?)
         .map_err(|source| Error::Environment { action: label.clone(), source })?;
@@ -143,8 +142,9 @@ pub(super) fn passes(
                 let content = |e: GatheredError| Error::Content { action: label.clone(), message: e.to_string() };
                 let gathered = Gathered::decode(&x.read(g, blobs, light_id, 0)?).map_err(content)?;
                 let casters = PointCasters::of(&g.keying.render.splat);
-                let light = FrameLight::from_gathered(posed, &g.keying.render.lighting.lights, env.clone(), casters, gathered)
-                    .map_err(content)?;
+                let light =
+                    FrameLight::from_gathered(posed, &g.keying.render.lighting.lights, env.clone(), casters, gathered)
+                        .map_err(content)?;
                 Some(light.with_exposure(g.keying.render.lighting.exposure))
             }
             _ => None,

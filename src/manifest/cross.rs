@@ -104,7 +104,9 @@ fn holds_splat_cameras(path: &Path) -> bool {
 /// where a `[transform]` moves the sources off them: the cameras would not see the scene as they did in training.
 fn splat_camera_checks(m: &Manifest, diags: &mut Vec<Diagnostic>) {
     let moved = std::iter::once(("[transform]".to_string(), &m.transform))
-        .chain(m.sources.iter().filter_map(|(n, s)| s.transform.as_ref().map(|t| (format!("[source.{n}.transform]"), t))))
+        .chain(
+            m.sources.iter().filter_map(|(n, s)| s.transform.as_ref().map(|t| (format!("[source.{n}.transform]"), t))),
+        )
         .find_map(|(table, t)| t.moves().map(|key| (table, key)));
     let Some((table, key)) = moved else { return };
     for (name, rig) in &m.rigs {
@@ -168,7 +170,9 @@ pub(super) fn cross_check(m: &Manifest, broken: &Broken, diags: &mut Vec<Diagnos
                 if kind == RigKind::Path && split.time == TimeMode::Random {
                     diags.push(
                         Diagnostic::error(
-                            format!("split `{name}`: rig `{rig_name}` is a path, one camera per frame at that frame's pose"),
+                            format!(
+                                "split `{name}`: rig `{rig_name}` is a path, one camera per frame at that frame's pose"
+                            ),
                             Some(split.rig.span()),
                         )
                         .with_help("remove time = \"random\" (a path split renders every selected frame once)"),

@@ -367,8 +367,11 @@ impl Render {
         if let Some(v) = &self.view_transform {
             if self.shading != Shading::Pbr && *v.get_ref() != ViewTransform::Standard {
                 diags.push(
-                    Diagnostic::warning("`view_transform` applies to lit renders only: it is ignored here", Some(v.span()))
-                        .with_help("set shading = \"pbr\", or remove it"),
+                    Diagnostic::warning(
+                        "`view_transform` applies to lit renders only: it is ignored here",
+                        Some(v.span()),
+                    )
+                    .with_help("set shading = \"pbr\", or remove it"),
                 );
             }
         }

@@ -85,7 +85,11 @@ impl<'a> Graph<'a> {
             dataset: m.dataset.name().to_string(),
             // Consecutive frames lie `step / fps` seconds apart: a video of every second frame at 30 fps runs at
             // 15, as long as the motion it shows.
-            video_fps_milli: (m.sources.values().find_map(|s| s.frames().map(|f| f.fps() / f.step() as f64)).unwrap_or(30.0)
+            video_fps_milli: (m
+                .sources
+                .values()
+                .find_map(|s| s.frames().map(|f| f.fps() / f.step() as f64))
+                .unwrap_or(30.0)
                 * 1000.0)
                 .round() as u64,
             points: BTreeMap::new(),

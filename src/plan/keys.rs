@@ -87,18 +87,18 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 let facts = files.iter().map(|f| ply_facts(&f.path, stat)).collect::<Result<Vec<_>, _>>()?;
                 sides_per_source.push(facts.iter().map(|f| f.surface).collect());
                 files
-                .iter()
-                .zip(facts)
-                .map(|(f, facts)| {
-                    let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
-                    let mut bytes: Vec<&[u8]> = vec![world, &d.0];
-                    bytes.extend(origin);
-                    bytes.extend(splats);
-                    bytes.extend(opaque);
-                    bytes.extend(ply_reading(facts).into_iter().flatten());
-                    Ok(key("frame ply", &bytes))
-                })
-                .collect::<Result<Vec<_>, Error>>()?
+                    .iter()
+                    .zip(facts)
+                    .map(|(f, facts)| {
+                        let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
+                        let mut bytes: Vec<&[u8]> = vec![world, &d.0];
+                        bytes.extend(origin);
+                        bytes.extend(splats);
+                        bytes.extend(opaque);
+                        bytes.extend(ply_reading(facts).into_iter().flatten());
+                        Ok(key("frame ply", &bytes))
+                    })
+                    .collect::<Result<Vec<_>, Error>>()?
             }
             SourceData::MeshSequence(files) => {
                 // Its frames are not posed to plan: whether one holds glossy glass is not known, so each counts as
@@ -113,34 +113,34 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                 });
                 points_per_source.push(points.collect::<Result<_, _>>()?);
                 files
-                .iter()
-                .map(|f| {
-                    // The frame's file and what it reads besides (MTL files, textures), each by content.
-                    let mut parts: Vec<Digest> = Vec::new();
-                    let deps = crate::scene::source::mesh_frame_deps_cached(&f.path, stat)?;
-                    for p in std::iter::once(&f.path).chain(&deps) {
-                        parts.push(stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e })?);
-                    }
-                    let mut bytes: Vec<&[u8]> = vec![world];
-                    bytes.extend(origin);
-                    bytes.extend(splats);
-                    bytes.extend(opaque);
-                    // An OBJ's MTL materials were read as Kd and map_Kd alone before "mtl 1" read them as Blender
-                    // 4.5's importer does: frames with a material library re-render, others keep their keys.
-                    bytes.extend((is_obj(&f.path) && !deps.is_empty()).then_some(b"mtl 1".as_slice()));
-                    // An OBJ's polylines of three or more vertices were filled as polygons (tobj's reading) before
-                    // "obj polylines 1" dropped them, as Blender draws no lines: frames with them re-render, others
-                    // keep their keys.
-                    if is_obj(&f.path) && crate::scene::obj::polylines_cached(&f.path, stat)? {
-                        bytes.push(b"obj polylines 1");
-                    }
-                    if is_ply(&f.path) {
-                        bytes.extend(ply_reading(ply_facts(&f.path, stat)?).into_iter().flatten());
-                    }
-                    bytes.extend(parts.iter().map(|d| &d.0[..]));
-                    Ok(key("frame mesh", &bytes))
-                })
-                .collect::<Result<Vec<_>, Error>>()?
+                    .iter()
+                    .map(|f| {
+                        // The frame's file and what it reads besides (MTL files, textures), each by content.
+                        let mut parts: Vec<Digest> = Vec::new();
+                        let deps = crate::scene::source::mesh_frame_deps_cached(&f.path, stat)?;
+                        for p in std::iter::once(&f.path).chain(&deps) {
+                            parts.push(stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e })?);
+                        }
+                        let mut bytes: Vec<&[u8]> = vec![world];
+                        bytes.extend(origin);
+                        bytes.extend(splats);
+                        bytes.extend(opaque);
+                        // An OBJ's MTL materials were read as Kd and map_Kd alone before "mtl 1" read them as Blender
+                        // 4.5's importer does: frames with a material library re-render, others keep their keys.
+                        bytes.extend((is_obj(&f.path) && !deps.is_empty()).then_some(b"mtl 1".as_slice()));
+                        // An OBJ's polylines of three or more vertices were filled as polygons (tobj's reading) before
+                        // "obj polylines 1" dropped them, as Blender draws no lines: frames with them re-render, others
+                        // keep their keys.
+                        if is_obj(&f.path) && crate::scene::obj::polylines_cached(&f.path, stat)? {
+                            bytes.push(b"obj polylines 1");
+                        }
+                        if is_ply(&f.path) {
+                            bytes.extend(ply_reading(ply_facts(&f.path, stat)?).into_iter().flatten());
+                        }
+                        bytes.extend(parts.iter().map(|d| &d.0[..]));
+                        Ok(key("frame mesh", &bytes))
+                    })
+                    .collect::<Result<Vec<_>, Error>>()?
             }
             SourceData::Gltf { .. } | SourceData::Fbx { .. } | SourceData::Static(_) => {
                 let n = src.frame_count();
@@ -159,7 +159,9 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         let m = posed.material(p.material);
                         p.kind == PrimKind::Triangles && m.alpha_mode == AlphaMode::Blend && !m.unlit && glossy(m)
                     }));
-                    shadeless.push(posed.primitives.iter().any(|p| p.kind == PrimKind::Points && posed.material(p.material).unlit));
+                    shadeless.push(
+                        posed.primitives.iter().any(|p| p.kind == PrimKind::Points && posed.material(p.material).unlit),
+                    );
                     points.push(posed.primitives.iter().any(|p| {
                         let m = posed.material(p.material);
                         p.kind == PrimKind::Points && m.casts_shadows && !m.unlit

@@ -267,7 +267,8 @@ impl Plan {
             } else {
                 rig::poses(rig, Identity { rig: rig_name, seed }, views, &m.dir).map_err(rig_err)?
             };
-            if let Some(view) = focal.iter().flatten().position(|(a, b)| !(a.is_finite() && b.is_finite() && *a > 0.0)) {
+            if let Some(view) = focal.iter().flatten().position(|(a, b)| !(a.is_finite() && b.is_finite() && *a > 0.0))
+            {
                 return Err(Error::NonFinite { split: name.clone(), view });
             }
             // A path pairs its i-th camera with the i-th selected frame.

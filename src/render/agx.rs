@@ -309,9 +309,8 @@ impl Agx {
         let p = u.map(|x| x * n);
         let i = p.map(|x| (x as usize).min(SIDE - 2));
         let f = [p[0] - i[0] as f32, p[1] - i[1] as f32, p[2] - i[2] as f32];
-        let at = |dr: usize, dg: usize, db: usize| {
-            self.table[(i[0] + dr) + (i[1] + dg) * SIDE + (i[2] + db) * SIDE * SIDE]
-        };
+        let at =
+            |dr: usize, dg: usize, db: usize| self.table[(i[0] + dr) + (i[1] + dg) * SIDE + (i[2] + db) * SIDE * SIDE];
         let (fr, fg, fb) = (f[0], f[1], f[2]);
         let c000 = at(0, 0, 0);
         let c111 = at(1, 1, 1);

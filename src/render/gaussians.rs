@@ -171,7 +171,8 @@ fn sh_color(degree: usize, sh: &[Vec3], d: Vec3) -> Vec3 {
     const C0: f32 = 0.282_094_8;
     const C1: f32 = 0.488_602_5;
     const C2: [f32; 5] = [1.092_548_4, -1.092_548_4, 0.315_391_57, -1.092_548_4, 0.546_274_2];
-    const C3: [f32; 7] = [-0.590_043_6, 2.890_611_4, -0.457_045_8, 0.373_176_33, -0.457_045_8, 1.445_305_7, -0.590_043_6];
+    const C3: [f32; 7] =
+        [-0.590_043_6, 2.890_611_4, -0.457_045_8, 0.373_176_33, -0.457_045_8, 1.445_305_7, -0.590_043_6];
     let mut c = C0 * sh[0];
     if degree > 0 {
         let (x, y, z) = (d.x, d.y, d.z);
@@ -240,7 +241,8 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
     // band it reaches, at most the image's height in tiles, where a list per tile would hold a large one the
     // image's area in tiles over.) The rectangles are inclusive; a Gaussian's tiles are never empty.
     let (tw, th) = view.tiles;
-    let by_band = Binned::sort(&gs, 1, th as usize, |q| [0, q.tiles[1] as usize, 0, q.tiles[3] as usize - 1], |k, _| k as u32);
+    let by_band =
+        Binned::sort(&gs, 1, th as usize, |q| [0, q.tiles[1] as usize, 0, q.tiles[3] as usize - 1], |k, _| k as u32);
     let w = cam.width as usize;
     let rows = TILE as usize * w;
     let Frame { rgba, depth, normal, object, coverage, .. } = f;
@@ -251,7 +253,9 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
     let bands: Vec<_> = rgba
         .chunks_mut(rows * 4)
         .zip(coverage.chunks_mut(rows))
-        .map(|(c, a)| (c, a, dep.next().unwrap_or_default(), nor.next().unwrap_or_default(), obj.next().unwrap_or_default()))
+        .map(|(c, a)| {
+            (c, a, dep.next().unwrap_or_default(), nor.next().unwrap_or_default(), obj.next().unwrap_or_default())
+        })
         .collect();
     let ray = depth_kind == DepthKind::Ray;
     bands.into_par_iter().enumerate().for_each_init(
@@ -277,7 +281,9 @@ pub(super) fn draw(scene: &PosedScene, cam: &Camera, depth_kind: DepthKind, f: &
                         let centre = Vec2::new(x as f32 + 0.5, (ty * TILE as usize + ly) as f32 + 0.5);
                         // The depth buffer's value as a planar depth: a ray distance shrinks by the ray's length.
                         let stretch = if ray {
-                            Vec2::new((centre.x - view.cx) / view.fx, (centre.y - view.cy) / view.fy).extend(1.0).length()
+                            Vec2::new((centre.x - view.cx) / view.fx, (centre.y - view.cy) / view.fy)
+                                .extend(1.0)
+                                .length()
                         } else {
                             1.0
                         };
@@ -471,13 +477,28 @@ mod tests {
     #[test]
     fn gaussians_stop_at_the_surface_drawn_in_front_of_them() {
         let wall = |z: f32| {
-            let p = vec![Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(1.0, 1.0, z), Vec3::new(-1.0, 1.0, z)];
+            let p = vec![
+                Vec3::new(-1.0, -1.0, z),
+                Vec3::new(1.0, -1.0, z),
+                Vec3::new(1.0, 1.0, z),
+                Vec3::new(-1.0, 1.0, z),
+            ];
             let m = Material { base_color: Vec4::new(0.0, 0.0, 1.0, 1.0), double_sided: true, ..Material::default() };
             PosedScene::single(PrimKind::Triangles, p, vec![Vec3::Z; 4], Vec::new(), vec![0, 1, 2, 0, 2, 3], m)
         };
-        let blob = file(&[Vec3::ZERO], Vec3::splat(0.3), 0.99, Vec3::splat(0.5 / 0.282_094_8), [Vec3::ZERO; 3], Mat4::IDENTITY);
+        let blob = file(
+            &[Vec3::ZERO],
+            Vec3::splat(0.3),
+            0.99,
+            Vec3::splat(0.5 / 0.282_094_8),
+            [Vec3::ZERO; 3],
+            Mat4::IDENTITY,
+        );
         let cam = camera(Vec3::new(0.0, 0.0, 4.0));
-        let s = RenderSettings { buffers: super::super::Buffers { depth: false, ..Default::default() }, ..Default::default() };
+        let s = RenderSettings {
+            buffers: super::super::Buffers { depth: false, ..Default::default() },
+            ..Default::default()
+        };
         for (z, hidden) in [(0.5, true), (-0.5, false)] {
             let mut scene = wall(z);
             crate::scene::merge(&[scene.clone(), blob.clone()], &mut scene);
@@ -510,8 +531,14 @@ mod tests {
         let (left, right) = (from(&plain, Vec3::new(-4.0, 0.0, 0.0)), from(&plain, Vec3::new(4.0, 0.0, 0.0)));
         assert!(left[0] > right[0] + 100, "{left:?} {right:?}");
         let near = |a: [u8; 4], b: [u8; 4]| (0..4).all(|c| a[c].abs_diff(b[c]) <= 1);
-        let (l, r) = (turn.transform_point3(Vec3::new(-4.0, 0.0, 0.0)), turn.transform_point3(Vec3::new(4.0, 0.0, 0.0)));
-        assert!(near(from(&turned, l), left) && near(from(&turned, r), right), "{:?} {:?}", from(&turned, l), from(&turned, r));
+        let (l, r) =
+            (turn.transform_point3(Vec3::new(-4.0, 0.0, 0.0)), turn.transform_point3(Vec3::new(4.0, 0.0, 0.0)));
+        assert!(
+            near(from(&turned, l), left) && near(from(&turned, r), right),
+            "{:?} {:?}",
+            from(&turned, l),
+            from(&turned, r)
+        );
     }
 
     #[test]

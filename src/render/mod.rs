@@ -238,9 +238,14 @@ pub struct Frame {
 /// `s.lighting`'s lights; a build prepares each frame's lighting once and calls [`render_lit`].
 pub fn render(scene: &PosedScene, cam: &Camera, s: &RenderSettings) -> Frame {
     if s.shading == Shading::Pbr {
-        let light = light::FrameLight::prepare(scene, &s.lighting.lights, s.lighting.environment.studio(), light::PointCasters::of(&s.splat))
-            .with_bounce(scene)
-            .with_exposure(s.lighting.exposure);
+        let light = light::FrameLight::prepare(
+            scene,
+            &s.lighting.lights,
+            s.lighting.environment.studio(),
+            light::PointCasters::of(&s.splat),
+        )
+        .with_bounce(scene)
+        .with_exposure(s.lighting.exposure);
         return render_lit(scene, cam, s, Some(&light));
     }
     render_lit(scene, cam, s, None)
@@ -319,7 +324,8 @@ pub fn render_lit(scene: &PosedScene, cam: &Camera, s: &RenderSettings, light: O
             width: w,
         })
         .collect();
-    let env_bg = light.filter(|l| l.has_background()).map(|light| EnvBackground { light, cam, display: Display::of(s) });
+    let env_bg =
+        light.filter(|l| l.has_background()).map(|light| EnvBackground { light, cam, display: Display::of(s) });
     // Sample buffers are reused by the bands a worker takes.
     let scratch = || (None::<raster::SampleTile>, splat::Layer::default());
     bands.into_par_iter().enumerate().for_each_init(scratch, |(st, layer), (band, mut out)| {

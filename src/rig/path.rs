@@ -47,13 +47,12 @@ pub fn poses(rig: &Rig, times: &[f64], dir: &Path, render_fov_deg: f64) -> Resul
     };
     let end = samples.last().map_or(0.0, |s| s.time);
     let zooms = samples.iter().any(|s| s.fov_deg.is_some_and(|f| (f - render_fov_deg).abs() > 1e-6));
-    let fov_deg = zooms.then(|| {
-        times.iter().map(|&t| sampled_fov(&samples, t).unwrap_or(render_fov_deg)).collect()
-    });
+    let fov_deg = zooms.then(|| times.iter().map(|&t| sampled_fov(&samples, t).unwrap_or(render_fov_deg)).collect());
     Ok(Placed { poses: times.iter().map(|&t| sampled(&samples, t)).collect(), fov_deg, note: held(times, end) })
 }
 
-const IDENTITY: [[f64; 4]; 4] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+const IDENTITY: [[f64; 4]; 4] =
+    [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
 
 /// The note for frames past the path's end, which hold its last pose.
 fn held(times: &[f64], end: f64) -> Option<String> {

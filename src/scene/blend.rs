@@ -307,7 +307,9 @@ impl<'a> Importer<'a> {
         };
         let keyed_by = if is_python(exe) { bpy_library(exe) } else { Some(exe.to_path_buf()) };
         match keyed_by {
-            Some(p) => self.stat.derived("blender --version", &p, derive).map_err(|e| format!("{}: {e}", p.display()))?,
+            Some(p) => {
+                self.stat.derived("blender --version", &p, derive).map_err(|e| format!("{}: {e}", p.display()))?
+            }
             None => derive(),
         }
     }

@@ -44,8 +44,17 @@ pub(crate) const MAPS: &[&str] =
     &["map_Kd", "map_d", "map_Bump", "map_bump", "bump", "map_Ke", "map_Pr", "map_Ns", "map_Pm", "map_refl"];
 
 /// Options that take arguments and change nothing vvgen draws (Blender skips them too), with their counts.
-const SKIPPED: &[(&str, usize)] =
-    &[("-blendu", 1), ("-blendv", 1), ("-boost", 1), ("-cc", 1), ("-clamp", 1), ("-imfchan", 1), ("-mm", 2), ("-texres", 1), ("-type", 1)];
+const SKIPPED: &[(&str, usize)] = &[
+    ("-blendu", 1),
+    ("-blendv", 1),
+    ("-boost", 1),
+    ("-cc", 1),
+    ("-clamp", 1),
+    ("-imfchan", 1),
+    ("-mm", 2),
+    ("-texres", 1),
+    ("-type", 1),
+];
 
 /// A texture statement: its file's name as written and the options vvgen applies.
 #[derive(Debug, Clone, PartialEq)]
@@ -298,7 +307,8 @@ pub(crate) fn material(m: &tobj::Material, dir: &Path, images: &mut Images) -> R
             images.load(path)?;
         }
         let map = rough.as_ref().or(metal.as_ref()).map(|(m, _)| m).expect("BUG: one of the two is there");
-        let t = metallic_roughness(rough.as_ref().map(|(_, p)| images.get(p)), metal.as_ref().map(|(_, p)| images.get(p)));
+        let t =
+            metallic_roughness(rough.as_ref().map(|(_, p)| images.get(p)), metal.as_ref().map(|(_, p)| images.get(p)));
         // A linked socket ignores its value: the texture carries it, the factor is 1.
         if rough.is_some() {
             mat.roughness = 1.0;
@@ -354,7 +364,10 @@ mod tests {
     #[test]
     fn a_texture_statement_reads_its_options_then_the_rest_of_the_line_as_the_name() {
         let m = TexMap::parse("-bm 0.7 -s 2 3 1 -o 0.25 -clamp on \"my texture.png\"").unwrap();
-        assert_eq!((m.name.as_str(), m.bm, m.scale, m.offset), ("my texture.png", 0.7, Vec2::new(2.0, 3.0), Vec2::new(0.25, 0.0)));
+        assert_eq!(
+            (m.name.as_str(), m.bm, m.scale, m.offset),
+            ("my texture.png", 0.7, Vec2::new(2.0, 3.0), Vec2::new(0.25, 0.0))
+        );
         assert_eq!(TexMap::parse("textures\\red.png").unwrap().name, "textures\\red.png");
         assert_eq!(TexMap::parse("-s 1 1 1 green tex.png").unwrap().name, "green tex.png");
         assert_eq!(TexMap::parse("-bm 2"), None);
@@ -388,14 +401,32 @@ mod tests {
         type Case = (&'static str, [f32; 3], f32, f32, f32, f32, f32, bool);
         let cases: &[Case] = &[
             ("Kd 0.2 0.4 0.6", [0.2, 0.4, 0.6], 1.0, 0.0, 0.0, 0.04, 1.0, false),
-            ("Ns 225\nKa 1 1 1\nKd 0.8 0.7 0.6\nKs 0.5 0.5 0.5\nNi 1.45\nd 1\nillum 2", [0.8, 0.7, 0.6], 0.5257, 0.0, 1.0, f0_145, 1.0, false),
+            (
+                "Ns 225\nKa 1 1 1\nKd 0.8 0.7 0.6\nKs 0.5 0.5 0.5\nNi 1.45\nd 1\nillum 2",
+                [0.8, 0.7, 0.6],
+                0.5257,
+                0.0,
+                1.0,
+                f0_145,
+                1.0,
+                false,
+            ),
             ("illum 2", [0.8, 0.8, 0.8], 0.0, 0.0, 1.0, 0.08, 1.0, false),
             ("Ns 900\nKa 0.9 0.9 0.9\nKd 0.5 0.5 0.5\nKs 1 1 1\nillum 3", [0.5; 3], 0.0513, 0.9, 1.0, 0.08, 1.0, false),
             ("Kd 1 1 1\nNi 1.33\nd 0.3\nillum 4", [1.0; 3], 1.0, 1.0, 0.0, 0.02006, 0.3, true),
             ("Kd 0.5 0.5 0.5\nTr 0.25", [0.5; 3], 1.0, 0.0, 0.0, 0.04, 1.0, false),
             ("Kd 0.5 0.5 0.5\nNs 0\nKs 0.2 0.2 0.2\nillum 2", [0.5; 3], 1.0, 0.0, 0.4, 0.04, 1.0, false),
             ("Kd 1 1 1\nPr 0.3\nPm 0.8", [1.0; 3], 0.3, 0.8, 0.0, 0.04, 1.0, false),
-            ("Ns 30\nNi 1.5\nd 1\nTr 0\nTf 1 1 1\nillum 2\nKa 0.588 0.588 0.588\nKd 0.588 0.588 0.588\nKs 0 0 0", [0.588; 3], 0.8268, 0.0, 0.0, 0.04, 1.0, false),
+            (
+                "Ns 30\nNi 1.5\nd 1\nTr 0\nTf 1 1 1\nillum 2\nKa 0.588 0.588 0.588\nKd 0.588 0.588 0.588\nKs 0 0 0",
+                [0.588; 3],
+                0.8268,
+                0.0,
+                0.0,
+                0.04,
+                1.0,
+                false,
+            ),
         ];
         for &(text, base, rough, metal, spec, f0, alpha, blended) in cases {
             let (mats, _) = tobj::load_mtl_buf(&mut format!("newmtl m\n{text}\n").as_bytes()).unwrap();
@@ -413,7 +444,8 @@ mod tests {
             );
         }
         // Emission: Ke at strength 1.
-        let (mats, _) = tobj::load_mtl_buf(&mut "newmtl e\nKd 0.1 0.1 0.1\nKe 1 0.5 0.25\nillum 2\n".as_bytes()).unwrap();
+        let (mats, _) =
+            tobj::load_mtl_buf(&mut "newmtl e\nKd 0.1 0.1 0.1\nKe 1 0.5 0.25\nillum 2\n".as_bytes()).unwrap();
         let m = material(&mats[0], Path::new("."), &mut Images::default()).unwrap();
         assert_eq!(m.emissive, Vec3::new(1.0, 0.5, 0.25));
     }

@@ -16,7 +16,9 @@ use std::fmt::Write as _;
 enum Encoding {
     /// UTF-8 (or, line by line where a line is not UTF-8, Latin-1).
     Bytes,
-    Utf16 { big_endian: bool },
+    Utf16 {
+        big_endian: bool,
+    },
 }
 
 impl Encoding {

@@ -7,9 +7,9 @@ use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
 
+use super::input::folder_of;
 use super::material::{srgb_to_linear, Material};
 use super::posed::{PosedScene, PrimKind};
-use super::input::folder_of;
 use super::{ply, Error};
 
 /// The texture a PLY's `comment TextureFile NAME` names, beside the PLY, checked to exist.

@@ -6,12 +6,12 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3, Vec4};
 
 use super::gltf::{GltfAsset, PoseScratch};
-use super::material::Material;
-use super::posed::{PosedPrimitive, PosedScene, PrimKind};
-use super::ply_scene::{splats_of, texture_file};
-pub use super::ply_scene::{checked_ply, ply_facts, ply_scene, ply_scene_at, ply_scene_slice, PlyFacts};
-use super::Error;
 use super::input::{folder_of, Clip, Clips, FrameFile, FrameRange, Ground, SourceFile, SourceRequest, UpAxis};
+use super::material::Material;
+pub use super::ply_scene::{checked_ply, ply_facts, ply_scene, ply_scene_at, ply_scene_slice, PlyFacts};
+use super::ply_scene::{splats_of, texture_file};
+use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use super::Error;
 
 /// A loaded source.
 #[derive(Debug)]
@@ -111,8 +111,9 @@ impl LoadedSource {
                 let got = importer.import(path, select, &req.frames)?;
                 warnings.extend(got.info.warnings.iter().map(|w| format!("{}: {w}", path.display())));
                 let frames = got.info.frames.iter().enumerate();
-                let file = |(i, &number): (usize, &i64)| {
-                    FrameFile { number, path: got.dir.join(format!("frame_{i:05}.gltf")) }
+                let file = |(i, &number): (usize, &i64)| FrameFile {
+                    number,
+                    path: got.dir.join(format!("frame_{i:05}.gltf")),
                 };
                 SourceData::MeshSequence(frames.map(file).collect())
             }
@@ -352,10 +353,14 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
         "abc" | "usd" | "usda" | "usdc" | "usdz" | "dae" | "3ds" | "x3d" | "wrl" => {
             // Blender 4.2 moved its 3DS and X3D/VRML importers out to extensions (4.5 LTS has neither built in).
             let how = match ext.as_str() {
-                "3ds" => "File → Import, once the \"Autodesk 3DS format\" extension is added from Edit → Preferences → \
-                          Get Extensions",
-                "x3d" | "wrl" => "File → Import, once the \"Web3D X3D/VRML2 format\" extension is added from Edit → \
-                                  Preferences → Get Extensions",
+                "3ds" => {
+                    "File → Import, once the \"Autodesk 3DS format\" extension is added from Edit → Preferences → \
+                          Get Extensions"
+                }
+                "x3d" | "wrl" => {
+                    "File → Import, once the \"Web3D X3D/VRML2 format\" extension is added from Edit → \
+                                  Preferences → Get Extensions"
+                }
                 _ => "File → Import; a blender.org build reads Alembic and USD",
             };
             format!(

@@ -143,8 +143,9 @@ mod tests {
         assert!(!on_whole_grid(&grid));
         assert!(on_whole_grid(&[Vec3::new(3.0, -7.0, 1023.0)]));
         // Points at distances 1, 2, …, 10 from their partners: nine in ten have theirs within 9.
-        let pairs: Vec<Vec3> =
-            (1..=10).flat_map(|k| [Vec3::new(k as f32 * 100.0, 0.0, 0.0), Vec3::new(k as f32 * 100.0, k as f32, 0.0)]).collect();
+        let pairs: Vec<Vec3> = (1..=10)
+            .flat_map(|k| [Vec3::new(k as f32 * 100.0, 0.0, 0.0), Vec3::new(k as f32 * 100.0, k as f32, 0.0)])
+            .collect();
         assert_eq!(typical(&pairs), Some(9.0));
         // The brute-force nearest neighbour, on a clumped cloud the grid bins unevenly.
         let mut s = 12345u32;
@@ -154,7 +155,8 @@ mod tests {
             s ^= s << 5;
             s as f32 / u32::MAX as f32
         };
-        let cloud: Vec<Vec3> = (0..3000).map(|i| Vec3::new(rnd(), rnd(), rnd()) * if i % 3 == 0 { 10.0 } else { 0.5 }).collect();
+        let cloud: Vec<Vec3> =
+            (0..3000).map(|i| Vec3::new(rnd(), rnd(), rnd()) * if i % 3 == 0 { 10.0 } else { 0.5 }).collect();
         let g = Grid::of(&cloud).unwrap();
         for &p in cloud.iter().step_by(37) {
             let brute = cloud.iter().map(|q| q.distance(p)).filter(|&d| d > 0.0).fold(f32::INFINITY, f32::min);

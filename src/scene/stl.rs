@@ -39,8 +39,8 @@ impl Problem {
 /// printed parts).
 pub fn scene(path: &Path) -> Result<PosedScene, Error> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    let corners = triangles(&bytes)
-        .map_err(|p| Error::Mesh { path: path.to_path_buf(), line: p.line, message: p.message })?;
+    let corners =
+        triangles(&bytes).map_err(|p| Error::Mesh { path: path.to_path_buf(), line: p.line, message: p.message })?;
     // The file's bytes go before the mesh is made (a load's peak: 100 MB for two million triangles).
     drop(bytes);
     Ok(posed(corners))
@@ -109,8 +109,10 @@ fn form(head: &[u8], len: u64) -> Result<Form, Problem> {
     let message = if head.iter().all(u8::is_ascii_whitespace) {
         "empty: neither a binary nor an ASCII STL".to_string()
     } else {
-        format!("{len} bytes: too short for a binary STL (its header is {COUNTED} bytes) and not text starting with \
-                 `solid`")
+        format!(
+            "{len} bytes: too short for a binary STL (its header is {COUNTED} bytes) and not text starting with \
+                 `solid`"
+        )
     };
     Err(Problem { line: None, message })
 }
@@ -154,7 +156,10 @@ fn binary(bytes: &[u8], n: usize) -> Result<Vec<[Vec3; 3]>, Problem> {
         if !tri.iter().all(|v| v.is_finite()) {
             return Err(Problem {
                 line: None,
-                message: format!("triangle {t} (byte {}) has a corner that is not a finite number", COUNTED + t * TRIANGLE),
+                message: format!(
+                    "triangle {t} (byte {}) has a corner that is not a finite number",
+                    COUNTED + t * TRIANGLE
+                ),
             });
         }
         out.push(tri);
@@ -168,7 +173,8 @@ fn words(line: &str) -> impl Iterator<Item = (usize, &str)> {
 }
 
 /// What an ASCII STL may hold, said when a line holds something else.
-const ASCII_HELP: &str = "an ASCII STL holds `solid NAME`, then per triangle `facet normal X Y Z`, `outer loop`, three \
+const ASCII_HELP: &str =
+    "an ASCII STL holds `solid NAME`, then per triangle `facet normal X Y Z`, `outer loop`, three \
                           `vertex X Y Z` lines, `endloop` and `endfacet`, and ends with `endsolid NAME`";
 
 /// An ASCII STL's triangles, of every `solid` in it (Blender reads them into one mesh). The facets' normals are
@@ -186,9 +192,8 @@ fn ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, Problem> {
         let Some((col, key)) = w.next() else {
             continue;
         };
-        let unexpected = |what: &str| {
-            Problem::at(line_no, format!("column {col}: `{key}` where {what} was expected. {ASCII_HELP}"))
-        };
+        let unexpected =
+            |what: &str| Problem::at(line_no, format!("column {col}: `{key}` where {what} was expected. {ASCII_HELP}"));
         match key {
             "solid" if !solid && !in_facet => solid = true,
             _ if !solid => {
@@ -203,9 +208,10 @@ fn ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, Problem> {
                     let Some((c, word)) = w.next() else {
                         return Err(Problem::at(line_no, format!("`vertex` needs three numbers; it has {k}")));
                     };
-                    *slot = word.parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                        Problem::at(line_no, format!("column {c}: `{word}` is not a finite number"))
-                    })?;
+                    *slot =
+                        word.parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                            Problem::at(line_no, format!("column {c}: `{word}` is not a finite number"))
+                        })?;
                 }
                 facet.push(Vec3::from(v));
             }

@@ -239,7 +239,9 @@ impl Subject {
                 let front = self.fronts[pi as usize] + self.vertex(pi, v).0;
                 let shift = hammersley(front as u32 % 4093, 4093);
                 (0..rays as u32)
-                    .filter_map(|i| self.trace(scene, p + n * self.tracer.eps, cosine_direction(i, rays as u32, shift, t, b, n)))
+                    .filter_map(|i| {
+                        self.trace(scene, p + n * self.tracer.eps, cosine_direction(i, rays as u32, shift, t, b, n))
+                    })
                     .collect()
             })
             .collect();
@@ -350,9 +352,8 @@ impl Neighbours {
 fn surface_at(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, c: [u32; 3], k: [f32; 2]) -> (Vec3, Vec3) {
     let mat = scene.material(prim.material);
     let w = [1.0 - k[0] - k[1], k[0], k[1]];
-    let uv = (!prim.uvs.is_empty()).then(|| {
-        (0..3).map(|j| prim.uvs.get(c[j] as usize).copied().unwrap_or(Vec2::ZERO) * w[j]).sum::<Vec2>()
-    });
+    let uv = (!prim.uvs.is_empty())
+        .then(|| (0..3).map(|j| prim.uvs.get(c[j] as usize).copied().unwrap_or(Vec2::ZERO) * w[j]).sum::<Vec2>());
     let color = (!prim.colors.is_empty()).then(|| {
         (0..3).map(|j| prim.colors.get(c[j] as usize).copied().unwrap_or(glam::Vec4::ONE) * w[j]).sum::<glam::Vec4>()
     });
@@ -383,10 +384,10 @@ fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 2] {
 
 #[cfg(test)]
 mod tests {
-    use crate::render::light::PointCasters;
     use super::*;
-    use crate::scene::material::Material;
+    use crate::render::light::PointCasters;
     use crate::scene::light::{Light, LightKind};
+    use crate::scene::material::Material;
     use crate::scene::PrimKind;
     use glam::Vec4;
 
@@ -408,11 +409,22 @@ mod tests {
             for i in 0..n {
                 let k = j * (n + 1) + i;
                 let quad = [k, k + 1, k + n + 2, k, k + n + 2, k + n + 1];
-                indices.extend(if normal.z > 0.0 { quad } else { [quad[0], quad[2], quad[1], quad[3], quad[5], quad[4]] });
+                indices.extend(if normal.z > 0.0 {
+                    quad
+                } else {
+                    [quad[0], quad[2], quad[1], quad[3], quad[5], quad[4]]
+                });
             }
         }
         let material = Material { base_color: Vec4::new(grey, grey, grey, 1.0), ..Material::default() };
-        PosedScene::single(PrimKind::Triangles, positions, vec![normal; ((n + 1) * (n + 1)) as usize], Vec::new(), indices, material)
+        PosedScene::single(
+            PrimKind::Triangles,
+            positions,
+            vec![normal; ((n + 1) * (n + 1)) as usize],
+            Vec::new(),
+            indices,
+            material,
+        )
     }
 
     /// A sun shining straight up, casting no shadows, and a dark environment: only faces looking down are lit,

@@ -124,7 +124,12 @@ mod tests {
             };
             let mut s = PosedScene::single(
                 PrimKind::Triangles,
-                vec![Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(1.0, 1.0, 1.0), Vec3::new(-1.0, 1.0, 1.0)],
+                vec![
+                    Vec3::new(-1.0, -1.0, 1.0),
+                    Vec3::new(1.0, -1.0, 1.0),
+                    Vec3::new(1.0, 1.0, 1.0),
+                    Vec3::new(-1.0, 1.0, 1.0),
+                ],
                 vec![-Vec3::Z; 4],
                 Vec::new(),
                 vec![0, 2, 1, 0, 3, 2],

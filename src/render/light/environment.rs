@@ -219,8 +219,16 @@ fn atan2(y: f32, x: f32) -> f32 {
 /// for negative x (see [`atan2`] for why not libm).
 #[inline]
 fn acos(x: f32) -> f32 {
-    const P: [f32; 8] =
-        [std::f32::consts::FRAC_PI_2, -0.214_598_8, 0.088_978_99, -0.050_174_303, 0.030_891_88, -0.017_088_126, 0.006_670_09, -0.001_262_491_1];
+    const P: [f32; 8] = [
+        std::f32::consts::FRAC_PI_2,
+        -0.214_598_8,
+        0.088_978_99,
+        -0.050_174_303,
+        0.030_891_88,
+        -0.017_088_126,
+        0.006_670_09,
+        -0.001_262_491_1,
+    ];
     let a = x.abs();
     let r = (1.0 - a).max(0.0).sqrt() * P.iter().rev().fold(0.0, |acc, &c| acc * a + c);
     if x < 0.0 {
@@ -294,7 +302,6 @@ fn row_solid_angle(y: u32, h: u32) -> f32 {
     t0.cos() - t1.cos()
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -309,7 +316,10 @@ mod tests {
         });
         for (y, x) in special.into_iter().chain(sweep) {
             let (got, want) = (atan2(y, x), y.atan2(x));
-            assert!((got - want).abs() < 1e-6 || (got.abs() - PI).abs() < 1e-6 && (want.abs() - PI).abs() < 1e-6, "atan2({y}, {x}): {got} vs {want}");
+            assert!(
+                (got - want).abs() < 1e-6 || (got.abs() - PI).abs() < 1e-6 && (want.abs() - PI).abs() < 1e-6,
+                "atan2({y}, {x}): {got} vs {want}"
+            );
         }
         assert_eq!(atan2(0.0, 0.0), 0.0);
         for i in 0..=100_000 {

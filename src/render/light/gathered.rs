@@ -61,7 +61,9 @@ impl Gathered {
             let f = r.f32s(n * 7)?;
             let v3 = |c: &[f32]| Vec3::new(c[0], c[1], c[2]);
             vertices.push(
-                f.chunks_exact(7).map(|c| Visibility { env: c[0], below: v3(&c[1..4]), bounce: v3(&c[4..7]) }).collect(),
+                f.chunks_exact(7)
+                    .map(|c| Visibility { env: c[0], below: v3(&c[1..4]), bounce: v3(&c[4..7]) })
+                    .collect(),
             );
         }
         let planes = r.count(16)?;
@@ -78,7 +80,8 @@ impl Gathered {
             }
             let [lamps, bounce] = colours;
             let sized = |len: usize| len == 0 || len == plane_grid::GRID_POINTS;
-            if vis.len() != plane_grid::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len()) {
+            if vis.len() != plane_grid::GRID_POINTS || !sized(sun.len()) || !sized(lamps.len()) || !sized(bounce.len())
+            {
                 return Err(GatheredError::Damaged("a ground grid of another size"));
             }
             let n = r.count(12)?;

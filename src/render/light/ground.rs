@@ -123,7 +123,8 @@ impl FrameLight {
                 })
                 .collect()
         };
-        let mut plane = self.assemble(material, corners, PlaneGrids { vis, sun, lamps, bounce: Vec::new(), shades: Vec::new() });
+        let mut plane =
+            self.assemble(material, corners, PlaneGrids { vis, sun, lamps, bounce: Vec::new(), shades: Vec::new() });
         plane.grids.shades = self
             .lights
             .iter()
@@ -262,7 +263,9 @@ impl FrameLight {
             return None;
         }
         let (q, t) = g.hit(p, d);
-        plane.light_over(q.x, q.y, t * spread).map(|(light, lamps, on)| (g.radiance(light) + g.albedo * lamps * (1.0 / PI), on))
+        plane
+            .light_over(q.x, q.y, t * spread)
+            .map(|(light, lamps, on)| (g.radiance(light) + g.albedo * lamps * (1.0 / PI), on))
     }
 
     /// [`FrameLight::shade`] of the top face (normal +Z) of ground plane material `material`, when it is one,
@@ -300,18 +303,22 @@ impl FrameLight {
 
 #[cfg(test)]
 mod tests {
-    use crate::render::light::PointCasters;
     use super::super::brdf::DIELECTRIC;
     use super::super::Surface;
     use super::*;
+    use crate::render::light::PointCasters;
 
     /// A 4 m ground plane of colour (0.7, 0.6, 0.5) at z = 0 under a 0.6 m square caster at z = 1, lit by
     /// `lights` and the studio map.
     fn square_over_ground(lights: &[Light]) -> (PosedScene, FrameLight) {
         let plane = crate::scene::input::Ground { size: [4.0, 4.0], color: [0.7, 0.6, 0.5], z: None };
         let mut scene = PosedScene::default();
-        crate::scene::merge(&[crate::scene::source::ground(&plane, 0.0), super::super::shadow::tests::quad(1.0, 0.3)], &mut scene);
-        let frame = FrameLight::prepare(&scene, lights, crate::render::Environment::default().studio(), PointCasters::NONE);
+        crate::scene::merge(
+            &[crate::scene::source::ground(&plane, 0.0), super::super::shadow::tests::quad(1.0, 0.3)],
+            &mut scene,
+        );
+        let frame =
+            FrameLight::prepare(&scene, lights, crate::render::Environment::default().studio(), PointCasters::NONE);
         (scene, frame)
     }
 
@@ -400,7 +407,10 @@ mod tests {
         let (x, y) = (plane.lo.x + plane.cell.x * (i0 as f32 + 4.0), plane.lo.y + plane.cell.y * (j0 as f32 + 4.0));
         let (avg, _, on) = plane.light_over(x, y, plane.cell.x * 4.5).expect("on the plane");
         assert_eq!(on, 1.0);
-        assert!((avg.x - mean(&plane.grids.vis)).abs() < 1e-4 && (avg.y - mean(&plane.grids.sun)).abs() < 1e-4, "{avg}");
+        assert!(
+            (avg.x - mean(&plane.grids.vis)).abs() < 1e-4 && (avg.y - mean(&plane.grids.sun)).abs() < 1e-4,
+            "{avg}"
+        );
     }
 
     #[test]
@@ -443,7 +453,8 @@ mod tests {
         // The shortcut reads the sun's shadow from the frame's lattice ([`SunShade`]), the full model looks it up:
         // the two differ by the sun's light times the difference of the two visibilities, and by nothing else.
         let sun_lamp = &frame.lights[0];
-        let sun_term = albedo / PI * sun_lamp.light.color * sun_lamp.light.intensity * sun_lamp.incidence(Vec3::ZERO).0.z;
+        let sun_term =
+            albedo / PI * sun_lamp.light.color * sun_lamp.light.intensity * sun_lamp.incidence(Vec3::ZERO).0.z;
         let plane = &frame.planes[0];
         let mut worst = 0.0f32;
         for p in grid.chain(across).chain(along) {
@@ -454,7 +465,10 @@ mod tests {
             let at = locate(plane.grid_uv(p.x, p.y));
             let lattice = plane.grids.shades[0].at(at.j * PLANE_CELLS + at.i, at.t).unwrap_or(1.0);
             let expected = full - sun_term * (sun - lattice);
-            assert!((expected - fast).abs().max_element() <= 1e-5 * (1.0 + full.max_element()), "{p}: {expected} vs {fast}");
+            assert!(
+                (expected - fast).abs().max_element() <= 1e-5 * (1.0 + full.max_element()),
+                "{p}: {expected} vs {fast}"
+            );
             worst = worst.max((sun - lattice).abs());
             (shadowed, open) = (shadowed + (sun == 0.0) as u32, open + (sun == 1.0) as u32);
         }

@@ -73,7 +73,12 @@ impl Lamp {
 
 /// The lights (`lights`, the manifest's, then the scene's own) with their shadow maps over the casters within
 /// `bounds` (plain points casting as `points` says), made side by side.
-pub(super) fn lamps(scene: &PosedScene, lights: &[Light], bounds: Option<(Vec3, Vec3)>, points: PointCasters) -> Vec<Lamp> {
+pub(super) fn lamps(
+    scene: &PosedScene,
+    lights: &[Light],
+    bounds: Option<(Vec3, Vec3)>,
+    points: PointCasters,
+) -> Vec<Lamp> {
     let all: Vec<&Light> = lights.iter().chain(&scene.lights).collect();
     all.par_iter()
         .map(|l| {

@@ -17,9 +17,9 @@ mod ground;
 mod lamp;
 mod occlusion;
 mod pcf;
+mod penumbra;
 mod plane_grid;
 mod pyramid;
-mod penumbra;
 mod rays;
 mod scan;
 pub mod shadow;
@@ -34,17 +34,17 @@ use rayon::prelude::*;
 pub use crate::scene::light::{Light, LightKind};
 use crate::scene::material::Material;
 use crate::scene::{PosedPrimitive, PosedScene, PrimKind};
+pub use bake::BAKE_SALT;
 pub use brdf::Surface;
 pub use environment::{EnvMap, Prefiltered};
-pub use bake::BAKE_SALT;
-pub use sides::two_sided;
 pub use gathered::{Gathered, GatheredError};
 use ground::{ground_planes, Ground};
-use plane_grid::PlaneVisibility;
 use lamp::{lamps, Lamp};
 use occlusion::occlusion_maps;
+use plane_grid::PlaneVisibility;
 pub use shadow::PointCasters;
 use shadow::ShadowMap;
+pub use sides::two_sided;
 
 /// What reaches a surface point of the environment's light: interpolated across a triangle from its vertices,
 /// like any vertex attribute.
@@ -146,7 +146,8 @@ pub enum Lobe {
 /// Whether primitive `p` casts shadows, and so occludes and reflects light onto others: triangles whose material
 /// casts them (every material but a `plane` source's).
 fn is_caster(scene: &PosedScene, p: &PosedPrimitive) -> bool {
-    p.kind == PrimKind::Triangles && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows && !m.unlit)
+    p.kind == PrimKind::Triangles
+        && scene.materials.get(p.material as usize).is_none_or(|m| m.casts_shadows && !m.unlit)
 }
 
 /// Bounds of the geometry that casts shadows.
@@ -246,7 +247,8 @@ impl FrameLight {
         if !fits {
             return Err(GatheredError::OtherScene);
         }
-        let mut light = FrameLight::bare(scene, lights, lamps(scene, lights, shadow_bounds(scene, points), points), env);
+        let mut light =
+            FrameLight::bare(scene, lights, lamps(scene, lights, shadow_bounds(scene, points), points), env);
         light.tracer = may_be_glossy(scene).then(|| rays::Tracer::of(scene, rays::Rays::Few).map(Arc::new)).flatten();
         light.vertex_visibility = g.vertices;
         light.planes = ground_planes(scene)
@@ -313,7 +315,16 @@ impl FrameLight {
     /// comes partly back to the diffuse layer by an estimate (`multi_bounce`) instead: yes on a subject, whose
     /// casters are mostly its own parts, of colours like its own.
     #[allow(clippy::too_many_arguments)]
-    pub fn shade(&self, p: Vec3, n: Vec3, v: Vec3, s: &Surface, ao: f32, vis: Visibility, estimate_bounce: bool) -> Vec3 {
+    pub fn shade(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        v: Vec3,
+        s: &Surface,
+        ao: f32,
+        vis: Visibility,
+        estimate_bounce: bool,
+    ) -> Vec3 {
         self.shade_lobe(p, n, v, s, ao, vis, estimate_bounce, Lobe::Rays).0
     }
 
@@ -371,7 +382,8 @@ impl FrameLight {
                 let lowered = r.z > -0.5 * w;
                 let d = if lowered { Vec3::new(r.x, r.y, -0.5 * w).normalize() } else { r };
                 if let Some((g, on)) = self.ground_seen(p, d, 2.0 * a) {
-                    let map = if lowered { e.prefiltered.specular(e.rotation * d, s.roughness) * e.strength } else { l };
+                    let map =
+                        if lowered { e.prefiltered.specular(e.rotation * d, s.roughness) * e.strength } else { l };
                     l = (l + (g - map) * (below * on)).max(Vec3::ZERO);
                 }
             }
@@ -385,8 +397,7 @@ impl FrameLight {
         // tracer follows). A mesh's vertices gathered it ([`bounce`]); a baked point estimates it by Jimenez et
         // al.'s multi-bounce fit ("Practical real-time strategies for accurate indirect occlusion", 2016), with
         // the surface's own colour standing in for its surroundings' (see `estimate_bounce`).
-        let returned =
-            if estimate_bounce { multi_bounce(occlusion, s.diffuse()) } else { Vec3::splat(occlusion) };
+        let returned = if estimate_bounce { multi_bounce(occlusion, s.diffuse()) } else { Vec3::splat(occlusion) };
         // The specular layer sees the same occluders where its lobe is blocked: their mean radiance, which the
         // gathered irradiance over π is (for a rough lobe; a sharp one would see one of them).
         let bounce = vis.bounce.max(Vec3::ZERO) * ao;
@@ -407,7 +418,15 @@ impl FrameLight {
     /// bakes the same geometry's occlusion they meet (FlightHelmet's, multiplied in, was 2 % dark against Cycles,
     /// which Blender's importer does not give the texture to).
     #[inline]
-    fn lobe_occlusion(&self, p: Vec3, n: Vec3, v: Vec3, roughness: f32, occlusion: f32, lobe: Lobe) -> (f32, Option<f32>) {
+    fn lobe_occlusion(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        v: Vec3,
+        roughness: f32,
+        occlusion: f32,
+        lobe: Lobe,
+    ) -> (f32, Option<f32>) {
         let hemisphere = specular_occlusion(n.dot(v), occlusion, roughness);
         let rays = 1.0 - environment::smoothstep(GLOSSY_RAYS.0, GLOSSY_RAYS.1, roughness);
         let Some(tracer) = self.tracer.as_ref().filter(|_| rays > 0.0 && lobe != Lobe::Hemisphere) else {
@@ -504,8 +523,13 @@ fn may_be_glossy(scene: &PosedScene) -> bool {
 
 /// Whether material `m` may have a lobe glossy enough for rays ([`may_be_glossy`]).
 pub fn glossy(m: &Material) -> bool {
-    let surface =
-        Surface { base: Vec3::ONE, metallic: m.metallic, roughness: m.roughness, specular: m.specular, f0: m.specular_f0 };
+    let surface = Surface {
+        base: Vec3::ONE,
+        metallic: m.metallic,
+        roughness: m.roughness,
+        specular: m.specular,
+        f0: m.specular_f0,
+    };
     surface.specular_weight() > 0.0 && (m.roughness < GLOSSY_RAYS.1 || m.metallic_roughness_texture.is_some())
 }
 
@@ -520,9 +544,9 @@ impl Surface {
 
 #[cfg(test)]
 mod tests {
-    use crate::render::light::PointCasters;
     use super::brdf::DIELECTRIC;
     use super::*;
+    use crate::render::light::PointCasters;
 
     #[test]
     fn interreflection_gives_back_part_of_what_occluders_block_and_never_more() {
@@ -560,7 +584,12 @@ mod tests {
                     intensity: 3.0,
                     shadows: true,
                 };
-                let frame = FrameLight::prepare(&scene, &[sun], crate::render::Environment::default().studio(), PointCasters::NONE);
+                let frame = FrameLight::prepare(
+                    &scene,
+                    &[sun],
+                    crate::render::Environment::default().studio(),
+                    PointCasters::NONE,
+                );
                 let metal = Surface { base: Vec3::ONE, metallic: 1.0, roughness: 0.5, specular: 0.5, f0: DIELECTRIC };
                 // Facing +X, seen from the direction whose mirror image is (x, 0, z): the lobe's centre.
                 let n = Vec3::X;
@@ -600,29 +629,50 @@ mod tests {
         // seen from below, the wall mirrors the overhang; from above, the open space below it.
         let quad = |corners: [Vec3; 4], normal: Vec3, roughness: f32| {
             let m = crate::scene::material::Material { roughness, metallic: 1.0, ..Default::default() };
-            PosedScene::single(PrimKind::Triangles, corners.to_vec(), vec![normal; 4], Vec::new(), vec![0, 1, 2, 0, 2, 3], m)
+            PosedScene::single(
+                PrimKind::Triangles,
+                corners.to_vec(),
+                vec![normal; 4],
+                Vec::new(),
+                vec![0, 1, 2, 0, 2, 3],
+                m,
+            )
         };
         let scene_of = |roughness: f32| {
-            let wall = [Vec3::new(0.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 2.0), Vec3::new(0.0, -1.0, 2.0)];
-            let roof = [Vec3::new(0.0, -1.0, 2.2), Vec3::new(3.0, -1.0, 2.2), Vec3::new(3.0, 1.0, 2.2), Vec3::new(0.0, 1.0, 2.2)];
+            let wall = [
+                Vec3::new(0.0, -1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 2.0),
+                Vec3::new(0.0, -1.0, 2.0),
+            ];
+            let roof = [
+                Vec3::new(0.0, -1.0, 2.2),
+                Vec3::new(3.0, -1.0, 2.2),
+                Vec3::new(3.0, 1.0, 2.2),
+                Vec3::new(0.0, 1.0, 2.2),
+            ];
             let mut scene = PosedScene::default();
             crate::scene::merge(&[quad(wall, Vec3::X, roughness), quad(roof, -Vec3::Z, roughness)], &mut scene);
             scene
         };
         let (p, n, hemisphere) = (Vec3::new(0.0, 0.0, 1.0), Vec3::X, 0.6);
         let seen_from = |r: Vec3| 2.0 * n.dot(r) * n - r;
-        let (below, above) = (seen_from(Vec3::new(1.0, 0.0, 1.0).normalize()), seen_from(Vec3::new(1.0, 0.0, -1.0).normalize()));
+        let (below, above) =
+            (seen_from(Vec3::new(1.0, 0.0, 1.0).normalize()), seen_from(Vec3::new(1.0, 0.0, -1.0).normalize()));
         let studio = || crate::render::Environment::default().studio();
         let glossy = FrameLight::prepare(&scene_of(0.2), &[], studio(), PointCasters::NONE).with_bounce(&scene_of(0.2));
         assert!(glossy.tracer.is_some());
-        let lobe = |light: &FrameLight, v: Vec3, roughness: f32| light.lobe_occlusion(p, n, v, roughness, hemisphere, Lobe::Rays);
+        let lobe = |light: &FrameLight, v: Vec3, roughness: f32| {
+            light.lobe_occlusion(p, n, v, roughness, hemisphere, Lobe::Rays)
+        };
         let ((up, found_up), (down, found_down)) = (lobe(&glossy, below, 0.2), lobe(&glossy, above, 0.2));
         assert!(up < 0.05 && down > 0.95, "mirroring the roof {up}, the open space {down}");
         // What the rays found comes back with the answer; given, it stands for them (no ray is cast).
         assert_eq!((found_up, found_down), (Some(up), Some(down)));
         assert_eq!(glossy.lobe_occlusion(p, n, below, 0.2, hemisphere, Lobe::Found(down)), (down, Some(down)));
         // The hemisphere's occlusion alone cannot tell the two apart.
-        let (a, b) = (specular_occlusion(n.dot(below), hemisphere, 0.2), specular_occlusion(n.dot(above), hemisphere, 0.2));
+        let (a, b) =
+            (specular_occlusion(n.dot(below), hemisphere, 0.2), specular_occlusion(n.dot(above), hemisphere, 0.2));
         assert!((a - b).abs() < 1e-6 && a > 0.3 && a < 0.9, "{a} {b}");
         // A transparent layer's lobe reads the hemisphere's, with the tree at hand: no ray is cast.
         assert_eq!(glossy.lobe_occlusion(p, n, below, 0.2, hemisphere, Lobe::Hemisphere), (a, None));
@@ -636,7 +686,8 @@ mod tests {
         assert!(mid > traced.min(rough) && mid < traced.max(rough), "{traced} < {mid} < {rough}");
         // Surfaces that cannot be glossy (roughness 1, no roughness texture: CesiumMan's) make no tree, and keep
         // the hemisphere's occlusion.
-        let rough_scene = FrameLight::prepare(&scene_of(1.0), &[], studio(), PointCasters::NONE).with_bounce(&scene_of(1.0));
+        let rough_scene =
+            FrameLight::prepare(&scene_of(1.0), &[], studio(), PointCasters::NONE).with_bounce(&scene_of(1.0));
         assert!(rough_scene.tracer.is_none());
         assert_eq!(lobe(&rough_scene, below, 0.2), (a, None));
     }
@@ -675,7 +726,8 @@ mod tests {
         assert_eq!(Gathered::decode(&bytes).as_ref(), Ok(&g));
         // Read back, it lights the frame exactly as preparing it in place does, without the environment's
         // occlusion maps.
-        let cached = FrameLight::from_gathered(&scene, lights, studio(), PointCasters::NONE, g.clone()).expect("the same frame");
+        let cached =
+            FrameLight::from_gathered(&scene, lights, studio(), PointCasters::NONE, g.clone()).expect("the same frame");
         assert!(cached.occlusion.is_empty() && !fresh.occlusion.is_empty());
         assert_eq!(fresh.vertex_visibility, cached.vertex_visibility);
         let ground = scene.primitives[0].material;
@@ -698,5 +750,4 @@ mod tests {
         let other = Gathered { vertices: vec![vec![Visibility::OPEN; 3]], planes: Vec::new() };
         assert!(FrameLight::from_gathered(&scene, lights, studio(), PointCasters::NONE, other).is_err());
     }
-
 }

@@ -98,7 +98,12 @@ impl SunShade {
     /// A shade read back from its parts, or why they cannot be one written by [`SunShade::encode`] for a grid
     /// of `cells` cells: a side past [`MAX_SIDE`], a cell list of another length, visibilities that are not
     /// whole blocks, a block number past them.
-    pub(super) fn from_parts(side: usize, block: Vec<u32>, vis: Vec<u16>, cells: usize) -> Result<SunShade, &'static str> {
+    pub(super) fn from_parts(
+        side: usize,
+        block: Vec<u32>,
+        vis: Vec<u16>,
+        cells: usize,
+    ) -> Result<SunShade, &'static str> {
         if block.is_empty() && vis.is_empty() {
             return Ok(SunShade::default());
         }
@@ -118,9 +123,9 @@ impl SunShade {
 
 #[cfg(test)]
 mod tests {
-    use crate::render::light::PointCasters;
     use super::super::shadow::tests::quad;
     use super::*;
+    use crate::render::light::PointCasters;
 
     /// A 1 m square caster 1 m over the ground (z = 0), its map seen from straight above.
     fn caster() -> (ShadowMap, Vec3) {
@@ -153,7 +158,8 @@ mod tests {
             }
             // Between lattice points: within what its four neighbours hold.
             let f = Vec2::new(0.5 / s as f32, 1.5 / s as f32);
-            let near = [(0, 1), (1, 1), (0, 2), (1, 2)].map(|(i, j)| shade.at(c, Vec2::new(i as f32, j as f32) / s as f32).unwrap());
+            let near = [(0, 1), (1, 1), (0, 2), (1, 2)]
+                .map(|(i, j)| shade.at(c, Vec2::new(i as f32, j as f32) / s as f32).unwrap());
             let v = shade.at(c, f).unwrap();
             let (lo_v, hi_v) = near.iter().fold((1.0f32, 0.0f32), |(a, b), &x| (a.min(x), b.max(x)));
             assert!(v >= lo_v - 1e-6 && v <= hi_v + 1e-6, "cell {c}: {v} outside {lo_v}..{hi_v}");
@@ -170,7 +176,11 @@ mod tests {
             (0..400)
                 .map(|i| {
                     let p = Vec3::new(0.3 + i as f32 * 0.001, 0.0, 0.0);
-                    if smooth { map.visibility_smooth(p, Vec3::Z, 0.1) } else { map.visibility(p, Vec3::Z, 0.1) }
+                    if smooth {
+                        map.visibility_smooth(p, Vec3::Z, 0.1)
+                    } else {
+                        map.visibility(p, Vec3::Z, 0.1)
+                    }
                 })
                 .collect()
         };

@@ -89,7 +89,8 @@ impl PlaneVisibility {
             return None;
         }
         let g = locate(uv);
-        let fractions = Vec2::new(read(&self.grids.vis, g), if self.grids.sun.is_empty() { 1.0 } else { read(&self.grids.sun, g) });
+        let fractions =
+            Vec2::new(read(&self.grids.vis, g), if self.grids.sun.is_empty() { 1.0 } else { read(&self.grids.sun, g) });
         Some((fractions, read3(&self.grids.lamps, g)))
     }
 
@@ -157,7 +158,9 @@ impl PlaneVisibility {
     pub(super) fn combine(&mut self, lights: &[super::Lamp]) {
         let n = (PLANE_CELLS + 1) * (PLANE_CELLS + 1);
         let suns: Vec3 = lights.iter().map(|lamp| sun_irradiance(&lamp.light)).sum();
-        self.unsunned = (0..n).map(|k| self.sky * self.grids.vis[k] + self.grids.bounce.get(k).copied().unwrap_or(Vec3::ZERO)).collect();
+        self.unsunned = (0..n)
+            .map(|k| self.sky * self.grids.vis[k] + self.grids.bounce.get(k).copied().unwrap_or(Vec3::ZERO))
+            .collect();
         self.lit = self.unsunned.iter().map(|&e| e + suns).collect();
         let shadowing: Vec<&Vec<bool>> = lights
             .iter()
@@ -165,9 +168,8 @@ impl PlaneVisibility {
             .filter(|(lamp, _)| sun_irradiance(&lamp.light) != Vec3::ZERO && !lamp.maps.is_empty())
             .map(|(_, open)| open)
             .collect();
-        self.sunlit = (0..PLANE_CELLS * PLANE_CELLS)
-            .map(|c| shadowing.iter().all(|open| open.get(c) == Some(&true)))
-            .collect();
+        self.sunlit =
+            (0..PLANE_CELLS * PLANE_CELLS).map(|c| shadowing.iter().all(|open| open.get(c) == Some(&true))).collect();
     }
 }
 

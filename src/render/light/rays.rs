@@ -200,7 +200,12 @@ mod tests {
         // A unit square at z = 1 facing down.
         let square = PosedScene::single(
             PrimKind::Triangles,
-            vec![Vec3::new(-0.5, -0.5, 1.0), Vec3::new(0.5, -0.5, 1.0), Vec3::new(0.5, 0.5, 1.0), Vec3::new(-0.5, 0.5, 1.0)],
+            vec![
+                Vec3::new(-0.5, -0.5, 1.0),
+                Vec3::new(0.5, -0.5, 1.0),
+                Vec3::new(0.5, 0.5, 1.0),
+                Vec3::new(-0.5, 0.5, 1.0),
+            ],
             vec![-Vec3::Z; 4],
             Vec::new(),
             vec![0, 2, 1, 0, 3, 2],

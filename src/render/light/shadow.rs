@@ -16,8 +16,8 @@ use rayon::prelude::*;
 
 mod points;
 
-pub use points::PointCasters;
 pub(super) use points::bounds as point_bounds;
+pub use points::PointCasters;
 
 use super::pcf::{self, Depths, PcfAxis};
 use super::pyramid;
@@ -113,7 +113,14 @@ impl ShadowMap {
 
     /// A map of light from `eye` along `dir`, `fov` radians wide (a spot's cone, or a cube face's 90°); plain
     /// points cast as `points` says.
-    pub fn perspective(scene: &PosedScene, eye: Vec3, dir: Vec3, fov: f32, size: u32, points: PointCasters) -> ShadowMap {
+    pub fn perspective(
+        scene: &PosedScene,
+        eye: Vec3,
+        dir: Vec3,
+        fov: f32,
+        size: u32,
+        points: PointCasters,
+    ) -> ShadowMap {
         let focal = 0.5 * size as f32 / (0.5 * fov.min(3.0)).tan();
         let mut m = ShadowMap {
             view: look(eye, dir),
@@ -500,7 +507,12 @@ pub fn cube_face(d: Vec3) -> usize {
 
 /// A transparent triangle's alpha: its material's factor times the mean alpha of its corners' vertex colours
 /// and base-colour texture (read at the corners' uvs).
-fn triangle_alpha(scene: &PosedScene, prim: &crate::scene::PosedPrimitive, m: &crate::scene::material::Material, t: &[u32]) -> f32 {
+fn triangle_alpha(
+    scene: &PosedScene,
+    prim: &crate::scene::PosedPrimitive,
+    m: &crate::scene::material::Material,
+    t: &[u32],
+) -> f32 {
     let mut a = m.base_color.w;
     if prim.colors.len() == prim.positions.len() {
         a *= t.iter().map(|&i| prim.colors[i as usize].w).sum::<f32>() / 3.0;
@@ -576,7 +588,13 @@ pub(super) mod tests {
         // point of a cell `open_over` calls open is looked up fully lit, and it calls open most of the ground but
         // not the cells at the shadow's edge.
         let scene = quad(1.0, 0.5);
-        let m = ShadowMap::sun(&scene, Vec3::new(0.3, 0.2, -1.0).normalize(), scene.bounds().unwrap(), 512, PointCasters::NONE);
+        let m = ShadowMap::sun(
+            &scene,
+            Vec3::new(0.3, 0.2, -1.0).normalize(),
+            scene.bounds().unwrap(),
+            512,
+            PointCasters::NONE,
+        );
         for size in [0.0, 0.02] {
             let (mut open, mut cells) = (0, 0);
             for j in 0..60 {
@@ -618,16 +636,30 @@ pub(super) mod tests {
         // from it holds the depth the two-triangle square's map holds wherever either is covered.
         let (n, half) = (182usize, 0.5f32);
         assert!(2 * n * n > SCAN_RUN);
-        let at = |i: usize, j: usize| Vec3::new(-half + 2.0 * half * i as f32 / n as f32, -half + 2.0 * half * j as f32 / n as f32, 1.0);
+        let at = |i: usize, j: usize| {
+            Vec3::new(-half + 2.0 * half * i as f32 / n as f32, -half + 2.0 * half * j as f32 / n as f32, 1.0)
+        };
         let p: Vec<Vec3> = (0..=n).flat_map(|j| (0..=n).map(move |i| at(i, j))).collect();
         let k = |i: usize, j: usize| (j * (n + 1) + i) as u32;
         let indices: Vec<u32> = (0..n)
-            .flat_map(|j| (0..n).flat_map(move |i| [k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j), k(i + 1, j + 1), k(i, j + 1)]))
+            .flat_map(|j| {
+                (0..n).flat_map(move |i| [k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j), k(i + 1, j + 1), k(i, j + 1)])
+            })
             .collect();
-        let fine = PosedScene::single(PrimKind::Triangles, p.clone(), vec![Vec3::Z; p.len()], Vec::new(), indices, Material::default());
+        let fine = PosedScene::single(
+            PrimKind::Triangles,
+            p.clone(),
+            vec![Vec3::Z; p.len()],
+            Vec::new(),
+            indices,
+            Material::default(),
+        );
         let coarse = quad(1.0, half);
         let bounds = coarse.bounds().unwrap();
-        let (a, b) = (ShadowMap::sun(&fine, -Vec3::Z, bounds, 256, PointCasters::NONE), ShadowMap::sun(&coarse, -Vec3::Z, bounds, 256, PointCasters::NONE));
+        let (a, b) = (
+            ShadowMap::sun(&fine, -Vec3::Z, bounds, 256, PointCasters::NONE),
+            ShadowMap::sun(&coarse, -Vec3::Z, bounds, 256, PointCasters::NONE),
+        );
         let covered = b.depth.iter().filter(|d| d.is_finite()).count();
         assert!(covered > 170 * 170, "{covered}");
         for (i, (x, y)) in a.depth.iter().zip(&b.depth).enumerate() {

@@ -64,8 +64,8 @@ pub(super) fn closed_outward(p: &PosedPrimitive) -> bool {
 mod tests {
     use super::*;
     use crate::scene::material::Material;
-    use glam::Vec3;
     use crate::scene::PrimKind;
+    use glam::Vec3;
 
     /// A unit cube of 24 corners (four per face, split at its edges as seams split a textured mesh), its faces
     /// turning counter-clockwise seen from outside.

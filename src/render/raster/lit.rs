@@ -280,13 +280,12 @@ fn normal_mapped(n: Vec3, back: bool, tangent: Vec4, texel: Vec3, scale: f32) ->
     }
 }
 
-
 #[cfg(test)]
 mod tests {
-    use crate::render::light::PointCasters;
     use super::super::{draw_triangles, raster_tile, setup, Shade, TileWork, Tiles};
     use super::*;
     use crate::render::light::FrameLight;
+    use crate::render::light::PointCasters;
     use crate::scene::material::Material;
     use crate::scene::PrimKind;
     use glam::Mat4;
@@ -298,18 +297,38 @@ mod tests {
         // then the pixels between) and again with every pixel casting its own rays.
         let quad = |corners: [Vec3; 4], normal: Vec3| {
             let m = Material { roughness: 0.3, metallic: 1.0, ..Material::default() };
-            PosedScene::single(PrimKind::Triangles, corners.to_vec(), vec![normal; 4], Vec::new(), vec![0, 1, 2, 0, 2, 3], m)
+            PosedScene::single(
+                PrimKind::Triangles,
+                corners.to_vec(),
+                vec![normal; 4],
+                Vec::new(),
+                vec![0, 1, 2, 0, 2, 3],
+                m,
+            )
         };
-        let floor = [Vec3::new(-2.0, -2.0, 0.0), Vec3::new(2.0, -2.0, 0.0), Vec3::new(2.0, 2.0, 0.0), Vec3::new(-2.0, 2.0, 0.0)];
-        let roof = [Vec3::new(-2.0, -2.0, 0.4), Vec3::new(-2.0, 2.0, 0.4), Vec3::new(0.0, 2.0, 0.4), Vec3::new(0.0, -2.0, 0.4)];
+        let floor = [
+            Vec3::new(-2.0, -2.0, 0.0),
+            Vec3::new(2.0, -2.0, 0.0),
+            Vec3::new(2.0, 2.0, 0.0),
+            Vec3::new(-2.0, 2.0, 0.0),
+        ];
+        let roof = [
+            Vec3::new(-2.0, -2.0, 0.4),
+            Vec3::new(-2.0, 2.0, 0.4),
+            Vec3::new(0.0, 2.0, 0.4),
+            Vec3::new(0.0, -2.0, 0.4),
+        ];
         let mut scene = PosedScene::default();
         crate::scene::merge(&[quad(floor, Vec3::Z), quad(roof, -Vec3::Z)], &mut scene);
-        let light = FrameLight::prepare(&scene, &[], crate::render::Environment::default().studio(), PointCasters::NONE).with_bounce(&scene);
+        let light =
+            FrameLight::prepare(&scene, &[], crate::render::Environment::default().studio(), PointCasters::NONE)
+                .with_bounce(&scene);
         let (eye, k, side) = (Vec3::new(3.0, 0.3, 2.5), 2i64, 64i64);
         // Camera to world: x right, y up, looking along −z.
         let ahead = (Vec3::new(-0.5, 0.0, 0.0) - eye).normalize();
         let right = ahead.cross(Vec3::Z).normalize();
-        let c2w = Mat4::from_cols(right.extend(0.0), right.cross(ahead).extend(0.0), (-ahead).extend(0.0), eye.extend(1.0));
+        let c2w =
+            Mat4::from_cols(right.extend(0.0), right.cross(ahead).extend(0.0), (-ahead).extend(0.0), eye.extend(1.0));
         let f = (side * k) as f32;
         let proj = Projection {
             w2c: c2w.inverse(),

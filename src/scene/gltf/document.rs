@@ -70,12 +70,19 @@ pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
     // The JSON is parsed again from the edited document only when there was something to edit.
     let read = |validate: bool| -> Result<gltf::Gltf, gltf::Error> {
         if !edited {
-            return if validate { gltf::Gltf::from_slice(bytes) } else { gltf::Gltf::from_slice_without_validation(bytes) };
+            return if validate {
+                gltf::Gltf::from_slice(bytes)
+            } else {
+                gltf::Gltf::from_slice_without_validation(bytes)
+            };
         }
         let blob = bin.as_deref().map(<[u8]>::to_vec);
         let root: gltf::json::Root = serde_json::from_value(doc.clone()).map_err(gltf::Error::Deserialize)?;
-        let document =
-            if validate { gltf::Document::from_json(root)? } else { gltf::Document::from_json_without_validation(root) };
+        let document = if validate {
+            gltf::Document::from_json(root)?
+        } else {
+            gltf::Document::from_json_without_validation(root)
+        };
         Ok(gltf::Gltf { document, blob })
     };
     let parsed = match read(true) {

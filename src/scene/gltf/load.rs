@@ -248,9 +248,10 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
                 .or_else(|| n.mesh().and_then(|m| m.weights().map(<[f32]>::to_vec)))
                 .unwrap_or_default();
             weights.resize(n_targets, 0.0);
-            let vertices = n.mesh().and_then(|m| meshes.get(m.index())).map_or(0, |ps: &Vec<Primitive>| {
-                ps.iter().map(|p| p.positions.len() as u64).sum::<u64>()
-            });
+            let vertices = n
+                .mesh()
+                .and_then(|m| meshes.get(m.index()))
+                .map_or(0, |ps: &Vec<Primitive>| ps.iter().map(|p| p.positions.len() as u64).sum::<u64>());
             // A skinned mesh is drawn once: the extension does not say where a skin's copies go.
             let instances = match (n.mesh(), n.skin()) {
                 (Some(_), None) => instancing::instances(&n, doc, &buffers, vertices, &mut instanced)

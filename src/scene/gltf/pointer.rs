@@ -65,19 +65,25 @@ pub(super) fn follow(doc: &mut Value) -> Result<Followed, String> {
             let pointer = channel
                 .pointer("/target/extensions/KHR_animation_pointer/pointer")
                 .and_then(Value::as_str)
-                .ok_or_else(|| format!("{at}: target.path is `pointer` but the target has no `KHR_animation_pointer` pointer"))?
+                .ok_or_else(|| {
+                    format!("{at}: target.path is `pointer` but the target has no `KHR_animation_pointer` pointer")
+                })?
                 .to_string();
             match target(&pointer) {
                 Some(Target::Node(n, path)) => {
                     if n >= nodes {
-                        return Err(format!("{at}: its pointer `{pointer}` names node {n}; the file has {nodes} nodes"));
+                        return Err(format!(
+                            "{at}: its pointer `{pointer}` names node {n}; the file has {nodes} nodes"
+                        ));
                     }
                     kept.push(core(&channel, n, path));
                 }
                 Some(Target::MeshWeights(m)) => {
                     let Some(shown) = shown_by.get(m) else {
                         let meshes = shown_by.len();
-                        return Err(format!("{at}: its pointer `{pointer}` names mesh {m}; the file has {meshes} meshes"));
+                        return Err(format!(
+                            "{at}: its pointer `{pointer}` names mesh {m}; the file has {meshes} meshes"
+                        ));
                     };
                     expanded += shown.len();
                     if expanded > MAX_EXPANDED {
@@ -198,7 +204,10 @@ mod tests {
     #[test]
     fn a_pointer_past_the_file_or_missing_is_an_error_naming_the_channel() {
         for (bad, says) in [
-            (channel("/nodes/7/rotation", 0), "animations[0].channels[0]: its pointer `/nodes/7/rotation` names node 7; the file has 1 nodes"),
+            (
+                channel("/nodes/7/rotation", 0),
+                "animations[0].channels[0]: its pointer `/nodes/7/rotation` names node 7; the file has 1 nodes",
+            ),
             (channel("/meshes/2/weights", 0), "names mesh 2; the file has 0 meshes"),
             (json!({"sampler": 0, "target": {"path": "pointer"}}), "has no `KHR_animation_pointer` pointer"),
         ] {

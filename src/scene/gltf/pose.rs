@@ -169,10 +169,10 @@ impl GltfAsset {
                     }
                     pose_primitive(prim, &s.weights[n], joints, &model, &mut out.primitives[slot]);
                     // Gaussians are placed by their node's transform (the extension defines no skinning).
-                    out.primitives[slot].gaussians = prim.gaussians.as_ref().map(|data| Gaussians {
-                        data: Arc::clone(data),
-                        to_world: glam::Mat3::from_mat4(model),
-                    });
+                    out.primitives[slot].gaussians = prim
+                        .gaussians
+                        .as_ref()
+                        .map(|data| Gaussians { data: Arc::clone(data), to_world: glam::Mat3::from_mat4(model) });
                     slot += 1;
                 }
             }

@@ -139,7 +139,11 @@ impl SpecGloss {
             }
             None => add(brightness(self.specular)),
         }
-        if n == 0 { GLTF_DIELECTRIC } else { (sum / n as f64) as f32 }
+        if n == 0 {
+            GLTF_DIELECTRIC
+        } else {
+            (sum / n as f64) as f32
+        }
     }
 }
 
@@ -252,10 +256,8 @@ mod tests {
         assert_eq!(base.rgba[7], 128);
         // Different texture coordinates cannot share one baked image: warned, the specular texture dropped
         // (its factors: a white specular, mostly metal on the red diffuse; glossiness 0.8).
-        let sg = SpecGloss {
-            specular_glossiness_texture: Some(TextureRef { tex_coord: 1, ..TextureRef::new(1) }),
-            ..sg
-        };
+        let sg =
+            SpecGloss { specular_glossiness_texture: Some(TextureRef { tex_coord: 1, ..TextureRef::new(1) }), ..sg };
         let mut m = Material::default();
         assert!(sg.apply(&mut m, &mut textures).is_some());
         let mr = &textures[5].rgba[0..4];

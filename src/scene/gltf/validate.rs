@@ -198,10 +198,7 @@ impl<'a> Checker<'a> {
                 (m.get("normalTexture"), "normalTexture"),
                 (m.get("occlusionTexture"), "occlusionTexture"),
                 (m.get("emissiveTexture"), "emissiveTexture"),
-                (
-                    ext("KHR_materials_specular", "specularTexture"),
-                    "extensions.KHR_materials_specular.specularTexture",
-                ),
+                (ext("KHR_materials_specular", "specularTexture"), "extensions.KHR_materials_specular.specularTexture"),
                 (
                     ext("KHR_materials_specular", "specularColorTexture"),
                     "extensions.KHR_materials_specular.specularColorTexture",

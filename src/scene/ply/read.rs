@@ -544,9 +544,10 @@ fn read_vertices(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData, origin: [f
     out.uvs = has_uv.then_some(uvs);
     out.colors = (has_c || splats).then_some(colors);
     if let Some(row) = not_finite {
-        let msg = "a Gaussian's opacity, scale, rotation or colour (`opacity`, `scale_*`, `rot_*`, `f_dc_*`, `f_rest_*`) \
+        let msg =
+            "a Gaussian's opacity, scale, rotation or colour (`opacity`, `scale_*`, `rot_*`, `f_dc_*`, `f_rest_*`) \
                    is not a finite number (an opacity may be infinite: a peak opacity of 1 or 0)"
-            .into();
+                .into();
         return Err(PlyError::Body { element: el.name.clone(), row, msg });
     }
     out.gaussians = gaussians;

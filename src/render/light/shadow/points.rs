@@ -235,7 +235,9 @@ impl ShadowMap {
                 let inside = match f.shape {
                     Outline::Box(_) => true,
                     Outline::Disk(r) => d.length_squared() <= r * r,
-                    Outline::Ellipse { conic: [a, b, c], .. } => a * d.x * d.x + 2.0 * b * d.x * d.y + c * d.y * d.y <= 1.0,
+                    Outline::Ellipse { conic: [a, b, c], .. } => {
+                        a * d.x * d.x + 2.0 * b * d.x * d.y + c * d.y * d.y <= 1.0
+                    }
                 };
                 if inside {
                     any = true;
@@ -273,7 +275,9 @@ mod tests {
     fn sheet(side: f32, step: f32, z: f32) -> Vec<Vec3> {
         let n = (side / step).round() as usize;
         (0..=n)
-            .flat_map(|j| (0..=n).map(move |i| Vec3::new(-0.5 * side + i as f32 * step, -0.5 * side + j as f32 * step, z)))
+            .flat_map(|j| {
+                (0..=n).map(move |i| Vec3::new(-0.5 * side + i as f32 * step, -0.5 * side + j as f32 * step, z))
+            })
             .collect()
     }
 
@@ -353,7 +357,13 @@ mod tests {
         // centre rarely falls inside a point, yet every texel under the sheet holds it.
         let bounds = (Vec3::new(-0.6, -0.6, 0.0), Vec3::new(0.6, 0.6, 1.0));
         let points = cloud(sheet(1.0, 0.005, 1.0));
-        let map = ShadowMap::sun(&points, -Vec3::Z, bounds, 256, PointCasters { size: Some(0.001), cube: true, gaussians: true });
+        let map = ShadowMap::sun(
+            &points,
+            -Vec3::Z,
+            bounds,
+            256,
+            PointCasters { size: Some(0.001), cube: true, gaussians: true },
+        );
         for j in 0..40 {
             for i in 0..40 {
                 let p = Vec3::new(-0.45 + i as f32 * 0.0231, -0.45 + j as f32 * 0.0231, 0.0);
