@@ -53,10 +53,17 @@ pub struct FrameKeys {
 /// What a PLY frame's key adds for how its file is read since it first was. Its polygons were all filled by the fan
 /// from their first corner before "ply polygons 1" filled the concave ones (and quads folded along their first
 /// diagonal) as Blender does; its triangle strips were dropped (the file read as a point cloud) before "ply strips
-/// 1" cut them into triangles as Blender 4.x does. A frame with either is keyed apart; every other frame (point
-/// clouds, triangles, convex polygons) keeps its key.
-fn ply_reading(facts: PlyFacts) -> [Option<&'static [u8]>; 2] {
-    [facts.unfanned.then_some(b"ply polygons 1".as_slice()), facts.strips.then_some(b"ply strips 1".as_slice())]
+/// 1" cut them into triangles as Blender 4.x does; its per-corner texture coordinates were not read (the mesh drawn
+/// untextured) before "ply wedge uvs 1"; its texture was multiplied by its vertex colours before "ply texture over
+/// colours 1" drew the texture alone. A frame with any of these is keyed apart; every other frame (point clouds,
+/// triangles, convex polygons, meshes textured per vertex without colours) keeps its key.
+fn ply_reading(facts: PlyFacts) -> [Option<&'static [u8]>; 4] {
+    [
+        facts.unfanned.then_some(b"ply polygons 1".as_slice()),
+        facts.strips.then_some(b"ply strips 1".as_slice()),
+        facts.wedge.then_some(b"ply wedge uvs 1".as_slice()),
+        facts.tinted.then_some(b"ply texture over colours 1".as_slice()),
+    ]
 }
 
 /// The keys of every scene frame. `lit` also keys what only lit shading reads ([`FrameKeys::lit`]).
@@ -91,11 +98,21 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     .zip(facts)
                     .map(|(f, facts)| {
                         let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
+                        // A textured mesh's textures, by content (a cloud has none: its key reads no more).
+                        let textures = match facts.surface {
+                            true => crate::scene::source::ply_textures_cached(&f.path, stat)?,
+                            false => Vec::new(),
+                        };
+                        let textures = textures
+                            .iter()
+                            .map(|p| stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e }))
+                            .collect::<Result<Vec<_>, _>>()?;
                         let mut bytes: Vec<&[u8]> = vec![world, &d.0];
                         bytes.extend(origin);
                         bytes.extend(splats);
                         bytes.extend(opaque);
                         bytes.extend(ply_reading(facts).into_iter().flatten());
+                        bytes.extend(textures.iter().map(|d| &d.0[..]));
                         Ok(key("frame ply", &bytes))
                     })
                     .collect::<Result<Vec<_>, Error>>()?

@@ -291,7 +291,8 @@ impl Scene {
                 }
                 SourceData::Sequence(files) => {
                     for f in files {
-                        source::checked_ply(&f.path)?;
+                        // Its header, and the textures a textured mesh's names.
+                        source::ply_textures(&f.path)?;
                     }
                 }
                 _ => {}

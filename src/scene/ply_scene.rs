@@ -2,29 +2,41 @@
 //! Gaussians), or a mesh's triangles with its colours or texture; and what a PLY's header says before its body is
 //! read (whether it holds Gaussians, whether `check` can refuse it).
 
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use glam::{Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::input::folder_of;
 use super::material::{srgb_to_linear, Material};
-use super::posed::{PosedScene, PrimKind};
+use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use super::texture::{Texture, TextureRef};
 use super::{ply, Error};
 
-/// The texture a PLY's `comment TextureFile NAME` names, beside the PLY, checked to exist.
-pub(super) fn texture_file(comments: &[String], path: &std::path::Path) -> Result<Option<PathBuf>, Error> {
-    let Some(name) = comments.iter().find_map(|c| c.trim().strip_prefix("TextureFile").map(str::trim)) else {
-        return Ok(None);
-    };
+/// The textures a PLY's `comment TextureFile NAME` comments name, in order (a face's `texnumber` counts them from
+/// 0), each beside the PLY and checked to exist.
+pub(super) fn texture_files(comments: &[String], path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+    let names = comments.iter().filter_map(|c| ply::texture_comment(c));
     // Found as an MTL's textures are: Windows-authored names (`\`), absolute ones, or a base name beside it.
-    match super::mtl::locate(folder_of(path), name) {
-        Ok(tex) => Ok(Some(tex)),
-        Err(tried) => Err(Error::Mesh {
-            path: path.to_path_buf(),
-            line: None,
-            message: format!("`comment TextureFile {name}`: not found ({})", tried.display()),
-        }),
+    names
+        .map(|name| {
+            super::mtl::locate(folder_of(path), name).map_err(|tried| Error::Mesh {
+                path: path.to_path_buf(),
+                line: None,
+                message: format!("`comment TextureFile {name}`: not found ({})", tried.display()),
+            })
+        })
+        .collect()
+}
+
+/// The textures the PLY with `header` at `path` is drawn with: those its comments name when it has texture
+/// coordinates to read them by ([`ply::texturing`]), else none (a cloud's or an untextured mesh's comment names a
+/// file that nothing reads).
+pub(super) fn textures_read(header: &ply::Header, path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+    match ply::texturing(header).textured {
+        true => texture_files(&header.comments, path),
+        false => Ok(Vec::new()),
     }
 }
 
@@ -74,6 +86,12 @@ pub struct PlyFacts {
     /// along its first diagonal: [`ply::PlyData::unfanned`]). Every polygon was fanned until "ply polygons 1", so a
     /// sequence's frame with such a polygon is keyed apart.
     pub unfanned: bool,
+    /// It is textured by per-corner coordinates (a face `texcoord` list and `comment TextureFile`), which were
+    /// read as an untextured mesh until "ply wedge uvs 1", so a sequence's frame with them is keyed apart.
+    pub wedge: bool,
+    /// It is textured and its vertices have colours too: the texture was multiplied by them until "ply texture
+    /// over colours 1" drew the texture alone, so a sequence's frame with both is keyed apart.
+    pub tinted: bool,
 }
 
 /// The [`PlyFacts`] of the PLY file at `path`, remembered by the stat cache for its content as one fact: its
@@ -81,16 +99,18 @@ pub struct PlyFacts {
 pub fn ply_facts(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<PlyFacts, Error> {
     let io = |e| Error::Io { path: path.to_path_buf(), source: e };
     let fact = stat
-        .derived("ply facts 1", path, || {
+        .derived("ply facts 2", path, || {
             let header = checked_ply(path)?;
             let has = |name: &str| header.elements.iter().any(|e| e.name == name && e.count > 0);
             let (faces, strips) = (has("face"), has("tristrips"));
             let unfanned = faces && ply::read_file(path).map_err(|e| file_error(path, e))?.unfanned;
-            Ok::<_, Error>([faces || strips, strips, unfanned].map(|b| if b { '1' } else { '0' }).iter().collect())
+            let t = ply::texturing(&header);
+            let bits = [faces || strips, strips, unfanned, t.wedge, t.textured && t.colours && (faces || strips)];
+            Ok::<_, Error>(bits.map(|b| if b { '1' } else { '0' }).iter().collect())
         })
         .map_err(io)??;
     let bit = |k: usize| fact.as_bytes().get(k) == Some(&b'1');
-    Ok(PlyFacts { surface: bit(0), strips: bit(1), unfanned: bit(2) })
+    Ok(PlyFacts { surface: bit(0), strips: bit(1), unfanned: bit(2), wedge: bit(3), tinted: bit(4) })
 }
 
 fn file_error(path: &std::path::Path, e: ply::FileError) -> Error {
@@ -105,9 +125,11 @@ pub fn ply_scene_slice(bytes: &[u8], path: &std::path::Path) -> Result<PosedScen
     ply_posed(ply::read(bytes).map_err(|e| Error::Ply { path: path.to_path_buf(), source: e })?, path)
 }
 
-/// A decoded PLY as a posed scene in source space; `path` finds its texture and names it in errors.
+/// A decoded PLY as a posed scene in source space; `path` finds its textures and names it in errors.
 fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Error> {
-    let ply::PlyData { positions, normals, colors, uvs, triangles, comments, gaussians, .. } = d;
+    let ply::PlyData {
+        positions, normals, colors, uvs, corner_uvs, texnumbers, triangles, comments, gaussians, ..
+    } = d;
     let kind = if triangles.is_empty() { PrimKind::Points } else { PrimKind::Triangles };
     // In place: `[f32; 3]` and `Vec3` have one size and alignment, so the collect reuses the allocation.
     let positions: Vec<Vec3> = positions.into_iter().map(Vec3::from).collect();
@@ -116,6 +138,22 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
         (None, PrimKind::Triangles) => super::gltf::load::smooth_normals(&positions, &triangles),
         (None, PrimKind::Points) => vec![Vec3::ZERO; positions.len()],
     };
+    // A textured mesh (MeshLab's and OpenMVS's convention: `comment TextureFile`, texture coordinates per vertex
+    // or per face corner). The texture takes the place of vertex colours, as trimesh reads such a file: MeshLab
+    // writes its default grey with a texture, and a scan's colours beside its texture would darken it twice.
+    let textures = match kind {
+        PrimKind::Triangles if uvs.is_some() || corner_uvs.is_some() => texture_files(&comments, path)?,
+        _ => Vec::new(),
+    };
+    if !textures.is_empty() {
+        let textures = textures.iter().map(|t| super::obj::texture(t)).collect::<Result<Vec<_>, _>>()?;
+        let mesh = Mesh { positions: &positions, normals: &normals, triangles: &triangles };
+        return Ok(match (corner_uvs, uvs) {
+            (Some(corners), _) => wedge_textured(mesh, &corners, texnumbers.as_deref(), textures),
+            (None, Some(uvs)) => vertex_textured(mesh, &uvs, textures),
+            (None, None) => unreachable!("textures are read only with coordinates"),
+        });
+    }
     let colors: Vec<Vec4> = colors
         .map(|c| {
             c.iter()
@@ -130,27 +168,116 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
                 .collect()
         })
         .unwrap_or_default();
-    // A textured mesh (MeshLab's convention: per-vertex texture_u/v or s/t, `comment TextureFile`).
-    let texture = match (&uvs, kind) {
-        (Some(_), PrimKind::Triangles) => texture_file(&comments, path)?,
-        _ => None,
-    };
     // A mesh with neither colours nor a texture is Blender's grey (points stay white: Blender draws none).
-    let plain = kind == PrimKind::Triangles && colors.is_empty() && texture.is_none();
+    let plain = kind == PrimKind::Triangles && colors.is_empty();
     let base = if plain { Material::unassigned() } else { Material::default() };
     // Scans rarely have consistent winding: draw both sides.
-    let mut material = Material { double_sided: true, ..base };
-    let mut scene = PosedScene::single(kind, positions, normals, colors, triangles, material.clone());
+    let material = Material { double_sided: true, ..base };
+    let mut scene = PosedScene::single(kind, positions, normals, colors, triangles, material);
     if kind == PrimKind::Points {
         let g = gaussians.as_ref().map(super::gaussians::GaussianData::from_columns);
         scene.primitives[0].gaussians = g.map(super::gaussians::Gaussians::new);
     }
-    if let (Some(tex), Some(uvs)) = (texture, &uvs) {
-        material.base_color_texture = Some(super::texture::TextureRef::new(0));
-        scene.materials = Arc::new(vec![material]);
-        scene.textures = Arc::new(vec![super::obj::texture(&tex)?]);
-        // v runs up from the bottom row; textures are stored top row first.
-        scene.primitives[0].uvs = Arc::new(uvs.iter().map(|t| glam::Vec2::new(t[0], 1.0 - t[1])).collect());
-    }
     Ok(scene)
+}
+
+/// A PLY mesh's welded vertices and triangles (normals found on the welded mesh, so a texture seam is no crease).
+#[derive(Clone, Copy)]
+struct Mesh<'m> {
+    positions: &'m [Vec3],
+    normals: &'m [Vec3],
+    triangles: &'m [u32],
+}
+
+/// The material of a textured PLY's texture `t`: its texture as base colour, both sides drawn (scans rarely have
+/// consistent winding).
+fn textured_material(t: usize) -> Material {
+    Material { double_sided: true, base_color_texture: Some(TextureRef::new(t as u32)), ..Material::default() }
+}
+
+/// A textured primitive of material `material`.
+fn textured_primitive(
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+    indices: Vec<u32>,
+    material: usize,
+) -> PosedPrimitive {
+    PosedPrimitive {
+        kind: PrimKind::Triangles,
+        positions,
+        normals,
+        tangents: Vec::new(),
+        // v runs up from the bottom row; textures are stored top row first.
+        uvs: Arc::new(uvs.into_iter().map(|t| Vec2::new(t.x, 1.0 - t.y)).collect()),
+        colors: Arc::new(Vec::new()),
+        indices: Arc::new(indices),
+        material: material as u32,
+        object: 0,
+        gaussians: None,
+    }
+}
+
+/// A mesh textured by per-vertex coordinates `uvs`, by its first texture (one set of coordinates reads one).
+fn vertex_textured(mesh: Mesh<'_>, uvs: &[[f32; 2]], textures: Vec<Texture>) -> PosedScene {
+    let uvs = uvs.iter().map(|&t| Vec2::from(t)).collect();
+    let p = textured_primitive(mesh.positions.to_vec(), mesh.normals.to_vec(), uvs, mesh.triangles.to_vec(), 0);
+    PosedScene {
+        primitives: vec![p],
+        materials: Arc::new(vec![textured_material(0)]),
+        textures: Arc::new(textures),
+        lights: Vec::new(),
+    }
+}
+
+/// A mesh textured by per-corner coordinates `corners` (one pair per entry of its triangles), each triangle by the
+/// texture `texnumbers` gives it (the first without): one primitive per texture with triangles, whose vertices are
+/// the mesh's split where a vertex has more than one pair (a seam), numbered in order of first use, so the same
+/// file gives the same primitives.
+fn wedge_textured(
+    mesh: Mesh<'_>,
+    corners: &[[f32; 2]],
+    texnumbers: Option<&[u32]>,
+    textures: Vec<Texture>,
+) -> PosedScene {
+    let materials = (0..textures.len()).map(textured_material).collect();
+    let mut primitives = Vec::new();
+    // Most vertices have one pair: a vertex's first (its new index, in `first`) is found without hashing; only a
+    // seam's further pairs are looked up in `more`.
+    let mut first = vec![u32::MAX; mesh.positions.len()];
+    let mut more: HashMap<(u32, [u32; 2]), u32> = HashMap::new();
+    for t in 0..textures.len() {
+        let on = |tri: usize| texnumbers.map_or(t == 0, |n| n.get(tri).copied() == Some(t as u32));
+        let (mut positions, mut normals, mut uvs, mut indices) =
+            (Vec::new(), Vec::new(), Vec::<Vec2>::new(), Vec::new());
+        first.fill(u32::MAX);
+        more.clear();
+        for tri in (0..mesh.triangles.len() / 3).filter(|&tri| on(tri)) {
+            let at = 3 * tri..3 * tri + 3;
+            for (&v, &uv) in mesh.triangles[at.clone()].iter().zip(&corners[at]) {
+                let bits = uv.map(f32::to_bits);
+                let known = match first[v as usize] {
+                    u32::MAX => None,
+                    f if uvs[f as usize].to_array().map(f32::to_bits) == bits => Some(f),
+                    _ => more.get(&(v, bits)).copied(),
+                };
+                let i = known.unwrap_or_else(|| {
+                    positions.push(mesh.positions[v as usize]);
+                    normals.push(mesh.normals[v as usize]);
+                    uvs.push(Vec2::from(uv));
+                    let i = (positions.len() - 1) as u32;
+                    match first[v as usize] {
+                        u32::MAX => first[v as usize] = i,
+                        _ => _ = more.insert((v, bits), i),
+                    }
+                    i
+                });
+                indices.push(i);
+            }
+        }
+        if !indices.is_empty() {
+            primitives.push(textured_primitive(positions, normals, uvs, indices, t));
+        }
+    }
+    PosedScene { primitives, materials: Arc::new(materials), textures: Arc::new(textures), lights: Vec::new() }
 }

@@ -9,7 +9,7 @@ use super::gltf::{GltfAsset, PoseScratch};
 use super::input::{folder_of, Clip, Clips, FrameFile, FrameRange, Ground, SourceFile, SourceRequest, UpAxis};
 use super::material::Material;
 pub use super::ply_scene::{checked_ply, ply_facts, ply_scene, ply_scene_at, ply_scene_slice, PlyFacts};
-use super::ply_scene::{splats_of, texture_file};
+use super::ply_scene::{splats_of, texture_files, textures_read};
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
 use super::Error;
 
@@ -412,7 +412,7 @@ fn frame_times(f: &FrameRange, duration: f64, clip: &str) -> Result<Vec<f32>, St
 }
 
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has
-/// `texture_u/v` or `s/t` and a `comment TextureFile`), STL, or glTF posed at rest.
+/// `comment TextureFile` and texture coordinates, per vertex or per face corner), STL, or glTF posed at rest.
 pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
     mesh_frame_at(path, [0.0; 3])
 }
@@ -456,9 +456,33 @@ pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
         "obj" => super::obj::scan(path),
         // Nothing beside it; its form and size checked (`vvgen check` runs this on every frame).
         "stl" => super::stl::check_file(path).map(|()| Vec::new()),
-        "ply" => Ok(texture_file(&checked_ply(path)?.comments, path)?.into_iter().collect()),
+        "ply" => ply_textures(path),
         _ => Ok(beside(path, gltf_side_files(path)?)),
     }
+}
+
+/// The textures the PLY file at `path` is drawn with (its `TextureFile` comments, when it has texture coordinates
+/// to read them by), checked to exist; its header checked as [`checked_ply`] checks it.
+pub fn ply_textures(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+    textures_read(&checked_ply(path)?, path)
+}
+
+/// [`ply_textures`] for keying: the names, which the header decides, remembered by the stat cache for the file's
+/// content; the files they name are found and checked every time.
+pub fn ply_textures_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
+    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    // The `TextureFile` comments of a file with texture coordinates to read them by, one a line.
+    let names = stat
+        .derived("ply textures 2", path, || {
+            // The header alone (`ply::check_file`), not the whole frame.
+            let header = checked_ply(path)?;
+            let named = header.comments.iter().filter(|c| super::ply::texture_comment(c).is_some());
+            let read = super::ply::texturing(&header).textured;
+            Ok::<_, Error>(named.filter(|_| read).cloned().collect::<Vec<_>>().join("\n"))
+        })
+        .map_err(io)??;
+    let names: Vec<String> = names.lines().map(str::to_string).collect();
+    texture_files(&names, path)
 }
 
 /// A glTF frame's buffers and images beside it, relative to its folder (an error in the glTF's errors' form).
@@ -480,17 +504,7 @@ pub fn mesh_frame_deps_cached(path: &std::path::Path, stat: &crate::cache::StatC
     match ext.as_str() {
         "obj" => super::obj::scan_cached(path, stat),
         "stl" => Ok(Vec::new()),
-        "ply" => {
-            let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-            let name = stat
-                .derived("ply texture 1", path, || {
-                    // The header alone (`ply::check_file`), not the whole frame.
-                    let header = checked_ply(path)?;
-                    Ok(header.comments.into_iter().find(|c| c.trim().starts_with("TextureFile")).unwrap_or_default())
-                })
-                .map_err(io)??;
-            Ok(texture_file(&[name], path)?.into_iter().collect())
-        }
+        "ply" => ply_textures_cached(path, stat),
         _ => {
             // The names a glTF frame's JSON gives its buffers and images, remembered for that content (as
             // relative names: the same content elsewhere names the files beside it there).

@@ -29,6 +29,7 @@ mod normal_maps;
 mod obj_text;
 mod path;
 mod ply;
+mod ply_textures;
 mod point_shadows;
 mod points;
 mod preview;

@@ -21,6 +21,7 @@ pub use header::{parse_header, Element, Format, Header, Property, Scalar};
 pub use read::{
     gaussian_splats, holds_gaussian_shapes, holds_gaussian_splats, read, read_at, GaussianColumns, PlyData,
 };
+pub(crate) use read::{texture_comment, texturing};
 pub use write::{write, PlyOut};
 
 use thiserror::Error;

@@ -8,6 +8,8 @@ use super::PlyError;
 
 mod faces;
 
+pub(crate) use faces::texture_comment;
+
 /// What vvgen takes from a PLY: points with optional normals and colours, and triangles.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PlyData {
@@ -24,6 +26,13 @@ pub struct PlyData {
     /// first corner, a concave one or a folded quad otherwise: [`crate::scene::polygon`]), and triangle strips cut
     /// into triangles as Blender 4.x cuts them.
     pub triangles: Vec<u32>,
+    /// Per triangle corner (one pair per entry of `triangles`), its wedge texture coordinates (v up): a face
+    /// element's `texcoord` list, when it has one and the header names a texture (`comment TextureFile`).
+    pub corner_uvs: Option<Vec<[f32; 2]>>,
+    /// Per triangle, which of the header's `TextureFile` comments (counted from 0) it is textured by: a face
+    /// element's `texnumber` (OpenMVS's, with more than one texture), when it has one and the header names a
+    /// texture.
+    pub texnumbers: Option<Vec<u32>>,
     /// Whether some polygon was filled otherwise than by the fan from its first corner, which every polygon was
     /// until "ply polygons 1" (sequences' frames with such polygons are keyed apart).
     pub unfanned: bool,
@@ -168,6 +177,36 @@ fn splat_shows(o: f64) -> bool {
     o.is_nan() || 1.0 / (1.0 + (-o).exp()) >= 1.0 / 255.0
 }
 
+/// How a PLY's header says its surface is textured ([`texturing`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct Texturing {
+    /// It names a texture (`comment TextureFile`) and has texture coordinates to read it by: per vertex
+    /// (`texture_u`/`texture_v`, `s`/`t`, `u`/`v`) or per face corner (a face `texcoord` list).
+    pub textured: bool,
+    /// Its coordinates are per face corner.
+    pub wedge: bool,
+    /// Its vertices have colours too (which a texture takes the place of).
+    pub colours: bool,
+}
+
+/// How the PLY with `header` is textured, from its header alone.
+pub(crate) fn texturing(header: &super::Header) -> Texturing {
+    let points = points_element(header);
+    let vertex = header.elements.iter().find(|e| e.name == points);
+    let has = |s: usize| vertex.is_some_and(|el| el.props.iter().any(|p| p.list.is_none() && slot(&p.name) == s));
+    let wedge = header
+        .elements
+        .iter()
+        .any(|e| e.name == "face" && e.count > 0 && e.props.iter().any(|p| p.name == "texcoord" && p.list.is_some()));
+    let named = header.comments.iter().any(|c| texture_comment(c).is_some());
+    let per_vertex = has(SLOT_U) && has(SLOT_U + 1);
+    Texturing {
+        textured: named && (wedge || per_vertex),
+        wedge: named && wedge,
+        colours: (SLOT_R..SLOT_R + 3).all(has),
+    }
+}
+
 /// Reads a PLY from memory.
 pub fn read(bytes: &[u8]) -> Result<PlyData, PlyError> {
     read_at(bytes, [0.0; 3])
@@ -189,10 +228,17 @@ pub fn read_at(bytes: &[u8], origin: [f64; 3]) -> Result<PlyData, PlyError> {
                 let checked = read_vertices(&mut cursor, el, &mut out, origin)?;
                 check_finite(&out.positions, checked, points)?;
             }
-            "face" => out.unfanned |= faces::read(&mut cursor, el, &out.positions, &mut out.triangles)?,
+            "face" => faces::read(&mut cursor, el, &mut out)?,
             "tristrips" => faces::read_strips(&mut cursor, el, &out.positions, &mut out.triangles)?,
             _ => cursor.skip_element(el)?,
         }
+    }
+    // Triangles from elsewhere than the faces (strips beside them) have no wedge coordinates of their own.
+    if let Some(uvs) = &mut out.corner_uvs {
+        uvs.resize(out.triangles.len(), [0.0; 2]);
+    }
+    if let Some(n) = &mut out.texnumbers {
+        n.resize(out.triangles.len() / 3, 0);
     }
     if !vertex_seen {
         return Err(PlyError::Unusable("no `vertex` (or `point`) element".into()));

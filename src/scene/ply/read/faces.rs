@@ -3,28 +3,74 @@
 
 use super::super::header::Element;
 use super::super::PlyError;
-use super::Cursor;
+use super::{Cursor, PlyData};
 
-/// Reads a `face` element's rows: each polygon of its vertex-index list is filled into triangles (appended to
-/// `tris`) as Blender fills it; returns whether some polygon was filled otherwise than by its fan.
-pub(super) fn read(
-    c: &mut Cursor<'_>,
-    el: &Element,
-    positions: &[[f32; 3]],
-    tris: &mut Vec<u32>,
-) -> Result<bool, PlyError> {
-    let corners: &[glam::Vec3] = bytemuck::cast_slice(positions);
+/// Reads a `face` element's rows into `out`: each polygon of its vertex-index list is filled into triangles
+/// (appended to `out.triangles`) as Blender fills them, `out.unfanned` set when some polygon was filled otherwise
+/// than by its fan. A `texcoord` list (MeshLab's and OpenMVS's wedge texture coordinates: a u, v pair per corner,
+/// v up) gives each triangle's corners their own coordinates (`out.corner_uvs`), and a `texnumber` picks the
+/// face's texture among the header's `TextureFile` comments (`out.texnumbers`, per triangle), read when the header
+/// names a texture: a texture seam is then where one vertex has two coordinates, which per-vertex
+/// coordinates cannot say.
+pub(super) fn read(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Result<(), PlyError> {
+    let corners: &[glam::Vec3] = bytemuck::cast_slice(&out.positions);
+    let tris = &mut out.triangles;
     tris.reserve(el.count.min(c.remaining()) * 3);
-    let (mut scratch, mut unfanned) = (Default::default(), false);
-    each_list(c, el, positions.len(), false, |poly| {
+    let textures = out.comments.iter().filter(|c| texture_comment(c).is_some()).count();
+    let want = Wanted::of(el, textures > 0);
+    let mut uvs = want.texcoord.map(|_| Vec::with_capacity(el.count.min(c.remaining()) * 3));
+    let mut numbers = want.texnumber.map(|_| Vec::with_capacity(el.count.min(c.remaining())));
+    let mut scratch = Default::default();
+    each_list(c, el, corners.len(), false, want, |r| {
         // Fewer than three corners draw nothing.
-        if poly.len() >= 3 {
-            let start = tris.len();
-            crate::scene::polygon::triangulate(corners, poly, &mut scratch, tris);
-            unfanned |= poly.len() > 3 && !fanned(poly, &tris[start..]);
+        if r.corners.len() < 3 {
+            return Ok(());
         }
+        let start = tris.len();
+        crate::scene::polygon::triangulate(corners, r.corners, &mut scratch, tris);
+        out.unfanned |= r.corners.len() > 3 && !fanned(r.corners, &tris[start..]);
+        if let Some(uvs) = &mut uvs {
+            if r.texcoord.len() != 2 * r.corners.len() {
+                let msg = format!(
+                    "its `texcoord` list has {} values for {} corners (a u, v pair per corner): re-export the mesh \
+                     with its texture coordinates, or remove the property from the header to read it untextured",
+                    r.texcoord.len(),
+                    r.corners.len()
+                );
+                return Err(PlyError::Body { element: el.name.clone(), row: r.row, msg });
+            }
+            if let Some(v) = r.texcoord.iter().find(|v| !v.is_finite()) {
+                let msg = format!("its `texcoord` list holds {v}, not a finite number");
+                return Err(PlyError::Body { element: el.name.clone(), row: r.row, msg });
+            }
+            // Each triangle corner's own pair: the polygon corner it came from (a corner listed twice in one
+            // polygon draws nothing between its two places, so either pair will do).
+            for &v in &tris[start..] {
+                let k = r.corners.iter().position(|&w| w == v).unwrap_or(0);
+                uvs.push([r.texcoord[2 * k], r.texcoord[2 * k + 1]]);
+            }
+        }
+        if let Some(numbers) = &mut numbers {
+            let n = r.texnumber.unwrap_or(0.0);
+            if !(n >= 0.0 && n.fract() == 0.0 && (n as usize) < textures) {
+                let msg = format!(
+                    "`texnumber` {n} names no texture: the header names {textures} (`comment TextureFile`, counted \
+                     from 0)"
+                );
+                return Err(PlyError::Body { element: el.name.clone(), row: r.row, msg });
+            }
+            numbers.extend(std::iter::repeat_n(n as u32, (tris.len() - start) / 3));
+        }
+        Ok(())
     })?;
-    Ok(unfanned)
+    out.corner_uvs = uvs;
+    out.texnumbers = numbers;
+    Ok(())
+}
+
+/// The texture name a header comment gives (`TextureFile NAME`, MeshLab's and OpenMVS's), if it is one.
+pub(crate) fn texture_comment(comment: &str) -> Option<&str> {
+    comment.trim().strip_prefix("TextureFile").map(str::trim)
 }
 
 /// Reads a `tristrips` element's rows (Stanford's scans hold one, a strip of the whole mesh) into triangles
@@ -38,29 +84,60 @@ pub(super) fn read_strips(
     positions: &[[f32; 3]],
     tris: &mut Vec<u32>,
 ) -> Result<(), PlyError> {
-    each_list(c, el, positions.len(), true, |strip| {
-        for (k, w) in strip.split(|&i| i == RESTART).flat_map(|s| s.windows(3).enumerate()) {
+    each_list(c, el, positions.len(), true, Wanted::default(), |r| {
+        for (k, w) in r.corners.split(|&i| i == RESTART).flat_map(|s| s.windows(3).enumerate()) {
             let [a, b, c] = [w[0], w[1], w[2]];
             if a != b && b != c && a != c {
                 tris.extend_from_slice(&if k % 2 == 1 { [b, a, c] } else { [a, b, c] });
             }
         }
+        Ok(())
     })
 }
 
 /// A strip's restart index (−1) as [`each_list`] gives it.
 const RESTART: u32 = u32::MAX;
 
-/// Calls `f` with the vertex-index list (`vertex_indices`, or `vertex_index` as some writers name it) of each of
-/// `el`'s rows, other properties skipped; an index out of `0..n_vertices` is an error naming the row, but for −1
-/// when `restarts` (given as [`RESTART`]). An element with rows but no such list is refused: its rows would be
-/// dropped without a word.
+/// Which of a face element's properties besides its vertex-index list are read: the positions among its
+/// properties of a `texcoord` list and a `texnumber` scalar.
+#[derive(Debug, Clone, Copy, Default)]
+struct Wanted {
+    texcoord: Option<usize>,
+    texnumber: Option<usize>,
+}
+
+impl Wanted {
+    /// A `face` element's wedge texture coordinates and texture numbers, when the file names a texture (`textured`):
+    /// without one they colour nothing, and are skipped as before.
+    fn of(el: &Element, textured: bool) -> Wanted {
+        let find = |name: &str, list: bool| el.props.iter().position(|p| p.name == name && p.list.is_some() == list);
+        match textured {
+            true => Wanted { texcoord: find("texcoord", true), texnumber: find("texnumber", false) },
+            false => Wanted::default(),
+        }
+    }
+}
+
+/// One row of a face-like element as [`each_list`] gives it: its vertex indices and what [`Wanted`] asks.
+struct Row<'r> {
+    row: usize,
+    corners: &'r [u32],
+    /// The `texcoord` list's values (empty unless asked).
+    texcoord: &'r [f32],
+    texnumber: Option<f64>,
+}
+
+/// Calls `f` with each of `el`'s rows: its vertex-index list (`vertex_indices`, or `vertex_index` as some writers
+/// name it) and the properties `want` asks, others skipped; an index out of `0..n_vertices` is an error naming the
+/// row, but for −1 when `restarts` (given as [`RESTART`]). An element with rows but no such list is refused: its
+/// rows would be dropped without a word.
 fn each_list(
     c: &mut Cursor<'_>,
     el: &Element,
     n_vertices: usize,
     restarts: bool,
-    mut f: impl FnMut(&[u32]),
+    want: Wanted,
+    mut f: impl FnMut(Row<'_>) -> Result<(), PlyError>,
 ) -> Result<(), PlyError> {
     c.check_count(el)?;
     let list_idx =
@@ -69,23 +146,34 @@ fn each_list(
         let msg = format!("element `{}` has no `vertex_indices` list: which vertices it joins is unknown", el.name);
         return Err(PlyError::Unusable(msg));
     }
-    let mut list: Vec<u32> = Vec::new();
+    let (mut list, mut texcoord): (Vec<u32>, Vec<f32>) = Default::default();
     for row in 0..el.count {
+        let mut texnumber = None;
         for (i, p) in el.props.iter().enumerate() {
             match p.list {
                 None => {
-                    c.value(p.ty, el, row)?;
+                    let v = c.value(p.ty, el, row)?;
+                    if Some(i) == want.texnumber {
+                        texnumber = Some(v);
+                    }
                 }
                 Some(ct) => {
                     let len = c.list_len(ct, el, row)?;
+                    if len > c.remaining() {
+                        return Err(PlyError::Truncated(format!("{} row {row} lists {len} values", el.name)));
+                    }
+                    if Some(i) == want.texcoord {
+                        texcoord.clear();
+                        for _ in 0..len {
+                            texcoord.push(c.value(p.ty, el, row)? as f32);
+                        }
+                        continue;
+                    }
                     if Some(i) != list_idx {
                         for _ in 0..len {
                             c.value(p.ty, el, row)?;
                         }
                         continue;
-                    }
-                    if len > c.remaining() {
-                        return Err(PlyError::Truncated(format!("{} row {row} lists {len} vertices", el.name)));
                     }
                     list.clear();
                     for _ in 0..len {
@@ -102,11 +190,11 @@ fn each_list(
                             }
                         });
                     }
-                    f(&list);
                 }
             }
         }
         c.end_row();
+        f(Row { row, corners: &list, texcoord: &texcoord, texnumber })?;
     }
     Ok(())
 }
@@ -167,6 +255,32 @@ mod tests {
             row.iter().for_each(|i| bin.extend_from_slice(&i.to_le_bytes()));
         }
         assert_eq!(read(&bin).unwrap().triangles, [0, 1, 2, 1, 2, 3]);
+    }
+
+    #[test]
+    fn a_polygons_corner_coordinates_follow_its_corners_into_its_triangles() {
+        // A concave pentagon (ear-clipped, not fanned) and a triangle, each corner's pair its vertex's x, y (in
+        // another order than the vertices: the list is per corner), a `texnumber` each; and a file naming no
+        // texture, whose lists are skipped.
+        let ply = |comment: &str| {
+            format!(
+                "ply\nformat ascii 1.0\n{comment}element vertex 6\nproperty float x\nproperty float y\n\
+                 property float z\nelement face 2\nproperty list uchar int vertex_indices\n\
+                 property list uchar float texcoord\nproperty uchar texnumber\nend_header\n\
+                 0 0 0\n2 0 0\n2 2 0\n1 0.5 0\n0 2 0\n3 3 0\n\
+                 5 0 1 2 3 4 10 0 0 2 0 2 2 1 0.5 0 2 1\n3 5 2 1 6 3 3 2 2 2 0 0\n"
+            )
+        };
+        let d = read(ply("comment TextureFile a.png\ncomment TextureFile b.png\n").as_bytes()).unwrap();
+        assert!(d.unfanned, "the pentagon is concave");
+        let uvs = d.corner_uvs.expect("corner coordinates");
+        assert_eq!(uvs.len(), d.triangles.len());
+        for (&v, uv) in d.triangles.iter().zip(&uvs) {
+            assert_eq!(*uv, [d.positions[v as usize][0], d.positions[v as usize][1]], "vertex {v}");
+        }
+        assert_eq!(d.texnumbers.expect("texture numbers"), [1, 1, 1, 0]);
+        let d = read(ply("").as_bytes()).unwrap();
+        assert_eq!((d.corner_uvs, d.texnumbers, d.triangles.len()), (None, None, 12));
     }
 
     #[test]
