@@ -24,7 +24,11 @@ pub(super) fn texture_files(comments: &[String], path: &std::path::Path) -> Resu
             super::mtl::locate(folder_of(path), name).map_err(|tried| Error::Mesh {
                 path: path.to_path_buf(),
                 line: None,
-                message: format!("`comment TextureFile {name}`: not found ({})", tried.display()),
+                message: format!(
+                    "`comment TextureFile {name}`: not found ({}): the mesh's texture, which MeshLab and OpenMVS write \
+                     beside it; put the image there",
+                    tried.display()
+                ),
             })
         })
         .collect()
