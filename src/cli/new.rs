@@ -119,6 +119,24 @@ fn mesh_at_rest(path: &Path) -> anyhow::Result<(scene::PosedScene, Option<[f64; 
     })
 }
 
+/// The glob that matches a folder's frames of extension `e` (lower case) among `files`, as their names spell it:
+/// globs are case-sensitive, so a camera's `FRAME_0001.PLY` needs `*.PLY`, and a folder of both spellings a
+/// class per letter (`*.[pP][lL][yY]`).
+fn frames_glob(files: &[PathBuf], e: &str) -> String {
+    let spelt: std::collections::BTreeSet<String> = files
+        .iter()
+        .filter_map(|p| p.extension().map(|x| x.to_string_lossy().into_owned()))
+        .filter(|x| x.eq_ignore_ascii_case(e))
+        .collect();
+    match spelt.len() {
+        1 => format!("*.{}", spelt.first().expect("one")),
+        _ => {
+            let class = |c: char| format!("[{}{}]", c.to_ascii_lowercase(), c.to_ascii_uppercase());
+            format!("*.{}", e.chars().map(class).collect::<String>())
+        }
+    }
+}
+
 /// The asset's kind, its up axis, a line saying how that was decided, its first frame at rest, and a PLY's or
 /// OBJ's origin.
 fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
@@ -152,7 +170,7 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             "stl" => stl_up(),
             _ => tallest(&frame, first),
         };
-        let seq = Asset::Sequence { key, glob: format!("*.{e}"), frames: n };
+        let seq = Asset::Sequence { key, glob: frames_glob(&files, e), frames: n };
         let note = format!("{n} {e} frames; {why}");
         return Ok(Described { kind: seq, up, note, rest: frame, origin });
     }

@@ -398,3 +398,33 @@ fn a_folder_of_frames_copied_from_a_mac_reads_its_frames_alone() {
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("error") && !err.contains("warning"), "{err}");
 }
+
+/// Globs are case-sensitive: a folder of `FRAME_0.PLY` frames (a capture rig's, a Windows tool's) gets `*.PLY`,
+/// and one of both spellings a class per letter, so the manifest matches every frame `new` counted. It wrote
+/// `*.ply` for both, which matched none of the first and some of the second.
+#[test]
+fn frames_named_in_capitals_are_matched_as_spelt() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    for (folder, names, glob) in [
+        ("caps", ["F_0.PLY", "F_1.PLY", "F_2.PLY"], "caps/*.PLY"),
+        ("mixed", ["f_0.ply", "f_1.PLY", "f_2.Ply"], "mixed/*.[pP][lL][yY]"),
+    ] {
+        std::fs::create_dir(d.join(folder)).unwrap();
+        for (f, name) in names.iter().enumerate() {
+            // Each frame its own apex height: three light actions, one per frame matched.
+            let ply = pyramid(None).replace("0 0 1.2", &format!("0 0 {}", 1.0 + 0.1 * f as f64));
+            std::fs::write(d.join(folder).join(name), ply).unwrap();
+        }
+        let m = format!("{folder}.toml");
+        let (code, err) = vvgen(d, &["new", folder, "-o", &m]);
+        assert_eq!(code, 0, "{err}");
+        let text = std::fs::read_to_string(d.join(&m)).unwrap();
+        assert!(text.contains(&format!("ply_sequence = \"{glob}\"   # 3 file(s)")), "{text}");
+        let (code, err) = vvgen(d, &["check", &m]);
+        assert_eq!(code, 0, "{folder}: {err}");
+        let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(d).args(["plan", &m]).output().unwrap();
+        let plan = String::from_utf8_lossy(&out.stdout);
+        assert!(plan.lines().any(|l| l.starts_with("light") && l.contains(" 3 planned")), "{folder}: {plan}");
+    }
+}
