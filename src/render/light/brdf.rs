@@ -179,6 +179,15 @@ pub fn dfg(nv: f32, roughness: f32) -> Vec2 {
     at(x0, y0).lerp(at(x1, y0), tx).lerp(at(x0, y1).lerp(at(x1, y1), tx), ty)
 }
 
+impl Surface {
+    /// How much of the Fresnel-weighted specular layer is present: all of it for metals, `specular` for
+    /// dielectrics (0 makes a Lambertian surface).
+    #[inline]
+    pub fn specular_weight(&self) -> f32 {
+        self.specular + (1.0 - self.specular) * self.metallic
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
