@@ -23,6 +23,7 @@ pub mod spacing;
 pub mod stl;
 pub mod texture;
 pub mod transform;
+mod way_out;
 
 use std::path::PathBuf;
 use std::sync::Arc;

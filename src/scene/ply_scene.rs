@@ -16,7 +16,7 @@ use super::{ply, Error};
 
 /// The textures a PLY's `comment TextureFile NAME` comments name, in order (a face's `texnumber` counts them from
 /// 0), each beside the PLY and checked to exist.
-pub(super) fn texture_files(comments: &[String], path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+fn texture_files(comments: &[String], path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
     let names = comments.iter().filter_map(|c| ply::texture_comment(c));
     // Found as an MTL's textures are: Windows-authored names (`\`), absolute ones, or a base name beside it.
     names
@@ -37,11 +37,35 @@ pub(super) fn texture_files(comments: &[String], path: &std::path::Path) -> Resu
 /// The textures the PLY with `header` at `path` is drawn with: those its comments name when it has texture
 /// coordinates to read them by ([`ply::texturing`]), else none (a cloud's or an untextured mesh's comment names a
 /// file that nothing reads).
-pub(super) fn textures_read(header: &ply::Header, path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+fn textures_read(header: &ply::Header, path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
     match ply::texturing(header).textured {
         true => texture_files(&header.comments, path),
         false => Ok(Vec::new()),
     }
+}
+
+/// The textures the PLY file at `path` is drawn with (its `TextureFile` comments, when it has texture coordinates
+/// to read them by), checked to exist; its header checked as [`checked_ply`] checks it.
+pub fn ply_textures(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+    textures_read(&checked_ply(path)?, path)
+}
+
+/// [`ply_textures`] for keying: the names, which the header decides, remembered by the stat cache for the file's
+/// content; the files they name are found and checked every time.
+pub fn ply_textures_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
+    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    // The `TextureFile` comments of a file with texture coordinates to read them by, one a line.
+    let names = stat
+        .derived("ply textures 2", path, || {
+            // The header alone (`ply::check_file`), not the whole frame.
+            let header = checked_ply(path)?;
+            let named = header.comments.iter().filter(|c| ply::texture_comment(c).is_some());
+            let read = ply::texturing(&header).textured;
+            Ok::<_, Error>(named.filter(|_| read).cloned().collect::<Vec<_>>().join("\n"))
+        })
+        .map_err(io)??;
+    let names: Vec<String> = names.lines().map(str::to_string).collect();
+    texture_files(&names, path)
 }
 
 /// Whether the PLY at `path` holds 3D Gaussians drawn as splats (with their scales and rotations), and what a

@@ -8,8 +8,10 @@ use glam::{Mat4, Vec3, Vec4};
 use super::gltf::{GltfAsset, PoseScratch};
 use super::input::{folder_of, Clip, Clips, FrameFile, FrameRange, Ground, SourceFile, SourceRequest, UpAxis};
 use super::material::Material;
-pub use super::ply_scene::{checked_ply, ply_facts, ply_scene, ply_scene_at, ply_scene_slice, PlyFacts};
-use super::ply_scene::{splats_of, texture_files, textures_read};
+use super::ply_scene::splats_of;
+pub use super::ply_scene::{
+    checked_ply, ply_facts, ply_scene, ply_scene_at, ply_scene_slice, ply_textures, ply_textures_cached, PlyFacts,
+};
 use super::posed::{PosedPrimitive, PosedScene, PrimKind};
 use super::Error;
 
@@ -337,52 +339,7 @@ pub(crate) fn is_obj(path: &std::path::Path) -> bool {
 }
 
 pub(crate) use super::stl::is_stl;
-
-/// What to do with a file in a format vvgen does not read but a newcomer brings (by its extension): the tool
-/// that turns it into one vvgen reads. `None` for any other name.
-pub fn way_out_of(path: &std::path::Path) -> Option<String> {
-    let name = path.file_name()?.to_string_lossy().into_owned();
-    let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
-    let stem = name.strip_suffix(&format!(".{ext}")).unwrap_or(&name).trim_end_matches(".compressed");
-    Some(match ext.as_str() {
-        // Gaussian splatting's packed and web forms: PlayCanvas's converter reads them all.
-        "splat" | "ksplat" | "spz" | "sog" => format!(
-            "{name}: Gaussian splats in the .{ext} form, which vvgen does not read: `npx @playcanvas/splat-transform \
-             \"{name}\" \"{stem}.ply\"` writes them in 3D Gaussian splatting's PLY layout, which vvgen reads"
-        ),
-        "abc" | "usd" | "usda" | "usdc" | "usdz" | "dae" | "3ds" | "x3d" | "wrl" => {
-            // Blender 4.2 moved its 3DS and X3D/VRML importers out to extensions (4.5 LTS has neither built in).
-            let how = match ext.as_str() {
-                "3ds" => {
-                    "File → Import, once the \"Autodesk 3DS format\" extension is added from Edit → Preferences → \
-                          Get Extensions"
-                }
-                "x3d" | "wrl" => {
-                    "File → Import, once the \"Web3D X3D/VRML2 format\" extension is added from Edit → \
-                                  Preferences → Get Extensions"
-                }
-                _ => "File → Import; a blender.org build reads Alembic and USD",
-            };
-            format!(
-                "{name}: vvgen does not read .{ext} files: import it in Blender ({how}), save it as a .blend and name \
-                 that (`vvgen new \"{stem}.blend\"`): Blender then evaluates every frame for vvgen"
-            )
-        }
-        // Geometry processing's format (libigl's and ModelNet's meshes); Blender has no importer for it either.
-        "off" => format!(
-            "{name}: vvgen does not read .off files (nor does Blender): `pip install trimesh`, then `python -c \
-             \"import trimesh; trimesh.load('{name}').export('{stem}.ply')\"` writes it as a PLY mesh, which vvgen \
-             reads"
-        ),
-        // The Point Cloud Library's format (ASCII, binary or compressed): Open3D reads each and writes the PLY.
-        "pcd" => format!(
-            "{name}: vvgen does not read .pcd files: `pip install open3d`, then `python -c \"import open3d as o3d; \
-             o3d.io.write_point_cloud('{stem}.ply', o3d.io.read_point_cloud('{name}'))\"` writes it as a PLY point \
-             cloud (normals and colours kept), which vvgen reads"
-        ),
-        _ => return None,
-    })
-}
+pub use super::way_out::way_out_of;
 
 /// The times (seconds from the clip's start) of an animated source's frames: `frames`, else the clip's whole
 /// `duration` at its rate. The manifest bounds `frames`; a whole clip longer than
@@ -459,30 +416,6 @@ pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
         "ply" => ply_textures(path),
         _ => Ok(beside(path, gltf_side_files(path)?)),
     }
-}
-
-/// The textures the PLY file at `path` is drawn with (its `TextureFile` comments, when it has texture coordinates
-/// to read them by), checked to exist; its header checked as [`checked_ply`] checks it.
-pub fn ply_textures(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
-    textures_read(&checked_ply(path)?, path)
-}
-
-/// [`ply_textures`] for keying: the names, which the header decides, remembered by the stat cache for the file's
-/// content; the files they name are found and checked every time.
-pub fn ply_textures_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
-    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-    // The `TextureFile` comments of a file with texture coordinates to read them by, one a line.
-    let names = stat
-        .derived("ply textures 2", path, || {
-            // The header alone (`ply::check_file`), not the whole frame.
-            let header = checked_ply(path)?;
-            let named = header.comments.iter().filter(|c| super::ply::texture_comment(c).is_some());
-            let read = super::ply::texturing(&header).textured;
-            Ok::<_, Error>(named.filter(|_| read).cloned().collect::<Vec<_>>().join("\n"))
-        })
-        .map_err(io)??;
-    let names: Vec<String> = names.lines().map(str::to_string).collect();
-    texture_files(&names, path)
 }
 
 /// A glTF frame's buffers and images beside it, relative to its folder (an error in the glTF's errors' form).
