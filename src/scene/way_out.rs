@@ -42,6 +42,17 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
              o3d.io.write_point_cloud('{stem}.ply', o3d.io.read_point_cloud('{name}'))\"` writes it as a PLY point \
              cloud (normals and colours kept), which vvgen reads"
         ),
+        // LiDAR (ASPRS LAS, LASzip-compressed LAZ): laspy reads both; Open3D writes the PLY in double precision,
+        // which keeps a georeferenced survey's detail (`vvgen new` then reads it relative to an `origin`).
+        "las" | "laz" => format!(
+            "{name}: vvgen does not read .{ext} (LiDAR) files: `pip install \"laspy[lazrs]\" open3d`, then `python -c \
+             \"import laspy, numpy as np, open3d as o3d; l = laspy.read('{name}'); p = \
+             o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.c_[l.x, l.y, l.z])); c = np.c_[l.red, l.green, \
+             l.blue] if 'red' in l.point_format.dimension_names else None; p.colors = o3d.utility.Vector3dVector(c \
+             / (65535 if c.max() > 255 else 255)) if c is not None else p.colors; \
+             o3d.io.write_point_cloud('{stem}.ply', p)\"` writes it as a PLY point cloud in double precision \
+             (colours kept), which vvgen reads; a LAS file's heights are its z: `up = \"z\"`"
+        ),
         _ => return None,
     })
 }

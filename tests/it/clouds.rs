@@ -238,7 +238,8 @@ fn a_sequence_in_metres_renders_as_its_integer_twin() {
 
 /// Formats a newcomer brings that vvgen does not read are refused by `new` and by `check` with the tool that turns
 /// them into one it reads: Gaussian splats packed by SuperSplat (`.compressed.ply`) or in web forms (`.spz`,
-/// `.splat`), Alembic and USD (through Blender, as a `.blend`), OFF and PCD (through trimesh and Open3D, as a PLY).
+/// `.splat`), Alembic and USD (through Blender, as a `.blend`), OFF, PCD and LAS/LAZ (through trimesh, Open3D and
+/// laspy, as a PLY).
 #[test]
 fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
     let tmp = tempfile::tempdir().unwrap();
@@ -253,12 +254,14 @@ fn a_splat_or_scene_format_vvgen_does_not_read_names_the_converter() {
     std::fs::write(d.join("shot.usdz"), b"PK").unwrap();
     std::fs::write(d.join("homer.off"), b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
     std::fs::write(d.join("bunny.pcd"), b"VERSION .5\nFIELDS x y z\nPOINTS 1\nDATA ascii\n0 0 0\n").unwrap();
+    std::fs::write(d.join("autzen.laz"), b"LASF").unwrap();
     let cases = [
         ("scan.compressed.ply", "splat-transform in.compressed.ply out.ply"),
         ("scan.spz", "splat-transform \"scan.spz\" \"scan.ply\""),
         ("shot.usdz", "save it as a .blend"),
         ("homer.off", "trimesh.load('homer.off').export('homer.ply')"),
         ("bunny.pcd", "o3d.io.write_point_cloud('bunny.ply', o3d.io.read_point_cloud('bunny.pcd'))"),
+        ("autzen.laz", "l = laspy.read('autzen.laz');"),
     ];
     for (file, says) in cases {
         let (code, err) = vvgen(d, &["new", file]);
