@@ -174,11 +174,24 @@ fn ply_posed(d: ply::PlyData, path: &std::path::Path) -> Result<PosedScene, Erro
         _ => Vec::new(),
     };
     if !textures.is_empty() {
-        let textures = textures.iter().map(|t| super::obj::texture(t)).collect::<Result<Vec<_>, _>>()?;
+        // Each file decoded once, however many comments name it: per comment, its image's place in `images`.
+        let mut distinct: Vec<&PathBuf> = Vec::new();
+        let image: Vec<u32> = textures
+            .iter()
+            .map(|t| {
+                let at = distinct.iter().position(|d| *d == t).unwrap_or_else(|| {
+                    distinct.push(t);
+                    distinct.len() - 1
+                });
+                at as u32
+            })
+            .collect();
+        let images = distinct.into_iter().map(|t| super::obj::texture(t)).collect::<Result<Vec<_>, _>>()?;
+        let textured = Textured { materials: image.into_iter().map(textured_material).collect(), images };
         let mesh = Mesh { positions: &positions, normals: &normals, triangles: &triangles };
         return Ok(match (corner_uvs, uvs) {
-            (Some(corners), _) => wedge_textured(mesh, &corners, texnumbers.as_deref(), textures),
-            (None, Some(uvs)) => vertex_textured(mesh, &uvs, textures),
+            (Some(corners), _) => wedge_textured(mesh, &corners, texnumbers.as_deref(), textured),
+            (None, Some(uvs)) => vertex_textured(mesh, &uvs, textured),
             (None, None) => unreachable!("textures are read only with coordinates"),
         });
     }
@@ -217,10 +230,16 @@ struct Mesh<'m> {
     triangles: &'m [u32],
 }
 
-/// The material of a textured PLY's texture `t`: its texture as base colour, both sides drawn (scans rarely have
-/// consistent winding).
-fn textured_material(t: usize) -> Material {
-    Material { double_sided: true, base_color_texture: Some(TextureRef::new(t as u32)), ..Material::default() }
+/// A textured PLY's materials, one per `TextureFile` comment, and the images they read (one per distinct file).
+struct Textured {
+    materials: Vec<Material>,
+    images: Vec<Texture>,
+}
+
+/// The material of a textured PLY's texture `t` (of its decoded images): that image as base colour, both sides
+/// drawn (scans rarely have consistent winding).
+fn textured_material(t: u32) -> Material {
+    Material { double_sided: true, base_color_texture: Some(TextureRef::new(t)), ..Material::default() }
 }
 
 /// A textured primitive of material `material`.
@@ -247,41 +266,39 @@ fn textured_primitive(
 }
 
 /// A mesh textured by per-vertex coordinates `uvs`, by its first texture (one set of coordinates reads one).
-fn vertex_textured(mesh: Mesh<'_>, uvs: &[[f32; 2]], textures: Vec<Texture>) -> PosedScene {
+fn vertex_textured(mesh: Mesh<'_>, uvs: &[[f32; 2]], textured: Textured) -> PosedScene {
     let uvs = uvs.iter().map(|&t| Vec2::from(t)).collect();
     let p = textured_primitive(mesh.positions.to_vec(), mesh.normals.to_vec(), uvs, mesh.triangles.to_vec(), 0);
-    PosedScene {
-        primitives: vec![p],
-        materials: Arc::new(vec![textured_material(0)]),
-        textures: Arc::new(textures),
-        lights: Vec::new(),
-    }
+    let Textured { materials, images } = textured;
+    PosedScene { primitives: vec![p], materials: Arc::new(materials), textures: Arc::new(images), lights: Vec::new() }
 }
 
 /// A mesh textured by per-corner coordinates `corners` (one pair per entry of its triangles), each triangle by the
-/// texture `texnumbers` gives it (the first without): one primitive per texture with triangles, whose vertices are
-/// the mesh's split where a vertex has more than one pair (a seam), numbered in order of first use, so the same
-/// file gives the same primitives.
-fn wedge_textured(
-    mesh: Mesh<'_>,
-    corners: &[[f32; 2]],
-    texnumbers: Option<&[u32]>,
-    textures: Vec<Texture>,
-) -> PosedScene {
-    let materials = (0..textures.len()).map(textured_material).collect();
+/// texture `texnumbers` gives it (the first without): one primitive per texture with triangles, in file order,
+/// whose vertices are the mesh's split where a vertex has more than one pair (a seam), numbered in order of first
+/// use, so the same file gives the same primitives. Each triangle and vertex is visited once whatever the count
+/// of textures.
+fn wedge_textured(mesh: Mesh<'_>, corners: &[[f32; 2]], texnumbers: Option<&[u32]>, textured: Textured) -> PosedScene {
+    let Textured { materials, images } = textured;
+    // The triangles of each texture, in file order (`read` checked every number against the comments).
+    let mut per: Vec<Vec<u32>> = vec![Vec::new(); materials.len()];
+    for tri in 0..mesh.triangles.len() / 3 {
+        let t = texnumbers.and_then(|n| n.get(tri)).map_or(0, |&t| t as usize);
+        if let Some(p) = per.get_mut(t) {
+            p.push(tri as u32);
+        }
+    }
     let mut primitives = Vec::new();
     // Most vertices have one pair: a vertex's first (its new index, in `first`) is found without hashing; only a
-    // seam's further pairs are looked up in `more`.
+    // seam's further pairs are looked up in `more`. A texture's vertices are unmarked after it (`touched`).
     let mut first = vec![u32::MAX; mesh.positions.len()];
     let mut more: HashMap<(u32, [u32; 2]), u32> = HashMap::new();
-    for t in 0..textures.len() {
-        let on = |tri: usize| texnumbers.map_or(t == 0, |n| n.get(tri).copied() == Some(t as u32));
+    let mut touched: Vec<u32> = Vec::new();
+    for (t, tris) in per.iter().enumerate().filter(|(_, tris)| !tris.is_empty()) {
         let (mut positions, mut normals, mut uvs, mut indices) =
-            (Vec::new(), Vec::new(), Vec::<Vec2>::new(), Vec::new());
-        first.fill(u32::MAX);
-        more.clear();
-        for tri in (0..mesh.triangles.len() / 3).filter(|&tri| on(tri)) {
-            let at = 3 * tri..3 * tri + 3;
+            (Vec::new(), Vec::new(), Vec::<Vec2>::new(), Vec::with_capacity(3 * tris.len()));
+        for &tri in tris {
+            let at = 3 * tri as usize..3 * tri as usize + 3;
             for (&v, &uv) in mesh.triangles[at.clone()].iter().zip(&corners[at]) {
                 let bits = uv.map(f32::to_bits);
                 let known = match first[v as usize] {
@@ -295,7 +312,10 @@ fn wedge_textured(
                     uvs.push(Vec2::from(uv));
                     let i = (positions.len() - 1) as u32;
                     match first[v as usize] {
-                        u32::MAX => first[v as usize] = i,
+                        u32::MAX => {
+                            first[v as usize] = i;
+                            touched.push(v);
+                        }
                         _ => _ = more.insert((v, bits), i),
                     }
                     i
@@ -303,9 +323,11 @@ fn wedge_textured(
                 indices.push(i);
             }
         }
-        if !indices.is_empty() {
-            primitives.push(textured_primitive(positions, normals, uvs, indices, t));
+        for v in touched.drain(..) {
+            first[v as usize] = u32::MAX;
         }
+        more.clear();
+        primitives.push(textured_primitive(positions, normals, uvs, indices, t));
     }
-    PosedScene { primitives, materials: Arc::new(materials), textures: Arc::new(textures), lights: Vec::new() }
+    PosedScene { primitives, materials: Arc::new(materials), textures: Arc::new(images), lights: Vec::new() }
 }

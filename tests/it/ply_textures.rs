@@ -219,3 +219,23 @@ fn a_bad_corner_list_or_texture_number_is_named_by_file_row_and_fix() {
         assert!(!d.join("out").exists(), "{what}: nothing is written");
     }
 }
+
+#[test]
+fn many_comments_naming_one_image_decode_it_once() {
+    // A header may name one image many times (a hostile one, thousands): it is decoded once, and the faces pick
+    // their comment's material as numbered.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    checker(&d.join("a.png"), 0);
+    checker(&d.join("b.png"), 128);
+    let names: String = (0..3000).map(|k| format!("comment TextureFile {}\n", ["a.png", "b.png"][k % 2])).collect();
+    let ply = String::from_utf8(tent_ply(true, false))
+        .unwrap()
+        .replace("comment TextureFile a.png\ncomment TextureFile b.png\n", &names)
+        .replace("0.5 1 1\n", "0.5 1 2999\n");
+    std::fs::write(d.join("tent.ply"), ply).unwrap();
+    let scene = vvgen::scene::source::mesh_frame(&d.join("tent.ply")).unwrap();
+    assert_eq!((scene.textures.len(), scene.materials.len(), scene.primitives.len()), (2, 3000, 2));
+    assert_eq!(scene.primitives.iter().map(|p| p.material).collect::<Vec<_>>(), [0, 2999]);
+    assert_eq!(scene.materials[2999].base_color_texture.map(|t| t.texture), Some(1));
+}
