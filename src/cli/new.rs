@@ -388,8 +388,7 @@ fn manifest(
             let _ = writeln!(w, "gltf   = \"{}\"", rel(asset)?);
             let _ = writeln!(w, "# clips in the file (pick with `animation = N`, a name, a list, or \"all\"):");
             for (i, (n, d)) in clips.iter().enumerate() {
-                let _ =
-                    writeln!(w, "#   {i}: `{n}`, {d:.3} s: frames = {{ count = {}, fps = 30 }}", frames_covering(*d));
+                let _ = writeln!(w, "{}", clip_line(i, n, *d));
             }
             let n = frames_covering(clips[0].1);
             let _ = writeln!(w, "animation = 0\n{}", first_clip_frames(n, "clip"));
@@ -402,11 +401,7 @@ fn manifest(
             } else {
                 let _ = writeln!(w, "# takes in the file (pick with `animation = N` or a name):");
                 for (i, (n, d)) in takes.iter().enumerate() {
-                    let _ = writeln!(
-                        w,
-                        "#   {i}: `{n}`, {d:.3} s: frames = {{ count = {}, fps = 30 }}",
-                        frames_covering(*d)
-                    );
+                    let _ = writeln!(w, "{}", clip_line(i, n, *d));
                 }
                 let n = frames_covering(takes[0].1);
                 let _ = writeln!(w, "animation = 0\n{}", first_clip_frames(n, "take"));
@@ -539,6 +534,20 @@ fn manifest(
         );
     }
     Ok(t)
+}
+
+/// The comment line listing clip (or take) `i`, named `name`, of `seconds`: the `frames` that cover it at 30 fps,
+/// within the most a manifest takes ([`crate::manifest::frames::MAX_FRAMES`]), so that the line copied as it is
+/// checks clean (ufbx's corpus has takes of 92 hours: ten million frames).
+fn clip_line(i: usize, name: &str, seconds: f32) -> String {
+    let (n, most) = (frames_covering(seconds), crate::manifest::frames::MAX_FRAMES as usize);
+    match n <= most {
+        true => format!("#   {i}: `{name}`, {seconds:.3} s: frames = {{ count = {n}, fps = 30 }}"),
+        false => format!(
+            "#   {i}: `{name}`, {seconds:.3} s: frames = {{ count = {most}, fps = 30 }}   # its first {most} of {n} \
+             frames at 30 fps (the most a manifest takes)"
+        ),
+    }
 }
 
 /// Frames at 30 fps from 0 that cover a clip of `seconds`, its last pose included.

@@ -290,7 +290,7 @@ fn a_splatting_model_folder_takes_its_up_from_its_training_cameras() {
 
 /// What ufbx's corpus of exporters' files showed `new` (each used from its own folder): a name of other scripts
 /// than Latin gives a dataset name `check` accepts; a take left 92 hours long gives its first 10 minutes, not a
-/// count `check` refuses; a layered texture (no image file of its own) is a warning, where it stopped `new`
+/// count `check` refuses, and is listed with the most frames a manifest takes; a layered texture (no image file of its own) is a warning, where it stopped `new`
 /// reading the folder as an image; a file of NURBS alone, or of lights alone, is refused saying what it holds.
 #[test]
 fn exporters_leftovers_give_a_manifest_that_checks_or_say_what_the_file_holds() {
@@ -303,6 +303,9 @@ fn exporters_leftovers_give_a_manifest_that_checks_or_say_what_the_file_holds() 
     assert!(text.contains("name = \"take\""), "{text}");
     assert!(text.contains("frames = { count = 18000, fps = 30 }   # the first 10 minutes"), "{text}");
     assert!(text.contains("10000001 frames"), "{text}");
+    // The take's listing offers no count a manifest refuses: the most it takes, saying so.
+    let listed = "frames = { count = 1000000, fps = 30 }   # its first 1000000 of 10000001 frames at 30 fps";
+    assert!(text.contains(listed) && !text.contains("count = 10000001"), "{text}");
     let (code, err) = vvgen(d, &["check", "take.toml"]);
     assert_eq!(code, 0, "{err}");
     // Without `frames`, the whole take: refused by `check` with the way out, never planned frame by frame.
