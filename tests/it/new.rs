@@ -290,8 +290,9 @@ fn a_splatting_model_folder_takes_its_up_from_its_training_cameras() {
 
 /// What ufbx's corpus of exporters' files showed `new` (each used from its own folder): a name of other scripts
 /// than Latin gives a dataset name `check` accepts; a take left 92 hours long gives its first 10 minutes, not a
-/// count `check` refuses, and is listed with the most frames a manifest takes; a layered texture (no image file of its own) is a warning, where it stopped `new`
-/// reading the folder as an image; a file of NURBS alone, or of lights alone, is refused saying what it holds.
+/// count `check` refuses, and is listed with the most frames a manifest takes; a layered texture (no image file
+/// of its own) is a warning, where it stopped `new` reading the folder as an image; a file of NURBS alone, or of
+/// lights alone, is refused saying what it holds.
 #[test]
 fn exporters_leftovers_give_a_manifest_that_checks_or_say_what_the_file_holds() {
     let tmp = tempfile::tempdir().unwrap();
