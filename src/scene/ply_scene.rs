@@ -21,7 +21,8 @@ fn texture_files(comments: &[String], path: &std::path::Path) -> Result<Vec<Path
     // Found as an MTL's textures are: Windows-authored names (`\`), absolute ones, or a base name beside it.
     names
         .map(|name| {
-            super::mtl::locate(folder_of(path), name).map_err(|tried| Error::Mesh {
+            let file = this_replaced(name, path);
+            super::mtl::locate(folder_of(path), &file).map_err(|tried| Error::Mesh {
                 path: path.to_path_buf(),
                 line: None,
                 message: format!(
@@ -32,6 +33,29 @@ fn texture_files(comments: &[String], path: &std::path::Path) -> Result<Vec<Path
             })
         })
         .collect()
+}
+
+/// A `TextureFile` name with each `<this>` (any case) replaced by the PLY's file name without its `.ply`, as
+/// MeshLab's library reads it (its samples name `<this>_A.png`, so that a renamed mesh keeps its textures).
+fn this_replaced(name: &str, path: &std::path::Path) -> String {
+    let file = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = match file.len().checked_sub(4) {
+        Some(cut) if file.is_char_boundary(cut) && file[cut..].eq_ignore_ascii_case(".ply") => &file[..cut],
+        _ => &file,
+    };
+    let mut out = String::with_capacity(name.len());
+    let mut rest = name;
+    while let Some(at) = rest
+        .char_indices()
+        .map(|(i, _)| i)
+        .find(|&i| rest.get(i..i + 6).is_some_and(|w| w.eq_ignore_ascii_case("<this>")))
+    {
+        out.push_str(&rest[..at]);
+        out.push_str(stem);
+        rest = &rest[at + 6..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// The textures the PLY with `header` at `path` is drawn with: those its comments name when it has texture

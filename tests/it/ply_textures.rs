@@ -239,3 +239,23 @@ fn many_comments_naming_one_image_decode_it_once() {
     assert_eq!(scene.primitives.iter().map(|p| p.material).collect::<Vec<_>>(), [0, 2999]);
     assert_eq!(scene.materials[2999].base_color_texture.map(|t| t.texture), Some(1));
 }
+
+#[test]
+fn a_texture_named_after_its_ply_through_this_is_found() {
+    // MeshLab's library reads `<this>` (any case) in a `TextureFile` name as the PLY's own name without `.ply`,
+    // as its samples (TextureDouble.ply: `<this>_A.png`, `<this>_B.png`) name their textures.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    checker(&d.join("scan 07_A.png"), 0);
+    checker(&d.join("scan 07.PLY.png"), 128);
+    let ply = String::from_utf8(tent_ply(true, false))
+        .unwrap()
+        .replace("TextureFile a.png", "TextureFile <this>_A.png")
+        .replace("TextureFile b.png", "TextureFile <THIS>.PLY.png");
+    std::fs::write(d.join("scan 07.PLY"), ply).unwrap();
+    let scene = vvgen::scene::source::mesh_frame(&d.join("scan 07.PLY")).unwrap();
+    assert_eq!((scene.textures.len(), scene.primitives.len()), (2, 2));
+    // The first primitive's texture is A's (shift 0): its first texel as written.
+    assert_eq!(&scene.textures[0].rgba[..4], &[0, 40, 255, 255]);
+    assert_eq!(&scene.textures[1].rgba[..4], &[128, 40, 255, 255]);
+}
