@@ -12,6 +12,9 @@ use super::up::{cameras_up, obj_up, stl_up, tallest, training_cameras, up_note};
 use super::Ui;
 use crate::scene;
 
+mod frames;
+use frames::{clip_line, first_clip_frames, frames_covering, frames_glob, LONGEST};
+
 /// The writers `--writer` accepts.
 pub const WRITERS: [&str; 7] =
     ["dnerf", "nerfstudio", "instant-ngp", "colmap", "dynerf", "static-frames", "ply-sequence"];
@@ -117,24 +120,6 @@ fn mesh_at_rest(path: &Path) -> anyhow::Result<(scene::PosedScene, Option<[f64; 
         Some(o) => (read(o)?, Some(o)),
         None => (s, None),
     })
-}
-
-/// The glob that matches a folder's frames of extension `e` (lower case) among `files`, as their names spell it:
-/// globs are case-sensitive, so a camera's `FRAME_0001.PLY` needs `*.PLY`, and a folder of both spellings a
-/// class per letter (`*.[pP][lL][yY]`).
-fn frames_glob(files: &[PathBuf], e: &str) -> String {
-    let spelt: std::collections::BTreeSet<String> = files
-        .iter()
-        .filter_map(|p| p.extension().map(|x| x.to_string_lossy().into_owned()))
-        .filter(|x| x.eq_ignore_ascii_case(e))
-        .collect();
-    match spelt.len() {
-        1 => format!("*.{}", spelt.first().expect("one")),
-        _ => {
-            let class = |c: char| format!("[{}{}]", c.to_ascii_lowercase(), c.to_ascii_uppercase());
-            format!("*.{}", e.chars().map(class).collect::<String>())
-        }
-    }
 }
 
 /// The asset's kind, its up axis, a line saying how that was decided, its first frame at rest, and a PLY's or
@@ -534,44 +519,6 @@ fn manifest(
         );
     }
     Ok(t)
-}
-
-/// The comment line listing clip (or take) `i`, named `name`, of `seconds`: the `frames` that cover it at 30 fps,
-/// within the most a manifest takes ([`crate::manifest::frames::MAX_FRAMES`]), so that the line copied as it is
-/// checks clean (ufbx's corpus has takes of 92 hours: ten million frames).
-fn clip_line(i: usize, name: &str, seconds: f32) -> String {
-    let (n, most) = (frames_covering(seconds), crate::manifest::frames::MAX_FRAMES as usize);
-    match n <= most {
-        true => format!("#   {i}: `{name}`, {seconds:.3} s: frames = {{ count = {n}, fps = 30 }}"),
-        false => format!(
-            "#   {i}: `{name}`, {seconds:.3} s: frames = {{ count = {most}, fps = 30 }}   # its first {most} of {n} \
-             frames at 30 fps (the most a manifest takes)"
-        ),
-    }
-}
-
-/// Frames at 30 fps from 0 that cover a clip of `seconds`, its last pose included.
-fn frames_covering(seconds: f32) -> usize {
-    (seconds as f64 * 30.0 + 1e-4).floor() as usize + 1
-}
-
-/// The most frames `vvgen new` asks of a clip: 10 minutes at 30 fps. Longer clips are most often a timeline left
-/// at its end by the exporter (ufbx's corpus has takes of 92 hours); a whole one is a `count` away.
-const LONGEST: usize = 18_000;
-
-/// The `frames` line for a first clip (glTF) or take (FBX) of `n` frames at 30 fps: all of it, or its first
-/// [`LONGEST`] frames, saying so.
-fn first_clip_frames(n: usize, clip: &str) -> String {
-    if n <= LONGEST {
-        format!("frames = {{ count = {n}, fps = 30 }}   # the first {clip}'s length at 30 fps")
-    } else {
-        format!(
-            "frames = {{ count = {LONGEST}, fps = 30 }}   # the first {} minutes of the first {clip}, which has {n} \
-             frames at 30 fps; raise `count` for more (at most {})",
-            LONGEST / 30 / 60,
-            crate::manifest::frames::MAX_FRAMES
-        )
-    }
 }
 
 /// A dataset name from a file's stem that `check` accepts ([`crate::manifest::is_plain_name`]: it names folders

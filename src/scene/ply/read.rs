@@ -8,7 +8,7 @@ use super::PlyError;
 
 mod faces;
 
-pub(crate) use faces::texture_comment;
+pub(crate) use faces::{texture_comment, texturing};
 
 /// What vvgen takes from a PLY: points with optional normals and colours, and triangles.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -175,36 +175,6 @@ fn splat_rgba8(v: &[f64; SLOTS]) -> [u8; 4] {
 #[inline]
 fn splat_shows(o: f64) -> bool {
     o.is_nan() || 1.0 / (1.0 + (-o).exp()) >= 1.0 / 255.0
-}
-
-/// How a PLY's header says its surface is textured ([`texturing`]).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub(crate) struct Texturing {
-    /// It names a texture (`comment TextureFile`) and has texture coordinates to read it by: per vertex
-    /// (`texture_u`/`texture_v`, `s`/`t`, `u`/`v`) or per face corner (a face `texcoord` list).
-    pub textured: bool,
-    /// Its coordinates are per face corner.
-    pub wedge: bool,
-    /// Its vertices have colours too (which a texture takes the place of).
-    pub colours: bool,
-}
-
-/// How the PLY with `header` is textured, from its header alone.
-pub(crate) fn texturing(header: &super::Header) -> Texturing {
-    let points = points_element(header);
-    let vertex = header.elements.iter().find(|e| e.name == points);
-    let has = |s: usize| vertex.is_some_and(|el| el.props.iter().any(|p| p.list.is_none() && slot(&p.name) == s));
-    let wedge = header
-        .elements
-        .iter()
-        .any(|e| e.name == "face" && e.count > 0 && e.props.iter().any(|p| p.name == "texcoord" && p.list.is_some()));
-    let named = header.comments.iter().any(|c| texture_comment(c).is_some());
-    let per_vertex = has(SLOT_U) && has(SLOT_U + 1);
-    Texturing {
-        textured: named && (wedge || per_vertex),
-        wedge: named && wedge,
-        colours: (SLOT_R..SLOT_R + 3).all(has),
-    }
 }
 
 /// Reads a PLY from memory.

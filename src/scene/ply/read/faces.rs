@@ -1,9 +1,10 @@
 //! A PLY's faces: polygons filled into triangles as Blender fills them ([`crate::scene::polygon`]), and
-//! triangle strips (the `tristrips` element of Stanford's scans) cut into triangles as Blender 4.x cuts them.
+//! triangle strips (the `tristrips` element of Stanford's scans) cut into triangles as Blender 4.x cuts them; a
+//! face's texture coordinates per corner and texture number, and what a header says of how its faces are textured.
 
 use super::super::header::Element;
 use super::super::PlyError;
-use super::{Cursor, PlyData};
+use super::{points_element, slot, Cursor, PlyData, SLOT_R, SLOT_U};
 
 /// Reads a `face` element's rows into `out`: each polygon of its vertex-index list is filled into triangles
 /// (appended to `out.triangles`) as Blender fills them, `out.unfanned` set when some polygon was filled otherwise
@@ -71,6 +72,36 @@ pub(super) fn read(c: &mut Cursor<'_>, el: &Element, out: &mut PlyData) -> Resul
 /// The texture name a header comment gives (`TextureFile NAME`, MeshLab's and OpenMVS's), if it is one.
 pub(crate) fn texture_comment(comment: &str) -> Option<&str> {
     comment.trim().strip_prefix("TextureFile").map(str::trim)
+}
+
+/// How a PLY's header says its surface is textured ([`texturing`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct Texturing {
+    /// It names a texture (`comment TextureFile`) and has texture coordinates to read it by: per vertex
+    /// (`texture_u`/`texture_v`, `s`/`t`, `u`/`v`) or per face corner (a face `texcoord` list).
+    pub textured: bool,
+    /// Its coordinates are per face corner.
+    pub wedge: bool,
+    /// Its vertices have colours too (which a texture takes the place of).
+    pub colours: bool,
+}
+
+/// How the PLY with `header` is textured, from its header alone.
+pub(crate) fn texturing(header: &super::super::Header) -> Texturing {
+    let points = points_element(header);
+    let vertex = header.elements.iter().find(|e| e.name == points);
+    let has = |s: usize| vertex.is_some_and(|el| el.props.iter().any(|p| p.list.is_none() && slot(&p.name) == s));
+    let wedge = header
+        .elements
+        .iter()
+        .any(|e| e.name == "face" && e.count > 0 && e.props.iter().any(|p| p.name == "texcoord" && p.list.is_some()));
+    let named = header.comments.iter().any(|c| texture_comment(c).is_some());
+    let per_vertex = has(SLOT_U) && has(SLOT_U + 1);
+    Texturing {
+        textured: named && (wedge || per_vertex),
+        wedge: named && wedge,
+        colours: (SLOT_R..SLOT_R + 3).all(has),
+    }
 }
 
 /// Reads a `tristrips` element's rows (Stanford's scans hold one, a strip of the whole mesh) into triangles
