@@ -57,7 +57,7 @@ pub struct FrameKeys {
 /// untextured) before "ply wedge uvs 1"; its texture was multiplied by its vertex colours before "ply texture over
 /// colours 1" drew the texture alone. A frame with any of these is keyed apart; every other frame (point clouds,
 /// triangles, convex polygons, meshes textured per vertex without colours) keeps its key.
-fn ply_reading(facts: PlyFacts) -> [Option<&'static [u8]>; 4] {
+fn ply_reading(facts: &PlyFacts) -> [Option<&'static [u8]>; 4] {
     [
         facts.unfanned.then_some(b"ply polygons 1".as_slice()),
         facts.strips.then_some(b"ply strips 1".as_slice()),
@@ -99,11 +99,8 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     .map(|(f, facts)| {
                         let d = stat.digest(&f.path).map_err(|e| Error::Input { path: f.path.clone(), source: e })?;
                         // A textured mesh's textures, by content (a cloud has none: its key reads no more).
-                        let textures = match facts.surface {
-                            true => crate::scene::source::ply_textures_cached(&f.path, stat)?,
-                            false => Vec::new(),
-                        };
-                        let textures = textures
+                        let textures = facts
+                            .texture_files(&f.path)?
                             .iter()
                             .map(|p| stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e }))
                             .collect::<Result<Vec<_>, _>>()?;
@@ -111,7 +108,7 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         bytes.extend(origin);
                         bytes.extend(splats);
                         bytes.extend(opaque);
-                        bytes.extend(ply_reading(facts).into_iter().flatten());
+                        bytes.extend(ply_reading(&facts).into_iter().flatten());
                         bytes.extend(textures.iter().map(|d| &d.0[..]));
                         Ok(key("frame ply", &bytes))
                     })
@@ -134,7 +131,12 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                     .map(|f| {
                         // The frame's file and what it reads besides (MTL files, textures), each by content.
                         let mut parts: Vec<Digest> = Vec::new();
-                        let deps = crate::scene::source::mesh_frame_deps_cached(&f.path, stat)?;
+                        // A PLY's textures come with its facts: one lookup for both.
+                        let facts = is_ply(&f.path).then(|| ply_facts(&f.path, stat)).transpose()?;
+                        let deps = match &facts {
+                            Some(facts) => facts.texture_files(&f.path)?,
+                            None => crate::scene::source::mesh_frame_deps_cached(&f.path, stat)?,
+                        };
                         for p in std::iter::once(&f.path).chain(&deps) {
                             parts.push(stat.digest(p).map_err(|e| Error::Input { path: p.clone(), source: e })?);
                         }
@@ -151,8 +153,8 @@ pub fn frame_keys(scene: &Scene, stat: &StatCache, lit: bool) -> Result<FrameKey
                         if is_obj(&f.path) && crate::scene::obj::polylines_cached(&f.path, stat)? {
                             bytes.push(b"obj polylines 1");
                         }
-                        if is_ply(&f.path) {
-                            bytes.extend(ply_reading(ply_facts(&f.path, stat)?).into_iter().flatten());
+                        if let Some(facts) = &facts {
+                            bytes.extend(ply_reading(facts).into_iter().flatten());
                         }
                         bytes.extend(parts.iter().map(|d| &d.0[..]));
                         Ok(key("frame mesh", &bytes))

@@ -477,14 +477,10 @@ mod tests {
     #[test]
     fn gaussians_stop_at_the_surface_drawn_in_front_of_them() {
         let wall = |z: f32| {
-            let p = vec![
-                Vec3::new(-1.0, -1.0, z),
-                Vec3::new(1.0, -1.0, z),
-                Vec3::new(1.0, 1.0, z),
-                Vec3::new(-1.0, 1.0, z),
-            ];
+            let p =
+                [Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(1.0, 1.0, z), Vec3::new(-1.0, 1.0, z)];
             let m = Material { base_color: Vec4::new(0.0, 0.0, 1.0, 1.0), double_sided: true, ..Material::default() };
-            PosedScene::single(PrimKind::Triangles, p, vec![Vec3::Z; 4], Vec::new(), vec![0, 1, 2, 0, 2, 3], m)
+            PosedScene::quad(p, Vec3::Z, m)
         };
         let blob = file(
             &[Vec3::ZERO],

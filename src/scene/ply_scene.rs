@@ -38,58 +38,41 @@ fn texture_files(comments: &[String], path: &std::path::Path) -> Result<Vec<Path
 /// A `TextureFile` name with each `<this>` (any case) replaced by the PLY's file name without its `.ply`, as
 /// MeshLab's library reads it (its samples name `<this>_A.png`, so that a renamed mesh keeps its textures).
 fn this_replaced(name: &str, path: &std::path::Path) -> String {
-    let file = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
-    let stem = match file.len().checked_sub(4) {
-        Some(cut) if file.is_char_boundary(cut) && file[cut..].eq_ignore_ascii_case(".ply") => &file[..cut],
-        _ => &file,
+    let stem = match path.extension() {
+        Some(e) if e.eq_ignore_ascii_case("ply") => path.file_stem(),
+        _ => path.file_name(),
     };
-    let mut out = String::with_capacity(name.len());
-    let mut rest = name;
-    while let Some(at) = rest
-        .char_indices()
-        .map(|(i, _)| i)
-        .find(|&i| rest.get(i..i + 6).is_some_and(|w| w.eq_ignore_ascii_case("<this>")))
-    {
-        out.push_str(&rest[..at]);
-        out.push_str(stem);
-        rest = &rest[at + 6..];
+    let stem = stem.map(|s| s.to_string_lossy()).unwrap_or_default();
+    // ASCII lower case keeps every byte where it was: the matches' offsets are the name's.
+    let (mut out, mut last) = (String::with_capacity(name.len()), 0);
+    for (at, _) in name.to_ascii_lowercase().match_indices("<this>") {
+        out.push_str(&name[last..at]);
+        out.push_str(&stem);
+        last = at + "<this>".len();
     }
-    out.push_str(rest);
+    out.push_str(&name[last..]);
     out
 }
 
-/// The textures the PLY with `header` at `path` is drawn with: those its comments name when it has texture
-/// coordinates to read them by ([`ply::texturing`]), else none (a cloud's or an untextured mesh's comment names a
-/// file that nothing reads).
-fn textures_read(header: &ply::Header, path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
-    match ply::texturing(header).textured {
-        true => texture_files(&header.comments, path),
-        false => Ok(Vec::new()),
-    }
+/// The `TextureFile` comments of the PLY with `header` that its surface is drawn with: all of them when it has a
+/// surface and texture coordinates to read them by ([`ply::texturing`]), else none (a cloud's or an untextured
+/// mesh's comment names a file that nothing reads).
+fn texture_comments(header: &ply::Header) -> Vec<String> {
+    let surface = header.elements.iter().any(|e| (e.name == "face" || e.name == "tristrips") && e.count > 0);
+    let read = surface && ply::texturing(header).textured;
+    header.comments.iter().filter(|c| read && ply::texture_comment(c).is_some()).cloned().collect()
 }
 
-/// The textures the PLY file at `path` is drawn with (its `TextureFile` comments, when it has texture coordinates
-/// to read them by), checked to exist; its header checked as [`checked_ply`] checks it.
+/// The textures the PLY file at `path` is drawn with (its `TextureFile` comments, when it has a surface and texture
+/// coordinates to read them by), checked to exist; its header checked as [`checked_ply`] checks it.
 pub fn ply_textures(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
-    textures_read(&checked_ply(path)?, path)
+    texture_files(&texture_comments(&checked_ply(path)?), path)
 }
 
-/// [`ply_textures`] for keying: the names, which the header decides, remembered by the stat cache for the file's
-/// content; the files they name are found and checked every time.
+/// [`ply_textures`] for keying: the comments, which the header decides, come with the file's [`ply_facts`]; the
+/// files they name are found and checked every time.
 pub fn ply_textures_cached(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<Vec<PathBuf>, Error> {
-    let io = |e| Error::Io { path: path.to_path_buf(), source: e };
-    // The `TextureFile` comments of a file with texture coordinates to read them by, one a line.
-    let names = stat
-        .derived("ply textures 2", path, || {
-            // The header alone (`ply::check_file`), not the whole frame.
-            let header = checked_ply(path)?;
-            let named = header.comments.iter().filter(|c| ply::texture_comment(c).is_some());
-            let read = ply::texturing(&header).textured;
-            Ok::<_, Error>(named.filter(|_| read).cloned().collect::<Vec<_>>().join("\n"))
-        })
-        .map_err(io)??;
-    let names: Vec<String> = names.lines().map(str::to_string).collect();
-    texture_files(&names, path)
+    ply_facts(path, stat)?.texture_files(path)
 }
 
 /// Whether the PLY at `path` holds 3D Gaussians drawn as splats (with their scales and rotations), and what a
@@ -127,7 +110,7 @@ pub fn checked_ply(path: &std::path::Path) -> Result<ply::Header, Error> {
 }
 
 /// What keying knows of a PLY file besides its bytes' digest ([`ply_facts`]).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct PlyFacts {
     /// It has a surface (a `face` or `tristrips` element with rows) rather than points alone.
     pub surface: bool,
@@ -144,25 +127,44 @@ pub struct PlyFacts {
     /// It is textured and its vertices have colours too: the texture was multiplied by them until "ply texture
     /// over colours 1" drew the texture alone, so a sequence's frame with both is keyed apart.
     pub tinted: bool,
+    /// The `TextureFile` comments its surface is drawn with, in order (none for a cloud or an untextured mesh):
+    /// the textures that key it besides its bytes ([`PlyFacts::texture_files`]).
+    pub textures: Vec<String>,
+}
+
+impl PlyFacts {
+    /// The files [`PlyFacts::textures`] name, beside the PLY at `path`, checked to exist.
+    pub fn texture_files(&self, path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
+        texture_files(&self.textures, path)
+    }
 }
 
 /// The [`PlyFacts`] of the PLY file at `path`, remembered by the stat cache for its content as one fact: its
 /// header read once, and its body only when it has faces (a point cloud is answered from its header alone).
 pub fn ply_facts(path: &std::path::Path, stat: &crate::cache::StatCache) -> Result<PlyFacts, Error> {
     let io = |e| Error::Io { path: path.to_path_buf(), source: e };
+    // A line of bits, then the texture comments, one a line.
     let fact = stat
-        .derived("ply facts 2", path, || {
+        .derived("ply facts 3", path, || {
             let header = checked_ply(path)?;
             let has = |name: &str| header.elements.iter().any(|e| e.name == name && e.count > 0);
             let (faces, strips) = (has("face"), has("tristrips"));
             let unfanned = faces && ply::read_file(path).map_err(|e| file_error(path, e))?.unfanned;
             let t = ply::texturing(&header);
             let bits = [faces || strips, strips, unfanned, t.wedge, t.textured && t.colours && (faces || strips)];
-            Ok::<_, Error>(bits.map(|b| if b { '1' } else { '0' }).iter().collect())
+            let mut fact: String = bits.map(|b| if b { '1' } else { '0' }).iter().collect();
+            for c in texture_comments(&header) {
+                fact.push('\n');
+                fact.push_str(&c);
+            }
+            Ok::<_, Error>(fact)
         })
         .map_err(io)??;
-    let bit = |k: usize| fact.as_bytes().get(k) == Some(&b'1');
-    Ok(PlyFacts { surface: bit(0), strips: bit(1), unfanned: bit(2), wedge: bit(3), tinted: bit(4) })
+    let mut lines = fact.lines();
+    let bits = lines.next().unwrap_or_default().as_bytes();
+    let bit = |k: usize| bits.get(k) == Some(&b'1');
+    let textures = lines.map(str::to_string).collect();
+    Ok(PlyFacts { surface: bit(0), strips: bit(1), unfanned: bit(2), wedge: bit(3), tinted: bit(4), textures })
 }
 
 fn file_error(path: &std::path::Path, e: ply::FileError) -> Error {

@@ -59,6 +59,13 @@ pub struct PosedScene {
 }
 
 impl PosedScene {
+    /// A scene of one quad: `corners` in order around it, facing `normal`, drawn as the two triangles 0 1 2 and
+    /// 0 2 3, of `material` (the ground plane, test fixtures).
+    pub fn quad(corners: [Vec3; 4], normal: Vec3, material: Material) -> PosedScene {
+        let indices = vec![0, 1, 2, 0, 2, 3];
+        PosedScene::single(PrimKind::Triangles, corners.to_vec(), vec![normal; 4], Vec::new(), indices, material)
+    }
+
     /// A scene of one untextured primitive (object 0) with one material: a PLY mesh or cloud, a test fixture.
     pub fn single(
         kind: PrimKind,

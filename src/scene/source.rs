@@ -12,7 +12,7 @@ use super::ply_scene::splats_of;
 pub use super::ply_scene::{
     checked_ply, ply_facts, ply_scene, ply_scene_at, ply_scene_slice, ply_textures, ply_textures_cached, PlyFacts,
 };
-use super::posed::{PosedPrimitive, PosedScene, PrimKind};
+use super::posed::{PosedPrimitive, PosedScene};
 use super::Error;
 
 /// A loaded source.
@@ -541,9 +541,7 @@ impl VertexTransform {
 /// a grid (`render::light`), not from its vertices.
 pub fn ground(p: &Ground, z: f32) -> PosedScene {
     let [w, d] = p.size.map(|v| v as f32 * 0.5);
-    let positions = vec![Vec3::new(-w, -d, z), Vec3::new(w, -d, z), Vec3::new(w, d, z), Vec3::new(-w, d, z)];
-    let indices = vec![0, 1, 2, 0, 2, 3];
-    let normals = vec![Vec3::Z; positions.len()];
+    let corners = [Vec3::new(-w, -d, z), Vec3::new(w, -d, z), Vec3::new(w, d, z), Vec3::new(-w, d, z)];
     let c = p.color.map(|v| v as f32);
     let material = Material {
         base_color: Vec4::new(c[0], c[1], c[2], 1.0),
@@ -554,13 +552,14 @@ pub fn ground(p: &Ground, z: f32) -> PosedScene {
         casts_shadows: false,
         ..Material::default()
     };
-    PosedScene::single(PrimKind::Triangles, positions, normals, Vec::new(), indices, material)
+    PosedScene::quad(corners, Vec3::Z, material)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::light::{Light, LightKind};
+    use crate::scene::PrimKind;
 
     #[test]
     fn transformed_in_place_matches_the_copy_bit_for_bit() {

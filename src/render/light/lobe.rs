@@ -118,14 +118,7 @@ mod tests {
         // seen from below, the wall mirrors the overhang; from above, the open space below it.
         let quad = |corners: [Vec3; 4], normal: Vec3, roughness: f32| {
             let m = crate::scene::material::Material { roughness, metallic: 1.0, ..Default::default() };
-            PosedScene::single(
-                PrimKind::Triangles,
-                corners.to_vec(),
-                vec![normal; 4],
-                Vec::new(),
-                vec![0, 1, 2, 0, 2, 3],
-                m,
-            )
+            PosedScene::quad(corners, normal, m)
         };
         let scene_of = |roughness: f32| {
             let wall = [

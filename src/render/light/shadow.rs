@@ -427,20 +427,13 @@ pub(super) mod tests {
 
     /// A square of side 2·`half` at height `z`, facing +Z: the casters of the light module's tests.
     pub(in crate::render::light) fn quad(z: f32, half: f32) -> PosedScene {
-        let p = vec![
+        let p = [
             Vec3::new(-half, -half, z),
             Vec3::new(half, -half, z),
             Vec3::new(half, half, z),
             Vec3::new(-half, half, z),
         ];
-        PosedScene::single(
-            PrimKind::Triangles,
-            p,
-            vec![Vec3::Z; 4],
-            Vec::new(),
-            vec![0, 1, 2, 0, 2, 3],
-            Material::default(),
-        )
+        PosedScene::quad(p, Vec3::Z, Material::default())
     }
 
     #[test]

@@ -287,7 +287,6 @@ mod tests {
     use crate::render::light::FrameLight;
     use crate::render::light::PointCasters;
     use crate::scene::material::Material;
-    use crate::scene::PrimKind;
     use glam::Mat4;
 
     #[test]
@@ -297,14 +296,7 @@ mod tests {
         // then the pixels between) and again with every pixel casting its own rays.
         let quad = |corners: [Vec3; 4], normal: Vec3| {
             let m = Material { roughness: 0.3, metallic: 1.0, ..Material::default() };
-            PosedScene::single(
-                PrimKind::Triangles,
-                corners.to_vec(),
-                vec![normal; 4],
-                Vec::new(),
-                vec![0, 1, 2, 0, 2, 3],
-                m,
-            )
+            PosedScene::quad(corners, normal, m)
         };
         let floor = [
             Vec3::new(-2.0, -2.0, 0.0),
