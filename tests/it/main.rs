@@ -10,6 +10,7 @@ mod common;
 mod compare;
 mod consumers;
 mod corpus;
+mod draco;
 mod engine;
 mod fbx;
 mod first_try;

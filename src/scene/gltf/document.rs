@@ -29,6 +29,9 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     // 3D Gaussians (`super::splats`), required by the files that compress them (refused below) or by choice.
     "KHR_gaussian_splatting",
+    // Draco-compressed meshes (Blender's exporter's "Compression", glTF-Transform's `draco`): decoded once, when
+    // the file loads (`super::draco`).
+    "KHR_draco_mesh_compression",
 ];
 
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
@@ -155,8 +158,8 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
         if SUPPORTED_REQUIRED.contains(&ext) {
             continue;
         }
-        if matches!(ext, "KHR_draco_mesh_compression" | "EXT_meshopt_compression") {
-            // Blender's importer reads Draco but not meshopt; glTF-Transform decodes both.
+        if ext == "EXT_meshopt_compression" {
+            // Blender's importer does not read meshopt; glTF-Transform decodes it.
             return Err(format!(
                 "requires the extension `{ext}`, which vvgen does not read (its meshes are compressed). Way out: \
                  `npx @gltf-transform/cli copy in.glb plain.glb` writes the file with plain meshes (or quantized \

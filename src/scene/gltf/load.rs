@@ -144,14 +144,13 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene
 
 /// [`load`] from the file's bytes; `path` names it in errors and locates its side-car files.
 pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene::Error> {
-    let (gltf, set_aside) = super::document::parse(bytes).map_err(|e| err(path, e))?;
-    let doc = &gltf.document;
+    let (gltf::Gltf { document, blob }, set_aside) = super::document::parse(bytes).map_err(|e| err(path, e))?;
     let dir = crate::scene::input::folder_of(path);
     let mut buffers = Vec::new();
-    for b in doc.buffers() {
+    for b in document.buffers() {
         let data = match b.source() {
             gltf::buffer::Source::Bin => {
-                gltf.blob.clone().ok_or_else(|| err(path, "buffer refers to a GLB BIN chunk the file does not have"))?
+                blob.clone().ok_or_else(|| err(path, "buffer refers to a GLB BIN chunk the file does not have"))?
             }
             gltf::buffer::Source::Uri(uri) => {
                 fetch_uri(dir, uri).map_err(|e| err(path, format!("buffer {}: {e}", b.index())))?
@@ -163,6 +162,9 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
         buffers.push(data);
     }
     let mut warnings = set_aside;
+    let (document, decoded) = super::draco::decode(document, &mut buffers).map_err(|e| err(path, e))?;
+    warnings.extend(decoded);
+    let doc = &document;
 
     // Textures: decode each image once; base colour and emissive use is sRGB.
     let mut images: Vec<Option<image::RgbaImage>> = vec![None; doc.images().len()];

@@ -3,6 +3,7 @@
 mod accessor;
 pub mod anim;
 mod document;
+mod draco;
 mod instancing;
 pub mod load;
 mod materials;

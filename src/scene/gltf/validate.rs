@@ -272,6 +272,22 @@ fn components(ty: &str) -> Option<u64> {
     })
 }
 
+/// The accessors whose data Draco-compressed primitives decode: the attributes their extension names, and
+/// their indices.
+fn draco_accessors(root: &Value) -> std::collections::BTreeSet<u64> {
+    let mut out = std::collections::BTreeSet::new();
+    for prim in items(root, "meshes").iter().flat_map(|m| items(m, "primitives")) {
+        let Some(named) = prim.pointer("/extensions/KHR_draco_mesh_compression/attributes").and_then(Value::as_object)
+        else {
+            continue;
+        };
+        let attributes = prim.get("attributes").and_then(Value::as_object);
+        out.extend(named.keys().filter_map(|k| attributes.and_then(|a| a.get(k)).and_then(Value::as_u64)));
+        out.extend(prim.get("indices").and_then(Value::as_u64));
+    }
+    out
+}
+
 /// The accessor `i` of `root`, when it exists.
 fn accessor<'v>(root: &'v Value, i: &Value) -> Option<&'v Value> {
     items(root, "accessors").get(usize::try_from(i.as_u64()?).ok()?)
@@ -338,14 +354,17 @@ impl Checker<'_> {
         }
     }
 
-    /// Accessors with no bufferView declare at most [`MAX_UNBACKED_COMPONENTS`] components; sparse counts fit
-    /// their accessor's.
+    /// Accessors with no bufferView declare at most [`MAX_UNBACKED_COMPONENTS`] components, but for those whose
+    /// data a Draco-compressed primitive decodes (bounded by the decoder's own limits, `super::draco`); sparse
+    /// counts fit their accessor's.
     fn accessor_budget(&mut self) {
+        let draco = draco_accessors(self.root);
         for (i, a) in items(self.root, "accessors").iter().enumerate() {
             let p = format!("accessors[{i}]");
             let count = a.get("count").and_then(Value::as_u64).unwrap_or(0);
             let n = a.get("type").and_then(Value::as_str).and_then(components).unwrap_or(1);
-            if a.get("bufferView").is_none() && count.saturating_mul(n) > MAX_UNBACKED_COMPONENTS {
+            let unbacked = a.get("bufferView").is_none() && !draco.contains(&(i as u64));
+            if unbacked && count.saturating_mul(n) > MAX_UNBACKED_COMPONENTS {
                 self.problems.push(format!(
                     "{p}.count = {count} ({n} components each) with no bufferView: over vvgen's limit of \
                      {MAX_UNBACKED_COMPONENTS} components for data the file does not hold"
@@ -433,5 +452,28 @@ mod tests {
         )
         .unwrap();
         assert_eq!(check(&ok), Ok(()));
+    }
+
+    /// An accessor with no bufferView is held to the budget unless a Draco-compressed primitive decodes its data:
+    /// ten million vertices are refused as zeros, read as a Draco primitive's positions.
+    #[test]
+    fn the_unbacked_budget_spares_what_draco_decodes() {
+        let doc = |draco: bool| {
+            let ext = if draco {
+                r#", "extensions": {"KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}}"#
+            } else {
+                ""
+            };
+            let json = format!(
+                r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": 4}}],
+                   "bufferViews": [{{"buffer": 0, "byteLength": 4}}],
+                   "accessors": [{{"componentType": 5126, "count": 10000000, "type": "VEC3"}}],
+                   "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}{ext}}}]}}]}}"#
+            );
+            serde_json::from_str::<Value>(&json).unwrap()
+        };
+        let e = check(&doc(false)).unwrap_err();
+        assert!(e.contains("accessors[0].count = 10000000"), "{e}");
+        assert_eq!(check(&doc(true)), Ok(()));
     }
 }
