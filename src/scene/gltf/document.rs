@@ -32,6 +32,10 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     // Draco-compressed meshes (Blender's exporter's "Compression", glTF-Transform's `draco`): decoded once, when
     // the file loads (`super::draco`).
     "KHR_draco_mesh_compression",
+    // Meshopt-compressed views (gltfpack's `-c`, glTF-Transform's `meshopt`): decoded once, when the file loads
+    // (`super::meshopt`).
+    "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
 ];
 
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
@@ -157,14 +161,6 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
         let Some(ext) = ext.as_str() else { return Err(format!("extensionsRequired[{i}] is not a string")) };
         if SUPPORTED_REQUIRED.contains(&ext) {
             continue;
-        }
-        if ext == "EXT_meshopt_compression" {
-            // Blender's importer does not read meshopt; glTF-Transform decodes it.
-            return Err(format!(
-                "requires the extension `{ext}`, which vvgen does not read (its meshes are compressed). Way out: \
-                 `npx @gltf-transform/cli copy in.glb plain.glb` writes the file with plain meshes (or quantized \
-                 ones, which vvgen reads); name that"
-            ));
         }
         if ext.starts_with("KHR_gaussian_splatting_compression") || ext.starts_with("EXT_gaussian_splatting") {
             // Blender reads no Gaussians: the way out is the uncompressed form, which vvgen reads.

@@ -148,6 +148,10 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
     let dir = crate::scene::input::folder_of(path);
     let mut buffers = Vec::new();
     for b in document.buffers() {
+        if super::meshopt::is_fallback(&b) {
+            buffers.push(Vec::new());
+            continue;
+        }
         let data = match b.source() {
             gltf::buffer::Source::Bin => {
                 blob.clone().ok_or_else(|| err(path, "buffer refers to a GLB BIN chunk the file does not have"))?
@@ -162,6 +166,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
         buffers.push(data);
     }
     let mut warnings = set_aside;
+    let document = super::meshopt::decode(document, &mut buffers).map_err(|e| err(path, e))?;
     let (document, decoded) = super::draco::decode(document, &mut buffers).map_err(|e| err(path, e))?;
     warnings.extend(decoded);
     let doc = &document;

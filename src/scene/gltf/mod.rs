@@ -7,6 +7,7 @@ mod draco;
 mod instancing;
 pub mod load;
 mod materials;
+mod meshopt;
 mod pointer;
 pub mod pose;
 mod spec_gloss;
