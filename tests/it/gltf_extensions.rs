@@ -88,10 +88,14 @@ fn a_specular_glossiness_dielectric_renders_as_its_metallic_roughness_twin() {
 #[test]
 fn a_required_extension_vvgen_does_not_read_is_refused_with_the_way_out() {
     let (mut json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
-    // Blender reads them. (Compressed meshes, Draco and meshopt, are read: `super::compressed`.)
+    // KTX2 and AVIF textures have glTF-Transform's converters (Blender's importer refuses both); material
+    // extensions Blender reads, Blender; any other, the tool that wrote it. (Compressed meshes, Draco and meshopt,
+    // are read: `super::compressed`.)
     let cases = [
-        ("KHR_texture_basisu", ["KTX2", "Blender", "blend = "]),
-        ("EXT_texture_avif", ["AVIF", "Blender", "blend = "]),
+        ("KHR_texture_basisu", ["KTX2", "Blender's importer does not read either", "ktxdecompress", "KTX-Software"]),
+        ("EXT_texture_avif", ["AVIF", "Blender's importer does not read either", "cli png", "--formats"]),
+        ("KHR_materials_transmission", ["does not read.", "Blender", "blend = ", "without"]),
+        ("EXT_made_up", ["neither vvgen nor Blender", "importer reads", "its tool", "without `EXT_made_up`"]),
     ];
     for (ext, way_out) in cases {
         json["extensionsUsed"] = json!([ext]);

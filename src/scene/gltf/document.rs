@@ -38,6 +38,16 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_meshopt_compression",
 ];
 
+/// Extensions Blender 4.5's importer reads that vvgen refuses when a file requires them (the material looks it
+/// does not draw, `super::materials`): for those, Blender is the way out.
+const BLENDER_READS: &[&str] = &[
+    "KHR_materials_clearcoat",
+    "KHR_materials_transmission",
+    "KHR_materials_sheen",
+    "KHR_materials_volume",
+    "KHR_materials_anisotropy",
+];
+
 /// Parses and validates, except that an accessor without a bufferView is accepted (the spec says it reads as
 /// zeros, then sparse values, but gltf 1.4's validation calls it missing data), so is a position accessor
 /// without `min` and `max` (as Blender's importer accepts it), and so is a required extension
@@ -170,15 +180,29 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
                  from the file they were made from (`npx @playcanvas/splat-transform in.ply out.glb`), and name that"
             ));
         }
-        let what = match ext {
-            "KHR_texture_basisu" | "EXT_texture_avif" => " (its textures are KTX2 or AVIF)",
-            _ => "",
-        };
-        return Err(format!(
-            "requires the extension `{ext}`, which vvgen does not read{what}. Way out: import the file in Blender \
-             (File → Import → glTF 2.0), save it as a .blend and name that (`blend = \"….blend\"`), or export it \
-             again from its tool without `{ext}`"
-        ));
+        // Blender's importer refuses a file that requires an extension it does not manage, so it is a way out only
+        // for those it reads; texture formats have their converters.
+        return Err(match ext {
+            "KHR_texture_basisu" => format!(
+                "requires the extension `{ext}`, which vvgen does not read (its textures are KTX2, which Blender's \
+                 importer does not read either). Way out: `npx @gltf-transform/cli ktxdecompress in.glb out.glb` \
+                 rewrites them as PNG (it runs KTX-Software's `ktx` tool, which must be installed); name that"
+            ),
+            "EXT_texture_avif" => format!(
+                "requires the extension `{ext}`, which vvgen does not read (its textures are AVIF, which Blender's \
+                 importer does not read either). Way out: `npx @gltf-transform/cli png in.glb out.glb --formats \"*\"` \
+                 rewrites them as PNG; name that"
+            ),
+            _ if BLENDER_READS.contains(&ext) => format!(
+                "requires the extension `{ext}`, which vvgen does not read. Way out: import the file in Blender \
+                 (File → Import → glTF 2.0), save it as a .blend and name that (`blend = \"….blend\"`), or export it \
+                 again from its tool without `{ext}`"
+            ),
+            _ => format!(
+                "requires the extension `{ext}`, which neither vvgen nor Blender's importer reads. Way out: export \
+                 the file again from its tool without `{ext}`"
+            ),
+        });
     }
     Ok(())
 }
