@@ -146,25 +146,7 @@ pub fn load(path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene
 pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<GltfAsset, crate::scene::Error> {
     let (gltf::Gltf { document, blob }, set_aside) = super::document::parse(bytes).map_err(|e| err(path, e))?;
     let dir = crate::scene::input::folder_of(path);
-    let mut buffers = Vec::new();
-    for b in document.buffers() {
-        if super::meshopt::is_fallback(&b) {
-            buffers.push(Vec::new());
-            continue;
-        }
-        let data = match b.source() {
-            gltf::buffer::Source::Bin => {
-                blob.clone().ok_or_else(|| err(path, "buffer refers to a GLB BIN chunk the file does not have"))?
-            }
-            gltf::buffer::Source::Uri(uri) => {
-                fetch_uri(dir, uri).map_err(|e| err(path, format!("buffer {}: {e}", b.index())))?
-            }
-        };
-        if data.len() < b.length() {
-            return Err(err(path, format!("buffer {} holds {} bytes, {} declared", b.index(), data.len(), b.length())));
-        }
-        buffers.push(data);
-    }
+    let mut buffers = super::uri::buffers(&document, blob, dir).map_err(|e| err(path, e))?;
     let mut warnings = set_aside;
     let document = super::meshopt::decode(document, &mut buffers).map_err(|e| err(path, e))?;
     let (document, decoded) = super::draco::decode(document, &mut buffers).map_err(|e| err(path, e))?;

@@ -1,8 +1,32 @@
-//! A glTF's buffer and image URIs: `data:` (base64), or files beside the glTF that stay inside its folder.
+//! A glTF's buffers and image URIs: the GLB's BIN chunk, `data:` (base64), or files beside the glTF that stay
+//! inside its folder.
 
 use std::path::Path;
 
 use base64::Engine as _;
+
+/// The bytes of every buffer of `document`, from the GLB's BIN chunk `blob` or from its URI (resolved in `dir`,
+/// the glTF's folder), each at least as long as declared; a meshopt fallback buffer (never read) is empty.
+pub(super) fn buffers(document: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Vec<Vec<u8>>, String> {
+    let mut buffers = Vec::new();
+    for b in document.buffers() {
+        if super::meshopt::is_fallback(&b) {
+            buffers.push(Vec::new());
+            continue;
+        }
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => {
+                blob.clone().ok_or("buffer refers to a GLB BIN chunk the file does not have")?
+            }
+            gltf::buffer::Source::Uri(uri) => fetch_uri(dir, uri).map_err(|e| format!("buffer {}: {e}", b.index()))?,
+        };
+        if data.len() < b.length() {
+            return Err(format!("buffer {} holds {} bytes, {} declared", b.index(), data.len(), b.length()));
+        }
+        buffers.push(data);
+    }
+    Ok(buffers)
+}
 
 /// Reads a buffer or image URI: `data:` (base64) or a file relative to the glTF that stays inside its folder.
 pub(super) fn fetch_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
