@@ -4,22 +4,13 @@
 //! Run: `cargo bench --bench engine [-- OUT_DIR]` (default `target/bench-engine`).
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use vvgen::build::{self, Silent};
 use vvgen::plan::actions::Kind;
 
-fn median(runs: usize, mut f: impl FnMut()) -> Duration {
-    let mut v: Vec<Duration> = (0..runs)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed()
-        })
-        .collect();
-    v.sort();
-    v[runs / 2]
-}
+mod common;
+use common::median;
 
 fn main() {
     vvgen::alloc::retain_freed_memory();

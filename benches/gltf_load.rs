@@ -6,21 +6,15 @@
 
 use std::hint::black_box;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+mod common;
 
 /// Median wall time of `runs` loads after one untimed load (the peer's protocol).
 fn median(runs: usize, path: &Path) -> Duration {
     let load = || vvgen::scene::gltf::load(path, None).unwrap_or_else(|e| panic!("{e}"));
     black_box(load());
-    let mut v: Vec<Duration> = (0..runs)
-        .map(|_| {
-            let t = Instant::now();
-            black_box(load());
-            t.elapsed()
-        })
-        .collect();
-    v.sort();
-    v[runs / 2]
+    common::median(runs, load)
 }
 
 fn main() {

@@ -6,7 +6,6 @@
 //! (default `target/bench-data`) as `points_1m.ply`, so Open3D can downsample the same points in the same run
 //! (see docs/benchmarks.md). `--quick` skips the 60-frame sequence.
 
-use std::hint::black_box;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -20,18 +19,7 @@ use vvgen::scene::{PosedPrimitive, PosedScene, PrimKind};
 
 mod common;
 
-/// Median wall time of `runs` calls.
-fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> Duration {
-    let mut v: Vec<Duration> = (0..runs)
-        .map(|_| {
-            let t = Instant::now();
-            black_box(f());
-            t.elapsed()
-        })
-        .collect();
-    v.sort();
-    v[runs / 2]
-}
+use common::median as time;
 
 fn ms(d: Duration) -> String {
     format!("{:8.1} ms", d.as_secs_f64() * 1e3)

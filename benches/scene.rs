@@ -6,27 +6,21 @@
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use glam::Mat4;
 use vvgen::scene::gltf::{self, PoseScratch};
 use vvgen::scene::ply::{self, PlyOut};
 use vvgen::scene::PosedScene;
 
+mod common;
+
 /// Median wall time of `runs` calls after one untimed call, the protocol of the peers' script
 /// (`bench_python.py`: one warm call, then the median of the timed ones): the first call faults in the memory the
 /// later ones reuse.
 fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> Duration {
     black_box(f());
-    let mut v: Vec<Duration> = (0..runs)
-        .map(|_| {
-            let t = Instant::now();
-            black_box(f());
-            t.elapsed()
-        })
-        .collect();
-    v.sort();
-    v[runs / 2]
+    common::median(runs, f)
 }
 
 fn ms(d: Duration) -> String {

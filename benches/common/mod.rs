@@ -1,6 +1,9 @@
-//! What more than one benchmark builds: the peers' bumpy torus (bench_python.py `make_mesh_100k`).
+//! What more than one benchmark builds: the peers' bumpy torus (bench_python.py `make_mesh_100k`), and how they
+//! time a call.
 
 use std::f32::consts::TAU;
+use std::hint::black_box;
+use std::time::{Duration, Instant};
 
 use glam::{Vec2, Vec3, Vec4};
 
@@ -14,6 +17,7 @@ pub struct Torus {
 }
 
 /// The peers' bumpy torus: radius 0.8 around Z, tube radius 0.3 with a 7 × 5 bump pattern.
+#[allow(dead_code)] // not every bench draws it
 pub fn torus_100k() -> Torus {
     let (nu, nv) = (500usize, 100usize);
     let mut positions = Vec::with_capacity(nu * nv);
@@ -37,4 +41,18 @@ pub fn torus_100k() -> Torus {
         }
     }
     Torus { positions, uvs, colors, indices }
+}
+
+/// Median wall time of `runs` calls of `f`, whose results the optimizer may not drop.
+#[allow(dead_code)] // not every bench times with it
+pub fn median<T>(runs: usize, mut f: impl FnMut() -> T) -> Duration {
+    let mut v: Vec<Duration> = (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            black_box(f());
+            t.elapsed()
+        })
+        .collect();
+    v.sort();
+    v[runs / 2]
 }

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::Command;
 
 use glam::Mat4;
-use serde_json::json;
+use serde_json::{json, Value};
 use vvgen::scene::gltf::{self, GltfAsset, PoseScratch};
 use vvgen::scene::PosedScene;
 
@@ -27,6 +27,47 @@ fn pose(a: &GltfAsset, t: f32) -> PosedScene {
 fn vvgen(dir: &Path, args: &[&str]) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_vvgen")).current_dir(dir).args(args).output().unwrap();
     (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// Writes `doc` (with binary chunk `bin`) as `model.glb` beside a two-view manifest: `check` and `build` each
+/// refuse it with exit 2, saying every one of `parts`.
+fn refused_by_check_and_build(doc: &Value, bin: &[u8], parts: &[&str]) {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("model.glb"), join(doc, bin)).unwrap();
+    let manifest = "[dataset]\nname = \"s\"\nout = \"out\"\n[source.s]\ngltf = \"model.glb\"\n[rig.h]\n\
+                    kind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n";
+    std::fs::write(tmp.path().join("m.toml"), manifest).unwrap();
+    for command in ["check", "build"] {
+        let (code, err) = vvgen(tmp.path(), &[command, "m.toml"]);
+        assert_eq!(code, 2, "{command}: {err}");
+        for part in parts {
+            assert!(err.contains(part), "{command}: `{part}` not in {err}");
+        }
+    }
+}
+
+/// Loads `json` (with binary chunk `bin`) with each byte of `at` set in turn to 0, 255 and itself with bit 4
+/// flipped: every file loads or is refused with an error saying all of `parts`. Returns how many loaded and how
+/// many were refused.
+fn damaged(json: &Value, bin: &[u8], at: impl Iterator<Item = usize>, parts: &[&str]) -> (usize, usize) {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("model.glb");
+    let (mut loaded, mut refused) = (0, 0);
+    for at in at {
+        for value in [0u8, 0xff, bin[at] ^ 0x10] {
+            let mut damaged = bin.to_vec();
+            damaged[at] = value;
+            match gltf::load_slice(&join(json, &damaged), &path, None) {
+                Ok(_) => loaded += 1,
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(parts.iter().all(|p| e.contains(p)), "{e}");
+                    refused += 1;
+                }
+            }
+        }
+    }
+    (loaded, refused)
 }
 
 /// CesiumMan exported by Blender 4.5 with Draco compression (its encoder's defaults: EdgeBreaker, positions on 14
@@ -100,18 +141,7 @@ fn bad_draco_data_is_an_error_naming_the_primitive() {
         (lines, "must be TRIANGLES or TRIANGLE_STRIP"),
     ];
     for (doc, says) in cases {
-        let tmp = tempfile::tempdir().unwrap();
-        std::fs::write(tmp.path().join("model.glb"), join(&doc, &bin)).unwrap();
-        let manifest = "[dataset]\nname = \"s\"\nout = \"out\"\n[source.s]\ngltf = \"model.glb\"\n[rig.h]\n\
-                        kind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n";
-        std::fs::write(tmp.path().join("m.toml"), manifest).unwrap();
-        for command in ["check", "build"] {
-            let (code, err) = vvgen(tmp.path(), &[command, "m.toml"]);
-            assert_eq!(code, 2, "{command}: {err}");
-            for part in ["model.glb", "meshes[0].primitives[0]", says] {
-                assert!(err.contains(part), "{command}: `{part}` not in {err}");
-            }
-        }
+        refused_by_check_and_build(&doc, &bin, &["model.glb", "meshes[0].primitives[0]", says]);
     }
 }
 
@@ -123,23 +153,7 @@ fn damaged_draco_streams_fail_cleanly() {
     let draco = json.pointer("/meshes/0/primitives/0/extensions/KHR_draco_mesh_compression/bufferView").unwrap();
     let view = &json["bufferViews"][draco.as_u64().unwrap() as usize];
     let (start, length) = (view["byteOffset"].as_u64().unwrap_or(0) as usize, view["byteLength"].as_u64().unwrap());
-    let tmp = tempfile::tempdir().unwrap();
-    let path = tmp.path().join("model.glb");
-    let (mut loaded, mut refused) = (0, 0);
-    for at in start..start + length as usize {
-        for value in [0u8, 0xff, bin[at] ^ 0x10] {
-            let mut damaged = bin.clone();
-            damaged[at] = value;
-            match gltf::load_slice(&join(&json, &damaged), &path, None) {
-                Ok(_) => loaded += 1,
-                Err(e) => {
-                    let e = e.to_string();
-                    assert!(e.contains("model.glb") && e.contains("primitive"), "{e}");
-                    refused += 1;
-                }
-            }
-        }
-    }
+    let (loaded, refused) = damaged(&json, &bin, start..start + length as usize, &["model.glb", "primitive"]);
     assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
 }
 
@@ -227,19 +241,8 @@ fn bad_meshopt_data_is_an_error_naming_the_view() {
         (edit(4, "byteLength", json!(length / 2)), 4, "does not decode"),
     ];
     for (doc, view, says) in cases {
-        let tmp = tempfile::tempdir().unwrap();
-        std::fs::write(tmp.path().join("model.glb"), join(&doc, &bin)).unwrap();
-        let manifest = "[dataset]\nname = \"s\"\nout = \"out\"\n[source.s]\ngltf = \"model.glb\"\n[rig.h]\n\
-                        kind = \"hemisphere\"\n[split.train]\nrig = \"h\"\nviews = 2\n[output.d]\nwriter = \"dnerf\"\n";
-        std::fs::write(tmp.path().join("m.toml"), manifest).unwrap();
         let at = format!("bufferViews[{view}].extensions.EXT_meshopt_compression");
-        for command in ["check", "build"] {
-            let (code, err) = vvgen(tmp.path(), &[command, "m.toml"]);
-            assert_eq!(code, 2, "{command}: {err}");
-            for part in ["model.glb", at.as_str(), says] {
-                assert!(err.contains(part), "{command}: `{part}` not in {err}");
-            }
-        }
+        refused_by_check_and_build(&doc, &bin, &["model.glb", &at, says]);
     }
 }
 
@@ -248,8 +251,6 @@ fn bad_meshopt_data_is_an_error_naming_the_view() {
 #[test]
 fn damaged_meshopt_streams_fail_cleanly() {
     let (json, bin) = split(&std::fs::read(data("gltf/meshopt/CesiumMan_meshopt.glb")).unwrap());
-    let tmp = tempfile::tempdir().unwrap();
-    let path = tmp.path().join("model.glb");
     let (mut loaded, mut refused) = (0, 0);
     for view in [1, 4] {
         let ext = &json["bufferViews"][view]["extensions"]["EXT_meshopt_compression"];
@@ -257,19 +258,8 @@ fn damaged_meshopt_streams_fail_cleanly() {
         // Every byte of the first 200, and every 7th after: the header, the control bytes and the data.
         let bytes =
             (start..start + ext["byteLength"].as_u64().unwrap() as usize).filter(|i| i - start < 200 || i % 7 == 0);
-        for at in bytes {
-            for value in [0u8, 0xff, bin[at] ^ 0x10] {
-                let mut damaged = bin.clone();
-                damaged[at] = value;
-                match gltf::load_slice(&join(&json, &damaged), &path, None) {
-                    Ok(_) => loaded += 1,
-                    Err(e) => {
-                        assert!(e.to_string().contains("model.glb"), "{e}");
-                        refused += 1;
-                    }
-                }
-            }
-        }
+        let (l, r) = damaged(&json, &bin, bytes, &["model.glb"]);
+        (loaded, refused) = (loaded + l, refused + r);
     }
     assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
 }

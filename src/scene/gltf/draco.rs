@@ -43,9 +43,9 @@ pub(super) fn decode(doc: gltf::Document, buffers: &mut Vec<Vec<u8>>) -> Result<
         return Ok((doc, Vec::new()));
     }
     let mut root = doc.into_json();
-    let mut out = Out { bytes: Vec::new(), buffer: buffers.len(), views: Vec::new(), accessors: Vec::new() };
+    let mut out = Out { bytes: Vec::new(), accessors: Vec::new() };
     let mut warnings = Vec::new();
-    let (first_view, first_accessor) = (root.buffer_views.len(), root.accessors.len());
+    let first_accessor = root.accessors.len();
     for (m, mesh) in root.meshes.iter_mut().enumerate() {
         for (p, prim) in mesh.primitives.iter_mut().enumerate() {
             let Some(ext) = prim.extensions.as_ref().and_then(|e| e.others.get(EXTENSION)) else { continue };
@@ -63,16 +63,10 @@ pub(super) fn decode(doc: gltf::Document, buffers: &mut Vec<Vec<u8>>) -> Result<
             }
         }
     }
-    root.buffers.push(json::Buffer {
-        byte_length: USize64::from(out.bytes.len()),
-        name: Some("decoded Draco geometry".into()),
-        uri: None,
-        extensions: None,
-        extras: Default::default(),
-    });
-    for (offset, length) in out.views {
-        root.buffer_views.push(json::buffer::View {
-            buffer: Index::new(out.buffer as u32),
+    let buffer = super::uri::push_buffer(&mut root, buffers, out.bytes, "decoded Draco geometry");
+    for (mut accessor, (offset, length)) in out.accessors {
+        accessor.buffer_view = Some(root.push(json::buffer::View {
+            buffer,
             byte_length: USize64::from(length),
             byte_offset: Some(USize64::from(offset)),
             byte_stride: None,
@@ -80,24 +74,17 @@ pub(super) fn decode(doc: gltf::Document, buffers: &mut Vec<Vec<u8>>) -> Result<
             target: None,
             extensions: None,
             extras: Default::default(),
-        });
+        }));
+        root.push(accessor);
     }
-    for (k, (mut accessor, view)) in out.accessors.into_iter().enumerate() {
-        accessor.buffer_view = Some(Index::new((first_view + view) as u32));
-        debug_assert_eq!(root.accessors.len(), first_accessor + k);
-        root.accessors.push(accessor);
-    }
-    buffers.push(out.bytes);
     Ok((gltf::Document::from_json_without_validation(root), warnings))
 }
 
-/// The decoded data: its bytes (the new buffer, index `buffer`), its views (offset, length), and its accessors
-/// (each with the index of its view among `views`), appended to the document's after every primitive is done.
+/// The decoded data: its bytes (the new buffer) and its accessors, each with its range of them (offset, length),
+/// appended to the document's, each over a view of its own, after every primitive is done.
 struct Out {
     bytes: Vec<u8>,
-    buffer: usize,
-    views: Vec<(usize, usize)>,
-    accessors: Vec<(json::Accessor, usize)>,
+    accessors: Vec<(json::Accessor, (usize, usize))>,
 }
 
 impl Out {
@@ -187,9 +174,8 @@ impl Out {
     /// returns the accessor's index in the document (the new ones are numbered from `first`).
     fn push(&mut self, accessor: json::Accessor, bytes: Vec<u8>, first: usize) -> Index<json::Accessor> {
         self.bytes.resize(self.bytes.len().next_multiple_of(4), 0);
-        self.views.push((self.bytes.len(), bytes.len()));
+        self.accessors.push((accessor, (self.bytes.len(), bytes.len())));
         self.bytes.extend_from_slice(&bytes);
-        self.accessors.push((accessor, self.views.len() - 1));
         Index::new((first + self.accessors.len() - 1) as u32)
     }
 }

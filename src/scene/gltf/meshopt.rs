@@ -6,7 +6,7 @@
 //! whether or not it has data (gltfpack's `-cf` writes a plain copy there for loaders without the extension).
 
 use gltf::json::validation::USize64;
-use gltf::json::{self, Index};
+use gltf::json::Index;
 use serde_json::Value;
 
 /// The extension's names, older first.
@@ -48,7 +48,8 @@ pub(super) fn decode(doc: gltf::Document, buffers: &mut Vec<Vec<u8>>) -> Result<
         return Ok(doc);
     }
     let mut root = doc.into_json();
-    let (buffer, mut bytes) = (buffers.len(), Vec::new());
+    // The buffer the decoded views go to, appended after them.
+    let (buffer, mut bytes) = (Index::new(root.buffers.len() as u32), Vec::new());
     for (i, view) in root.buffer_views.iter_mut().enumerate() {
         let found = view.extensions.as_ref().and_then(|e| NAMES.iter().find_map(|&n| Some((n, e.others.get(n)?))));
         let Some((name, ext)) = found else { continue };
@@ -66,18 +67,58 @@ pub(super) fn decode(doc: gltf::Document, buffers: &mut Vec<Vec<u8>>) -> Result<
             ));
         }
         bytes.resize(bytes.len().next_multiple_of(4), 0);
-        (view.buffer, view.byte_offset) = (Index::new(buffer as u32), Some(USize64::from(bytes.len())));
+        (view.buffer, view.byte_offset) = (buffer, Some(USize64::from(bytes.len())));
         bytes.extend_from_slice(&data);
     }
-    root.buffers.push(json::Buffer {
-        byte_length: USize64::from(bytes.len()),
-        name: Some("decoded meshopt views".into()),
-        uri: None,
-        extensions: None,
-        extras: Default::default(),
-    });
-    buffers.push(bytes);
+    super::uri::push_buffer(&mut root, buffers, bytes, "decoded meshopt views");
     Ok(gltf::Document::from_json_without_validation(root))
+}
+
+/// A filter's decoding, in place on one element.
+type Unfilter = fn(&mut [u8]);
+
+/// How a view's elements were encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Attributes,
+    Triangles,
+    Indices,
+}
+
+impl Compressed {
+    /// Its mode and the filter to undo (none for NONE), checked against its stride and count: the codecs' own
+    /// preconditions (meshoptimizer asserts them), so that a file cannot break them.
+    fn layout(&self) -> Result<(Mode, Option<Unfilter>), String> {
+        let (count, stride) = (self.count, self.byte_stride);
+        let (mode, fits) = match self.mode.as_str() {
+            "ATTRIBUTES" => (Mode::Attributes, stride % 4 == 0 && (4..=256).contains(&stride)),
+            "TRIANGLES" => (Mode::Triangles, matches!(stride, 2 | 4) && count % 3 == 0),
+            "INDICES" => (Mode::Indices, matches!(stride, 2 | 4)),
+            other => return Err(format!("mode `{other}` is none of ATTRIBUTES, TRIANGLES and INDICES")),
+        };
+        if !fits {
+            return Err(format!(
+                "{count} elements of {stride} bytes cannot be {} (attributes take 4 to 256 bytes in fours; indices 2 \
+                 or 4, triangles in threes)",
+                self.mode
+            ));
+        }
+        let filter = self.filter.as_deref().unwrap_or("NONE");
+        let (unfilter, fits): (Option<Unfilter>, bool) = match filter {
+            "NONE" => (None, true),
+            "OCTAHEDRAL" => (Some(octahedral), matches!(stride, 4 | 8)),
+            "COLOR" => (Some(color), matches!(stride, 4 | 8)),
+            "QUATERNION" => (Some(quaternion), stride == 8),
+            "EXPONENTIAL" => (Some(exponential), true),
+            other => {
+                return Err(format!("filter `{other}` is none of NONE, OCTAHEDRAL, QUATERNION, EXPONENTIAL and COLOR"))
+            }
+        };
+        if !fits || (unfilter.is_some() && mode != Mode::Attributes) {
+            return Err(format!("filter {filter} does not apply to {} of {stride}-byte elements", self.mode));
+        }
+        Ok((mode, unfilter))
+    }
 }
 
 /// The bytes of one compressed view (`count` elements of `byteStride` bytes), its filter undone.
@@ -86,35 +127,8 @@ fn decode_view(ext: &Compressed, buffers: &[Vec<u8>]) -> Result<Vec<u8>, String>
     let end = ext.byte_offset.checked_add(ext.byte_length).filter(|&e| e <= source.len() as u64);
     let end = end.ok_or_else(|| format!("its data runs past buffer {} ({} bytes)", ext.buffer, source.len()))?;
     let source = &source[ext.byte_offset as usize..end as usize];
+    let (mode, unfilter) = ext.layout()?;
     let (count, stride) = (ext.count, ext.byte_stride);
-    // The codecs' own preconditions (meshoptimizer asserts them), checked here so that a file cannot break them.
-    let fits = match ext.mode.as_str() {
-        "ATTRIBUTES" => stride % 4 == 0 && (4..=256).contains(&stride),
-        "TRIANGLES" => matches!(stride, 2 | 4) && count % 3 == 0,
-        "INDICES" => matches!(stride, 2 | 4),
-        other => return Err(format!("mode `{other}` is none of ATTRIBUTES, TRIANGLES and INDICES")),
-    };
-    if !fits {
-        return Err(format!(
-            "{} elements of {stride} bytes cannot be {} (attributes take 4 to 256 bytes in fours; indices 2 or \
-             4, triangles in threes)",
-            count, ext.mode
-        ));
-    }
-    let filter = ext.filter.as_deref().unwrap_or("NONE");
-    let filter_fits = match filter {
-        "NONE" => true,
-        _ if ext.mode != "ATTRIBUTES" => false,
-        "OCTAHEDRAL" | "COLOR" => matches!(stride, 4 | 8),
-        "QUATERNION" => stride == 8,
-        "EXPONENTIAL" => true,
-        other => {
-            return Err(format!("filter `{other}` is none of NONE, OCTAHEDRAL, QUATERNION, EXPONENTIAL and COLOR"))
-        }
-    };
-    if !filter_fits {
-        return Err(format!("filter {filter} does not apply to {} of {stride}-byte elements", ext.mode));
-    }
     let size = count.saturating_mul(stride);
     if size > MAX_DECODED_BYTES.min(MAX_RATIO.saturating_mul(source.len() as u64 + 16)) {
         return Err(format!(
@@ -127,33 +141,26 @@ fn decode_view(ext: &Compressed, buffers: &[Vec<u8>]) -> Result<Vec<u8>, String>
         return Ok(Vec::new());
     }
     let (count, stride) = (count as usize, stride as usize);
-    // Words, so that the filters (which read 16- and 32-bit components in place) see aligned data.
+    // Words: the index decoders store 16- and 32-bit integers through typed pointers, which must be aligned.
     let mut words = vec![0u32; (count * stride).div_ceil(4)];
     let out: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
     let (dst, src) = (out.as_mut_ptr().cast(), source.as_ptr());
     // SAFETY: `out` holds at least `count × stride` bytes, what each decoder writes at most; `source` is a live
     // slice of `source.len()` bytes, which the decoders read within (meshoptimizer: "safe to use for untrusted
-    // input"); their preconditions on sizes and counts were checked above.
+    // input"); their preconditions on sizes and counts were checked by `layout`.
     let code = unsafe {
-        match ext.mode.as_str() {
-            "ATTRIBUTES" => meshopt::ffi::meshopt_decodeVertexBuffer(dst, count, stride, src, source.len()),
-            "TRIANGLES" => meshopt::ffi::meshopt_decodeIndexBuffer(dst, count, stride, src, source.len()),
-            _ => meshopt::ffi::meshopt_decodeIndexSequence(dst, count, stride, src, source.len()),
+        match mode {
+            Mode::Attributes => meshopt::ffi::meshopt_decodeVertexBuffer(dst, count, stride, src, source.len()),
+            Mode::Triangles => meshopt::ffi::meshopt_decodeIndexBuffer(dst, count, stride, src, source.len()),
+            Mode::Indices => meshopt::ffi::meshopt_decodeIndexSequence(dst, count, stride, src, source.len()),
         }
     };
     if code != 0 {
         return Err(format!("its data does not decode (meshoptimizer's code {code}): it is damaged or truncated"));
     }
-    let mut out = bytemuck::cast_slice::<u32, u8>(&words).to_vec();
-    out.truncate(count * stride);
-    for element in out.chunks_exact_mut(stride) {
-        match filter {
-            "OCTAHEDRAL" => octahedral(element),
-            "QUATERNION" => quaternion(element),
-            "EXPONENTIAL" => element.chunks_exact_mut(4).for_each(exponential),
-            "COLOR" => color(element),
-            _ => break,
-        }
+    let mut out = bytemuck::cast_slice::<u32, u8>(&words)[..count * stride].to_vec();
+    if let Some(unfilter) = unfilter {
+        out.chunks_exact_mut(stride).for_each(unfilter);
     }
     Ok(out)
 }
@@ -233,12 +240,14 @@ fn quaternion(e: &mut [u8]) {
     }
 }
 
-/// EXPONENTIAL: a float 2^e · m from a signed 8-bit exponent and 24-bit mantissa.
+/// EXPONENTIAL: each 32-bit component a float 2^e · m, from a signed 8-bit exponent and 24-bit mantissa.
 fn exponential(e: &mut [u8]) {
-    let v = i32::from_le_bytes([e[0], e[1], e[2], e[3]]);
-    let (exponent, mantissa) = (v >> 24, (v << 8) >> 8);
-    let power = f32::from_bits(((exponent + 127) << 23) as u32);
-    e.copy_from_slice(&(power * mantissa as f32).to_le_bytes());
+    for c in e.chunks_exact_mut(4) {
+        let v = i32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        let (exponent, mantissa) = (v >> 24, (v << 8) >> 8);
+        let power = f32::from_bits(((exponent + 127) << 23) as u32);
+        c.copy_from_slice(&(power * mantissa as f32).to_le_bytes());
+    }
 }
 
 /// COLOR (`KHR_meshopt_compression`): RGBA from YCoCg and an alpha whose top set bit marks the bit count K, as
@@ -299,11 +308,10 @@ mod tests {
         let cases: Vec<Case> = (2..=16)
             .flat_map(|bits| {
                 let (oct, quat) = (unit(&v, true), unit(&v, false));
-                let raw = |b: Vec<u8>| b;
                 let mut c: Vec<Case> = vec![(
                     "OCTAHEDRAL",
                     8,
-                    raw(bytemuck::cast_slice(&enc::encode_filter_oct::<i16>(&oct, bits)).to_vec()),
+                    bytemuck::cast_slice(&enc::encode_filter_oct::<i16>(&oct, bits)).to_vec(),
                     meshopt::ffi::meshopt_decodeFilterOct,
                     octahedral,
                 )];
@@ -321,13 +329,12 @@ mod tests {
                 }
                 let scaled: Vec<[f32; 4]> = v.iter().map(|c| c.map(|x| x * 1e3f32.powf(x * 4.0))).collect();
                 let b = enc::encode_filter_exp(&scaled, bits, enc::EncodeExpMode::Separate);
-                let exp: fn(&mut [u8]) = |e| e.chunks_exact_mut(4).for_each(exponential);
                 c.push((
                     "EXPONENTIAL",
                     16,
                     bytemuck::cast_slice(&b).to_vec(),
                     meshopt::ffi::meshopt_decodeFilterExp,
-                    exp,
+                    exponential,
                 ));
                 c
             })

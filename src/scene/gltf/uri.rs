@@ -7,16 +7,26 @@ use base64::Engine as _;
 
 /// The bytes of every buffer of `document`, from the GLB's BIN chunk `blob` or from its URI (resolved in `dir`,
 /// the glTF's folder), each at least as long as declared; a meshopt fallback buffer (never read) is empty.
-pub(super) fn buffers(document: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Vec<Vec<u8>>, String> {
+pub(super) fn buffers(
+    document: &gltf::Document,
+    mut blob: Option<Vec<u8>>,
+    dir: &Path,
+) -> Result<Vec<Vec<u8>>, String> {
+    let read = |b: &gltf::Buffer<'_>| !super::meshopt::is_fallback(b);
+    // The chunk is moved into the last buffer that reads it (the spec allows one), copied only for earlier ones.
+    let mut chunk_readers =
+        document.buffers().filter(|b| read(b) && matches!(b.source(), gltf::buffer::Source::Bin)).count();
     let mut buffers = Vec::new();
     for b in document.buffers() {
-        if super::meshopt::is_fallback(&b) {
+        if !read(&b) {
             buffers.push(Vec::new());
             continue;
         }
         let data = match b.source() {
             gltf::buffer::Source::Bin => {
-                blob.clone().ok_or("buffer refers to a GLB BIN chunk the file does not have")?
+                chunk_readers -= 1;
+                let chunk = if chunk_readers == 0 { blob.take() } else { blob.clone() };
+                chunk.ok_or("buffer refers to a GLB BIN chunk the file does not have")?
             }
             gltf::buffer::Source::Uri(uri) => fetch_uri(dir, uri).map_err(|e| format!("buffer {}: {e}", b.index()))?,
         };
@@ -26,6 +36,25 @@ pub(super) fn buffers(document: &gltf::Document, blob: Option<Vec<u8>>, dir: &Pa
         buffers.push(data);
     }
     Ok(buffers)
+}
+
+/// Appends `bytes`, data decoded at load (Draco geometry, meshopt views), as a buffer named `name` of `root`, whose
+/// buffers' bytes are `buffers`; returns its index.
+pub(super) fn push_buffer(
+    root: &mut gltf::json::Root,
+    buffers: &mut Vec<Vec<u8>>,
+    bytes: Vec<u8>,
+    name: &str,
+) -> gltf::json::Index<gltf::json::Buffer> {
+    debug_assert_eq!(root.buffers.len(), buffers.len(), "every buffer of the document was read");
+    buffers.push(bytes);
+    root.push(gltf::json::Buffer {
+        byte_length: gltf::json::validation::USize64::from(buffers[buffers.len() - 1].len()),
+        name: Some(name.into()),
+        uri: None,
+        extensions: None,
+        extras: Default::default(),
+    })
 }
 
 /// Reads a buffer or image URI: `data:` (base64) or a file relative to the glTF that stays inside its folder.
