@@ -263,3 +263,145 @@ fn damaged_meshopt_streams_fail_cleanly() {
     }
     assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
 }
+
+/// BoxTextured with its one image replaced by `image` (of MIME type `mime`), appended to its binary chunk. For
+/// KTX2 the texture names it through `KHR_texture_basisu` alone, required, as glTF-Transform's `etc1s` and `uastc`
+/// write it; `fallback` keeps the core PNG `source` beside it and requires nothing.
+pub(crate) fn box_with_image(image: &[u8], mime: &str, fallback: bool) -> (Value, Vec<u8>) {
+    let (mut json, mut bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let offset = bin.len();
+    bin.extend(image);
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": image.len()}));
+    let view = views.len() - 1;
+    json["buffers"][0]["byteLength"] = json!(bin.len());
+    if mime != "image/ktx2" {
+        json["images"][0] = json!({"bufferView": view, "mimeType": mime});
+        return (json, bin);
+    }
+    json["images"].as_array_mut().unwrap().push(json!({"bufferView": view, "mimeType": mime}));
+    json["textures"][0]["extensions"] = json!({"KHR_texture_basisu": {"source": 1}});
+    json["extensionsUsed"] = json!(["KHR_texture_basisu"]);
+    if !fallback {
+        json["textures"][0].as_object_mut().unwrap().remove("source");
+        json["extensionsRequired"] = json!(["KHR_texture_basisu"]);
+    }
+    (json, bin)
+}
+
+/// The texture's RGBA bytes as vvgen loads `json` and `bin`.
+fn texture_of(json: &Value, bin: &[u8]) -> image::RgbaImage {
+    let tmp = tempfile::tempdir().unwrap();
+    let a = gltf::load_slice(&join(json, bin), &tmp.path().join("model.glb"), None).unwrap_or_else(|e| panic!("{e}"));
+    let t = &a.textures[0];
+    image::RgbaImage::from_raw(t.width, t.height, t.rgba.clone()).unwrap()
+}
+
+/// KTX2 textures (`KHR_texture_basisu`) load as Binomial's own transcoder (basisu 2.50, `-unpack`, its RGBA32
+/// output) transcodes them, byte for byte: ETC1S (BasisLZ) and UASTC (Zstandard), mipmapped, 211 texels square
+/// (not a whole number of blocks), made by basisu from BoxTextured's PNG; and two files from glTF-Transform's tests,
+/// made by KTX-Software. The ETC1S box is lossy but its own picture: near its PNG.
+#[test]
+fn ktx2_textures_load_as_binomials_transcoder_decodes_them() {
+    for name in ["BoxTextured_etc1s", "BoxTextured_uastc", "2d_etc1s", "2d_uastc"] {
+        let ktx2 = std::fs::read(data(&format!("gltf/ktx2/{name}.ktx2"))).unwrap();
+        let want = image::open(data(&format!("gltf/ktx2/{name}.png"))).unwrap().to_rgba8();
+        let (json, bin) = box_with_image(&ktx2, "image/ktx2", false);
+        let got = texture_of(&json, &bin);
+        assert_eq!(got.dimensions(), want.dimensions(), "{name}");
+        let differ = got.pixels().zip(want.pixels()).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "{name}: {differ} texels differ from the reference transcoder's");
+    }
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let png = texture_of(&json, &bin);
+    let ktx2 = std::fs::read(data("gltf/ktx2/BoxTextured_etc1s.ktx2")).unwrap();
+    let (json, bin) = box_with_image(&ktx2, "image/ktx2", false);
+    let etc1s = texture_of(&json, &bin);
+    let off = png.pixels().zip(etc1s.pixels()).map(|(a, b)| (0..3).map(|c| a[c].abs_diff(b[c]) as u32).sum::<u32>());
+    let mean = off.sum::<u32>() as f64 / (3 * png.len() / 4) as f64;
+    assert!(mean < 4.0, "the ETC1S texture is BoxTextured's picture: {mean} levels off on average");
+}
+
+/// A texture with a KTX2 image and a PNG fallback (the extension optional) shows the PNG, as Blender's importer
+/// does: the KTX2 image is a lossy copy of it.
+#[test]
+fn a_ktx2_texture_with_a_png_fallback_shows_the_png() {
+    let (json, bin) = split(&std::fs::read(data("gltf/BoxTextured/BoxTextured.glb")).unwrap());
+    let ktx2 = std::fs::read(data("gltf/ktx2/BoxTextured_etc1s.ktx2")).unwrap();
+    let (with, with_bin) = box_with_image(&ktx2, "image/ktx2", true);
+    assert_eq!(texture_of(&with, &with_bin), texture_of(&json, &bin));
+}
+
+/// A box textured with KTX2 alone runs through `new`, `check` and `build` from its folder, as a newcomer runs them,
+/// and its images are those of the same box with the reference transcoder's PNG.
+#[test]
+fn a_ktx2_textured_box_builds_as_its_transcoded_twin() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut images = Vec::new();
+    for (name, file, mime) in
+        [("ktx2", "BoxTextured_uastc.ktx2", "image/ktx2"), ("png", "BoxTextured_uastc.png", "image/png")]
+    {
+        let dir = tmp.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        let (json, bin) = box_with_image(&std::fs::read(data(&format!("gltf/ktx2/{file}"))).unwrap(), mime, false);
+        std::fs::write(dir.join("box.glb"), join(&json, &bin)).unwrap();
+        let (code, err) = vvgen(&dir, &["new", "box.glb", "-o", "m.toml"]);
+        assert_eq!(code, 0, "{err}");
+        let manifest = std::fs::read_to_string(dir.join("m.toml")).unwrap();
+        // Two small views keep it quick; the rest is what `new` wrote.
+        let manifest = manifest.replace("[400, 400]", "[96, 96]").replace("views = 100", "views = 2");
+        std::fs::write(dir.join("m.toml"), manifest).unwrap();
+        for command in ["check", "build"] {
+            let (code, err) = vvgen(&dir, &["-q", command, "m.toml"]);
+            assert_eq!(code, 0, "{name} {command}: {err}");
+        }
+        images.push(image::open(dir.join("out/box/box_dnerf/train/r_0000.png")).unwrap().to_rgba8());
+    }
+    let shades: std::collections::BTreeSet<_> = images[0].pixels().filter(|p| p[3] == 255).map(|p| p.0).collect();
+    assert!(shades.len() > 20, "the texture shows: {} shades", shades.len());
+    assert_eq!(images[0], images[1], "the KTX2 box's image is its transcoded twin's");
+}
+
+/// KTX2 images vvgen cannot read are errors naming the file and the image, with what is wrong, in `check` as in
+/// `build`: an uncompressed RGBA8 one (glTF-Transform's test file; `KHR_texture_basisu` allows Basis Universal
+/// only), a cube map, absurd sides, a Zstandard level that claims to inflate to 1 TiB, a level index past the end.
+#[test]
+fn bad_ktx2_images_are_errors_naming_the_image() {
+    let uastc = std::fs::read(data("gltf/ktx2/BoxTextured_uastc.ktx2")).unwrap();
+    let edit = |at: usize, value: &[u8]| {
+        let mut k = uastc.clone();
+        k[at..at + value.len()].copy_from_slice(value);
+        k
+    };
+    let cases = [
+        (
+            std::fs::read(data("gltf/ktx2/2d_rgba8.ktx2")).unwrap(),
+            "is not Basis Universal's ETC1S or UASTC (vkFormat 43",
+        ),
+        (edit(36, &6u32.to_le_bytes()), "is not one 2D image (0 deep, 0 layers, 6 faces)"),
+        (edit(20, &100_000u32.to_le_bytes()), "is 100000 × 211 texels"),
+        (edit(80 + 16, &(1u64 << 40).to_le_bytes()), "level 0 runs past the file or states an impossible size"),
+        (edit(40, &1_000_000u32.to_le_bytes()), "is truncated"),
+        (uastc[..60].to_vec(), "is truncated"),
+    ];
+    for (ktx2, says) in cases {
+        let (json, bin) = box_with_image(&ktx2, "image/ktx2", false);
+        refused_by_check_and_build(&json, &bin, &["model.glb", "images[1]: a KTX2 image", says]);
+    }
+}
+
+/// Every byte of two KTX2 files (ETC1S and UASTC, made by KTX-Software) set to three values: each loads or is
+/// refused with an error naming the image; none panics.
+#[test]
+fn damaged_ktx2_images_fail_cleanly() {
+    let (mut loaded, mut refused) = (0, 0);
+    for name in ["2d_etc1s", "2d_uastc"] {
+        let ktx2 = std::fs::read(data(&format!("gltf/ktx2/{name}.ktx2"))).unwrap();
+        let (json, bin) = box_with_image(&ktx2, "image/ktx2", false);
+        let start = bin.len() - ktx2.len();
+        let (l, r) = damaged(&json, &bin, start..bin.len(), &["model.glb", "images[1]"]);
+        (loaded, refused) = (loaded + l, refused + r);
+    }
+    assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
+}

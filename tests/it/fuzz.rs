@@ -182,6 +182,12 @@ fn fuzz_gltf_loading_posing_and_rendering() {
         ("tangent.gltf", crate::normal_maps::quad_gltf(glam::Vec3::new(0.3, 0.2, 0.9), 0.5, true)),
     ];
     seeds.extend(made.into_iter().map(|(name, json)| (PathBuf::from(name), json.into_bytes())));
+    // KTX2 textures (ETC1S and UASTC with Zstandard), so that mutants reach the KTX2 header check and the transcoder.
+    for name in ["2d_etc1s", "BoxTextured_uastc"] {
+        let ktx2 = std::fs::read(crate::common::data(&format!("gltf/ktx2/{name}.ktx2"))).unwrap();
+        let (json, bin) = crate::compressed::box_with_image(&ktx2, "image/ktx2", false);
+        seeds.push((PathBuf::from(format!("{name}.glb")), crate::common::glb_join(&json, &bin)));
+    }
     fuzz("gltf", &seeds, 2, |path, bytes| {
         let Ok(asset) = gltf::load_slice(bytes, path, None) else { return };
         let clips: Vec<usize> = (0..asset.animations.len()).collect();

@@ -25,6 +25,9 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     // WebP images (glTF-Transform's `webp`; image-to-3D generators' output, TRELLIS 2's among them): `parse`
     // points the texture at its WebP image and the image decoder reads it.
     "EXT_texture_webp",
+    // KTX2 images (glTF-Transform's `etc1s` and `uastc`, gltfpack's `-tc`): `parse` points a texture without a core
+    // image at its KTX2 image, which `super::image` transcodes.
+    "KHR_texture_basisu",
     // A mesh drawn many times (gltfpack's `-mi` requires it): every copy is posed (`super::instancing`).
     "EXT_mesh_gpu_instancing",
     // 3D Gaussians (`super::splats`), required by the files that compress them (refused below) or by choice.
@@ -83,7 +86,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Vec<String>), String> {
     // After the check, whose messages name the file's own attributes.
     let splats = super::splats::rename(&mut doc)?;
     let followed = super::pointer::follow(&mut doc)?;
-    let edited = webp_sources(&mut doc) | scene_nodes(&mut doc) | splats | followed.changed;
+    let edited = image_sources(&mut doc) | scene_nodes(&mut doc) | splats | followed.changed;
     // The JSON is parsed again from the edited document only when there was something to edit.
     let read = |validate: bool| -> Result<gltf::Gltf, gltf::Error> {
         if !edited {
@@ -148,15 +151,20 @@ fn scene_nodes(doc: &mut serde_json::Value) -> bool {
     changed
 }
 
-/// Points every texture with an `EXT_texture_webp` image at that image (the extension's intent: a reader that
-/// decodes WebP uses it, the core `source`, if any, being a fallback of the same picture; Blender's importer does
-/// the same). Returns whether anything changed.
-fn webp_sources(doc: &mut serde_json::Value) -> bool {
+/// Points every texture at the image a reader that decodes its extensions would use: an `EXT_texture_webp` image
+/// always (the extension's intent: the core `source`, if any, is a fallback of the same picture; Blender's
+/// importer does the same), a `KHR_texture_basisu` (KTX2) image only when there is no core `source`. A KTX2 image
+/// is lossy and block-compressed: its PNG or JPEG fallback, where there is one, is the picture it was made from
+/// and the one Blender's importer shows. Returns whether anything changed.
+fn image_sources(doc: &mut serde_json::Value) -> bool {
     let Some(textures) = doc.get_mut("textures").and_then(|t| t.as_array_mut()) else { return false };
     let mut changed = false;
     for t in textures {
         let webp = t.pointer("/extensions/EXT_texture_webp/source").and_then(|s| s.as_u64());
-        if let (Some(source), Some(t)) = (webp, t.as_object_mut()) {
+        let ktx2 = t.pointer("/extensions/KHR_texture_basisu/source").and_then(|s| s.as_u64());
+        let Some(t) = t.as_object_mut() else { continue };
+        let source = webp.or(ktx2.filter(|_| !t.contains_key("source")));
+        if let Some(source) = source {
             changed |= t.insert("source".into(), source.into()).is_none_or(|old| old != source);
         }
     }
@@ -183,11 +191,6 @@ fn required_extensions(doc: &serde_json::Value) -> Result<(), String> {
         // Blender's importer refuses a file that requires an extension it does not manage, so it is a way out only
         // for those it reads; texture formats have their converters.
         return Err(match ext {
-            "KHR_texture_basisu" => format!(
-                "requires the extension `{ext}`, which vvgen does not read (its textures are KTX2, which Blender's \
-                 importer does not read either). Way out: `npx @gltf-transform/cli ktxdecompress in.glb out.glb` \
-                 rewrites them as PNG (it runs KTX-Software's `ktx` tool, which must be installed); name that"
-            ),
             "EXT_texture_avif" => format!(
                 "requires the extension `{ext}`, which vvgen does not read (its textures are AVIF, which Blender's \
                  importer does not read either). Way out: `npx @gltf-transform/cli png in.glb out.glb --formats \"*\"` \

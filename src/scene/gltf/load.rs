@@ -174,16 +174,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
                     fetch_uri(dir, uri).map_err(|e| err(path, format!("image {img_index}: {e}")))?
                 }
             };
-            // The image's own header sizes the decode: bounded as OBJ and FBX textures are.
-            let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
-                .with_guessed_format()
-                .map_err(|e| err(path, format!("images[{img_index}]: cannot decode: {e}")))?;
-            let mut limits = image::Limits::default();
-            limits.max_image_width = Some(crate::scene::obj::MAX_TEXTURE_SIDE);
-            limits.max_image_height = Some(crate::scene::obj::MAX_TEXTURE_SIDE);
-            reader.limits(limits);
-            let decoded = reader.decode().map_err(|e| err(path, format!("images[{img_index}]: cannot decode: {e}")))?;
-            images[img_index] = Some(decoded.to_rgba8());
+            images[img_index] = Some(super::image::decode(&bytes, img_index).map_err(|e| err(path, e))?);
         }
         let img = images[img_index].as_ref().expect("BUG: decoded just above when missing");
         textures.push(Texture::new(img.width(), img.height(), img.as_raw().clone(), true));

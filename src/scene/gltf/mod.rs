@@ -4,6 +4,7 @@ mod accessor;
 pub mod anim;
 mod document;
 mod draco;
+mod image;
 mod instancing;
 pub mod load;
 mod materials;
