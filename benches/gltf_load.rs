@@ -2,7 +2,9 @@
 //! meshopt, images) per file given. Run: `cargo bench --bench gltf_load -- FILE…`. Its peer,
 //! `benches/gltf_transform_read.mjs`, times glTF-Transform's `NodeIO.read` (Google's draco3dgltf and
 //! meshoptimizer's WebAssembly decoder, as three.js decodes) on the same files in the same run; a codec's cost
-//! is a compressed file's time minus its plain twin's, on each side.
+//! is a compressed file's time minus its plain twin's, on each side. For KTX2 textures the peer is
+//! `benches/basis_transcode.mjs` (three.js's Basis transcoder) and vvgen's cost is a KTX2 file's time minus that of
+//! the same file without textures.
 
 use std::hint::black_box;
 use std::path::Path;

@@ -25,8 +25,9 @@ pub(super) fn decode(bytes: &[u8], index: usize) -> Result<image::RgbaImage, Str
 }
 
 /// The way out for a KTX2 image vvgen cannot read.
-const KTX2_WAY_OUT: &str = "Way out: export the model again with PNG or JPEG textures, or with KTX2 textures in \
-                            Basis Universal's ETC1S or UASTC (`npx @gltf-transform/cli etc1s in.glb out.glb`)";
+const KTX2_WAY_OUT: &str = "Way out: export the model again with PNG or JPEG textures, or with KTX2 textures in Basis \
+                            Universal's ETC1S or UASTC LDR (what gltfpack's `-tc` and glTF-Transform's `etc1s` and \
+                            `uastc` write)";
 
 /// Level 0 of a Basis Universal KTX2 image as RGBA, or what is wrong with it (completing "a KTX2 image …").
 ///
