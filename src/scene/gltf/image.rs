@@ -1,15 +1,65 @@
-//! A glTF image's bytes to pixels: PNG, JPEG and WebP through the `image` crate, KTX2 (`KHR_texture_basisu`:
-//! Basis Universal's ETC1S and UASTC, Zstandard-supercompressed or not) through `basisu`, a port of Binomial's
-//! transcoder that gives its RGBA bytes exactly (the tests hold it to the C++ transcoder's output).
-//! Either way the image's own header sizes the decode, bounded by [`MAX_TEXTURE_SIDE`] as OBJ and FBX textures are.
+//! A glTF's textures ([`textures`]): its images' bytes to pixels, PNG, JPEG and WebP through the `image` crate, KTX2
+//! (`KHR_texture_basisu`: Basis Universal's ETC1S and UASTC, Zstandard-supercompressed or not) through `basisu`, a
+//! port of Binomial's transcoder that gives its RGBA bytes exactly (the tests hold it to the C++ transcoder's
+//! output). Either way the image's own header sizes the decode, bounded by [`MAX_TEXTURE_SIDE`] as OBJ and FBX
+//! textures are.
 
+use std::path::Path;
+
+use rayon::prelude::*;
+
+use super::uri::fetch_uri;
 use crate::scene::obj::MAX_TEXTURE_SIDE;
+use crate::scene::texture::Texture;
 
 /// KTX 2.0's file identifier.
 const KTX2: &[u8; 12] = b"\xABKTX 20\xBB\r\n\x1A\n";
 
+/// Every texture of `doc`, in its order, as sRGB RGBA: the images they use are read in the file's order (from
+/// `buffers`, or from files beside it in `dir`), then decoded once each, in parallel (a file's 2048² textures are
+/// most of its load: FlightHelmet's fifteen took 50 ms one after another, 27 ms on two cores). An image's pixels
+/// depend on its bytes alone, and a failure is reported for the first failing image in the file's order.
+pub(super) fn textures(doc: &gltf::Document, buffers: &[Vec<u8>], dir: &Path) -> Result<Vec<Texture>, String> {
+    let mut bytes: Vec<Option<Vec<u8>>> = vec![None; doc.images().len()];
+    for t in doc.textures() {
+        let index = t.source().index();
+        if bytes[index].is_some() {
+            continue;
+        }
+        bytes[index] = Some(match t.source().source() {
+            gltf::image::Source::View { view, .. } => {
+                let buf = &buffers[view.buffer().index()];
+                // Offsets come from the file: a sum that wraps is a range past the buffer, not a small one.
+                let end = view.offset().saturating_add(view.length());
+                if end > buf.len() {
+                    return Err(format!("images[{index}]: bufferView {} runs past its buffer", view.index()));
+                }
+                buf[view.offset()..end].to_vec()
+            }
+            gltf::image::Source::Uri { uri, .. } => fetch_uri(dir, uri).map_err(|e| format!("image {index}: {e}"))?,
+        });
+    }
+    let decoded: Vec<_> =
+        bytes.par_iter().enumerate().map(|(i, b)| b.as_deref().map(|b| decode(b, i)).transpose()).collect();
+    drop(bytes);
+    let mut images = decoded.into_iter().collect::<Result<Vec<_>, _>>()?;
+    // An image's last texture takes its pixels; textures before it that share the image copy them.
+    let mut last = vec![usize::MAX; images.len()];
+    for (ti, t) in doc.textures().enumerate() {
+        last[t.source().index()] = ti;
+    }
+    let mut textures = Vec::with_capacity(doc.textures().len());
+    for (ti, t) in doc.textures().enumerate() {
+        let i = t.source().index();
+        let img = if last[i] == ti { images[i].take() } else { images[i].clone() };
+        let img = img.expect("BUG: every texture's image was decoded above, and taken by its last texture only");
+        textures.push(Texture::new(img.width(), img.height(), img.into_raw(), true));
+    }
+    Ok(textures)
+}
+
 /// Decodes image `index`'s bytes to 8-bit RGBA, KTX2 by its identifier, anything else by its own magic bytes.
-pub(super) fn decode(bytes: &[u8], index: usize) -> Result<image::RgbaImage, String> {
+fn decode(bytes: &[u8], index: usize) -> Result<image::RgbaImage, String> {
     if bytes.starts_with(KTX2) {
         return ktx2(bytes).map_err(|e| format!("images[{index}]: a KTX2 image {e}"));
     }

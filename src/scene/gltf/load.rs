@@ -11,7 +11,6 @@ use super::accessor::{read_f32, read_u32};
 use super::anim::{Animation, Channel, Interp, Sampler, Target};
 use super::instancing;
 use super::materials::{linear_data_textures, material, unread_looks};
-use super::uri::fetch_uri;
 use crate::scene::light::{FileLight, GltfLightKind};
 use crate::scene::material::Material;
 use crate::scene::posed::PrimKind;
@@ -153,32 +152,8 @@ pub fn load_slice(bytes: &[u8], path: &Path, scene: Option<usize>) -> Result<Glt
     warnings.extend(decoded);
     let doc = &document;
 
-    // Textures: decode each image once; base colour and emissive use is sRGB.
-    let mut images: Vec<Option<image::RgbaImage>> = vec![None; doc.images().len()];
-    let mut textures = Vec::new();
-    for t in doc.textures() {
-        let img_index = t.source().index();
-        if images[img_index].is_none() {
-            let bytes = match t.source().source() {
-                gltf::image::Source::View { view, .. } => {
-                    let buf = &buffers[view.buffer().index()];
-                    // Offsets come from the file: a sum that wraps is a range past the buffer, not a small one.
-                    let end = view.offset().saturating_add(view.length());
-                    if end > buf.len() {
-                        let v = view.index();
-                        return Err(err(path, format!("images[{img_index}]: bufferView {v} runs past its buffer")));
-                    }
-                    buf[view.offset()..end].to_vec()
-                }
-                gltf::image::Source::Uri { uri, .. } => {
-                    fetch_uri(dir, uri).map_err(|e| err(path, format!("image {img_index}: {e}")))?
-                }
-            };
-            images[img_index] = Some(super::image::decode(&bytes, img_index).map_err(|e| err(path, e))?);
-        }
-        let img = images[img_index].as_ref().expect("BUG: decoded just above when missing");
-        textures.push(Texture::new(img.width(), img.height(), img.as_raw().clone(), true));
-    }
+    // Textures, sRGB as base colour and emissive use them (data textures get linear copies below).
+    let mut textures = super::image::textures(doc, &buffers, dir).map_err(|e| err(path, e))?;
 
     let (mut materials, spec_gloss): (Vec<Material>, Vec<_>) = doc.materials().map(|m| material(&m)).unzip();
     warnings.extend(unread_looks(doc.materials()));
