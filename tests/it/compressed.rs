@@ -405,3 +405,26 @@ fn damaged_ktx2_images_fail_cleanly() {
     }
     assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
 }
+
+/// Images decode in parallel, but a file with two bad ones is refused for the first in its order, every time.
+#[test]
+fn of_two_bad_images_the_first_is_reported() {
+    let ktx2 = std::fs::read(data("gltf/ktx2/2d_uastc.ktx2")).unwrap();
+    let (mut json, mut bin) = box_with_image(&ktx2[..60], "image/ktx2", false);
+    // A second texture on a second, also truncated, KTX2 image (PNG's magic bytes and nothing else).
+    let offset = bin.len().next_multiple_of(4);
+    bin.resize(offset, 0);
+    bin.extend(b"\x89PNG\r\n\x1a\n");
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": 8}));
+    let view = views.len() - 1;
+    json["images"].as_array_mut().unwrap().push(json!({"bufferView": view, "mimeType": "image/png"}));
+    json["textures"].as_array_mut().unwrap().push(json!({"source": 2}));
+    json["buffers"][0]["byteLength"] = json!(bin.len());
+    let tmp = tempfile::tempdir().unwrap();
+    for _ in 0..20 {
+        let e = gltf::load_slice(&join(&json, &bin), &tmp.path().join("model.glb"), None).map(|_| ()).unwrap_err();
+        let e = e.to_string();
+        assert!(e.contains("images[1]: a KTX2 image is truncated"), "{e}");
+    }
+}
