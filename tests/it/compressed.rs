@@ -428,3 +428,20 @@ fn of_two_bad_images_the_first_is_reported() {
         assert!(e.contains("images[1]: a KTX2 image is truncated"), "{e}");
     }
 }
+
+/// A KTX2 image in a file of its own beside a `.gltf` is named by that file in the error.
+#[test]
+fn a_bad_ktx2_file_beside_a_gltf_is_named() {
+    let (mut json, bin) = box_with_image(b"", "image/ktx2", false);
+    let tmp = tempfile::tempdir().unwrap();
+    json["images"][1] = json!({"uri": "logo.ktx2"});
+    json["buffers"][0]["uri"] = json!("box.bin");
+    std::fs::write(tmp.path().join("box.bin"), &bin).unwrap();
+    std::fs::copy(data("gltf/ktx2/2d_rgba8.ktx2"), tmp.path().join("logo.ktx2")).unwrap();
+    std::fs::write(tmp.path().join("box.gltf"), serde_json::to_vec(&json).unwrap()).unwrap();
+    let e = gltf::load(&tmp.path().join("box.gltf"), None).map(|_| ()).unwrap_err().to_string();
+    assert!(
+        e.contains("box.gltf") && e.contains("images[1] (logo.ktx2): a KTX2 image is not Basis Universal's"),
+        "{e}"
+    );
+}

@@ -20,7 +20,8 @@ const KTX2: &[u8; 12] = b"\xABKTX 20\xBB\r\n\x1A\n";
 /// most of its load: FlightHelmet's fifteen took 46 ms one after another, 27 ms on two cores). An image's pixels
 /// depend on its bytes alone, and a failure is reported for the first failing image in the file's order.
 pub(super) fn textures(doc: &gltf::Document, buffers: &[Vec<u8>], dir: &Path) -> Result<Vec<Texture>, String> {
-    let mut bytes: Vec<Option<Vec<u8>>> = vec![None; doc.images().len()];
+    // Each image's bytes and its name in errors: its index, and its file when it has one.
+    let mut bytes: Vec<Option<(Vec<u8>, String)>> = vec![None; doc.images().len()];
     for t in doc.textures() {
         let index = t.source().index();
         if bytes[index].is_some() {
@@ -34,13 +35,20 @@ pub(super) fn textures(doc: &gltf::Document, buffers: &[Vec<u8>], dir: &Path) ->
                 if end > buf.len() {
                     return Err(format!("images[{index}]: bufferView {} runs past its buffer", view.index()));
                 }
-                buf[view.offset()..end].to_vec()
+                (buf[view.offset()..end].to_vec(), format!("images[{index}]"))
             }
-            gltf::image::Source::Uri { uri, .. } => fetch_uri(dir, uri).map_err(|e| format!("image {index}: {e}"))?,
+            gltf::image::Source::Uri { uri, .. } => {
+                let read = fetch_uri(dir, uri).map_err(|e| format!("image {index}: {e}"))?;
+                let name = if uri.starts_with("data:") {
+                    format!("images[{index}]")
+                } else {
+                    format!("images[{index}] ({uri})")
+                };
+                (read, name)
+            }
         });
     }
-    let decoded: Vec<_> =
-        bytes.par_iter().enumerate().map(|(i, b)| b.as_deref().map(|b| decode(b, i)).transpose()).collect();
+    let decoded: Vec<_> = bytes.par_iter().map(|b| b.as_ref().map(|(b, name)| decode(b, name)).transpose()).collect();
     drop(bytes);
     let mut images = decoded.into_iter().collect::<Result<Vec<_>, _>>()?;
     // An image's last texture takes its pixels; textures before it that share the image copy them.
@@ -58,21 +66,25 @@ pub(super) fn textures(doc: &gltf::Document, buffers: &[Vec<u8>], dir: &Path) ->
     Ok(textures)
 }
 
-/// Decodes image `index`'s bytes to 8-bit RGBA, KTX2 by its identifier, anything else by its own magic bytes.
-fn decode(bytes: &[u8], index: usize) -> Result<image::RgbaImage, String> {
+/// Decodes the bytes of the image errors call `name` to 8-bit RGBA, KTX2 by its identifier, anything else by its own
+/// magic bytes.
+fn decode(bytes: &[u8], name: &str) -> Result<image::RgbaImage, String> {
     if bytes.starts_with(KTX2) {
-        return ktx2(bytes).map_err(|e| format!("images[{index}]: a KTX2 image {e}"));
+        return ktx2(bytes).map_err(|e| format!("{name}: a KTX2 image {e}"));
     }
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(|e| format!("images[{index}]: cannot decode: {e}"))?;
+        .map_err(|e| format!("{name}: cannot decode: {e}"))?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
     reader.limits(limits);
-    let decoded = reader.decode().map_err(|e| format!("images[{index}]: cannot decode: {e}"))?;
+    let decoded = reader.decode().map_err(|e| format!("{name}: cannot decode: {e}"))?;
     Ok(decoded.to_rgba8())
 }
+
+/// The way out for a damaged KTX2 image.
+const AGAIN: &str = "Way out: export or download the model again";
 
 /// The way out for a KTX2 image vvgen cannot read.
 const KTX2_WAY_OUT: &str = "Way out: export the model again with PNG or JPEG textures, or with KTX2 textures in Basis \
@@ -85,18 +97,22 @@ const KTX2_WAY_OUT: &str = "Way out: export the model again with PNG or JPEG tex
 /// Zstandard level's stated size is allocated as given, its range summed unchecked), and `KHR_texture_basisu`
 /// allows a 2D image only.
 fn ktx2(bytes: &[u8]) -> Result<image::RgbaImage, String> {
-    let header = Ktx2Header::read(bytes).ok_or("is truncated: its header or level index runs past its end")?;
+    let header = Ktx2Header::read(bytes)
+        .ok_or_else(|| format!("is truncated: its header or level index runs past its end. {AGAIN}"))?;
     // Basis Universal's payloads have no Vulkan format of their own (VK_FORMAT_UNDEFINED, 0).
     if header.vk_format != 0 {
         return Err(not_basis(&header));
     }
     let (w, h) = (header.width, header.height);
     if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
-        return Err(format!("is {w} × {h} texels: sides of 1 to {MAX_TEXTURE_SIDE} are read"));
+        return Err(format!(
+            "is {w} × {h} texels: sides of 1 to {MAX_TEXTURE_SIDE} are read. Way out: export the model again with \
+             smaller textures"
+        ));
     }
     if header.depth > 1 || header.layers > 1 || header.faces != 1 {
         return Err(format!(
-            "is not one 2D image ({} deep, {} layers, {} faces), as `KHR_texture_basisu` requires",
+            "is not one 2D image ({} deep, {} layers, {} faces), as `KHR_texture_basisu` requires. {KTX2_WAY_OUT}",
             header.depth, header.layers, header.faces
         ));
     }
@@ -106,11 +122,11 @@ fn ktx2(bytes: &[u8]) -> Result<image::RgbaImage, String> {
     for (i, l) in header.levels.iter().enumerate() {
         let end = l.offset.checked_add(l.length).filter(|&e| e <= bytes.len() as u64);
         if end.is_none() || l.uncompressed > blocks {
-            return Err(format!("is damaged: level {i} runs past the file or states an impossible size"));
+            return Err(format!("is damaged: level {i} runs past the file or states an impossible size. {AGAIN}"));
         }
     }
     let t = basisu::Transcoder::new(bytes).map_err(|e| match e {
-        basisu::Error::Truncated => "is truncated".to_string(),
+        basisu::Error::Truncated => format!("is truncated. {AGAIN}"),
         _ => not_basis(&header),
     })?;
     match t.source_format() {
@@ -123,12 +139,13 @@ fn ktx2(bytes: &[u8]) -> Result<image::RgbaImage, String> {
         }
     }
     if t.base_dimensions() != (w, h) {
-        return Err("is damaged: its transcoder reads another size than its header states".into());
+        return Err(format!("is damaged: its transcoder reads another size than its header states. {AGAIN}"));
     }
     let rgba = t
         .transcode(0, basisu::TargetFormat::Rgba32, basisu::DecodeFlags::NONE)
-        .map_err(|e| format!("is damaged: it does not transcode ({e:?})"))?;
-    image::RgbaImage::from_raw(w, h, rgba).ok_or_else(|| "is damaged: it transcodes to the wrong size".into())
+        .map_err(|e| format!("is damaged: it does not transcode ({e:?}). {AGAIN}"))?;
+    image::RgbaImage::from_raw(w, h, rgba)
+        .ok_or_else(|| format!("is damaged: it transcodes to the wrong size. {AGAIN}"))
 }
 
 /// The error for a KTX2 image that holds no Basis Universal payload (or a damaged one).
