@@ -156,8 +156,9 @@ pub enum Command {
         #[arg(long)]
         cache: Option<PathBuf>,
     },
-    /// Write a commented manifest to start from, for a glTF, FBX, .blend, PLY, OBJ or STL file or a folder of PLY,
-    /// OBJ or STL frames: clips, frame count and up axis read off the asset, the NeRF-synthetic recipe for the rest.
+    /// Write a commented manifest to start from, for a glTF, FBX, .blend, PLY, OBJ, STL or Draco file or a folder of
+    /// PLY, OBJ, STL or Draco frames: clips, frame count and up axis read off the asset, the NeRF-synthetic recipe
+    /// for the rest.
     #[command(
         after_help = "Examples:\n  vvgen new CesiumMan.glb\n  vvgen new frames/ --writer nerfstudio -o scan.toml"
     )]

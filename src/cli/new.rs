@@ -1,6 +1,6 @@
-//! `vvgen new ASSET`: a commented manifest to start from, for a glTF, FBX, `.blend`, PLY, OBJ or STL file, or a
-//! folder of PLY, OBJ or STL frames. What it can read off the asset (clips, frame count, the up axis) it writes in
-//! and says; the rest is the NeRF-synthetic recipe (a ±1.3 box, the hemisphere cameras, D-NeRF's splits).
+//! `vvgen new ASSET`: a commented manifest to start from, for a glTF, FBX, `.blend`, PLY, OBJ, STL or Draco file,
+//! or a folder of PLY, OBJ, STL or Draco frames. What it can read off the asset (clips, frame count, the up axis)
+//! it writes in and says; the rest is the NeRF-synthetic recipe (a ±1.3 box, the hemisphere cameras, D-NeRF's splits).
 
 use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};
@@ -137,18 +137,22 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         files.sort();
         let count = |e: &str| files.iter().filter(|p| ext(p) == e).count();
         // The kind of frame the folder holds most of (PLY first when as many).
-        let (e, n) = ["ply", "obj", "stl"]
+        let (e, n) = ["ply", "obj", "stl", "drc"]
             .map(|e| (e, count(e)))
             .into_iter()
             .rev()
             .max_by_key(|&(_, n)| n)
             .unwrap_or(("ply", 0));
         if n == 0 {
-            bail!("{}: no .ply, .obj or .stl frames in this folder", asset.display());
+            bail!("{}: no .ply, .obj, .stl or .drc frames in this folder", asset.display());
         }
         let key = if e == "ply" { "ply_sequence" } else { "mesh_sequence" };
         let first = files.iter().find(|p| ext(p) == e).expect("counted above");
-        let (frame, origin) = if e == "stl" { (scene::stl::scene(first)?, None) } else { mesh_at_rest(first)? };
+        let (frame, origin) = match e {
+            "stl" => (scene::stl::scene(first)?, None),
+            "drc" => (scene::drc::scene(first)?, None),
+            _ => mesh_at_rest(first)?,
+        };
         drawable(&frame, first)?;
         let (up, why) = match e {
             "obj" if !points_only(&frame) => obj_up(),
@@ -242,6 +246,13 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
             // One OBJ is a static mesh (`mesh`), as one PLY is; a folder of them is a sequence.
             Ok(Described { kind: Asset::Mesh, up, note: why, rest: s, origin })
         }
+        // A Draco file is most often a compressed PLY scan or cloud: its up is guessed as a scan's is.
+        "drc" => {
+            let s = scene::drc::scene(asset)?;
+            drawable(&s, asset)?;
+            let (up, note) = tallest(&s, asset);
+            Ok(Described { kind: Asset::Mesh, up, note, rest: s, origin: None })
+        }
         "stl" => {
             let s = scene::stl::scene(asset)?;
             drawable(&s, asset)?;
@@ -250,7 +261,12 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         }
         _ => match scene::source::way_out_of(asset) {
             Some(way_out) => bail!("{way_out}"),
-            None => bail!("{}: not a glTF, FBX, .blend, PLY, OBJ or STL file, nor a folder of frames", asset.display()),
+            None => {
+                bail!(
+                    "{}: not a glTF, FBX, .blend, PLY, OBJ, STL or Draco file, nor a folder of frames",
+                    asset.display()
+                )
+            }
         },
     }
 }

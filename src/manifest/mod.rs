@@ -151,7 +151,7 @@ fn not_a_manifest(path: &Path) -> Option<Diagnostic> {
             .collect();
         tomls.sort();
         let help = match tomls.len() {
-            0 => format!("`vvgen new {typed}` writes a manifest for a folder of PLY, OBJ or STL frames"),
+            0 => format!("`vvgen new {typed}` writes a manifest for a folder of PLY, OBJ, STL or Draco frames"),
             _ => format!("name a manifest: {}", tomls.join(", ")),
         };
         return Some(Diagnostic::error(format!("{shown} is a folder, not a manifest"), None).with_help(help));
@@ -164,6 +164,7 @@ fn not_a_manifest(path: &Path) -> Option<Diagnostic> {
         "ply" => "a PLY file",
         "obj" => "an OBJ file",
         "stl" => "an STL file",
+        "drc" => "a Draco file",
         _ => return None,
     };
     let help = format!("`vvgen new {typed}` writes a manifest for it; check and build that");

@@ -28,7 +28,7 @@ pub struct Source {
     pub object: Option<String>,
     /// A `.blend` source's collection to import (with its child collections).
     pub collection: Option<String>,
-    /// A static mesh: glTF, PLY, OBJ (with MTL and textures) or STL.
+    /// A static mesh or cloud: glTF, PLY, OBJ (with MTL and textures), STL or Draco (`.drc`).
     #[schemars(with = "Option<String>")]
     pub(super) mesh: Option<Spanned<String>>,
     /// A PLY sequence: a pattern with `{frame}` / `{frame:04}`, or a glob (`*`, `?`, `[…]`).

@@ -3,6 +3,7 @@
 //! frame, so the subject does not jump or breathe between frames.
 
 pub mod blend;
+pub mod drc;
 pub mod fbx;
 mod fbx_layers;
 mod fbx_materials;

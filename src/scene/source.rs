@@ -121,6 +121,7 @@ impl LoadedSource {
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
             SourceFile::Mesh { path, .. } if is_stl(path) => SourceData::Static(super::stl::scene(path)?),
+            SourceFile::Mesh { path, .. } if is_drc(path) => SourceData::Static(super::drc::scene(path)?),
             SourceFile::Mesh { path, .. } if is_obj(path) => {
                 let (scene, missing) = super::obj::scene_and_missing(path, req.origin)?;
                 warnings.extend(missing);
@@ -139,10 +140,12 @@ impl LoadedSource {
             SourceFile::PlySequence(frames) => SourceData::Sequence(frames.clone()),
             SourceFile::MeshSequence(frames) => SourceData::MeshSequence(frames.clone()),
         };
-        // An empty PLY, OBJ or STL (a header alone, `solid`/`endsolid` alone) would render blank images: refused
-        // as a glTF or FBX with nothing to draw is.
+        // An empty PLY, OBJ, STL or Draco file (a header alone, `solid`/`endsolid` alone) would render blank images:
+        // refused as a glTF or FBX with nothing to draw is.
         if let (SourceFile::Mesh { path, .. }, SourceData::Static(s)) = (&req.file, &data) {
-            if (is_ply(path) || is_obj(path) || is_stl(path)) && s.triangle_count() + s.point_count() == 0 {
+            if (is_ply(path) || is_obj(path) || is_stl(path) || is_drc(path))
+                && s.triangle_count() + s.point_count() == 0
+            {
                 let drawn =
                     Holds { draws: false, nodes: 0, meshes: true, clips: 0, clip: "", skeleton: false, curves: 0 };
                 return Err(Error::Source { name, message: nothing_drawn(path, drawn).unwrap_or_default() });
@@ -180,10 +183,10 @@ impl LoadedSource {
                 warnings.extend(super::obj::unseen_materials(path)?);
             }
         }
-        // PLY is a scanner's format (Z up), STL a printer's (Z up, as slicers and Blender read it); OBJ and glTF
-        // are Y up; FBX is loaded in the world's axes, and a .blend in Blender's (exported +Z up). A ground plane
-        // is placed in world units.
-        let z_up = |p: &std::path::Path| is_ply(p) || is_stl(p);
+        // PLY is a scanner's format (Z up), and so is Draco's `.drc` (most often a compressed PLY); STL a printer's
+        // (Z up, as slicers and Blender read it); OBJ and glTF are Y up; FBX is loaded in the world's axes, and a
+        // .blend in Blender's (exported +Z up). A ground plane is placed in world units.
+        let z_up = |p: &std::path::Path| is_ply(p) || is_stl(p) || is_drc(p);
         let default_up = match &req.file {
             SourceFile::Mesh { path, .. } if z_up(path) => UpAxis::Z,
             SourceFile::MeshSequence(frames) if frames.first().is_some_and(|f| z_up(&f.path)) => UpAxis::Z,
@@ -338,6 +341,7 @@ pub(crate) fn is_obj(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 
+pub(crate) use super::drc::is_drc;
 pub(crate) use super::stl::is_stl;
 pub use super::way_out::way_out_of;
 
@@ -369,7 +373,8 @@ fn frame_times(f: &FrameRange, duration: f64, clip: &str) -> Result<Vec<f32>, St
 }
 
 /// One frame of a mesh sequence, by its extension: OBJ (with MTL and textures), PLY (textured when it has
-/// `comment TextureFile` and texture coordinates, per vertex or per face corner), STL, or glTF posed at rest.
+/// `comment TextureFile` and texture coordinates, per vertex or per face corner), STL, Draco (`.drc`), or glTF
+/// posed at rest.
 pub fn mesh_frame(path: &std::path::Path) -> Result<PosedScene, Error> {
     mesh_frame_at(path, [0.0; 3])
 }
@@ -382,6 +387,7 @@ fn mesh_frame_at(path: &std::path::Path, origin: [f64; 3]) -> Result<PosedScene,
         "obj" => super::obj::scene_at(path, origin),
         "ply" => ply_scene_at(path, origin),
         "stl" => super::stl::scene(path),
+        "drc" => super::drc::scene(path),
         _ => match way_out_of(path) {
             Some(message) => Err(Error::Mesh { path: path.to_path_buf(), line: None, message }),
             None => gltf_at_rest(path, None),
@@ -413,6 +419,7 @@ pub fn mesh_frame_deps(path: &std::path::Path) -> Result<Vec<PathBuf>, Error> {
         "obj" => super::obj::scan(path),
         // Nothing beside it; its form and size checked (`vvgen check` runs this on every frame).
         "stl" => super::stl::check_file(path).map(|()| Vec::new()),
+        "drc" => super::drc::check_file(path).map(|()| Vec::new()),
         "ply" => ply_textures(path),
         _ => Ok(beside(path, gltf_side_files(path)?)),
     }
@@ -436,7 +443,7 @@ pub fn mesh_frame_deps_cached(path: &std::path::Path, stat: &crate::cache::StatC
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "obj" => super::obj::scan_cached(path, stat),
-        "stl" => Ok(Vec::new()),
+        "stl" | "drc" => Ok(Vec::new()),
         "ply" => ply_textures_cached(path, stat),
         _ => {
             // The names a glTF frame's JSON gives its buffers and images, remembered for that content (as

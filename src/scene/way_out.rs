@@ -53,15 +53,6 @@ pub fn way_out_of(path: &std::path::Path) -> Option<String> {
              o3d.io.write_point_cloud('{stem}.ply', p)\"` writes it as a PLY point cloud in double precision \
              (colours kept), which vvgen reads; a LAS file's heights are its z: `up = \"z\"`"
         ),
-        // Google's Draco (`draco_encoder`'s output, point-cloud compression's usual baseline): DracoPy decodes a mesh
-        // or a point cloud, trimesh writes it as PLY.
-        "drc" => format!(
-            "{name}: vvgen does not read .drc (Draco) files: `pip install DracoPy trimesh`, then `python -c \"import \
-             DracoPy, trimesh; m = DracoPy.decode(open('{name}', 'rb').read()); f = getattr(m, 'faces', []); \
-             (trimesh.Trimesh(m.points, f, vertex_colors=m.colors, process=False) if len(f) else \
-             trimesh.PointCloud(m.points, colors=m.colors)).export('{stem}.ply')\"` writes it as a PLY mesh or point \
-             cloud (colours kept), which vvgen reads"
-        ),
         _ => return None,
     })
 }

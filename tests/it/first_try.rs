@@ -70,7 +70,7 @@ fn new_writes_where_asked_and_refuses_what_is_not_an_asset() {
     // A manifest is not an asset, whether or not it exists.
     let (code, err) = vvgen(d, &["new", "sub/deeper/box.toml"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("not a glTF, FBX, .blend, PLY, OBJ or STL file"), "{err}");
+    assert!(err.contains("not a glTF, FBX, .blend, PLY, OBJ, STL or Draco file"), "{err}");
     // `new .` in a folder of frames names the dataset after the folder.
     let frames = d.join("torus frames");
     std::fs::create_dir_all(&frames).unwrap();

@@ -165,6 +165,17 @@ fn fuzz_stl_reading_and_rendering() {
 }
 
 #[test]
+fn fuzz_drc_decoding_and_rendering() {
+    // google/draco's meshes and point clouds (EdgeBreaker, kd-tree, sequential, unquantized).
+    let seeds = seeds("drc", &["drc"]);
+    fuzz("drc", &seeds, 8, |_, bytes| {
+        if let Ok(scene) = vvgen::scene::drc::scene_slice(bytes) {
+            render_small(&scene);
+        }
+    });
+}
+
+#[test]
 fn fuzz_gltf_loading_posing_and_rendering() {
     let mut seeds = seeds("gltf", &["gltf", "glb"]);
     // Files the tests make: lights (KHR_lights_punctual, animated) and a normal texture with and without TANGENT.

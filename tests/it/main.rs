@@ -11,6 +11,7 @@ mod compare;
 mod compressed;
 mod consumers;
 mod corpus;
+mod drc;
 mod engine;
 mod fbx;
 mod first_try;
