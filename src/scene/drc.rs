@@ -93,7 +93,7 @@ fn posed(cloud: &PointCloud, triangles: Vec<u32>) -> Result<PosedScene, String> 
     let n = cloud.num_points();
     let position = cloud
         .named_attribute(GeometryAttributeType::Position)
-        .ok_or("a Draco file without positions: nothing to draw")?;
+        .ok_or("a Draco file without positions: nothing to draw. Way out: encode it again with its positions")?;
     let positions: Vec<Vec3> = vectors(position, n, 3)?.chunks_exact(3).map(Vec3::from_slice).collect();
     if triangles.iter().any(|&c| c as usize >= n) {
         return Err(format!("a damaged Draco file: a triangle names a point past its {n}"));
