@@ -148,11 +148,8 @@ fn describe(asset: &Path, cache: &Path, ui: Ui) -> anyhow::Result<Described> {
         }
         let key = if e == "ply" { "ply_sequence" } else { "mesh_sequence" };
         let first = files.iter().find(|p| ext(p) == e).expect("counted above");
-        let (frame, origin) = match e {
-            "stl" => (scene::stl::scene(first)?, None),
-            "drc" => (scene::drc::scene(first)?, None),
-            _ => mesh_at_rest(first)?,
-        };
+        let (frame, origin) =
+            if e == "stl" || e == "drc" { (scene::source::mesh_frame(first)?, None) } else { mesh_at_rest(first)? };
         drawable(&frame, first)?;
         let (up, why) = match e {
             "obj" if !points_only(&frame) => obj_up(),

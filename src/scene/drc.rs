@@ -13,11 +13,13 @@ use super::material::{srgb_to_linear, Material};
 use super::posed::{PosedScene, PrimKind};
 use super::Error;
 
-/// Bounds on what one file may decode to: 2^26 points, 2^27 triangles, 4 GiB of attribute data (a file of a few
-/// bytes may state any count).
-const MAX_POINTS: u64 = 1 << 26;
-const MAX_FACES: u64 = 1 << 27;
-const MAX_DECODED_BYTES: u64 = 4 << 30;
+/// Ceilings on one Draco stream's decoded geometry (a `.drc` file's, or a glTF primitive's: `super::gltf::draco`):
+/// 2^26 points, 2^27 triangles, 2 GiB of data. Far above any exported mesh (Draco splits vertices at seams, so a
+/// decoded count can exceed its source's), and a bound on what a hostile header can make vvgen allocate
+/// (draco-core also refuses reservations its stream cannot back).
+pub(crate) fn limits() -> DecodeLimits {
+    DecodeLimits::default().with_max_points(1 << 26).with_max_faces(1 << 27).with_max_decoded_bytes(2 << 30)
+}
 
 /// Whether a file is a Draco file, by its extension.
 pub(crate) fn is_drc(path: &Path) -> bool {
@@ -61,17 +63,18 @@ fn mesh_error(path: &Path, message: String) -> Error {
 /// A Draco file's mesh or point cloud, at rest in its own coordinates.
 pub fn scene(path: &Path) -> Result<PosedScene, Error> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
-    scene_slice(&bytes).map_err(|message| mesh_error(path, message))
+    scene_slice(&bytes, path)
 }
 
-/// [`scene`] from the file's bytes.
-pub fn scene_slice(bytes: &[u8]) -> Result<PosedScene, String> {
+/// [`scene`] from the file's bytes; `path` names it in errors.
+pub fn scene_slice(bytes: &[u8], path: &Path) -> Result<PosedScene, Error> {
+    decoded(bytes).map_err(|message| mesh_error(path, message))
+}
+
+/// The scene of a Draco file's bytes, or what is wrong with them.
+fn decoded(bytes: &[u8]) -> Result<PosedScene, String> {
     let kind = holds(bytes)?;
-    let limits = DecodeLimits::default()
-        .with_max_points(MAX_POINTS)
-        .with_max_faces(MAX_FACES)
-        .with_max_decoded_bytes(MAX_DECODED_BYTES);
-    let mut stream = DecoderBuffer::new(bytes).with_limits(limits);
+    let mut stream = DecoderBuffer::new(bytes).with_limits(limits());
     let damaged = |e| format!("a damaged Draco file: it does not decode ({e}). Way out: encode it again");
     match kind {
         Holds::Points => {

@@ -120,8 +120,7 @@ impl LoadedSource {
                 SourceData::MeshSequence(frames.map(file).collect())
             }
             SourceFile::Mesh { path, .. } if is_ply(path) => SourceData::Static(ply_scene_at(path, req.origin)?),
-            SourceFile::Mesh { path, .. } if is_stl(path) => SourceData::Static(super::stl::scene(path)?),
-            SourceFile::Mesh { path, .. } if is_drc(path) => SourceData::Static(super::drc::scene(path)?),
+            SourceFile::Mesh { path, .. } if is_stl(path) || is_drc(path) => SourceData::Static(mesh_frame(path)?),
             SourceFile::Mesh { path, .. } if is_obj(path) => {
                 let (scene, missing) = super::obj::scene_and_missing(path, req.origin)?;
                 warnings.extend(missing);

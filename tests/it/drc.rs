@@ -70,10 +70,11 @@ fn damaged_draco_files_fail_cleanly() {
         for value in [0u8, 0xff, bytes[at] ^ 0x10] {
             let mut b = bytes.clone();
             b[at] = value;
-            match drc::scene_slice(&b) {
+            match drc::scene_slice(&b, Path::new("cube_pc.drc")) {
                 Ok(_) => decoded += 1,
                 Err(e) => {
-                    assert!(e.contains("Draco"), "{e}");
+                    let e = e.to_string();
+                    assert!(e.contains("cube_pc.drc") && e.contains("Draco"), "{e}");
                     refused += 1;
                 }
             }

@@ -168,8 +168,8 @@ fn fuzz_stl_reading_and_rendering() {
 fn fuzz_drc_decoding_and_rendering() {
     // google/draco's meshes and point clouds (EdgeBreaker, kd-tree, sequential, unquantized).
     let seeds = seeds("drc", &["drc"]);
-    fuzz("drc", &seeds, 8, |_, bytes| {
-        if let Ok(scene) = vvgen::scene::drc::scene_slice(bytes) {
+    fuzz("drc", &seeds, 8, |path, bytes| {
+        if let Ok(scene) = vvgen::scene::drc::scene_slice(bytes, path) {
             render_small(&scene);
         }
     });

@@ -10,20 +10,13 @@
 
 use std::collections::BTreeMap;
 
-use draco_core::{DataType, DecodeLimits, DecoderBuffer, Mesh, MeshDecoder};
+use draco_core::{DataType, DecoderBuffer, Mesh, MeshDecoder};
 use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
 use gltf::json::validation::{Checked, USize64};
 use gltf::json::{self, Index};
 
 /// The extension's name.
 pub(super) const EXTENSION: &str = "KHR_draco_mesh_compression";
-
-/// Ceilings on one primitive's decoded geometry: far above any exported mesh (Draco splits vertices at seams, so a
-/// primitive's decoded count can exceed its source's), and a bound on what a hostile header can make vvgen
-/// allocate (draco-core also refuses reservations its stream cannot back).
-const MAX_POINTS: u64 = 1 << 26;
-const MAX_FACES: u64 = 1 << 27;
-const MAX_DECODED_BYTES: u64 = 2 << 30;
 
 /// The extension's object on a primitive.
 #[derive(serde::Deserialize)]
@@ -187,11 +180,8 @@ fn decode_view(views: &[json::buffer::View], buffers: &[Vec<u8>], view: usize) -
     let offset = v.byte_offset.map_or(0, |o| o.0);
     let end =
         offset.checked_add(v.byte_length.0).filter(|&e| e <= buffer.len() as u64).ok_or("runs past its buffer")?;
-    let limits = DecodeLimits::default()
-        .with_max_points(MAX_POINTS)
-        .with_max_faces(MAX_FACES)
-        .with_max_decoded_bytes(MAX_DECODED_BYTES);
-    let mut stream = DecoderBuffer::new(&buffer[offset as usize..end as usize]).with_limits(limits);
+    let mut stream =
+        DecoderBuffer::new(&buffer[offset as usize..end as usize]).with_limits(crate::scene::drc::limits());
     let mut mesh = Mesh::new();
     MeshDecoder::new().decode(&mut stream, &mut mesh).map_err(|e| format!("does not decode: {e}"))?;
     Ok(mesh)

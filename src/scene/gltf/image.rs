@@ -138,9 +138,6 @@ fn ktx2(bytes: &[u8]) -> Result<image::RgbaImage, String> {
             ))
         }
     }
-    if t.base_dimensions() != (w, h) {
-        return Err(format!("is damaged: its transcoder reads another size than its header states. {AGAIN}"));
-    }
     let rgba = t
         .transcode(0, basisu::TargetFormat::Rgba32, basisu::DecodeFlags::NONE)
         .map_err(|e| format!("is damaged: it does not transcode ({e:?}). {AGAIN}"))?;
